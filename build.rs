@@ -1,0 +1,14 @@
+//! Build script: for bare-metal targets only, put `memory.x` on the linker search path.
+//! Host builds (tests, the `sinscal` tool) are left untouched.
+use std::{env, fs, path::PathBuf};
+
+fn main() {
+    println!("cargo:rerun-if-changed=memory.x");
+    println!("cargo:rerun-if-changed=build.rs");
+    if env::var("CARGO_CFG_TARGET_OS").as_deref() != Ok("none") {
+        return;
+    }
+    let out = PathBuf::from(env::var_os("OUT_DIR").expect("cargo sets OUT_DIR"));
+    fs::copy("memory.x", out.join("memory.x")).expect("memory.x is at the package root");
+    println!("cargo:rustc-link-search={}", out.display());
+}

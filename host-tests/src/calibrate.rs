@@ -1,0 +1,214 @@
+//! `sinscal calibrate`: a recording through the no_std core (dwell collection, alignment, solution).
+//! Every formula is the core's; this module only reads, converts to f32 at the edge, and checks input.
+
+use sinscal::align::{position_angles, DwellValue, PositionAngles};
+use sinscal::dwell::{DwellCollector, DwellSummary, ImuSample, Prefilter};
+use sinscal::earth::{normal_gravity_mps2, Site};
+use sinscal::frames::Attitude;
+use sinscal::prefilter::{CoefficientIdentifier, PrefilterSettings};
+use sinscal::solve::{BiasSolution, BiasSolver, SolverSettings, MAX_POSITIONS};
+
+use crate::error::InputError;
+use crate::recording::{DwellAttitude, Recording};
+
+/// Which prefilter runs in front of the dwell statistics.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum PrefilterKind {
+    /// The HMM/KF with the paper's Q and R.
+    HmmKf,
+    /// None: plain dwell means.
+    None,
+}
+
+/// How the prefilter's coefficient `a` is chosen.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum Coefficient {
+    /// A fixed value in [0, 1].
+    Fixed(f32),
+    /// Identified from the first dwell (mean over the three channels of each sensor).
+    Identify,
+}
+
+/// Options of a calibration.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Options {
+    /// Prefilter.
+    pub prefilter: PrefilterKind,
+    /// Prefilter coefficient `a`.
+    pub coefficient: Coefficient,
+    /// Dwell mean (default) or the prefilter's settled output.
+    pub dwell_value: DwellValue,
+    /// Estimate the constant reference offset `phi0`.
+    pub estimate_reference_offset: bool,
+}
+
+impl Default for Options {
+    fn default() -> Options {
+        Options {
+            prefilter: PrefilterKind::HmmKf,
+            coefficient: Coefficient::Fixed(1.0),
+            dwell_value: DwellValue::Mean,
+            estimate_reference_offset: true,
+        }
+    }
+}
+
+/// Where the gravity value came from.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum GravitySource {
+    /// The recording's header.
+    Header,
+    /// WGS-84 normal gravity at the recording's latitude and height.
+    NormalGravity,
+}
+
+/// One position of a calibration.
+#[derive(Clone, Debug, PartialEq)]
+pub struct PositionResult {
+    /// Position label.
+    pub pos: u32,
+    /// Line of its first row.
+    pub first_line: usize,
+    /// Reference attitude, degrees.
+    pub attitude: DwellAttitude,
+    /// Dwell statistics (core).
+    pub summary: DwellSummary,
+    /// Alignment result (core).
+    pub angles: PositionAngles,
+}
+
+/// The result of a calibration.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Calibration {
+    /// Recording name.
+    pub source: String,
+    /// Latitude from the header, degrees.
+    pub latitude_deg: f64,
+    /// Site as the core sees it.
+    pub site: Site,
+    /// Where g came from.
+    pub gravity_source: GravitySource,
+    /// The prefilter that ran.
+    pub prefilter: Prefilter,
+    /// Options used.
+    pub options: Options,
+    /// Positions in order.
+    pub positions: Vec<PositionResult>,
+    /// The solution (core).
+    pub solution: BiasSolution,
+}
+
+fn to_f32(v: [f64; 3]) -> [f32; 3] {
+    v.map(|x| x as f32)
+}
+
+/// Runs a calibration of a recording.
+pub fn calibrate(recording: &Recording, options: &Options) -> Result<Calibration, InputError> {
+    let source = recording.source.as_str();
+    let header = &recording.header;
+    let latitude_rad = (header.latitude_deg as f32).to_radians();
+    let (gravity_mps2, gravity_source) = match header.gravity_mps2 {
+        Some(g) => (g as f32, GravitySource::Header),
+        None => (normal_gravity_mps2(latitude_rad, header.height_m as f32), GravitySource::NormalGravity),
+    };
+    let site = Site { latitude_rad, gravity_mps2 };
+
+    let dwells = recording.dwells();
+    if dwells.is_empty() {
+        return Err(InputError::file(source, "no dwell: every row has pos = 0"));
+    }
+    if dwells.len() > MAX_POSITIONS {
+        let line = dwells[MAX_POSITIONS].first_line();
+        return Err(InputError::at(source, line, format!("more than {MAX_POSITIONS} positions (the core's limit)")));
+    }
+
+    let prefilter = match options.prefilter {
+        PrefilterKind::None => Prefilter::None,
+        PrefilterKind::HmmKf => {
+            let [a_gyro, a_accel] = match options.coefficient {
+                Coefficient::Fixed(a) => [a, a],
+                Coefficient::Identify => identify_coefficients(&dwells[0].rows, source, dwells[0].first_line())?,
+            };
+            Prefilter::HmmKf {
+                gyro: PrefilterSettings::paper_gyro().with_a(a_gyro),
+                accel: PrefilterSettings::paper_accel().with_a(a_accel),
+            }
+        }
+    };
+    let mut collector =
+        DwellCollector::new(&prefilter).map_err(|e| InputError::file(source, format!("prefilter: {e}")))?;
+    let mut solver = BiasSolver::new(
+        site,
+        SolverSettings { estimate_reference_offset: options.estimate_reference_offset, ..SolverSettings::default() },
+    );
+
+    let mut positions = Vec::with_capacity(dwells.len());
+    for dwell in &dwells {
+        let at = |reason: String| InputError::at(source, dwell.first_line(), format!("dwell {}: {reason}", dwell.pos));
+        let attitude = dwell.attitude(source)?;
+        let heading_deg = attitude.heading_deg.ok_or_else(|| {
+            at("heading is unknown (empty): the calibration needs the reference heading of every position".into())
+        })?;
+        collector.reset();
+        for row in &dwell.rows {
+            let sample = ImuSample { rate_b_radps: to_f32(row.rate_b_radps), force_b_mps2: to_f32(row.force_b_mps2) };
+            collector
+                .update(&sample)
+                .map_err(|e| InputError::at(source, row.line, format!("{e} (after conversion to f32)")))?;
+        }
+        let summary = collector.summary().map_err(|e| at(format!("{e}: too short to use")))?;
+        let c_b_n =
+            Attitude::from_degrees(attitude.pitch_deg as f32, attitude.roll_deg as f32, heading_deg as f32).c_b_n();
+        let angles = position_angles(&summary, options.dwell_value, &c_b_n, &site).map_err(|e| at(e.to_string()))?;
+        let gross = angles.phi_n_rad.iter().map(|x| x.abs()).fold(0.0f32, f32::max);
+        if gross > MAX_MISALIGNMENT_RAD {
+            return Err(at(format!(
+                "alignment differs from the reference attitude by {:.2} deg: the reference or the axes do not \
+                 match the data (SPEC.md conventions: ENU, body x right, y forward, z up)",
+                gross.to_degrees()
+            )));
+        }
+        solver.add(&c_b_n, angles.phi_n_rad, &angles.covariance_rad2).map_err(|e| at(e.to_string()))?;
+        positions.push(PositionResult { pos: dwell.pos, first_line: dwell.first_line(), attitude, summary, angles });
+    }
+    let solution = solver.solve().map_err(|e| InputError::file(source, e.to_string()))?;
+    Ok(Calibration {
+        source: source.to_string(),
+        latitude_deg: header.latitude_deg,
+        site,
+        gravity_source,
+        prefilter,
+        options: *options,
+        positions,
+        solution,
+    })
+}
+
+/// A misalignment above this (0.05 rad, 2.9 deg) is not a residual bias: the reference attitude or the
+/// axis convention is wrong, and the small-angle model of the solution would not hold.
+pub const MAX_MISALIGNMENT_RAD: f32 = 0.05;
+
+fn identify_coefficients(
+    rows: &[&crate::recording::Row],
+    source: &str,
+    line: usize,
+) -> Result<[f32; 2], InputError> {
+    let mut ids = [CoefficientIdentifier::new(); 6];
+    for row in rows {
+        let channels = [to_f32(row.rate_b_radps), to_f32(row.force_b_mps2)];
+        for (i, id) in ids.iter_mut().enumerate() {
+            id.update(channels[i / 3][i % 3]);
+        }
+    }
+    let mut out = [0.0; 2];
+    for (sensor, slot) in out.iter_mut().enumerate() {
+        let mut sum = 0.0;
+        for id in &ids[3 * sensor..3 * sensor + 3] {
+            sum += id.coefficient().ok_or_else(|| {
+                InputError::at(source, line, "first dwell too short or constant: cannot identify the coefficient a")
+            })?;
+        }
+        *slot = sum / 3.0;
+    }
+    Ok(out)
+}

@@ -1,0 +1,11 @@
+//! Host side of sinscal: the `sinscal` command line's building blocks. Every calibration formula is the
+//! no_std core's (`sinscal` crate); this crate reads and writes files, simulates (labelled as
+//! simulation), and reports.
+#![deny(missing_docs)]
+
+pub mod calibrate;
+pub mod error;
+pub mod montecarlo;
+pub mod output;
+pub mod recording;
+pub mod synth;

@@ -1,0 +1,379 @@
+//! The recording file of SPEC.md section 2 (CSV, version 1): reading with line-accurate errors, writing,
+//! and grouping rows into dwells.
+
+use std::fmt::Write as _;
+use std::path::Path;
+
+use crate::error::InputError;
+
+/// Header of a recording.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Header {
+    /// Geodetic latitude, degrees north.
+    pub latitude_deg: f64,
+    /// Height above the ellipsoid, m (0 when the header does not say).
+    pub height_m: f64,
+    /// Nominal sample rate, Hz, if given.
+    pub rate_hz: Option<f64>,
+    /// Local gravity, m/s^2, if given (otherwise normal gravity is used).
+    pub gravity_mps2: Option<f64>,
+    /// Free-text header lines that are not `key: value` pairs sinscal knows (kept when writing).
+    pub comments: Vec<String>,
+}
+
+/// One row (sample) of a recording.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Row {
+    /// Time, s.
+    pub t_s: f64,
+    /// Position (dwell) label; 0 = not in a position.
+    pub pos: u32,
+    /// Reference pitch, degrees.
+    pub pitch_deg: f64,
+    /// Reference roll, degrees.
+    pub roll_deg: f64,
+    /// Reference heading, degrees clockwise from north; `None` = unknown.
+    pub heading_deg: Option<f64>,
+    /// Gyro x, y, z (body), rad/s.
+    pub rate_b_radps: [f64; 3],
+    /// Accelerometer x, y, z (body), m/s^2.
+    pub force_b_mps2: [f64; 3],
+    /// Sensor temperature, deg C, if recorded.
+    pub temp_c: Option<f64>,
+    /// Line number in the file (1-based), for messages.
+    pub line: usize,
+}
+
+/// A recording in memory.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Recording {
+    /// Where it came from (file name for messages).
+    pub source: String,
+    /// Header.
+    pub header: Header,
+    /// Rows in file order.
+    pub rows: Vec<Row>,
+}
+
+const COLUMNS: [&str; 11] = [
+    "t_s",
+    "pos",
+    "pitch_deg",
+    "roll_deg",
+    "heading_deg",
+    "gx_radps",
+    "gy_radps",
+    "gz_radps",
+    "ax_mps2",
+    "ay_mps2",
+    "az_mps2",
+];
+
+impl Recording {
+    /// Reads a recording file.
+    pub fn read(path: &Path) -> Result<Recording, InputError> {
+        let text = std::fs::read_to_string(path).map_err(|e| InputError::io(path, e))?;
+        Recording::parse(&text, &path.display().to_string())
+    }
+
+    /// Parses the text of a recording; `source` names it in errors.
+    pub fn parse(text: &str, source: &str) -> Result<Recording, InputError> {
+        let bad = |line: usize, reason: String| InputError::at(source, line, reason);
+        let mut lines = text.lines().enumerate().map(|(i, l)| (i + 1, l.trim_end_matches('\r')));
+        let mut version = None;
+        let mut latitude = None;
+        let mut height_m = 0.0;
+        let mut rate_hz = None;
+        let mut gravity = None;
+        let mut comments = Vec::new();
+        let (header_line, column_line) = loop {
+            let Some((n, line)) = lines.next() else {
+                return Err(bad(text.lines().count().max(1), "no column line after the header".into()));
+            };
+            if line.trim().is_empty() {
+                continue;
+            }
+            let Some(rest) = line.strip_prefix('#') else { break (n, line) };
+            let Some((key, value)) = rest.split_once(':') else {
+                comments.push(rest.trim().to_string());
+                continue;
+            };
+            // A value may carry a trailing comment after whitespace, as in SPEC.md's example.
+            let value = value.split_whitespace().next().unwrap_or("");
+            let number = |what: &str| -> Result<f64, InputError> {
+                parse_finite(value).ok_or_else(|| bad(n, format!("header {what}: '{value}' is not a finite number")))
+            };
+            match key.trim() {
+                "sinscal-recording" => version = Some((n, value.to_string())),
+                "latitude_deg" => latitude = Some(number("latitude_deg")?),
+                "height_m" => height_m = number("height_m")?,
+                "rate_hz" => rate_hz = Some(number("rate_hz")?),
+                "gravity_mps2" => gravity = Some(number("gravity_mps2")?),
+                _ => comments.push(rest.trim().to_string()),
+            }
+        };
+        match version {
+            Some((_, v)) if v == "1" => {}
+            Some((n, v)) => return Err(bad(n, format!("unsupported recording version '{v}' (this sinscal reads 1)"))),
+            None => return Err(bad(1, "not a sinscal recording: no '# sinscal-recording: 1' header line".into())),
+        }
+        let latitude_deg = latitude.ok_or_else(|| bad(header_line, "header has no 'latitude_deg'".into()))?;
+        if !(-90.0..=90.0).contains(&latitude_deg) {
+            return Err(bad(header_line, format!("latitude_deg {latitude_deg} outside [-90, 90]")));
+        }
+        if let Some(g) = gravity {
+            if !(9.7..=9.9).contains(&g) {
+                return Err(bad(header_line, format!("gravity_mps2 {g} is not a gravity on Earth (9.7..9.9)")));
+            }
+        }
+
+        let names: Vec<&str> = column_line.split(',').map(str::trim).collect();
+        let find = |name: &str| names.iter().position(|c| *c == name);
+        let mut index = [0usize; 11];
+        for (slot, name) in index.iter_mut().zip(COLUMNS) {
+            *slot = find(name).ok_or_else(|| bad(header_line, format!("missing column '{name}'")))?;
+        }
+        let temp_index = find("temp_c");
+
+        let mut rows = Vec::new();
+        let mut previous_t: Option<f64> = None;
+        for (n, line) in lines {
+            if line.trim().is_empty() || line.starts_with('#') {
+                continue;
+            }
+            let cells: Vec<&str> = line.split(',').map(str::trim).collect();
+            if cells.len() != names.len() {
+                return Err(bad(n, format!("{} cells, the column line has {}", cells.len(), names.len())));
+            }
+            let num = |col: usize| -> Result<f64, InputError> {
+                parse_finite(cells[col])
+                    .ok_or_else(|| bad(n, format!("column '{}': '{}' is not a finite number", names[col], cells[col])))
+            };
+            let t_s = num(index[0])?;
+            if let Some(prev) = previous_t {
+                if t_s <= prev {
+                    return Err(bad(n, format!("time {t_s} s does not increase (previous row: {prev} s)")));
+                }
+            }
+            previous_t = Some(t_s);
+            let pos_cell = cells[index[1]];
+            let pos: u32 = pos_cell
+                .parse()
+                .map_err(|_| bad(n, format!("column 'pos': '{pos_cell}' is not a non-negative integer")))?;
+            let heading_deg = if cells[index[4]].is_empty() { None } else { Some(num(index[4])?) };
+            let temp_c = match temp_index {
+                Some(i) if !cells[i].is_empty() => Some(num(i)?),
+                _ => None,
+            };
+            rows.push(Row {
+                t_s,
+                pos,
+                pitch_deg: num(index[2])?,
+                roll_deg: num(index[3])?,
+                heading_deg,
+                rate_b_radps: [num(index[5])?, num(index[6])?, num(index[7])?],
+                force_b_mps2: [num(index[8])?, num(index[9])?, num(index[10])?],
+                temp_c,
+                line: n,
+            });
+        }
+        if rows.is_empty() {
+            return Err(bad(header_line, "no data rows".into()));
+        }
+        Ok(Recording {
+            source: source.to_string(),
+            header: Header { latitude_deg, height_m, rate_hz, gravity_mps2: gravity, comments },
+            rows,
+        })
+    }
+
+    /// Writes the recording in the SPEC.md section 2 format. Numbers are written in Rust's shortest
+    /// round-trip form, so reading the file back gives the same f64 values.
+    pub fn to_csv(&self) -> String {
+        let h = &self.header;
+        let mut out = String::new();
+        out.push_str("# sinscal-recording: 1\n");
+        for c in &h.comments {
+            let _ = writeln!(out, "# {c}");
+        }
+        let _ = writeln!(out, "# latitude_deg: {}", h.latitude_deg);
+        let _ = writeln!(out, "# height_m: {}", h.height_m);
+        if let Some(r) = h.rate_hz {
+            let _ = writeln!(out, "# rate_hz: {r}");
+        }
+        if let Some(g) = h.gravity_mps2 {
+            let _ = writeln!(out, "# gravity_mps2: {g}");
+        }
+        let with_temp = self.rows.iter().any(|r| r.temp_c.is_some());
+        out.push_str(&COLUMNS.join(","));
+        out.push_str(if with_temp { ",temp_c\n" } else { "\n" });
+        for r in &self.rows {
+            let heading = r.heading_deg.map(|h| h.to_string()).unwrap_or_default();
+            let [gx, gy, gz] = r.rate_b_radps;
+            let [ax, ay, az] = r.force_b_mps2;
+            let _ = write!(
+                out,
+                "{},{},{},{},{},{gx:e},{gy:e},{gz:e},{ax},{ay},{az}",
+                r.t_s, r.pos, r.pitch_deg, r.roll_deg, heading
+            );
+            if with_temp {
+                let _ = write!(out, ",{}", r.temp_c.map(|t| t.to_string()).unwrap_or_default());
+            }
+            out.push('\n');
+        }
+        out
+    }
+
+    /// Writes the recording to a file.
+    pub fn write(&self, path: &Path) -> Result<(), InputError> {
+        std::fs::write(path, self.to_csv()).map_err(|e| InputError::io(path, e))
+    }
+
+    /// The dwells, in order of first appearance of their label. Rows with the same non-zero label form
+    /// one dwell (SPEC.md); label 0 rows are skipped.
+    pub fn dwells(&self) -> Vec<Dwell<'_>> {
+        let mut dwells: Vec<Dwell<'_>> = Vec::new();
+        for row in self.rows.iter().filter(|r| r.pos != 0) {
+            match dwells.iter_mut().find(|d| d.pos == row.pos) {
+                Some(d) => d.rows.push(row),
+                None => dwells.push(Dwell { pos: row.pos, rows: vec![row] }),
+            }
+        }
+        dwells
+    }
+}
+
+/// The rows of one dwell.
+#[derive(Clone, Debug)]
+pub struct Dwell<'a> {
+    /// Position label.
+    pub pos: u32,
+    /// Its rows, in file order.
+    pub rows: Vec<&'a Row>,
+}
+
+/// A turntable attitude read off a dwell, degrees.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct DwellAttitude {
+    /// Pitch, degrees.
+    pub pitch_deg: f64,
+    /// Roll, degrees.
+    pub roll_deg: f64,
+    /// Heading, degrees clockwise from north, `None` if unknown.
+    pub heading_deg: Option<f64>,
+}
+
+/// Largest spread of a reference angle within one dwell that is still read as "not moving", degrees.
+pub const MAX_DWELL_ATTITUDE_SPREAD_DEG: f64 = 0.01;
+
+impl Dwell<'_> {
+    /// The line of the dwell's first row.
+    pub fn first_line(&self) -> usize {
+        self.rows[0].line
+    }
+
+    /// The reference attitude of the dwell: the circular mean of each angle over its rows (a read-out
+    /// jitter averages out). A spread above [`MAX_DWELL_ATTITUDE_SPREAD_DEG`] means the table moved: an error.
+    pub fn attitude(&self, source: &str) -> Result<DwellAttitude, InputError> {
+        let angle = |name: &str, get: &dyn Fn(&Row) -> Option<f64>| -> Result<Option<f64>, InputError> {
+            let known: Vec<(usize, f64)> = self.rows.iter().filter_map(|r| get(r).map(|v| (r.line, v))).collect();
+            if known.is_empty() {
+                return Ok(None);
+            }
+            if known.len() != self.rows.len() {
+                let line = self.rows.iter().find(|r| get(r).is_none()).map_or(self.first_line(), |r| r.line);
+                return Err(InputError::at(source, line, format!("dwell {}: {name} is empty in some rows only", self.pos)));
+            }
+            let (s, c) = known.iter().fold((0.0, 0.0), |(s, c), (_, v)| (s + v.to_radians().sin(), c + v.to_radians().cos()));
+            let mean = s.atan2(c).to_degrees();
+            for (line, v) in &known {
+                let diff = (v - mean + 540.0).rem_euclid(360.0) - 180.0;
+                if diff.abs() > MAX_DWELL_ATTITUDE_SPREAD_DEG {
+                    return Err(InputError::at(
+                        source,
+                        *line,
+                        format!("dwell {}: {name} {v} deg differs from the dwell's mean {mean:.4} deg: the table moves", self.pos),
+                    ));
+                }
+            }
+            // Report the angle in the range of the file's first value (270 stays 270, not -90).
+            let first = known[0].1;
+            let diff = (first - mean + 540.0).rem_euclid(360.0) - 180.0;
+            Ok(Some(first - diff))
+        };
+        Ok(DwellAttitude {
+            pitch_deg: angle("pitch_deg", &|r| Some(r.pitch_deg))?.unwrap_or(0.0),
+            roll_deg: angle("roll_deg", &|r| Some(r.roll_deg))?.unwrap_or(0.0),
+            heading_deg: angle("heading_deg", &|r| r.heading_deg)?,
+        })
+    }
+}
+
+fn parse_finite(cell: &str) -> Option<f64> {
+    cell.parse::<f64>().ok().filter(|v| v.is_finite())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    const GOOD: &str = "# sinscal-recording: 1\n# latitude_deg: 45.7796\n# height_m: 0                (optional)\n# rate_hz: 100\n\
+        t_s,pos,pitch_deg,roll_deg,heading_deg,gx_radps,gy_radps,gz_radps,ax_mps2,ay_mps2,az_mps2\n\
+        0.00,1,0,0,0,1.2e-06,5.1e-05,5.2e-05,1.0e-04,-3.0e-04,9.8063\n\
+        0.01,1,0,0,0,1.2e-06,5.1e-05,5.2e-05,1.0e-04,-3.0e-04,9.8063\n";
+
+    fn err(text: &str) -> String {
+        Recording::parse(text, "r.csv").unwrap_err().to_string()
+    }
+
+    #[test]
+    fn reads_the_spec_example_and_round_trips() {
+        let r = Recording::parse(GOOD, "r.csv").unwrap();
+        assert_eq!(r.header.latitude_deg, 45.7796);
+        assert_eq!(r.rows.len(), 2);
+        assert_eq!(r.rows[1].line, 7);
+        assert_eq!(r.rows[0].rate_b_radps, [1.2e-6, 5.1e-5, 5.2e-5]);
+        let again = Recording::parse(&r.to_csv(), "r.csv").unwrap();
+        assert_eq!(again.rows.iter().map(|x| x.force_b_mps2).collect::<Vec<_>>(), r.rows.iter().map(|x| x.force_b_mps2).collect::<Vec<_>>());
+        assert_eq!(again.rows[0].rate_b_radps, r.rows[0].rate_b_radps);
+    }
+
+    #[test]
+    fn columns_in_any_order_and_optional_temperature() {
+        let text = "# sinscal-recording: 1\n# latitude_deg: 10\n\
+            pos,t_s,temp_c,ax_mps2,ay_mps2,az_mps2,gx_radps,gy_radps,gz_radps,pitch_deg,roll_deg,heading_deg\n\
+            3,0.5,21.5,0,0,9.8,1e-5,2e-5,3e-5,0,90,\n";
+        let r = Recording::parse(text, "r.csv").unwrap();
+        assert_eq!(r.rows[0].pos, 3);
+        assert_eq!(r.rows[0].temp_c, Some(21.5));
+        assert_eq!(r.rows[0].heading_deg, None);
+        assert_eq!(r.rows[0].roll_deg, 90.0);
+        assert_eq!(r.rows[0].rate_b_radps, [1e-5, 2e-5, 3e-5]);
+    }
+
+    #[test]
+    fn bad_input_names_file_line_and_reason() {
+        assert_eq!(err("t_s\n1\n"), "r.csv:1: not a sinscal recording: no '# sinscal-recording: 1' header line");
+        assert!(err(&GOOD.replace(",ay_mps2", ",ay")).contains("missing column 'ay_mps2'"));
+        assert!(err(&GOOD.replace("0.01,1,0,0,0,1.2e-06", "0.01,1,0,0,0,NaN")).starts_with("r.csv:7: column 'gx_radps': 'NaN'"));
+        assert!(err(&GOOD.replace("0.01,1,0,0,0,1.2e-06", "0.01,1,0,0,0,inf")).contains("not a finite number"));
+        assert!(err(&GOOD.replace("0.01,1,", "0.00,1,")).starts_with("r.csv:7: time 0 s does not increase"));
+        assert!(err(&GOOD.replace("0.01,1,", "0.01,x,")).contains("'pos': 'x'"));
+        assert!(err(&GOOD.replace("# latitude_deg: 45.7796\n", "")).contains("no 'latitude_deg'"));
+        assert!(err(&GOOD.replace("-3.0e-04,9.8063\n0.01", "9.8063\n0.01")).starts_with("r.csv:6: 10 cells"));
+        assert!(err(&GOOD.replace("recording: 1", "recording: 2")).contains("unsupported recording version '2'"));
+    }
+
+    #[test]
+    fn moving_table_within_a_dwell_is_an_error() {
+        let text = GOOD.replace("0.01,1,0,0,0,", "0.01,1,0,0,0.5,");
+        let r = Recording::parse(&text, "r.csv").unwrap();
+        let e = r.dwells()[0].attitude("r.csv").unwrap_err().to_string();
+        assert!(e.contains("the table moves"), "{e}");
+        // Headings either side of north average to north, not to 180.
+        let text = GOOD.replace("0.00,1,0,0,0,", "0.00,1,0,0,359.999,").replace("0.01,1,0,0,0,", "0.01,1,0,0,0.001,");
+        let r = Recording::parse(&text, "r.csv").unwrap();
+        let h = r.dwells()[0].attitude("r.csv").unwrap().heading_deg.unwrap();
+        assert!((h - 360.0).abs() < 1e-9, "{h}");
+    }
+}

@@ -1,0 +1,239 @@
+//! Collection of one dwell (one turntable position): the prefilter bank and the per-channel statistics.
+//!
+//! Call rate: [`DwellCollector::update`] once per IMU sample (100 Hz), for the samples that belong to the
+//! dwell; [`DwellCollector::summary`] once at its end. The collector keeps, per channel, the mean and
+//! variance of the raw samples (the variance gives the standard errors), the mean of the filtered
+//! samples (what the alignment consumes), and the filter's last state (the paper's "settled output").
+
+use crate::accumulate::{DwellStats, KahanSum};
+use crate::linalg::Vec3;
+use crate::prefilter::{HmmKf, PrefilterError, PrefilterSettings};
+
+/// One IMU sample in the body frame.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub struct ImuSample {
+    /// Angular rate measured by the gyros, body frame, rad/s.
+    pub rate_b_radps: Vec3,
+    /// Specific force measured by the accelerometers, body frame, m/s^2.
+    pub force_b_mps2: Vec3,
+}
+
+/// Which prefilter the collector runs in front of the statistics.
+#[derive(Clone, Copy, Debug, PartialEq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub enum Prefilter {
+    /// No prefilter: the dwell value is the plain mean of the raw samples.
+    None,
+    /// The HMM/KF of METHOD.md step 1 with one setting for the three gyros and one for the accelerometers.
+    HmmKf {
+        /// Gyro channels, (rad/s)^2.
+        gyro: PrefilterSettings,
+        /// Accelerometer channels, (m/s^2)^2.
+        accel: PrefilterSettings,
+    },
+}
+
+impl Prefilter {
+    /// The HMM/KF with the paper's Q and R and `a` = 1.
+    pub fn paper() -> Prefilter {
+        Prefilter::HmmKf { gyro: PrefilterSettings::paper_gyro(), accel: PrefilterSettings::paper_accel() }
+    }
+}
+
+/// Why a dwell cannot be summarised, or a sample not used.
+#[derive(Clone, Copy, Debug, PartialEq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+#[non_exhaustive]
+pub enum DwellError {
+    /// Fewer samples than [`MIN_DWELL_SAMPLES`].
+    TooFewSamples {
+        /// Samples collected.
+        samples: u32,
+    },
+    /// A sample had a NaN or infinite value; it was not used (counted in the summary).
+    NotFinite,
+}
+
+impl core::fmt::Display for DwellError {
+    fn fmt(&self, f: &mut core::fmt::Formatter<'_>) -> core::fmt::Result {
+        match self {
+            DwellError::TooFewSamples { samples } => {
+                write!(f, "dwell has {samples} samples, at least {MIN_DWELL_SAMPLES} are needed")
+            }
+            DwellError::NotFinite => f.write_str("sample is NaN or infinite"),
+        }
+    }
+}
+
+impl core::error::Error for DwellError {}
+
+/// The smallest dwell the collector summarises (a variance needs some samples to mean anything).
+pub const MIN_DWELL_SAMPLES: u32 = 10;
+
+/// What one dwell gives the alignment, per channel (body frame).
+#[derive(Clone, Copy, Debug, PartialEq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub struct DwellSummary {
+    /// Samples used.
+    pub samples: u32,
+    /// Samples rejected as not finite.
+    pub rejected: u32,
+    /// Mean of the (prefiltered, if a prefilter runs) gyro channels, rad/s.
+    pub rate_mean_b_radps: Vec3,
+    /// Mean of the (prefiltered) accelerometer channels, m/s^2.
+    pub force_mean_b_mps2: Vec3,
+    /// Standard deviation of one raw gyro sample, rad/s.
+    pub rate_sample_std_b_radps: Vec3,
+    /// Standard deviation of one raw accelerometer sample, m/s^2.
+    pub force_sample_std_b_mps2: Vec3,
+    /// The prefilter's state after the last sample (the raw last sample without prefilter), rad/s.
+    pub rate_settled_b_radps: Vec3,
+    /// The prefilter's state after the last sample (the raw last sample without prefilter), m/s^2.
+    pub force_settled_b_mps2: Vec3,
+    /// Output variance of the settled prefilter per unit raw white-noise variance (sum of the squared
+    /// impulse response): gyro and accelerometer. 1 without prefilter.
+    pub settled_noise_gain: [f32; 2],
+}
+
+/// The prefilter bank and statistics for the six channels of one dwell.
+#[derive(Clone, Debug)]
+pub struct DwellCollector {
+    filters: Option<[HmmKf; 6]>,
+    raw: [DwellStats; 6],
+    filtered: [KahanSum; 6],
+    filtered_shift: [f32; 6],
+    last: [f32; 6],
+    rejected: u32,
+    noise_gain: [f32; 2],
+}
+
+impl DwellCollector {
+    /// A collector with the given prefilter. The Riccati iteration runs here, once.
+    pub fn new(prefilter: &Prefilter) -> Result<DwellCollector, PrefilterError> {
+        let (filters, noise_gain) = match prefilter {
+            Prefilter::None => (None, [1.0, 1.0]),
+            Prefilter::HmmKf { gyro, accel } => {
+                let g = HmmKf::new(gyro)?;
+                let a = HmmKf::new(accel)?;
+                let gains = [g.impulse_response_sums().1, a.impulse_response_sums().1];
+                (Some([g, g, g, a, a, a]), gains)
+            }
+        };
+        Ok(DwellCollector {
+            filters,
+            raw: [DwellStats::new(); 6],
+            filtered: [KahanSum::new(); 6],
+            filtered_shift: [0.0; 6],
+            last: [0.0; 6],
+            rejected: 0,
+            noise_gain,
+        })
+    }
+
+    /// Starts a new dwell: statistics cleared, filters restarted (their first sample initialises them).
+    pub fn reset(&mut self) {
+        self.raw = [DwellStats::new(); 6];
+        self.filtered = [KahanSum::new(); 6];
+        self.rejected = 0;
+        if let Some(filters) = self.filters.as_mut() {
+            filters.iter_mut().for_each(HmmKf::reset);
+        }
+    }
+
+    /// Samples used so far in this dwell.
+    pub fn samples(&self) -> u32 {
+        self.raw[0].count()
+    }
+
+    /// Feeds one sample. A sample with a non-finite value is counted and not used.
+    #[inline]
+    pub fn update(&mut self, sample: &ImuSample) -> Result<(), DwellError> {
+        let r = sample.rate_b_radps;
+        let f = sample.force_b_mps2;
+        let channels = [r[0], r[1], r[2], f[0], f[1], f[2]];
+        if !channels.iter().all(|x| x.is_finite()) {
+            self.rejected = self.rejected.saturating_add(1);
+            return Err(DwellError::NotFinite);
+        }
+        let first = self.raw[0].count() == 0;
+        for (i, &z) in channels.iter().enumerate() {
+            self.raw[i].add(z);
+            let y = match self.filters.as_mut() {
+                Some(filters) => filters[i].update(z),
+                None => z,
+            };
+            if first {
+                self.filtered_shift[i] = y;
+            }
+            self.filtered[i].add(y - self.filtered_shift[i]);
+            self.last[i] = y;
+        }
+        Ok(())
+    }
+
+    /// The summary of the dwell so far.
+    pub fn summary(&self) -> Result<DwellSummary, DwellError> {
+        let samples = self.raw[0].count();
+        if samples < MIN_DWELL_SAMPLES {
+            return Err(DwellError::TooFewSamples { samples });
+        }
+        let n = samples as f32;
+        let mean = |i: usize| self.filtered_shift[i] + self.filtered[i].value() / n;
+        let std = |i: usize| libm::sqrtf(self.raw[i].variance().unwrap_or(0.0));
+        Ok(DwellSummary {
+            samples,
+            rejected: self.rejected,
+            rate_mean_b_radps: [mean(0), mean(1), mean(2)],
+            force_mean_b_mps2: [mean(3), mean(4), mean(5)],
+            rate_sample_std_b_radps: [std(0), std(1), std(2)],
+            force_sample_std_b_mps2: [std(3), std(4), std(5)],
+            rate_settled_b_radps: [self.last[0], self.last[1], self.last[2]],
+            force_settled_b_mps2: [self.last[3], self.last[4], self.last[5]],
+            settled_noise_gain: self.noise_gain,
+        })
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn constant_input_gives_exact_means_with_and_without_prefilter() {
+        let s = ImuSample { rate_b_radps: [1e-5, -2e-5, 7e-5], force_b_mps2: [0.01, -0.02, 9.8] };
+        for p in [Prefilter::None, Prefilter::paper()] {
+            let mut c = DwellCollector::new(&p).unwrap();
+            for _ in 0..6000 {
+                c.update(&s).unwrap();
+            }
+            let d = c.summary().unwrap();
+            assert_eq!(d.samples, 6000);
+            assert_eq!(d.rate_mean_b_radps, s.rate_b_radps);
+            assert_eq!(d.force_mean_b_mps2, s.force_b_mps2);
+            assert_eq!(d.force_settled_b_mps2, s.force_b_mps2);
+            assert_eq!(d.rate_sample_std_b_radps, [0.0; 3]);
+        }
+    }
+
+    #[test]
+    fn non_finite_samples_are_counted_not_used() {
+        let mut c = DwellCollector::new(&Prefilter::None).unwrap();
+        let good = ImuSample { rate_b_radps: [0.0; 3], force_b_mps2: [0.0, 0.0, 9.8] };
+        let bad = ImuSample { rate_b_radps: [f32::NAN, 0.0, 0.0], ..good };
+        for _ in 0..20 {
+            c.update(&good).unwrap();
+        }
+        assert_eq!(c.update(&bad), Err(DwellError::NotFinite));
+        let d = c.summary().unwrap();
+        assert_eq!((d.samples, d.rejected), (20, 1));
+        assert_eq!(d.force_mean_b_mps2, [0.0, 0.0, 9.8]);
+    }
+
+    #[test]
+    fn short_dwell_is_an_error() {
+        let mut c = DwellCollector::new(&Prefilter::None).unwrap();
+        c.update(&ImuSample::default()).unwrap();
+        assert_eq!(c.summary(), Err(DwellError::TooFewSamples { samples: 1 }));
+    }
+}
