@@ -21,7 +21,10 @@ pub struct KahanSum {
 impl KahanSum {
     /// An empty sum.
     pub const fn new() -> KahanSum {
-        KahanSum { sum: 0.0, compensation: 0.0 }
+        KahanSum {
+            sum: 0.0,
+            compensation: 0.0,
+        }
     }
 
     /// Adds `x`. (The compiler does not reassociate floating-point additions, so the compensation
@@ -54,7 +57,12 @@ pub struct DwellStats {
 impl DwellStats {
     /// An empty accumulator.
     pub const fn new() -> DwellStats {
-        DwellStats { count: 0, shift: 0.0, sum: KahanSum::new(), sum_sq: KahanSum::new() }
+        DwellStats {
+            count: 0,
+            shift: 0.0,
+            sum: KahanSum::new(),
+            sum_sq: KahanSum::new(),
+        }
     }
 
     /// Adds one sample. The first sample becomes the shift.

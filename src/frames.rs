@@ -33,7 +33,9 @@ impl Attitude {
 
     /// The body-to-navigation direction cosine matrix `C_b^n = Rz(-psi) Rx(theta) Ry(gamma)`.
     pub fn c_b_n(&self) -> Mat3 {
-        rot_z(-self.heading_rad).mul(&rot_x(self.pitch_rad)).mul(&rot_y(self.roll_rad))
+        rot_z(-self.heading_rad)
+            .mul(&rot_x(self.pitch_rad))
+            .mul(&rot_y(self.roll_rad))
     }
 }
 

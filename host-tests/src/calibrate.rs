@@ -109,9 +109,15 @@ pub fn calibrate(recording: &Recording, options: &Options) -> Result<Calibration
     let latitude_rad = (header.latitude_deg as f32).to_radians();
     let (gravity_mps2, gravity_source) = match header.gravity_mps2 {
         Some(g) => (g as f32, GravitySource::Header),
-        None => (normal_gravity_mps2(latitude_rad, header.height_m as f32), GravitySource::NormalGravity),
+        None => (
+            normal_gravity_mps2(latitude_rad, header.height_m as f32),
+            GravitySource::NormalGravity,
+        ),
     };
-    let site = Site { latitude_rad, gravity_mps2 };
+    let site = Site {
+        latitude_rad,
+        gravity_mps2,
+    };
 
     let dwells = recording.dwells();
     if dwells.is_empty() {
@@ -119,7 +125,11 @@ pub fn calibrate(recording: &Recording, options: &Options) -> Result<Calibration
     }
     if dwells.len() > MAX_POSITIONS {
         let line = dwells[MAX_POSITIONS].first_line();
-        return Err(InputError::at(source, line, format!("more than {MAX_POSITIONS} positions (the core's limit)")));
+        return Err(InputError::at(
+            source,
+            line,
+            format!("more than {MAX_POSITIONS} positions (the core's limit)"),
+        ));
     }
 
     let prefilter = match options.prefilter {
@@ -127,7 +137,9 @@ pub fn calibrate(recording: &Recording, options: &Options) -> Result<Calibration
         PrefilterKind::HmmKf => {
             let [a_gyro, a_accel] = match options.coefficient {
                 Coefficient::Fixed(a) => [a, a],
-                Coefficient::Identify => identify_coefficients(&dwells[0].rows, source, dwells[0].first_line())?,
+                Coefficient::Identify => {
+                    identify_coefficients(&dwells[0].rows, source, dwells[0].first_line())?
+                }
             };
             Prefilter::HmmKf {
                 gyro: PrefilterSettings::paper_gyro().with_a(a_gyro),
@@ -135,32 +147,55 @@ pub fn calibrate(recording: &Recording, options: &Options) -> Result<Calibration
             }
         }
     };
-    let mut collector =
-        DwellCollector::new(&prefilter).map_err(|e| InputError::file(source, format!("prefilter: {e}")))?;
+    let mut collector = DwellCollector::new(&prefilter)
+        .map_err(|e| InputError::file(source, format!("prefilter: {e}")))?;
     let mut solver = BiasSolver::new(
         site,
-        SolverSettings { estimate_reference_offset: options.estimate_reference_offset, ..SolverSettings::default() },
+        SolverSettings {
+            estimate_reference_offset: options.estimate_reference_offset,
+            ..SolverSettings::default()
+        },
     );
 
     let mut positions = Vec::with_capacity(dwells.len());
     for dwell in &dwells {
-        let at = |reason: String| InputError::at(source, dwell.first_line(), format!("dwell {}: {reason}", dwell.pos));
+        let at = |reason: String| {
+            InputError::at(
+                source,
+                dwell.first_line(),
+                format!("dwell {}: {reason}", dwell.pos),
+            )
+        };
         let attitude = dwell.attitude(source)?;
         let heading_deg = attitude.heading_deg.ok_or_else(|| {
             at("heading is unknown (empty): the calibration needs the reference heading of every position".into())
         })?;
         collector.reset();
         for row in &dwell.rows {
-            let sample = ImuSample { rate_b_radps: to_f32(row.rate_b_radps), force_b_mps2: to_f32(row.force_b_mps2) };
-            collector
-                .update(&sample)
-                .map_err(|e| InputError::at(source, row.line, format!("{e} (after conversion to f32)")))?;
+            let sample = ImuSample {
+                rate_b_radps: to_f32(row.rate_b_radps),
+                force_b_mps2: to_f32(row.force_b_mps2),
+            };
+            collector.update(&sample).map_err(|e| {
+                InputError::at(source, row.line, format!("{e} (after conversion to f32)"))
+            })?;
         }
-        let summary = collector.summary().map_err(|e| at(format!("{e}: too short to use")))?;
-        let c_b_n =
-            Attitude::from_degrees(attitude.pitch_deg as f32, attitude.roll_deg as f32, heading_deg as f32).c_b_n();
-        let angles = position_angles(&summary, options.dwell_value, &c_b_n, &site).map_err(|e| at(e.to_string()))?;
-        let gross = angles.phi_n_rad.iter().map(|x| x.abs()).fold(0.0f32, f32::max);
+        let summary = collector
+            .summary()
+            .map_err(|e| at(format!("{e}: too short to use")))?;
+        let c_b_n = Attitude::from_degrees(
+            attitude.pitch_deg as f32,
+            attitude.roll_deg as f32,
+            heading_deg as f32,
+        )
+        .c_b_n();
+        let angles = position_angles(&summary, options.dwell_value, &c_b_n, &site)
+            .map_err(|e| at(e.to_string()))?;
+        let gross = angles
+            .phi_n_rad
+            .iter()
+            .map(|x| x.abs())
+            .fold(0.0f32, f32::max);
         if gross > MAX_MISALIGNMENT_RAD {
             return Err(at(format!(
                 "alignment differs from the reference attitude by {:.2} deg: the reference or the axes do not \
@@ -168,10 +203,20 @@ pub fn calibrate(recording: &Recording, options: &Options) -> Result<Calibration
                 gross.to_degrees()
             )));
         }
-        solver.add(&c_b_n, angles.phi_n_rad, &angles.covariance_rad2).map_err(|e| at(e.to_string()))?;
-        positions.push(PositionResult { pos: dwell.pos, first_line: dwell.first_line(), attitude, summary, angles });
+        solver
+            .add(&c_b_n, angles.phi_n_rad, &angles.covariance_rad2)
+            .map_err(|e| at(e.to_string()))?;
+        positions.push(PositionResult {
+            pos: dwell.pos,
+            first_line: dwell.first_line(),
+            attitude,
+            summary,
+            angles,
+        });
     }
-    let solution = solver.solve().map_err(|e| InputError::file(source, e.to_string()))?;
+    let solution = solver
+        .solve()
+        .map_err(|e| InputError::file(source, e.to_string()))?;
     Ok(Calibration {
         source: source.to_string(),
         latitude_deg: header.latitude_deg,
@@ -205,7 +250,11 @@ fn identify_coefficients(
         let mut sum = 0.0;
         for id in &ids[3 * sensor..3 * sensor + 3] {
             sum += id.coefficient().ok_or_else(|| {
-                InputError::at(source, line, "first dwell too short or constant: cannot identify the coefficient a")
+                InputError::at(
+                    source,
+                    line,
+                    "first dwell too short or constant: cannot identify the coefficient a",
+                )
             })?;
         }
         *slot = sum / 3.0;

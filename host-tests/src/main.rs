@@ -16,7 +16,11 @@ use sinscal_host::recording::Recording;
 use sinscal_host::synth::{Scenario, DEG_PER_HOUR, MICRO_G};
 
 #[derive(Parser)]
-#[command(name = "sinscal", version, about = "Fast six-position bias calibration of a strapdown IMU (HMM/KF prefilter, analytic coarse alignment, least squares)")]
+#[command(
+    name = "sinscal",
+    version,
+    about = "Fast six-position bias calibration of a strapdown IMU (HMM/KF prefilter, analytic coarse alignment, least squares)"
+)]
 struct Cli {
     #[command(subcommand)]
     command: Command,
@@ -132,7 +136,15 @@ fn write_json(path: &Path, value: &impl serde::Serialize) -> anyhow::Result<()> 
 
 fn run(command: Command) -> anyhow::Result<()> {
     match command {
-        Command::Calibrate { recording, json, prefilter, prefilter_a, dwell_value, no_reference_offset, on } => {
+        Command::Calibrate {
+            recording,
+            json,
+            prefilter,
+            prefilter_a,
+            dwell_value,
+            no_reference_offset,
+            on,
+        } => {
             if let Some(on) = on {
                 let which = match on {
                     OnArg::Host => "host",
@@ -145,7 +157,9 @@ fn run(command: Command) -> anyhow::Result<()> {
             } else {
                 match prefilter_a.parse::<f32>() {
                     Ok(a) if (0.0..=1.0).contains(&a) => Coefficient::Fixed(a),
-                    _ => anyhow::bail!("--prefilter-a: '{prefilter_a}' is neither 'auto' nor a number in [0, 1]"),
+                    _ => anyhow::bail!(
+                        "--prefilter-a: '{prefilter_a}' is neither 'auto' nor a number in [0, 1]"
+                    ),
                 }
             };
             let options = Options {
@@ -167,7 +181,11 @@ fn run(command: Command) -> anyhow::Result<()> {
         Command::Example { out, seed } => {
             let rec = Scenario::example().recording(seed, &out.display().to_string());
             rec.write(&out)?;
-            println!("wrote {} ({} rows, SIMULATION of Table 1 with known biases, seed {seed})", out.display(), rec.rows.len());
+            println!(
+                "wrote {} ({} rows, SIMULATION of Table 1 with known biases, seed {seed})",
+                out.display(),
+                rec.rows.len()
+            );
             Ok(())
         }
         Command::Demo { out, json } => demo(&out, json.as_deref()),
@@ -217,15 +235,69 @@ fn demo(out: &Path, json: Option<&Path>) -> anyhow::Result<()> {
     println!("\nTruth of the simulation, and (estimate - truth) / standard error:");
     let s = &cal.solution;
     let rows: [(&str, Option<sinscal::solve::Estimate>, f64, f64, &str); 9] = [
-        ("gyro x", s.gyro_bias_b_radps[0], scenario.gyro_bias_b_radps[0], DEG_PER_HOUR, "deg/h"),
-        ("gyro y", s.gyro_bias_b_radps[1], scenario.gyro_bias_b_radps[1], DEG_PER_HOUR, "deg/h"),
-        ("gyro z", s.gyro_bias_b_radps[2], scenario.gyro_bias_b_radps[2], DEG_PER_HOUR, "deg/h"),
-        ("accel x", s.accel_bias_b_mps2[0], scenario.accel_bias_b_mps2[0], MICRO_G, "ug"),
-        ("accel y", s.accel_bias_b_mps2[1], scenario.accel_bias_b_mps2[1], MICRO_G, "ug"),
-        ("accel z", s.accel_bias_b_mps2[2], scenario.accel_bias_b_mps2[2], MICRO_G, "ug"),
-        ("offset e", s.reference_offset_n_rad[0], scenario.reference_offset_n_rad[0], 1.0 / ARCSEC_PER_RAD, "arcsec"),
-        ("offset n", s.reference_offset_n_rad[1], scenario.reference_offset_n_rad[1], 1.0 / ARCSEC_PER_RAD, "arcsec"),
-        ("offset u", s.reference_offset_n_rad[2], scenario.reference_offset_n_rad[2], 1.0 / ARCSEC_PER_RAD, "arcsec"),
+        (
+            "gyro x",
+            s.gyro_bias_b_radps[0],
+            scenario.gyro_bias_b_radps[0],
+            DEG_PER_HOUR,
+            "deg/h",
+        ),
+        (
+            "gyro y",
+            s.gyro_bias_b_radps[1],
+            scenario.gyro_bias_b_radps[1],
+            DEG_PER_HOUR,
+            "deg/h",
+        ),
+        (
+            "gyro z",
+            s.gyro_bias_b_radps[2],
+            scenario.gyro_bias_b_radps[2],
+            DEG_PER_HOUR,
+            "deg/h",
+        ),
+        (
+            "accel x",
+            s.accel_bias_b_mps2[0],
+            scenario.accel_bias_b_mps2[0],
+            MICRO_G,
+            "ug",
+        ),
+        (
+            "accel y",
+            s.accel_bias_b_mps2[1],
+            scenario.accel_bias_b_mps2[1],
+            MICRO_G,
+            "ug",
+        ),
+        (
+            "accel z",
+            s.accel_bias_b_mps2[2],
+            scenario.accel_bias_b_mps2[2],
+            MICRO_G,
+            "ug",
+        ),
+        (
+            "offset e",
+            s.reference_offset_n_rad[0],
+            scenario.reference_offset_n_rad[0],
+            1.0 / ARCSEC_PER_RAD,
+            "arcsec",
+        ),
+        (
+            "offset n",
+            s.reference_offset_n_rad[1],
+            scenario.reference_offset_n_rad[1],
+            1.0 / ARCSEC_PER_RAD,
+            "arcsec",
+        ),
+        (
+            "offset u",
+            s.reference_offset_n_rad[2],
+            scenario.reference_offset_n_rad[2],
+            1.0 / ARCSEC_PER_RAD,
+            "arcsec",
+        ),
     ];
     for (name, est, truth, unit, unit_name) in rows {
         match est {
@@ -235,7 +307,10 @@ fn demo(out: &Path, json: Option<&Path>) -> anyhow::Result<()> {
                 e.value as f64 / unit,
                 (e.value as f64 - truth) / e.std_error as f64
             ),
-            None => println!("  {name:<8} truth {:>+10.5} {unit_name:<6} unobservable", truth / unit),
+            None => println!(
+                "  {name:<8} truth {:>+10.5} {unit_name:<6} unobservable",
+                truth / unit
+            ),
         }
     }
     Ok(())
@@ -285,11 +360,21 @@ fn montecarlo_table(r: &montecarlo::Report) -> String {
             );
         }
     }
-    let _ = writeln!(out, "\nCramer-Rao bounds (standard deviation): angle model vs. all six channels of every dwell");
-    let _ = writeln!(out, "  {:<20} {:>7} {:>11} {:>14} {:>16} {:>12}", "parameter", "unit", "angles", "six channels", "channels, ref. exact", "angles/chan.");
+    let _ = writeln!(
+        out,
+        "\nCramer-Rao bounds (standard deviation): angle model vs. all six channels of every dwell"
+    );
+    let _ = writeln!(
+        out,
+        "  {:<20} {:>7} {:>11} {:>14} {:>16} {:>12}",
+        "parameter", "unit", "angles", "six channels", "channels, ref. exact", "angles/chan."
+    );
     for (i, p) in sinscal::solve::Parameter::ALL.iter().enumerate() {
         let (u, name) = unit(p.name());
-        let known = r.crb_channels_known_reference.get(i).map_or("-".to_string(), |v| format!("{:.5}", v / u));
+        let known = r
+            .crb_channels_known_reference
+            .get(i)
+            .map_or("-".to_string(), |v| format!("{:.5}", v / u));
         let _ = writeln!(
             out,
             "  {:<20} {:>7} {:>11.5} {:>14.5} {:>16} {:>12.2}",

@@ -128,9 +128,16 @@ impl CalibrationJson {
                 }
             })
             .collect();
-        let offset = s.reference_offset_estimated.then_some(s.reference_offset_n_rad);
+        let offset = s
+            .reference_offset_estimated
+            .then_some(s.reference_offset_n_rad);
         let prefilter = match c.prefilter {
-            Prefilter::None => PrefilterJson { kind: "none", a: None, q: None, r: None },
+            Prefilter::None => PrefilterJson {
+                kind: "none",
+                a: None,
+                q: None,
+                r: None,
+            },
             Prefilter::HmmKf { gyro, accel } => PrefilterJson {
                 kind: "hmmkf",
                 a: Some([gyro.a as f64, accel.a as f64]),
@@ -147,7 +154,11 @@ impl CalibrationJson {
             gyro_bias_std_radps: s.gyro_bias_b_radps.map(std),
             accel_bias_mps2: s.accel_bias_b_mps2.map(value),
             accel_bias_std_mps2: s.accel_bias_b_mps2.map(std),
-            unobservable: Parameter::ALL.iter().filter(|p| s.is_unobservable(**p)).map(|p| p.name()).collect(),
+            unobservable: Parameter::ALL
+                .iter()
+                .filter(|p| s.is_unobservable(**p))
+                .map(|p| p.name())
+                .collect(),
             reference_offset_rad: offset.map(|o| o.map(value)),
             reference_offset_std_rad: offset.map(|o| o.map(std)),
             chi_square: s.chi_square as f64,
@@ -200,7 +211,10 @@ pub fn summary(c: &Calibration) -> String {
     let prefilter = match c.prefilter {
         Prefilter::None => "none (plain dwell means)".to_string(),
         Prefilter::HmmKf { gyro, accel } => {
-            format!("HMM/KF, paper's Q and R, a = {:.3} (gyro), {:.3} (accel)", gyro.a, accel.a)
+            format!(
+                "HMM/KF, paper's Q and R, a = {:.3} (gyro), {:.3} (accel)",
+                gyro.a, accel.a
+            )
         }
     };
     let value = match c.options.dwell_value {
@@ -214,7 +228,8 @@ pub fn summary(c: &Calibration) -> String {
     );
     for (k, p) in c.positions.iter().enumerate() {
         let phi = p.angles.phi_n_rad.map(|x| x as f64 * ARCSEC_PER_RAD);
-        let sd = [0, 1, 2].map(|i| (p.angles.covariance_rad2.0[i][i] as f64).sqrt() * ARCSEC_PER_RAD);
+        let sd =
+            [0, 1, 2].map(|i| (p.angles.covariance_rad2.0[i][i] as f64).sqrt() * ARCSEC_PER_RAD);
         let res = s.residual_n_rad[k].map(|x| x as f64 * ARCSEC_PER_RAD);
         let _ = writeln!(
             out,
@@ -236,23 +251,49 @@ pub fn summary(c: &Calibration) -> String {
         );
     }
     let axes = ["x", "y", "z"];
-    let _ = writeln!(out, "\nGyro bias, body frame [deg/h] (estimate ± standard error):");
+    let _ = writeln!(
+        out,
+        "\nGyro bias, body frame [deg/h] (estimate ± standard error):"
+    );
     for (i, axis) in axes.iter().enumerate() {
-        let _ = writeln!(out, "  {axis}: {}", show(s.gyro_bias_b_radps[i], DEG_PER_HOUR, 5));
+        let _ = writeln!(
+            out,
+            "  {axis}: {}",
+            show(s.gyro_bias_b_radps[i], DEG_PER_HOUR, 5)
+        );
     }
-    let _ = writeln!(out, "Accelerometer bias, body frame [ug] (1 ug = 9.80665e-6 m/s^2):");
+    let _ = writeln!(
+        out,
+        "Accelerometer bias, body frame [ug] (1 ug = 9.80665e-6 m/s^2):"
+    );
     for (i, axis) in axes.iter().enumerate() {
-        let _ = writeln!(out, "  {axis}: {}", show(s.accel_bias_b_mps2[i], MICRO_G, 2));
+        let _ = writeln!(
+            out,
+            "  {axis}: {}",
+            show(s.accel_bias_b_mps2[i], MICRO_G, 2)
+        );
     }
     if s.reference_offset_estimated {
         let _ = writeln!(out, "Reference (turntable) offset phi0 [arcsec]:");
         for (i, axis) in ["e", "n", "u"].iter().enumerate() {
-            let _ = writeln!(out, "  {axis}: {}", show(s.reference_offset_n_rad[i], 1.0 / ARCSEC_PER_RAD, 2));
+            let _ = writeln!(
+                out,
+                "  {axis}: {}",
+                show(s.reference_offset_n_rad[i], 1.0 / ARCSEC_PER_RAD, 2)
+            );
         }
     }
-    let unobservable: Vec<&str> = Parameter::ALL.iter().filter(|p| s.is_unobservable(**p)).map(|p| p.name()).collect();
+    let unobservable: Vec<&str> = Parameter::ALL
+        .iter()
+        .filter(|p| s.is_unobservable(**p))
+        .map(|p| p.name())
+        .collect();
     if !unobservable.is_empty() {
-        let _ = writeln!(out, "Not determined by this schedule: {}", unobservable.join(", "));
+        let _ = writeln!(
+            out,
+            "Not determined by this schedule: {}",
+            unobservable.join(", ")
+        );
     }
     let _ = writeln!(
         out,

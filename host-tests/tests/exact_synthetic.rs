@@ -12,7 +12,12 @@ use sinscal_host::synth::{Scenario, DEG_PER_HOUR, MICRO_G};
 const GYRO_TOLERANCE_RADPS: f64 = 1e-3 * DEG_PER_HOUR;
 const ACCEL_TOLERANCE_MPS2: f64 = 3.0 * MICRO_G;
 
-fn check(gyro_signs: [f64; 3], accel_signs: [f64; 3], offset_rad: [f64; 3], options: Options) -> (f64, f64) {
+fn check(
+    gyro_signs: [f64; 3],
+    accel_signs: [f64; 3],
+    offset_rad: [f64; 3],
+    options: Options,
+) -> (f64, f64) {
     let scenario = Scenario {
         gyro_bias_b_radps: gyro_signs.map(|s| s * 0.05 * DEG_PER_HOUR),
         accel_bias_b_mps2: accel_signs.map(|s| s * 100.0 * MICRO_G),
@@ -26,8 +31,12 @@ fn check(gyro_signs: [f64; 3], accel_signs: [f64; 3], offset_rad: [f64; 3], opti
     let s = &cal.solution;
     let mut worst = (0.0f64, 0.0f64);
     for i in 0..3 {
-        let eps = s.gyro_bias_b_radps[i].expect("Table 1 determines every gyro bias").value as f64;
-        let nabla = s.accel_bias_b_mps2[i].expect("Table 1 determines every accelerometer bias").value as f64;
+        let eps = s.gyro_bias_b_radps[i]
+            .expect("Table 1 determines every gyro bias")
+            .value as f64;
+        let nabla = s.accel_bias_b_mps2[i]
+            .expect("Table 1 determines every accelerometer bias")
+            .value as f64;
         let (eps_true, nabla_true) = (scenario.gyro_bias_b_radps[i], scenario.accel_bias_b_mps2[i]);
         assert_eq!(eps.signum(), eps_true.signum(), "gyro {i}: sign");
         assert_eq!(nabla.signum(), nabla_true.signum(), "accel {i}: sign");
@@ -52,7 +61,11 @@ fn check(gyro_signs: [f64; 3], accel_signs: [f64; 3], offset_rad: [f64; 3], opti
             // First order in the angles: the neglected products of the offset (up to 60 arcsec) with the
             // heading angles of the positions (about 1000 arcsec from the gyro biases) are about 0.3
             // arcsec. Within 3e-6 rad (0.6 arcsec).
-            assert!((got - offset_rad[i]).abs() < 3e-6, "offset {i}: {got} vs {}", offset_rad[i]);
+            assert!(
+                (got - offset_rad[i]).abs() < 3e-6,
+                "offset {i}: {got} vs {}",
+                offset_rad[i]
+            );
         }
     }
     assert!(s.chi_square.is_finite());
@@ -64,11 +77,17 @@ fn both_signs_on_every_axis_with_and_without_prefilter() {
     let mut report = Vec::new();
     for prefilter in [PrefilterKind::None, PrefilterKind::HmmKf] {
         for signs in [[1.0, -1.0, 1.0], [-1.0, 1.0, -1.0]] {
-            let options = Options { prefilter, ..Options::default() };
+            let options = Options {
+                prefilter,
+                ..Options::default()
+            };
             // Gyro and accelerometer signs crossed, so no pair of axes shares a sign pattern.
             let accel_signs = [signs[1], signs[0], signs[0]];
             let worst = check(signs, accel_signs, [0.0; 3], options);
-            report.push(format!("{prefilter:?} {signs:?}: worst {:.2e} deg/h, {:.3} ug", worst.0, worst.1));
+            report.push(format!(
+                "{prefilter:?} {signs:?}: worst {:.2e} deg/h, {:.3} ug",
+                worst.0, worst.1
+            ));
         }
     }
     // Shown with --nocapture: the first-order accuracy actually reached.
@@ -79,25 +98,42 @@ fn both_signs_on_every_axis_with_and_without_prefilter() {
 fn reference_offset_is_separated_from_the_biases() {
     let arcsec = 1.0 / 206_264.806;
     let offset = [20.0 * arcsec, -15.0 * arcsec, 60.0 * arcsec];
-    let worst = check([1.0, 1.0, -1.0], [-1.0, 1.0, 1.0], offset, Options::default());
-    println!("with offset: worst {:.2e} deg/h, {:.3} ug", worst.0, worst.1);
+    let worst = check(
+        [1.0, 1.0, -1.0],
+        [-1.0, 1.0, 1.0],
+        offset,
+        Options::default(),
+    );
+    println!(
+        "with offset: worst {:.2e} deg/h, {:.3} ug",
+        worst.0, worst.1
+    );
 }
 
 #[test]
 fn without_the_offset_parameter_an_exact_table_still_gives_the_biases() {
-    let options = Options { estimate_reference_offset: false, ..Options::default() };
+    let options = Options {
+        estimate_reference_offset: false,
+        ..Options::default()
+    };
     check([1.0, -1.0, -1.0], [1.0, 1.0, -1.0], [0.0; 3], options);
 }
 
 #[test]
 fn settled_output_and_identified_coefficient_on_exact_data() {
     // On exact data every variant sees the same constants (the filter passes DC exactly).
-    let options = Options { dwell_value: DwellValue::Settled, ..Options::default() };
+    let options = Options {
+        dwell_value: DwellValue::Settled,
+        ..Options::default()
+    };
     check([1.0, -1.0, 1.0], [1.0, -1.0, 1.0], [0.0; 3], options);
     // Coefficient identification needs a non-constant window: with exact data it must refuse, clearly.
     let scenario = Scenario::table1_exact();
     let rec = scenario.recording(0, "exact.csv");
-    let options = Options { coefficient: Coefficient::Identify, ..Options::default() };
+    let options = Options {
+        coefficient: Coefficient::Identify,
+        ..Options::default()
+    };
     let err = calibrate(&rec, &options).unwrap_err().to_string();
     assert!(err.contains("cannot identify the coefficient a"), "{err}");
 }
@@ -120,7 +156,13 @@ fn a_flipped_phi_convention_would_be_caught() {
     let mut flipped = BiasSolver::new(site, SolverSettings::default());
     for (p, deg) in cal.positions.iter().zip(TABLE1_POSITIONS_DEG) {
         let c = Attitude::from_degrees(deg[0], deg[1], deg[2]).c_b_n();
-        flipped.add(&c, p.angles.phi_n_rad.map(|x| -x), &p.angles.covariance_rad2).unwrap();
+        flipped
+            .add(
+                &c,
+                p.angles.phi_n_rad.map(|x| -x),
+                &p.angles.covariance_rad2,
+            )
+            .unwrap();
     }
     let f = flipped.solve().unwrap();
     for i in 0..3 {
