@@ -21,10 +21,7 @@ pub struct KahanSum {
 impl KahanSum {
     /// An empty sum.
     pub const fn new() -> KahanSum {
-        KahanSum {
-            sum: 0.0,
-            compensation: 0.0,
-        }
+        KahanSum { sum: 0.0, compensation: 0.0 }
     }
 
     /// Adds `x`. (The compiler does not reassociate floating-point additions, so the compensation
@@ -57,12 +54,7 @@ pub struct DwellStats {
 impl DwellStats {
     /// An empty accumulator.
     pub const fn new() -> DwellStats {
-        DwellStats {
-            count: 0,
-            shift: 0.0,
-            sum: KahanSum::new(),
-            sum_sq: KahanSum::new(),
-        }
+        DwellStats { count: 0, shift: 0.0, sum: KahanSum::new(), sum_sq: KahanSum::new() }
     }
 
     /// Adds one sample. The first sample becomes the shift.
@@ -118,9 +110,7 @@ mod tests {
         // 72,000 samples (12 minutes at 100 Hz) of 9.8 m/s^2 + 1e-3 noise + a slow ramp.
         let mut acc = DwellStats::new();
         let mut seed = 0x1234_5678u32;
-        let xs: Vec<f32> = (0..72_000)
-            .map(|k| 9.806_65 + 1e-3 * noise(&mut seed) + 2e-9 * k as f32)
-            .collect();
+        let xs: Vec<f32> = (0..72_000).map(|k| 9.806_65 + 1e-3 * noise(&mut seed) + 2e-9 * k as f32).collect();
         for &x in &xs {
             acc.add(x);
         }

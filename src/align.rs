@@ -21,9 +21,7 @@ pub enum AlignError {
 impl core::fmt::Display for AlignError {
     fn fmt(&self, f: &mut core::fmt::Formatter<'_>) -> core::fmt::Result {
         f.write_str(match self {
-            AlignError::Degenerate => {
-                "specific force and angular rate are parallel: attitude not determined"
-            }
+            AlignError::Degenerate => "specific force and angular rate are parallel: attitude not determined",
             AlignError::NotFinite => "alignment input is NaN or infinite",
         })
     }
@@ -44,16 +42,8 @@ pub const MIN_FORCE_RATE_SINE: f32 = 1e-3;
 ///     C_hat_b^n = M_n M_b^-1   ( = [v^n]^-T [v^b]^T of METHOD.md when the brackets hold the vectors as columns).
 /// The result is not exactly orthogonal for noisy input; [`misalignment_n_rad`] reads the first-order
 /// angles from its skew-symmetric part.
-pub fn coarse_align(
-    force_b_mps2: Vec3,
-    rate_b_radps: Vec3,
-    site: &Site,
-) -> Result<Mat3, AlignError> {
-    if !(force_b_mps2
-        .iter()
-        .chain(rate_b_radps.iter())
-        .all(|x| x.is_finite()))
-    {
+pub fn coarse_align(force_b_mps2: Vec3, rate_b_radps: Vec3, site: &Site) -> Result<Mat3, AlignError> {
+    if !(force_b_mps2.iter().chain(rate_b_radps.iter()).all(|x| x.is_finite())) {
         return Err(AlignError::NotFinite);
     }
     let frame = |f: Vec3, w: Vec3| {
@@ -62,16 +52,11 @@ pub fn coarse_align(
     };
     let v2_b = cross(force_b_mps2, rate_b_radps);
     let denominator = norm(force_b_mps2) * norm(rate_b_radps);
-    if denominator <= 0.0
-        || !denominator.is_finite()
-        || norm(v2_b) < MIN_FORCE_RATE_SINE * denominator
-    {
+    if denominator <= 0.0 || !denominator.is_finite() || norm(v2_b) < MIN_FORCE_RATE_SINE * denominator {
         return Err(AlignError::Degenerate);
     }
     let m_n = frame(site.force_at_rest_n_mps2(), site.earth_rate_n_radps());
-    let m_b_inv = frame(force_b_mps2, rate_b_radps)
-        .inverse()
-        .ok_or(AlignError::Degenerate)?;
+    let m_b_inv = frame(force_b_mps2, rate_b_radps).inverse().ok_or(AlignError::Degenerate)?;
     let c_hat_b_n = m_n.mul(&m_b_inv);
     if !c_hat_b_n.is_finite() {
         return Err(AlignError::NotFinite);
@@ -120,12 +105,7 @@ pub fn position_angles(
             let [gain_gyro, gain_accel] = summary.settled_noise_gain;
             let fv = sq(summary.force_sample_std_b_mps2).map(|v| v * gain_accel);
             let wv = sq(summary.rate_sample_std_b_radps).map(|v| v * gain_gyro);
-            (
-                summary.force_settled_b_mps2,
-                summary.rate_settled_b_radps,
-                fv,
-                wv,
-            )
+            (summary.force_settled_b_mps2, summary.rate_settled_b_radps, fv, wv)
         }
     };
     let c_hat_b_n = coarse_align(force, rate, site)?;
@@ -143,15 +123,9 @@ pub fn position_angles(
 ///     phi_e = -df_n / g,   phi_n = df_e / g,   phi_u = -dw_e / (W cos L) + tan L df_e / g
 /// with `df_n = C_b^n df_b` and `dw_n = C_b^n dw_b`. Note the correlation of `phi_n` and `phi_u` through
 /// `df_e`.
-pub fn angle_covariance_rad2(
-    c_b_n: &Mat3,
-    force_var_b_mps2sq: Vec3,
-    rate_var_b_radps2: Vec3,
-    site: &Site,
-) -> Mat3 {
+pub fn angle_covariance_rad2(c_b_n: &Mat3, force_var_b_mps2sq: Vec3, rate_var_b_radps2: Vec3, site: &Site) -> Mat3 {
     let c = &c_b_n.0;
-    let weighted =
-        |r1: usize, r2: usize, var: Vec3| (0..3).map(|j| c[r1][j] * c[r2][j] * var[j]).sum::<f32>();
+    let weighted = |r1: usize, r2: usize, var: Vec3| (0..3).map(|j| c[r1][j] * c[r2][j] * var[j]).sum::<f32>();
     let (e, n) = (0, 1);
     let g2 = site.gravity_mps2 * site.gravity_mps2;
     let omega = site.earth_rate_north_radps();
@@ -175,21 +149,13 @@ mod tests {
     use crate::frames::Attitude;
 
     fn site() -> Site {
-        Site {
-            latitude_rad: 45.7796f32.to_radians(),
-            gravity_mps2: 9.8063,
-        }
+        Site { latitude_rad: 45.7796f32.to_radians(), gravity_mps2: 9.8063 }
     }
 
     #[test]
     fn exact_vectors_give_the_true_attitude() {
         let s = site();
-        for (p, r, h) in [
-            (0.0, 0.0, 0.0),
-            (0.0, 90.0, 0.0),
-            (3.0, -20.0, 250.0),
-            (0.0, 0.0, 270.0),
-        ] {
+        for (p, r, h) in [(0.0, 0.0, 0.0), (0.0, 90.0, 0.0), (3.0, -20.0, 250.0), (0.0, 0.0, 270.0)] {
             let c = Attitude::from_degrees(p, r, h).c_b_n();
             let f_b = c.transpose().mul_vec(s.force_at_rest_n_mps2());
             let w_b = c.transpose().mul_vec(s.earth_rate_n_radps());
@@ -201,18 +167,9 @@ mod tests {
     #[test]
     fn parallel_force_and_rate_are_rejected() {
         let s = site();
-        assert_eq!(
-            coarse_align([0.0, 0.0, 9.8], [0.0, 0.0, 7e-5], &s),
-            Err(AlignError::Degenerate)
-        );
-        assert_eq!(
-            coarse_align([0.0, 0.0, 9.8], [0.0; 3], &s),
-            Err(AlignError::Degenerate)
-        );
-        assert_eq!(
-            coarse_align([f32::NAN, 0.0, 9.8], [0.0, 7e-5, 0.0], &s),
-            Err(AlignError::NotFinite)
-        );
+        assert_eq!(coarse_align([0.0, 0.0, 9.8], [0.0, 0.0, 7e-5], &s), Err(AlignError::Degenerate));
+        assert_eq!(coarse_align([0.0, 0.0, 9.8], [0.0; 3], &s), Err(AlignError::Degenerate));
+        assert_eq!(coarse_align([f32::NAN, 0.0, 9.8], [0.0, 7e-5, 0.0], &s), Err(AlignError::NotFinite));
     }
 
     #[test]

@@ -37,10 +37,7 @@ pub enum Prefilter {
 impl Prefilter {
     /// The HMM/KF with the paper's Q and R and `a` = 1.
     pub fn paper() -> Prefilter {
-        Prefilter::HmmKf {
-            gyro: PrefilterSettings::paper_gyro(),
-            accel: PrefilterSettings::paper_accel(),
-        }
+        Prefilter::HmmKf { gyro: PrefilterSettings::paper_gyro(), accel: PrefilterSettings::paper_accel() }
     }
 }
 
@@ -62,10 +59,7 @@ impl core::fmt::Display for DwellError {
     fn fmt(&self, f: &mut core::fmt::Formatter<'_>) -> core::fmt::Result {
         match self {
             DwellError::TooFewSamples { samples } => {
-                write!(
-                    f,
-                    "dwell has {samples} samples, at least {MIN_DWELL_SAMPLES} are needed"
-                )
+                write!(f, "dwell has {samples} samples, at least {MIN_DWELL_SAMPLES} are needed")
             }
             DwellError::NotFinite => f.write_str("sample is NaN or infinite"),
         }
@@ -207,10 +201,7 @@ mod tests {
 
     #[test]
     fn constant_input_gives_exact_means_with_and_without_prefilter() {
-        let s = ImuSample {
-            rate_b_radps: [1e-5, -2e-5, 7e-5],
-            force_b_mps2: [0.01, -0.02, 9.8],
-        };
+        let s = ImuSample { rate_b_radps: [1e-5, -2e-5, 7e-5], force_b_mps2: [0.01, -0.02, 9.8] };
         for p in [Prefilter::None, Prefilter::paper()] {
             let mut c = DwellCollector::new(&p).unwrap();
             for _ in 0..6000 {
@@ -228,14 +219,8 @@ mod tests {
     #[test]
     fn non_finite_samples_are_counted_not_used() {
         let mut c = DwellCollector::new(&Prefilter::None).unwrap();
-        let good = ImuSample {
-            rate_b_radps: [0.0; 3],
-            force_b_mps2: [0.0, 0.0, 9.8],
-        };
-        let bad = ImuSample {
-            rate_b_radps: [f32::NAN, 0.0, 0.0],
-            ..good
-        };
+        let good = ImuSample { rate_b_radps: [0.0; 3], force_b_mps2: [0.0, 0.0, 9.8] };
+        let bad = ImuSample { rate_b_radps: [f32::NAN, 0.0, 0.0], ..good };
         for _ in 0..20 {
             c.update(&good).unwrap();
         }

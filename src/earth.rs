@@ -35,8 +35,7 @@ pub fn normal_gravity_mps2(latitude_rad: f32, height_m: f32) -> f32 {
         s * s
     };
     let h = height_m as f64;
-    let gamma =
-        WGS84_GAMMA_E_MPS2 * (1.0 + WGS84_SOMIGLIANA_K * s2) / libm::sqrt(1.0 - WGS84_E2 * s2);
+    let gamma = WGS84_GAMMA_E_MPS2 * (1.0 + WGS84_SOMIGLIANA_K * s2) / libm::sqrt(1.0 - WGS84_E2 * s2);
     let corr = 1.0 - 2.0 / WGS84_A_M * (1.0 + WGS84_F + WGS84_M - 2.0 * WGS84_F * s2) * h
         + 3.0 * h * h / (WGS84_A_M * WGS84_A_M);
     (gamma * corr) as f32
@@ -55,10 +54,7 @@ pub struct Site {
 impl Site {
     /// A site with normal gravity at the given latitude and height.
     pub fn with_normal_gravity(latitude_rad: f32, height_m: f32) -> Site {
-        Site {
-            latitude_rad,
-            gravity_mps2: normal_gravity_mps2(latitude_rad, height_m),
-        }
+        Site { latitude_rad, gravity_mps2: normal_gravity_mps2(latitude_rad, height_m) }
     }
 
     /// Specific force of a body at rest in the navigation frame: `f_n = [0, 0, +g]` (ENU, pointing up).
@@ -68,11 +64,7 @@ impl Site {
 
     /// Earth rotation in the navigation frame: `w_ie_n = [0, W cos L, W sin L]` (ENU).
     pub fn earth_rate_n_radps(&self) -> Vec3 {
-        [
-            0.0,
-            EARTH_RATE_RADPS * libm::cosf(self.latitude_rad),
-            EARTH_RATE_RADPS * libm::sinf(self.latitude_rad),
-        ]
+        [0.0, EARTH_RATE_RADPS * libm::cosf(self.latitude_rad), EARTH_RATE_RADPS * libm::sinf(self.latitude_rad)]
     }
 
     /// Horizontal (north) component of Earth rotation `Omega_n = W cos L`, rad/s.

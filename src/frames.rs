@@ -33,9 +33,7 @@ impl Attitude {
 
     /// The body-to-navigation direction cosine matrix `C_b^n = Rz(-psi) Rx(theta) Ry(gamma)`.
     pub fn c_b_n(&self) -> Mat3 {
-        rot_z(-self.heading_rad)
-            .mul(&rot_x(self.pitch_rad))
-            .mul(&rot_y(self.roll_rad))
+        rot_z(-self.heading_rad).mul(&rot_x(self.pitch_rad)).mul(&rot_y(self.roll_rad))
     }
 }
 
@@ -82,11 +80,7 @@ fn rot_z(t: f32) -> Mat3 {
 pub fn misalignment_n_rad(c_hat_b_n: &Mat3, c_b_n: &Mat3) -> Vec3 {
     let p = c_hat_b_n.mul(&c_b_n.transpose()).0;
     // E = I - P; [phi x] = [[0,-u,n],[u,0,-e],[-n,e,0]] => e = (E21 - E12)/2 = (P12 - P21)/2, etc.
-    [
-        0.5 * (p[1][2] - p[2][1]),
-        0.5 * (p[2][0] - p[0][2]),
-        0.5 * (p[0][1] - p[1][0]),
-    ]
+    [0.5 * (p[1][2] - p[2][1]), 0.5 * (p[2][0] - p[0][2]), 0.5 * (p[0][1] - p[1][0])]
 }
 
 #[cfg(test)]
@@ -137,11 +131,7 @@ mod tests {
         let c = Attitude::from_degrees(5.0, 80.0, 123.0).c_b_n();
         let phi = [2e-4f32, -3e-4, 5e-3];
         let c_hat = Mat3::IDENTITY;
-        let i_minus_skew = Mat3([
-            [1.0, phi[2], -phi[1]],
-            [-phi[2], 1.0, phi[0]],
-            [phi[1], -phi[0], 1.0],
-        ]);
+        let i_minus_skew = Mat3([[1.0, phi[2], -phi[1]], [-phi[2], 1.0, phi[0]], [phi[1], -phi[0], 1.0]]);
         let c_hat = c_hat.mul(&i_minus_skew).mul(&c);
         let got = misalignment_n_rad(&c_hat, &c);
         for i in 0..3 {

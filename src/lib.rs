@@ -21,6 +21,7 @@
 
 pub mod accumulate;
 pub mod align;
+pub mod calibration;
 pub mod dwell;
 pub mod earth;
 pub mod frames;

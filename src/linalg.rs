@@ -15,11 +15,7 @@ pub fn dot(a: Vec3, b: Vec3) -> f32 {
 /// Cross product `a x b` (right-handed).
 #[inline]
 pub fn cross(a: Vec3, b: Vec3) -> Vec3 {
-    [
-        a[1] * b[2] - a[2] * b[1],
-        a[2] * b[0] - a[0] * b[2],
-        a[0] * b[1] - a[1] * b[0],
-    ]
+    [a[1] * b[2] - a[2] * b[1], a[2] * b[0] - a[0] * b[2], a[0] * b[1] - a[1] * b[0]]
 }
 
 /// Euclidean norm.
@@ -102,11 +98,7 @@ impl Mat3 {
             return None;
         }
         let inv_det = 1.0 / det;
-        Some(Mat3::from_rows(
-            scale(r0, inv_det),
-            scale(cross(c2, c0), inv_det),
-            scale(cross(c0, c1), inv_det),
-        ))
+        Some(Mat3::from_rows(scale(r0, inv_det), scale(cross(c2, c0), inv_det), scale(cross(c0, c1), inv_det)))
     }
 
     /// Elementwise finiteness.

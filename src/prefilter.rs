@@ -32,22 +32,14 @@ impl PrefilterSettings {
     /// The paper's gyro setting: Q = (0.005 deg/h)^2, R = (0.1 deg/h)^2 per sample, with `a` = 1.
     pub fn paper_gyro() -> PrefilterSettings {
         let (q, r) = (0.005 * DEG_PER_HOUR_IN_RADPS, 0.1 * DEG_PER_HOUR_IN_RADPS);
-        PrefilterSettings {
-            a: 1.0,
-            q: q * q,
-            r: r * r,
-        }
+        PrefilterSettings { a: 1.0, q: q * q, r: r * r }
     }
 
     /// The paper's accelerometer setting: Q = (5e-4 g)^2, R = (100e-4 g)^2 per sample, with `a` = 1
     /// (g = standard gravity 9.80665 m/s^2 as the unit).
     pub fn paper_accel() -> PrefilterSettings {
         let (q, r) = (5e-4 * STANDARD_GRAVITY_MPS2, 100e-4 * STANDARD_GRAVITY_MPS2);
-        PrefilterSettings {
-            a: 1.0,
-            q: q * q,
-            r: r * r,
-        }
+        PrefilterSettings { a: 1.0, q: q * q, r: r * r }
     }
 
     /// The same noise setting with another transition coefficient.
@@ -73,9 +65,7 @@ impl core::fmt::Display for PrefilterError {
     fn fmt(&self, f: &mut core::fmt::Formatter<'_>) -> core::fmt::Result {
         f.write_str(match self {
             PrefilterError::BadCoefficient => "prefilter coefficient a must be in [0, 1]",
-            PrefilterError::BadNoise => {
-                "prefilter noise variances q and r must be positive and finite"
-            }
+            PrefilterError::BadNoise => "prefilter noise variances q and r must be positive and finite",
             PrefilterError::NotSettled => "prefilter Kalman gain did not settle",
         })
     }
@@ -104,22 +94,13 @@ pub const MAX_RICCATI_ITERATIONS: u32 = 64;
 
 fn mat2_mul(a: &Mat2, b: &Mat2) -> Mat2 {
     [
-        [
-            a[0][0] * b[0][0] + a[0][1] * b[1][0],
-            a[0][0] * b[0][1] + a[0][1] * b[1][1],
-        ],
-        [
-            a[1][0] * b[0][0] + a[1][1] * b[1][0],
-            a[1][0] * b[0][1] + a[1][1] * b[1][1],
-        ],
+        [a[0][0] * b[0][0] + a[0][1] * b[1][0], a[0][0] * b[0][1] + a[0][1] * b[1][1]],
+        [a[1][0] * b[0][0] + a[1][1] * b[1][0], a[1][0] * b[0][1] + a[1][1] * b[1][1]],
     ]
 }
 
 fn mat2_add(a: &Mat2, b: &Mat2) -> Mat2 {
-    [
-        [a[0][0] + b[0][0], a[0][1] + b[0][1]],
-        [a[1][0] + b[1][0], a[1][1] + b[1][1]],
-    ]
+    [[a[0][0] + b[0][0], a[0][1] + b[0][1]], [a[1][0] + b[1][0], a[1][1] + b[1][1]]]
 }
 
 fn mat2_transpose(a: &Mat2) -> Mat2 {
@@ -136,10 +117,7 @@ fn mat2_inverse(a: &Mat2) -> Option<Mat2> {
     if det == 0.0 || !det.is_finite() {
         return None;
     }
-    Some([
-        [a[1][1] / det, -a[0][1] / det],
-        [-a[1][0] / det, a[0][0] / det],
-    ])
+    Some([[a[1][1] / det, -a[0][1] / det], [-a[1][0] / det, a[0][0] / det]])
 }
 
 const I2: Mat2 = [[1.0, 0.0], [0.0, 1.0]];
@@ -175,27 +153,16 @@ pub fn steady_gain(settings: &PrefilterSettings) -> Result<SteadyGain, Prefilter
     let mut big_g = I2;
     let mut big_h: Mat2 = [[q_rel, 0.0], [0.0, q_rel]];
     for iteration in 1..=MAX_RICCATI_ITERATIONS {
-        let w_inv = mat2_inverse(&mat2_add(&I2, &mat2_mul(&big_g, &big_h)))
-            .ok_or(PrefilterError::NotSettled)?;
+        let w_inv = mat2_inverse(&mat2_add(&I2, &mat2_mul(&big_g, &big_h))).ok_or(PrefilterError::NotSettled)?;
         let a_w = mat2_mul(&big_a, &w_inv);
         let next_a = mat2_mul(&a_w, &big_a);
-        let next_g = mat2_symmetrise(&mat2_add(
-            &big_g,
-            &mat2_mul(&mat2_mul(&a_w, &big_g), &mat2_transpose(&big_a)),
-        ));
+        let next_g = mat2_symmetrise(&mat2_add(&big_g, &mat2_mul(&mat2_mul(&a_w, &big_g), &mat2_transpose(&big_a))));
         let next_h = mat2_symmetrise(&mat2_add(
             &big_h,
-            &mat2_mul(
-                &mat2_mul(&mat2_transpose(&big_a), &big_h),
-                &mat2_mul(&w_inv, &big_a),
-            ),
+            &mat2_mul(&mat2_mul(&mat2_transpose(&big_a), &big_h), &mat2_mul(&w_inv, &big_a)),
         ));
-        let change = (0..4)
-            .map(|m| (next_h[m / 2][m % 2] - big_h[m / 2][m % 2]).abs())
-            .fold(0.0f32, f32::max);
-        let size = (0..4)
-            .map(|m| next_h[m / 2][m % 2].abs())
-            .fold(0.0f32, f32::max);
+        let change = (0..4).map(|m| (next_h[m / 2][m % 2] - big_h[m / 2][m % 2]).abs()).fold(0.0f32, f32::max);
+        let size = (0..4).map(|m| next_h[m / 2][m % 2].abs()).fold(0.0f32, f32::max);
         big_a = next_a;
         big_g = next_g;
         big_h = next_h;
@@ -209,18 +176,12 @@ pub fn steady_gain(settings: &PrefilterSettings) -> Result<SteadyGain, Prefilter
             let mut p_pred = mat2_mul(&mat2_mul(&f, &p_post), &mat2_transpose(&f));
             p_pred[0][0] += q_rel;
             p_pred[1][1] += q_rel;
-            let check =
-                gain_from_predicted(&mat2_symmetrise(&p_pred)).ok_or(PrefilterError::NotSettled)?;
-            let step = (0..4)
-                .map(|m| (check[m / 2][m % 2] - gain[m / 2][m % 2]).abs())
-                .fold(0.0f32, f32::max);
+            let check = gain_from_predicted(&mat2_symmetrise(&p_pred)).ok_or(PrefilterError::NotSettled)?;
+            let step = (0..4).map(|m| (check[m / 2][m % 2] - gain[m / 2][m % 2]).abs()).fold(0.0f32, f32::max);
             if step > GAIN_TOLERANCE {
                 return Err(PrefilterError::NotSettled);
             }
-            return Ok(SteadyGain {
-                gain,
-                iterations: iteration,
-            });
+            return Ok(SteadyGain { gain, iterations: iteration });
         }
     }
     Err(PrefilterError::NotSettled)
@@ -252,13 +213,7 @@ impl HmmKf {
 
     /// A filter with a given gain (for example one computed once and shared by three channels).
     pub fn with_gain(a: f32, gain: Mat2) -> HmmKf {
-        HmmKf {
-            a,
-            gain,
-            state: [0.0; 2],
-            previous_raw: 0.0,
-            started: false,
-        }
+        HmmKf { a, gain, state: [0.0; 2], previous_raw: 0.0, started: false }
     }
 
     /// The gain `K_off` in use.
@@ -297,10 +252,8 @@ impl HmmKf {
         let pred = [x1 + self.a * (x0 - x1), x0];
         let innov = [raw - pred[0], self.previous_raw - pred[1]];
         let k = &self.gain;
-        self.state = [
-            pred[0] + k[0][0] * innov[0] + k[0][1] * innov[1],
-            pred[1] + k[1][0] * innov[0] + k[1][1] * innov[1],
-        ];
+        self.state =
+            [pred[0] + k[0][0] * innov[0] + k[0][1] * innov[1], pred[1] + k[1][0] * innov[0] + k[1][1] * innov[1]];
         self.previous_raw = raw;
     }
 
@@ -362,8 +315,7 @@ impl CoefficientIdentifier {
             let d = raw - self.previous_raw;
             if self.count >= 2 {
                 self.lagged_products.add(d * self.previous_difference);
-                self.lagged_squares
-                    .add(self.previous_difference * self.previous_difference);
+                self.lagged_squares.add(self.previous_difference * self.previous_difference);
             }
             self.previous_difference = d;
         }
@@ -402,17 +354,13 @@ mod tests {
             let mut pp = [[0.0; 2]; 2];
             for i in 0..2 {
                 for j in 0..2 {
-                    pp[i][j] = (0..2).map(|m| fp[i][m] * f[j][m]).sum::<f64>()
-                        + if i == j { q } else { 0.0 };
+                    pp[i][j] = (0..2).map(|m| fp[i][m] * f[j][m]).sum::<f64>() + if i == j { q } else { 0.0 };
                 }
             }
             // S = P_pred + R, K = P_pred S^-1
             let s = [[pp[0][0] + r, pp[0][1]], [pp[1][0], pp[1][1] + r]];
             let det = s[0][0] * s[1][1] - s[0][1] * s[1][0];
-            let si = [
-                [s[1][1] / det, -s[0][1] / det],
-                [-s[1][0] / det, s[0][0] / det],
-            ];
+            let si = [[s[1][1] / det, -s[0][1] / det], [-s[1][0] / det, s[0][0] / det]];
             let mut kn = [[0.0; 2]; 2];
             for i in 0..2 {
                 for j in 0..2 {
@@ -425,9 +373,7 @@ mod tests {
                     p[i][j] = pp[i][j] - (0..2).map(|m| kn[i][m] * pp[m][j]).sum::<f64>();
                 }
             }
-            let change = (0..4)
-                .map(|m| (kn[m / 2][m % 2] - k[m / 2][m % 2]).abs())
-                .fold(0.0, f64::max);
+            let change = (0..4).map(|m| (kn[m / 2][m % 2] - k[m / 2][m % 2]).abs()).fold(0.0, f64::max);
             k = kn;
             if change < 1e-15 {
                 break;
@@ -450,11 +396,7 @@ mod tests {
                 for j in 0..2 {
                     // f32 fixed point of the recursion: within 1e-5 relative of the f64 solution.
                     let err = (got.gain[i][j] as f64 - want[i][j]).abs();
-                    assert!(
-                        err < 1e-5 * want[i][j].abs().max(1e-2),
-                        "{name}: K[{i}][{j}] {:?} vs {want:?}",
-                        got.gain
-                    );
+                    assert!(err < 1e-5 * want[i][j].abs().max(1e-2), "{name}: K[{i}][{j}] {:?} vs {want:?}", got.gain);
                 }
             }
         }
@@ -462,10 +404,7 @@ mod tests {
 
     #[test]
     fn constant_passes_bit_exactly() {
-        for settings in [
-            PrefilterSettings::paper_gyro(),
-            PrefilterSettings::paper_accel().with_a(0.37),
-        ] {
+        for settings in [PrefilterSettings::paper_gyro(), PrefilterSettings::paper_accel().with_a(0.37)] {
             let mut f = HmmKf::new(&settings).unwrap();
             for &c in &[9.806_65f32, -7.292_115e-5, 0.0, 1.0e-30] {
                 f.reset();
@@ -481,10 +420,7 @@ mod tests {
         let f = HmmKf::new(&PrefilterSettings::paper_gyro()).unwrap();
         let (dc, noise_gain) = f.impulse_response_sums();
         assert!((dc - 1.0).abs() < 1e-4, "DC gain {dc}");
-        assert!(
-            noise_gain > 0.0 && noise_gain < 0.2,
-            "noise gain {noise_gain}"
-        );
+        assert!(noise_gain > 0.0 && noise_gain < 0.2, "noise gain {noise_gain}");
         let mut f = f;
         f.update(0.0);
         let mut y = 0.0;
@@ -497,27 +433,16 @@ mod tests {
     #[test]
     fn bad_settings_are_rejected() {
         let s = PrefilterSettings::paper_gyro();
-        assert_eq!(
-            steady_gain(&s.with_a(1.5)),
-            Err(PrefilterError::BadCoefficient)
-        );
-        assert_eq!(
-            steady_gain(&s.with_a(f32::NAN)),
-            Err(PrefilterError::BadCoefficient)
-        );
-        assert_eq!(
-            steady_gain(&PrefilterSettings { q: 0.0, ..s }),
-            Err(PrefilterError::BadNoise)
-        );
+        assert_eq!(steady_gain(&s.with_a(1.5)), Err(PrefilterError::BadCoefficient));
+        assert_eq!(steady_gain(&s.with_a(f32::NAN)), Err(PrefilterError::BadCoefficient));
+        assert_eq!(steady_gain(&PrefilterSettings { q: 0.0, ..s }), Err(PrefilterError::BadNoise));
     }
 
     fn lcg_gauss(state: &mut u64) -> f32 {
         // Sum of 12 uniforms minus 6: a unit-variance, near-Gaussian deviate (good enough for this test).
         let mut s = 0.0;
         for _ in 0..12 {
-            *state = state
-                .wrapping_mul(6364136223846793005)
-                .wrapping_add(1442695040888963407);
+            *state = state.wrapping_mul(6364136223846793005).wrapping_add(1442695040888963407);
             s += (*state >> 40) as f32 / (1u64 << 24) as f32;
         }
         s - 6.0

@@ -53,11 +53,7 @@ impl Parameter {
     pub fn name(&self) -> &'static str {
         const GYRO: [&str; 3] = ["gyro_bias_x", "gyro_bias_y", "gyro_bias_z"];
         const ACCEL: [&str; 3] = ["accel_bias_x", "accel_bias_y", "accel_bias_z"];
-        const OFFSET: [&str; 3] = [
-            "reference_offset_e",
-            "reference_offset_n",
-            "reference_offset_u",
-        ];
+        const OFFSET: [&str; 3] = ["reference_offset_e", "reference_offset_n", "reference_offset_u"];
         match *self {
             Parameter::GyroBias(i) => GYRO[i],
             Parameter::AccelBias(i) => ACCEL[i],
@@ -82,11 +78,7 @@ pub struct SolverSettings {
 
 impl Default for SolverSettings {
     fn default() -> SolverSettings {
-        SolverSettings {
-            estimate_reference_offset: true,
-            angle_floor_std_rad: 1.2e-7,
-            rank_tolerance: 1e-5,
-        }
+        SolverSettings { estimate_reference_offset: true, angle_floor_std_rad: 1.2e-7, rank_tolerance: 1e-5 }
     }
 }
 
@@ -108,9 +100,7 @@ impl core::fmt::Display for SolveError {
         match self {
             SolveError::TooManyPositions => write!(f, "more than {MAX_POSITIONS} positions"),
             SolveError::NoPositions => f.write_str("no positions to solve"),
-            SolveError::BadInput => {
-                f.write_str("angles or covariance not finite or not positive definite")
-            }
+            SolveError::BadInput => f.write_str("angles or covariance not finite or not positive definite"),
         }
     }
 }
@@ -166,8 +156,7 @@ impl BiasSolution {
 
     /// Whether a parameter was a parameter of this solution and could not be determined.
     pub fn is_unobservable(&self, p: Parameter) -> bool {
-        let estimated =
-            !matches!(p, Parameter::ReferenceOffset(_)) || self.reference_offset_estimated;
+        let estimated = !matches!(p, Parameter::ReferenceOffset(_)) || self.reference_offset_estimated;
         estimated && self.get(p).is_none()
     }
 }
@@ -315,17 +304,8 @@ fn jacobi_eigen(
 impl BiasSolver {
     /// An empty solver for a site.
     pub fn new(site: Site, settings: SolverSettings) -> BiasSolver {
-        let empty = PositionRecord {
-            c_b_n: Mat3::IDENTITY,
-            phi_n_rad: [0.0; 3],
-            covariance_rad2: Mat3::IDENTITY,
-        };
-        BiasSolver {
-            site,
-            settings,
-            records: [empty; MAX_POSITIONS],
-            len: 0,
-        }
+        let empty = PositionRecord { c_b_n: Mat3::IDENTITY, phi_n_rad: [0.0; 3], covariance_rad2: Mat3::IDENTITY };
+        BiasSolver { site, settings, records: [empty; MAX_POSITIONS], len: 0 }
     }
 
     /// Positions added so far.
@@ -344,26 +324,14 @@ impl BiasSolver {
     }
 
     /// Adds one position: its reference attitude, misalignment angles (rad) and their covariance (rad^2).
-    pub fn add(
-        &mut self,
-        c_b_n: &Mat3,
-        phi_n_rad: Vec3,
-        covariance_rad2: &Mat3,
-    ) -> Result<(), SolveError> {
+    pub fn add(&mut self, c_b_n: &Mat3, phi_n_rad: Vec3, covariance_rad2: &Mat3) -> Result<(), SolveError> {
         if self.len == MAX_POSITIONS {
             return Err(SolveError::TooManyPositions);
         }
-        if !(phi_n_rad.iter().all(|x| x.is_finite())
-            && covariance_rad2.is_finite()
-            && c_b_n.is_finite())
-        {
+        if !(phi_n_rad.iter().all(|x| x.is_finite()) && covariance_rad2.is_finite() && c_b_n.is_finite()) {
             return Err(SolveError::BadInput);
         }
-        self.records[self.len] = PositionRecord {
-            c_b_n: *c_b_n,
-            phi_n_rad,
-            covariance_rad2: *covariance_rad2,
-        };
+        self.records[self.len] = PositionRecord { c_b_n: *c_b_n, phi_n_rad, covariance_rad2: *covariance_rad2 };
         self.len += 1;
         Ok(())
     }
@@ -373,11 +341,7 @@ impl BiasSolver {
         if self.len == 0 {
             return Err(SolveError::NoPositions);
         }
-        let params = if self.settings.estimate_reference_offset {
-            MAX_PARAMETERS
-        } else {
-            6
-        };
+        let params = if self.settings.estimate_reference_offset { MAX_PARAMETERS } else { 6 };
         let records = &self.records[..self.len];
         let floor = self.settings.angle_floor_std_rad * self.settings.angle_floor_std_rad;
         let with_floor = |m: &Mat3| {
@@ -388,15 +352,9 @@ impl BiasSolver {
             m
         };
         // Common scale of the angle variances, so the whitened numbers are of order one.
-        let var_ref = records
-            .iter()
-            .map(|r| {
-                (0..3)
-                    .map(|i| with_floor(&r.covariance_rad2).0[i][i])
-                    .sum::<f32>()
-            })
-            .sum::<f32>()
-            / (3 * self.len) as f32;
+        let var_ref =
+            records.iter().map(|r| (0..3).map(|i| with_floor(&r.covariance_rad2).0[i][i]).sum::<f32>()).sum::<f32>()
+                / (3 * self.len) as f32;
         if !(var_ref > 0.0 && var_ref.is_finite()) {
             return Err(SolveError::BadInput);
         }
@@ -427,10 +385,16 @@ impl BiasSolver {
             }
         }
 
-        // Equilibrate: unit diagonal. A parameter with a zero diagonal never enters the data.
+        // Equilibrate: unit diagonal. In scaled units every parameter moves the angles by the same amount
+        // per unit, so a parameter whose diagonal is far below the largest hardly enters the data (a
+        // position that is a few arcsec off an axis, a reference corrected by a small offset): it is a
+        // blind spot, excluded before equilibration would blow its column up to full size.
+        let largest = (0..params).map(|i| normal[i][i]).fold(0.0f32, f32::max);
         let mut d = [0.0f32; MAX_PARAMETERS];
         for i in 0..params {
-            d[i] = libm::sqrtf(normal[i][i]);
+            if normal[i][i] > self.settings.rank_tolerance * largest {
+                d[i] = libm::sqrtf(normal[i][i]);
+            }
         }
         let mut a = [[0.0f32; MAX_PARAMETERS]; MAX_PARAMETERS];
         for i in 0..params {
@@ -448,10 +412,7 @@ impl BiasSolver {
 
         let mut observable = [false; MAX_PARAMETERS];
         for i in 0..params {
-            let blind_share: f32 = (0..params)
-                .filter(|&k| !kept(k))
-                .map(|k| v[i][k] * v[i][k])
-                .sum();
+            let blind_share: f32 = (0..params).filter(|&k| !kept(k)).map(|k| v[i][k] * v[i][k]).sum();
             observable[i] = d[i] > 0.0 && blind_share < 0.01;
         }
 
@@ -471,17 +432,13 @@ impl BiasSolver {
             if d[i] == 0.0 {
                 continue;
             }
-            theta_scaled[i] = (0..params)
-                .filter(|&j| d[j] > 0.0)
-                .map(|j| pinv[i][j] * rhs[j] / d[j])
-                .sum::<f32>()
-                / d[i];
+            theta_scaled[i] =
+                (0..params).filter(|&j| d[j] > 0.0).map(|j| pinv[i][j] * rhs[j] / d[j]).sum::<f32>() / d[i];
         }
         for i in 0..params {
             for j in 0..params {
                 if observable[i] && observable[j] {
-                    covariance_si[i][j] =
-                        pinv[i][j] / (d[i] * d[j]) * var_ref * scale[i] * scale[j];
+                    covariance_si[i][j] = pinv[i][j] / (d[i] * d[j]) * var_ref * scale[i] * scale[j];
                 }
             }
         }
@@ -490,10 +447,7 @@ impl BiasSolver {
         for i in 0..params {
             if observable[i] {
                 let std_error = libm::sqrtf(covariance_si[i][i].max(0.0));
-                estimates[i] = Some(Estimate {
-                    value: theta_scaled[i] * scale[i],
-                    std_error,
-                });
+                estimates[i] = Some(Estimate { value: theta_scaled[i] * scale[i], std_error });
             }
         }
 
@@ -504,22 +458,14 @@ impl BiasSolver {
             let rows = design_rows_scaled(&r.c_b_n, &self.site);
             let mut res = r.phi_n_rad;
             for (i, out) in res.iter_mut().enumerate() {
-                *out -= (0..params)
-                    .map(|j| rows[i][j] * theta_scaled[j])
-                    .sum::<f32>();
+                *out -= (0..params).map(|j| rows[i][j] * theta_scaled[j]).sum::<f32>();
             }
             residual_n_rad[k] = res;
             let w = forward_substitute(&factors[k], res);
             chi_square += (w[0] * w[0] + w[1] * w[1] + w[2] * w[2]) / var_ref;
         }
 
-        let pick = |offset: usize| {
-            [
-                estimates[offset],
-                estimates[offset + 1],
-                estimates[offset + 2],
-            ]
-        };
+        let pick = |offset: usize| [estimates[offset], estimates[offset + 1], estimates[offset + 2]];
         Ok(BiasSolution {
             gyro_bias_b_radps: pick(0),
             accel_bias_b_mps2: pick(3),
@@ -535,14 +481,8 @@ impl BiasSolver {
 }
 
 /// Table 1 of the paper: turntable (pitch, roll, heading) in degrees, in table order t1..t6.
-pub const TABLE1_POSITIONS_DEG: [[f32; 3]; 6] = [
-    [0.0, 0.0, 0.0],
-    [0.0, 0.0, 180.0],
-    [0.0, 0.0, 90.0],
-    [0.0, 0.0, 270.0],
-    [0.0, 90.0, 0.0],
-    [0.0, 270.0, 0.0],
-];
+pub const TABLE1_POSITIONS_DEG: [[f32; 3]; 6] =
+    [[0.0, 0.0, 0.0], [0.0, 0.0, 180.0], [0.0, 0.0, 90.0], [0.0, 0.0, 270.0], [0.0, 90.0, 0.0], [0.0, 270.0, 0.0]];
 
 /// The paper's pair formulas (METHOD.md step 5, consistent signs) for the six Table 1 positions in table
 /// order: returns `(gyro_bias_b_radps, accel_bias_b_mps2)`. For axis i with pair (t_a, t_b):
@@ -570,10 +510,7 @@ mod tests {
     use crate::frames::Attitude;
 
     fn site() -> Site {
-        Site {
-            latitude_rad: 45.7796f32.to_radians(),
-            gravity_mps2: 9.8063,
-        }
+        Site { latitude_rad: 45.7796f32.to_radians(), gravity_mps2: 9.8063 }
     }
 
     fn angles_from_model(c: &Mat3, theta_si: &[f32; 9], s: &Site) -> Vec3 {
@@ -585,17 +522,7 @@ mod tests {
     fn least_squares_agrees_with_pair_formulas_on_model_angles() {
         let s = site();
         let omega = s.earth_rate_north_radps();
-        let truth = [
-            0.3 * omega,
-            -0.2 * omega,
-            0.1 * omega,
-            1e-3,
-            -2e-3,
-            1.5e-3,
-            2e-5,
-            -1e-5,
-            3e-4,
-        ];
+        let truth = [0.3 * omega, -0.2 * omega, 0.1 * omega, 1e-3, -2e-3, 1.5e-3, 2e-5, -1e-5, 3e-4];
         let mut solver = BiasSolver::new(s, SolverSettings::default());
         let mut phis = [[0.0; 3]; 6];
         let cov = Mat3([[1e-10, 0.0, 0.0], [0.0, 1e-10, 0.0], [0.0, 0.0, 1e-8]]);
@@ -610,23 +537,12 @@ mod tests {
             let ls_eps = sol.gyro_bias_b_radps[i].unwrap().value;
             let ls_nabla = sol.accel_bias_b_mps2[i].unwrap().value;
             // Agreement to f32 solve precision: 1e-4 relative (the values differ by about 1e-5).
-            assert!(
-                (ls_eps - eps[i]).abs() < 1e-4 * eps[i].abs(),
-                "eps {i}: {ls_eps} vs pair {}",
-                eps[i]
-            );
+            assert!((ls_eps - eps[i]).abs() < 1e-4 * eps[i].abs(), "eps {i}: {ls_eps} vs pair {}", eps[i]);
             assert!((ls_eps - truth[i]).abs() < 1e-4 * truth[i].abs());
-            assert!(
-                (ls_nabla - nabla[i]).abs() < 1e-4 * nabla[i].abs(),
-                "nabla {i}: {ls_nabla} vs pair {}",
-                nabla[i]
-            );
+            assert!((ls_nabla - nabla[i]).abs() < 1e-4 * nabla[i].abs(), "nabla {i}: {ls_nabla} vs pair {}", nabla[i]);
             assert!((ls_nabla - truth[3 + i]).abs() < 1e-4 * truth[3 + i].abs());
             let offset = sol.reference_offset_n_rad[i].unwrap().value;
-            assert!(
-                (offset - truth[6 + i]).abs() < 1e-4 * truth[6 + i].abs(),
-                "phi0 {i}: {offset}"
-            );
+            assert!((offset - truth[6 + i]).abs() < 1e-4 * truth[6 + i].abs(), "phi0 {i}: {offset}");
         }
         assert!(sol.chi_square < 1e-3, "chi2 {}", sol.chi_square);
         assert_eq!(sol.degrees_of_freedom, 18 - 9);
@@ -642,16 +558,11 @@ mod tests {
         let truth = [1e-7, 0.0, 0.0, 1e-3, 2e-3, 0.0, 1e-5, 2e-5, 1e-4];
         for p in &TABLE1_POSITIONS_DEG[..2] {
             let c = Attitude::from_degrees(p[0], p[1], p[2]).c_b_n();
-            solver
-                .add(&c, angles_from_model(&c, &truth, &s), &cov)
-                .unwrap();
+            solver.add(&c, angles_from_model(&c, &truth, &s), &cov).unwrap();
         }
         let sol = solver.solve().unwrap();
-        let unobservable: Vec<&str> = Parameter::ALL
-            .iter()
-            .filter(|p| sol.is_unobservable(**p))
-            .map(|p| p.name())
-            .collect();
+        let unobservable: Vec<&str> =
+            Parameter::ALL.iter().filter(|p| sol.is_unobservable(**p)).map(|p| p.name()).collect();
         assert_eq!(unobservable, ["gyro_bias_y", "gyro_bias_z", "accel_bias_z"]);
         assert!((sol.gyro_bias_b_radps[0].unwrap().value - 1e-7).abs() < 1e-11);
         assert!((sol.accel_bias_b_mps2[1].unwrap().value - 2e-3).abs() < 1e-8);
@@ -662,27 +573,14 @@ mod tests {
         solver.add(&c, [1e-4, 2e-4, 3e-3], &cov).unwrap();
         let sol = solver.solve().unwrap();
         for p in Parameter::ALL {
-            assert!(
-                sol.is_unobservable(p),
-                "{} should be unobservable",
-                p.name()
-            );
+            assert!(sol.is_unobservable(p), "{} should be unobservable", p.name());
         }
         // Without the offset, that one position determines nabla_x, nabla_y and eps_x.
-        let mut solver = BiasSolver::new(
-            s,
-            SolverSettings {
-                estimate_reference_offset: false,
-                ..Default::default()
-            },
-        );
+        let mut solver = BiasSolver::new(s, SolverSettings { estimate_reference_offset: false, ..Default::default() });
         solver.add(&c, [1e-4, 2e-4, 3e-3], &cov).unwrap();
         let sol = solver.solve().unwrap();
-        let observable: Vec<&str> = Parameter::ALL
-            .iter()
-            .filter(|p| sol.get(**p).is_some())
-            .map(|p| p.name())
-            .collect();
+        let observable: Vec<&str> =
+            Parameter::ALL.iter().filter(|p| sol.get(**p).is_some()).map(|p| p.name()).collect();
         assert_eq!(observable, ["gyro_bias_x", "accel_bias_x", "accel_bias_y"]);
         assert!(!sol.is_unobservable(Parameter::ReferenceOffset(0)));
     }
@@ -694,16 +592,10 @@ mod tests {
         assert_eq!(solver.solve(), Err(SolveError::NoPositions));
         let mut solver = BiasSolver::new(s, SolverSettings::default());
         let c = Mat3::IDENTITY;
-        assert_eq!(
-            solver.add(&c, [f32::NAN, 0.0, 0.0], &c),
-            Err(SolveError::BadInput)
-        );
+        assert_eq!(solver.add(&c, [f32::NAN, 0.0, 0.0], &c), Err(SolveError::BadInput));
         for _ in 0..MAX_POSITIONS {
             solver.add(&c, [0.0; 3], &c).unwrap();
         }
-        assert_eq!(
-            solver.add(&c, [0.0; 3], &c),
-            Err(SolveError::TooManyPositions)
-        );
+        assert_eq!(solver.add(&c, [0.0; 3], &c), Err(SolveError::TooManyPositions));
     }
 }

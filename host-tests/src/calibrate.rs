@@ -2,11 +2,12 @@
 //! Every formula is the core's; this module only reads, converts to f32 at the edge, and checks input.
 
 use sinscal::align::{position_angles, DwellValue, PositionAngles};
+use sinscal::calibration::{calibrate_positions, CalibrationResult, CalibrationSettings, PositionInput};
 use sinscal::dwell::{DwellCollector, DwellSummary, ImuSample, Prefilter};
 use sinscal::earth::{normal_gravity_mps2, Site};
 use sinscal::frames::Attitude;
 use sinscal::prefilter::{CoefficientIdentifier, PrefilterSettings};
-use sinscal::solve::{BiasSolution, BiasSolver, SolverSettings, MAX_POSITIONS};
+use sinscal::solve::{BiasSolution, SolverSettings, MAX_POSITIONS};
 
 use crate::error::InputError;
 use crate::recording::{DwellAttitude, Recording};
@@ -40,6 +41,9 @@ pub struct Options {
     pub dwell_value: DwellValue,
     /// Estimate the constant reference offset `phi0`.
     pub estimate_reference_offset: bool,
+    /// Passes of the solution at most (1 = the paper's single linear pass; more remove its second-order
+    /// error).
+    pub max_passes: u32,
 }
 
 impl Default for Options {
@@ -49,6 +53,7 @@ impl Default for Options {
             coefficient: Coefficient::Fixed(1.0),
             dwell_value: DwellValue::Mean,
             estimate_reference_offset: true,
+            max_passes: CalibrationSettings::default().max_passes,
         }
     }
 }
@@ -73,7 +78,7 @@ pub struct PositionResult {
     pub attitude: DwellAttitude,
     /// Dwell statistics (core).
     pub summary: DwellSummary,
-    /// Alignment result (core).
+    /// Alignment of the dwell as measured, against the turntable's attitude (first pass, core).
     pub angles: PositionAngles,
 }
 
@@ -96,6 +101,10 @@ pub struct Calibration {
     pub positions: Vec<PositionResult>,
     /// The solution (core).
     pub solution: BiasSolution,
+    /// Passes made and convergence of the refinement (core).
+    pub passes: u32,
+    /// Whether the refinement converged.
+    pub converged: bool,
 }
 
 fn to_f32(v: [f64; 3]) -> [f32; 3] {
@@ -109,15 +118,9 @@ pub fn calibrate(recording: &Recording, options: &Options) -> Result<Calibration
     let latitude_rad = (header.latitude_deg as f32).to_radians();
     let (gravity_mps2, gravity_source) = match header.gravity_mps2 {
         Some(g) => (g as f32, GravitySource::Header),
-        None => (
-            normal_gravity_mps2(latitude_rad, header.height_m as f32),
-            GravitySource::NormalGravity,
-        ),
+        None => (normal_gravity_mps2(latitude_rad, header.height_m as f32), GravitySource::NormalGravity),
     };
-    let site = Site {
-        latitude_rad,
-        gravity_mps2,
-    };
+    let site = Site { latitude_rad, gravity_mps2 };
 
     let dwells = recording.dwells();
     if dwells.is_empty() {
@@ -125,11 +128,7 @@ pub fn calibrate(recording: &Recording, options: &Options) -> Result<Calibration
     }
     if dwells.len() > MAX_POSITIONS {
         let line = dwells[MAX_POSITIONS].first_line();
-        return Err(InputError::at(
-            source,
-            line,
-            format!("more than {MAX_POSITIONS} positions (the core's limit)"),
-        ));
+        return Err(InputError::at(source, line, format!("more than {MAX_POSITIONS} positions (the core's limit)")));
     }
 
     let prefilter = match options.prefilter {
@@ -137,9 +136,7 @@ pub fn calibrate(recording: &Recording, options: &Options) -> Result<Calibration
         PrefilterKind::HmmKf => {
             let [a_gyro, a_accel] = match options.coefficient {
                 Coefficient::Fixed(a) => [a, a],
-                Coefficient::Identify => {
-                    identify_coefficients(&dwells[0].rows, source, dwells[0].first_line())?
-                }
+                Coefficient::Identify => identify_coefficients(&dwells[0].rows, source, dwells[0].first_line())?,
             };
             Prefilter::HmmKf {
                 gyro: PrefilterSettings::paper_gyro().with_a(a_gyro),
@@ -147,76 +144,51 @@ pub fn calibrate(recording: &Recording, options: &Options) -> Result<Calibration
             }
         }
     };
-    let mut collector = DwellCollector::new(&prefilter)
-        .map_err(|e| InputError::file(source, format!("prefilter: {e}")))?;
-    let mut solver = BiasSolver::new(
-        site,
-        SolverSettings {
+    let mut collector =
+        DwellCollector::new(&prefilter).map_err(|e| InputError::file(source, format!("prefilter: {e}")))?;
+    let settings = CalibrationSettings {
+        solver: SolverSettings {
             estimate_reference_offset: options.estimate_reference_offset,
             ..SolverSettings::default()
         },
-    );
-
+        dwell_value: options.dwell_value,
+        max_passes: options.max_passes,
+    };
+    let mut inputs = Vec::with_capacity(dwells.len());
     let mut positions = Vec::with_capacity(dwells.len());
     for dwell in &dwells {
-        let at = |reason: String| {
-            InputError::at(
-                source,
-                dwell.first_line(),
-                format!("dwell {}: {reason}", dwell.pos),
-            )
-        };
+        let at = |reason: String| InputError::at(source, dwell.first_line(), format!("dwell {}: {reason}", dwell.pos));
         let attitude = dwell.attitude(source)?;
         let heading_deg = attitude.heading_deg.ok_or_else(|| {
             at("heading is unknown (empty): the calibration needs the reference heading of every position".into())
         })?;
         collector.reset();
         for row in &dwell.rows {
-            let sample = ImuSample {
-                rate_b_radps: to_f32(row.rate_b_radps),
-                force_b_mps2: to_f32(row.force_b_mps2),
-            };
-            collector.update(&sample).map_err(|e| {
-                InputError::at(source, row.line, format!("{e} (after conversion to f32)"))
-            })?;
+            let sample = ImuSample { rate_b_radps: to_f32(row.rate_b_radps), force_b_mps2: to_f32(row.force_b_mps2) };
+            collector
+                .update(&sample)
+                .map_err(|e| InputError::at(source, row.line, format!("{e} (after conversion to f32)")))?;
         }
-        let summary = collector
-            .summary()
-            .map_err(|e| at(format!("{e}: too short to use")))?;
-        let c_b_n = Attitude::from_degrees(
-            attitude.pitch_deg as f32,
-            attitude.roll_deg as f32,
-            heading_deg as f32,
-        )
-        .c_b_n();
-        let angles = position_angles(&summary, options.dwell_value, &c_b_n, &site)
-            .map_err(|e| at(e.to_string()))?;
-        let gross = angles
-            .phi_n_rad
-            .iter()
-            .map(|x| x.abs())
-            .fold(0.0f32, f32::max);
-        if gross > MAX_MISALIGNMENT_RAD {
+        let summary = collector.summary().map_err(|e| at(format!("{e}: too short to use")))?;
+        let c_b_n =
+            Attitude::from_degrees(attitude.pitch_deg as f32, attitude.roll_deg as f32, heading_deg as f32).c_b_n();
+        let angles = position_angles(&summary, options.dwell_value, &c_b_n, &site).map_err(|e| at(e.to_string()))?;
+        let [phi_e, phi_n, phi_u] = angles.phi_n_rad;
+        let level = phi_e.abs().max(phi_n.abs());
+        if level > MAX_LEVEL_MISALIGNMENT_RAD || phi_u.abs() > MAX_HEADING_MISALIGNMENT_RAD {
             return Err(at(format!(
-                "alignment differs from the reference attitude by {:.2} deg: the reference or the axes do not \
-                 match the data (SPEC.md conventions: ENU, body x right, y forward, z up)",
-                gross.to_degrees()
+                "alignment differs from the reference attitude by {:.2} deg in level and {:.2} deg in heading: \
+                 the reference or the axes do not match the data (SPEC.md conventions: ENU, body x right, \
+                 y forward, z up)",
+                level.to_degrees(),
+                phi_u.to_degrees()
             )));
         }
-        solver
-            .add(&c_b_n, angles.phi_n_rad, &angles.covariance_rad2)
-            .map_err(|e| at(e.to_string()))?;
-        positions.push(PositionResult {
-            pos: dwell.pos,
-            first_line: dwell.first_line(),
-            attitude,
-            summary,
-            angles,
-        });
+        inputs.push(PositionInput { c_b_n, summary });
+        positions.push(PositionResult { pos: dwell.pos, first_line: dwell.first_line(), attitude, summary, angles });
     }
-    let solution = solver
-        .solve()
-        .map_err(|e| InputError::file(source, e.to_string()))?;
+    let CalibrationResult { solution, passes, converged, .. } =
+        calibrate_positions(&inputs, &site, &settings).map_err(|e| InputError::file(source, e.to_string()))?;
     Ok(Calibration {
         source: source.to_string(),
         latitude_deg: header.latitude_deg,
@@ -226,18 +198,20 @@ pub fn calibrate(recording: &Recording, options: &Options) -> Result<Calibration
         options: *options,
         positions,
         solution,
+        passes,
+        converged,
     })
 }
 
-/// A misalignment above this (0.05 rad, 2.9 deg) is not a residual bias: the reference attitude or the
-/// axis convention is wrong, and the small-angle model of the solution would not hold.
-pub const MAX_MISALIGNMENT_RAD: f32 = 0.05;
+/// Largest level misalignment (phi_e, phi_n) accepted, rad: 0.05 rad (2.9 deg) is an accelerometer bias
+/// of 50 mg. Larger means the reference attitude or the axis convention is wrong.
+pub const MAX_LEVEL_MISALIGNMENT_RAD: f32 = 0.05;
+/// Largest heading misalignment (phi_u) accepted, rad: 0.5 rad (29 deg) is an east gyro bias of about
+/// 0.5 W cos L (about 5 deg/h at 45 deg latitude), beyond which gyrocompassing on the Earth rate
+/// is not a calibration method any more.
+pub const MAX_HEADING_MISALIGNMENT_RAD: f32 = 0.5;
 
-fn identify_coefficients(
-    rows: &[&crate::recording::Row],
-    source: &str,
-    line: usize,
-) -> Result<[f32; 2], InputError> {
+fn identify_coefficients(rows: &[&crate::recording::Row], source: &str, line: usize) -> Result<[f32; 2], InputError> {
     let mut ids = [CoefficientIdentifier::new(); 6];
     for row in rows {
         let channels = [to_f32(row.rate_b_radps), to_f32(row.force_b_mps2)];
@@ -250,11 +224,7 @@ fn identify_coefficients(
         let mut sum = 0.0;
         for id in &ids[3 * sensor..3 * sensor + 3] {
             sum += id.coefficient().ok_or_else(|| {
-                InputError::at(
-                    source,
-                    line,
-                    "first dwell too short or constant: cannot identify the coefficient a",
-                )
+                InputError::at(source, line, "first dwell too short or constant: cannot identify the coefficient a")
             })?;
         }
         *slot = sum / 3.0;

@@ -28,19 +28,12 @@ pub enum InputError {
 impl InputError {
     /// An error at a line.
     pub fn at(file: &str, line: usize, reason: impl Into<String>) -> InputError {
-        InputError::At {
-            file: file.to_string(),
-            line,
-            reason: reason.into(),
-        }
+        InputError::At { file: file.to_string(), line, reason: reason.into() }
     }
 
     /// An error about a whole file.
     pub fn file(file: &str, reason: impl Into<String>) -> InputError {
-        InputError::File {
-            file: file.to_string(),
-            reason: reason.into(),
-        }
+        InputError::File { file: file.to_string(), reason: reason.into() }
     }
 
     /// An I/O error on a path.

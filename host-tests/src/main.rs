@@ -71,6 +71,10 @@ enum Command {
         /// Take the turntable reference as exact (do not estimate the constant offset phi0).
         #[arg(long)]
         no_reference_offset: bool,
+        /// Passes of the solution at most: 1 = the paper's single linear solution; more remove its
+        /// second-order error by realigning the bias-compensated dwells.
+        #[arg(long, default_value_t = 6, value_parser = clap::value_parser!(u32).range(1..=50))]
+        passes: u32,
         /// Replay through the firmware path (device frames, driver, sequence): comes with the firmware.
         #[arg(long, value_enum)]
         on: Option<OnArg>,
@@ -104,6 +108,9 @@ enum Command {
         /// Write the report as JSON to this file ('-' = stdout).
         #[arg(long)]
         json: Option<PathBuf>,
+        /// Passes of the solution at most (1 = the paper's linear solution).
+        #[arg(long, default_value_t = 6, value_parser = clap::value_parser!(u32).range(1..=50))]
+        passes: u32,
     },
 }
 
@@ -143,6 +150,7 @@ fn run(command: Command) -> anyhow::Result<()> {
             prefilter_a,
             dwell_value,
             no_reference_offset,
+            passes,
             on,
         } => {
             if let Some(on) = on {
@@ -157,9 +165,7 @@ fn run(command: Command) -> anyhow::Result<()> {
             } else {
                 match prefilter_a.parse::<f32>() {
                     Ok(a) if (0.0..=1.0).contains(&a) => Coefficient::Fixed(a),
-                    _ => anyhow::bail!(
-                        "--prefilter-a: '{prefilter_a}' is neither 'auto' nor a number in [0, 1]"
-                    ),
+                    _ => anyhow::bail!("--prefilter-a: '{prefilter_a}' is neither 'auto' nor a number in [0, 1]"),
                 }
             };
             let options = Options {
@@ -173,6 +179,7 @@ fn run(command: Command) -> anyhow::Result<()> {
                     DwellValueArg::Settled => DwellValue::Settled,
                 },
                 estimate_reference_offset: !no_reference_offset,
+                max_passes: passes,
             };
             let rec = Recording::read(&recording)?;
             let cal = calibrate(&rec, &options)?;
@@ -189,11 +196,11 @@ fn run(command: Command) -> anyhow::Result<()> {
             Ok(())
         }
         Command::Demo { out, json } => demo(&out, json.as_deref()),
-        Command::Montecarlo { runs, seed, json } => {
+        Command::Montecarlo { runs, seed, json, passes } => {
             anyhow::ensure!(runs >= 2, "--runs must be at least 2");
             let scenario = Scenario::example();
             let step = (runs / 10).max(1);
-            let report = montecarlo::run(&scenario, runs, seed, |done| {
+            let report = montecarlo::run(&scenario, runs, seed, passes, |done| {
                 if done % step == 0 || done == runs {
                     eprintln!("montecarlo: {done}/{runs} runs");
                 }
@@ -228,76 +235,25 @@ fn demo(out: &Path, json: Option<&Path>) -> anyhow::Result<()> {
     let scenario = Scenario::example();
     let rec = scenario.recording(1, &out.display().to_string());
     rec.write(out)?;
-    println!("Built-in example: {} (SIMULATION of the paper's Table 1, 60 s per position at 100 Hz, seed 1)\n", out.display());
+    println!(
+        "Built-in example: {} (SIMULATION of the paper's Table 1, 60 s per position at 100 Hz, seed 1)\n",
+        out.display()
+    );
     let rec = Recording::read(out)?;
     let cal = calibrate(&rec, &Options::default()).map_err(|e: InputError| anyhow::anyhow!(e))?;
     finish(&cal, json)?;
     println!("\nTruth of the simulation, and (estimate - truth) / standard error:");
     let s = &cal.solution;
     let rows: [(&str, Option<sinscal::solve::Estimate>, f64, f64, &str); 9] = [
-        (
-            "gyro x",
-            s.gyro_bias_b_radps[0],
-            scenario.gyro_bias_b_radps[0],
-            DEG_PER_HOUR,
-            "deg/h",
-        ),
-        (
-            "gyro y",
-            s.gyro_bias_b_radps[1],
-            scenario.gyro_bias_b_radps[1],
-            DEG_PER_HOUR,
-            "deg/h",
-        ),
-        (
-            "gyro z",
-            s.gyro_bias_b_radps[2],
-            scenario.gyro_bias_b_radps[2],
-            DEG_PER_HOUR,
-            "deg/h",
-        ),
-        (
-            "accel x",
-            s.accel_bias_b_mps2[0],
-            scenario.accel_bias_b_mps2[0],
-            MICRO_G,
-            "ug",
-        ),
-        (
-            "accel y",
-            s.accel_bias_b_mps2[1],
-            scenario.accel_bias_b_mps2[1],
-            MICRO_G,
-            "ug",
-        ),
-        (
-            "accel z",
-            s.accel_bias_b_mps2[2],
-            scenario.accel_bias_b_mps2[2],
-            MICRO_G,
-            "ug",
-        ),
-        (
-            "offset e",
-            s.reference_offset_n_rad[0],
-            scenario.reference_offset_n_rad[0],
-            1.0 / ARCSEC_PER_RAD,
-            "arcsec",
-        ),
-        (
-            "offset n",
-            s.reference_offset_n_rad[1],
-            scenario.reference_offset_n_rad[1],
-            1.0 / ARCSEC_PER_RAD,
-            "arcsec",
-        ),
-        (
-            "offset u",
-            s.reference_offset_n_rad[2],
-            scenario.reference_offset_n_rad[2],
-            1.0 / ARCSEC_PER_RAD,
-            "arcsec",
-        ),
+        ("gyro x", s.gyro_bias_b_radps[0], scenario.gyro_bias_b_radps[0], DEG_PER_HOUR, "deg/h"),
+        ("gyro y", s.gyro_bias_b_radps[1], scenario.gyro_bias_b_radps[1], DEG_PER_HOUR, "deg/h"),
+        ("gyro z", s.gyro_bias_b_radps[2], scenario.gyro_bias_b_radps[2], DEG_PER_HOUR, "deg/h"),
+        ("accel x", s.accel_bias_b_mps2[0], scenario.accel_bias_b_mps2[0], MICRO_G, "ug"),
+        ("accel y", s.accel_bias_b_mps2[1], scenario.accel_bias_b_mps2[1], MICRO_G, "ug"),
+        ("accel z", s.accel_bias_b_mps2[2], scenario.accel_bias_b_mps2[2], MICRO_G, "ug"),
+        ("offset e", s.reference_offset_n_rad[0], scenario.reference_offset_n_rad[0], 1.0 / ARCSEC_PER_RAD, "arcsec"),
+        ("offset n", s.reference_offset_n_rad[1], scenario.reference_offset_n_rad[1], 1.0 / ARCSEC_PER_RAD, "arcsec"),
+        ("offset u", s.reference_offset_n_rad[2], scenario.reference_offset_n_rad[2], 1.0 / ARCSEC_PER_RAD, "arcsec"),
     ];
     for (name, est, truth, unit, unit_name) in rows {
         match est {
@@ -307,10 +263,7 @@ fn demo(out: &Path, json: Option<&Path>) -> anyhow::Result<()> {
                 e.value as f64 / unit,
                 (e.value as f64 - truth) / e.std_error as f64
             ),
-            None => println!(
-                "  {name:<8} truth {:>+10.5} {unit_name:<6} unobservable",
-                truth / unit
-            ),
+            None => println!("  {name:<8} truth {:>+10.5} {unit_name:<6} unobservable", truth / unit),
         }
     }
     Ok(())
@@ -360,10 +313,7 @@ fn montecarlo_table(r: &montecarlo::Report) -> String {
             );
         }
     }
-    let _ = writeln!(
-        out,
-        "\nCramer-Rao bounds (standard deviation): angle model vs. all six channels of every dwell"
-    );
+    let _ = writeln!(out, "\nCramer-Rao bounds (standard deviation): angle model vs. all six channels of every dwell");
     let _ = writeln!(
         out,
         "  {:<20} {:>7} {:>11} {:>14} {:>16} {:>12}",
@@ -371,10 +321,7 @@ fn montecarlo_table(r: &montecarlo::Report) -> String {
     );
     for (i, p) in sinscal::solve::Parameter::ALL.iter().enumerate() {
         let (u, name) = unit(p.name());
-        let known = r
-            .crb_channels_known_reference
-            .get(i)
-            .map_or("-".to_string(), |v| format!("{:.5}", v / u));
+        let known = r.crb_channels_known_reference.get(i).map_or("-".to_string(), |v| format!("{:.5}", v / u));
         let _ = writeln!(
             out,
             "  {:<20} {:>7} {:>11.5} {:>14.5} {:>16} {:>12.2}",

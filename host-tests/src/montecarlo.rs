@@ -11,13 +11,12 @@
 //!   could give at best.
 
 use serde::Serialize;
-use sinscal::align::{angle_covariance_rad2, position_angles, DwellValue};
+use sinscal::align::{angle_covariance_rad2, DwellValue};
+use sinscal::calibration::{calibrate_positions, CalibrationSettings, PositionInput};
 use sinscal::dwell::{DwellCollector, DwellSummary, ImuSample, Prefilter};
 use sinscal::earth::Site;
 use sinscal::frames::Attitude;
-use sinscal::solve::{
-    design_rows_si, BiasSolution, BiasSolver, Parameter, SolverSettings, MAX_PARAMETERS,
-};
+use sinscal::solve::{design_rows_si, BiasSolution, Parameter, MAX_PARAMETERS};
 
 use crate::synth::{c_b_n as c_b_n_f64, mul_t_vec, Scenario, EARTH_RATE_RADPS};
 
@@ -35,11 +34,7 @@ pub enum Estimator {
 
 impl Estimator {
     /// All, in report order.
-    pub const ALL: [Estimator; 3] = [
-        Estimator::NoneMean,
-        Estimator::HmmkfMean,
-        Estimator::HmmkfSettled,
-    ];
+    pub const ALL: [Estimator; 3] = [Estimator::NoneMean, Estimator::HmmkfMean, Estimator::HmmkfSettled];
 
     /// Name in reports.
     pub fn name(&self) -> &'static str {
@@ -90,6 +85,8 @@ pub struct Report {
     pub runs: usize,
     /// First seed (run i uses seed + i).
     pub seed: u64,
+    /// Passes of the solution at most.
+    pub max_passes: u32,
     /// Gyro white noise per sample, rad/s.
     pub gyro_noise_radps: f64,
     /// Accelerometer white noise per sample, m/s^2.
@@ -109,9 +106,7 @@ pub struct Report {
 /// Inverse of a symmetric positive definite matrix (Gauss-Jordan with partial pivoting), f64.
 fn invert(mut a: Vec<Vec<f64>>) -> Option<Vec<Vec<f64>>> {
     let n = a.len();
-    let mut inv: Vec<Vec<f64>> = (0..n)
-        .map(|i| (0..n).map(|j| if i == j { 1.0 } else { 0.0 }).collect())
-        .collect();
+    let mut inv: Vec<Vec<f64>> = (0..n).map(|i| (0..n).map(|j| if i == j { 1.0 } else { 0.0 }).collect()).collect();
     for col in 0..n {
         let pivot = (col..n).max_by(|&x, &y| a[x][col].abs().total_cmp(&a[y][col].abs()))?;
         if a[pivot][col].abs() < 1e-300 {
@@ -147,10 +142,7 @@ fn bound_from_fisher(fisher: Vec<Vec<f64>>) -> Vec<f64> {
 }
 
 fn site_of(s: &Scenario) -> Site {
-    Site {
-        latitude_rad: (s.latitude_deg as f32).to_radians(),
-        gravity_mps2: s.gravity_mps2 as f32,
-    }
+    Site { latitude_rad: (s.latitude_deg as f32).to_radians(), gravity_mps2: s.gravity_mps2 as f32 }
 }
 
 /// The angle-model Cramer-Rao bound for the scenario's noise (standard deviation per parameter, SI).
@@ -164,9 +156,7 @@ pub fn crb_angles(s: &Scenario) -> Vec<f64> {
         let c = Attitude::from_degrees(p[0] as f32, p[1] as f32, p[2] as f32).c_b_n();
         let rows = design_rows_si(&c, &site);
         let cov = angle_covariance_rad2(&c, fv, wv, &site);
-        let cov64: Vec<Vec<f64>> = (0..3)
-            .map(|i| (0..3).map(|j| cov.0[i][j] as f64).collect())
-            .collect();
+        let cov64: Vec<Vec<f64>> = (0..3).map(|i| (0..3).map(|j| cov.0[i][j] as f64).collect()).collect();
         let w = invert(cov64).expect("angle covariance is positive definite");
         for a in 0..MAX_PARAMETERS {
             for b in 0..MAX_PARAMETERS {
@@ -187,16 +177,9 @@ pub fn crb_angles(s: &Scenario) -> Vec<f64> {
 pub fn crb_channels(s: &Scenario, known_reference: bool) -> Vec<f64> {
     let params = if known_reference { 6 } else { MAX_PARAMETERS };
     let n = s.dwell_samples() as f64;
-    let var = [
-        s.gyro_noise_radps.powi(2) / n,
-        s.accel_noise_mps2.powi(2) / n,
-    ];
+    let var = [s.gyro_noise_radps.powi(2) / n, s.accel_noise_mps2.powi(2) / n];
     let lat = s.latitude_deg.to_radians();
-    let w_n = [
-        0.0,
-        EARTH_RATE_RADPS * lat.cos(),
-        EARTH_RATE_RADPS * lat.sin(),
-    ];
+    let w_n = [0.0, EARTH_RATE_RADPS * lat.cos(), EARTH_RATE_RADPS * lat.sin()];
     let f_n = [0.0, 0.0, s.gravity_mps2];
     let mut fisher = vec![vec![0.0f64; params]; params];
     for p in &s.positions_deg {
@@ -231,23 +214,18 @@ pub fn crb_channels(s: &Scenario, known_reference: bool) -> Vec<f64> {
 }
 
 fn summarise(collector: &DwellCollector) -> DwellSummary {
-    collector
-        .summary()
-        .expect("simulated dwells are long enough")
+    collector.summary().expect("simulated dwells are long enough")
 }
 
-/// One run: the three estimators' solutions.
-pub fn run_once(s: &Scenario, seed: u64) -> [BiasSolution; 3] {
+/// One run: the three estimators' solutions, each with at most `max_passes` passes.
+pub fn run_once(s: &Scenario, seed: u64, max_passes: u32) -> [BiasSolution; 3] {
     let site = site_of(s);
     let mut plain = DwellCollector::new(&Prefilter::None).expect("no prefilter");
     let mut filtered = DwellCollector::new(&Prefilter::paper()).expect("paper prefilter");
     let mut summaries: Vec<(usize, DwellSummary, DwellSummary)> = Vec::new();
     let per_dwell = s.dwell_samples();
     s.for_each_sample(seed, |k, w, f| {
-        let sample = ImuSample {
-            rate_b_radps: w.map(|x| x as f32),
-            force_b_mps2: f.map(|x| x as f32),
-        };
+        let sample = ImuSample { rate_b_radps: w.map(|x| x as f32), force_b_mps2: f.map(|x| x as f32) };
         plain.update(&sample).expect("finite");
         filtered.update(&sample).expect("finite");
         if plain.samples() as usize == per_dwell {
@@ -257,26 +235,26 @@ pub fn run_once(s: &Scenario, seed: u64) -> [BiasSolution; 3] {
         }
     });
     Estimator::ALL.map(|e| {
-        let mut solver = BiasSolver::new(site, SolverSettings::default());
-        for (k, plain, filtered) in &summaries {
-            let p = s.positions_deg[*k];
-            let c = Attitude::from_degrees(p[0] as f32, p[1] as f32, p[2] as f32).c_b_n();
-            let (summary, value) = match e {
-                Estimator::NoneMean => (plain, DwellValue::Mean),
-                Estimator::HmmkfMean => (filtered, DwellValue::Mean),
-                Estimator::HmmkfSettled => (filtered, DwellValue::Settled),
-            };
-            let a = position_angles(summary, value, &c, &site).expect("alignment");
-            solver
-                .add(&c, a.phi_n_rad, &a.covariance_rad2)
-                .expect("position");
-        }
-        solver.solve().expect("solution")
+        let (use_filtered, dwell_value) = match e {
+            Estimator::NoneMean => (false, DwellValue::Mean),
+            Estimator::HmmkfMean => (true, DwellValue::Mean),
+            Estimator::HmmkfSettled => (true, DwellValue::Settled),
+        };
+        let inputs: Vec<PositionInput> = summaries
+            .iter()
+            .map(|(k, plain, filtered)| {
+                let p = s.positions_deg[*k];
+                let c_b_n = Attitude::from_degrees(p[0] as f32, p[1] as f32, p[2] as f32).c_b_n();
+                PositionInput { c_b_n, summary: if use_filtered { *filtered } else { *plain } }
+            })
+            .collect();
+        let settings = CalibrationSettings { dwell_value, max_passes, ..CalibrationSettings::default() };
+        calibrate_positions(&inputs, &site, &settings).expect("calibration").solution
     })
 }
 
 /// Runs the Monte Carlo; `progress(done)` is called after each run.
-pub fn run(s: &Scenario, runs: usize, seed: u64, mut progress: impl FnMut(usize)) -> Report {
+pub fn run(s: &Scenario, runs: usize, seed: u64, max_passes: u32, mut progress: impl FnMut(usize)) -> Report {
     let truth: Vec<f64> = s
         .gyro_bias_b_radps
         .iter()
@@ -287,12 +265,10 @@ pub fn run(s: &Scenario, runs: usize, seed: u64, mut progress: impl FnMut(usize)
     // sums per estimator and parameter: error, error^2, std^2, (error/std)^2
     let mut sums = [[[0.0f64; 4]; MAX_PARAMETERS]; 3];
     for r in 0..runs {
-        let solutions = run_once(s, seed.wrapping_add(r as u64));
+        let solutions = run_once(s, seed.wrapping_add(r as u64), max_passes);
         for (e, sol) in solutions.iter().enumerate() {
             for (i, p) in Parameter::ALL.iter().enumerate() {
-                let est = sol
-                    .get(*p)
-                    .expect("Table 1 with the offset determines every parameter");
+                let est = sol.get(*p).expect("Table 1 with the offset determines every parameter");
                 let err = est.value as f64 - truth[i];
                 let sd = est.std_error as f64;
                 let acc = &mut sums[e][i];
@@ -335,6 +311,7 @@ pub fn run(s: &Scenario, runs: usize, seed: u64, mut progress: impl FnMut(usize)
         schema: "sinscal-montecarlo/1",
         runs,
         seed,
+        max_passes,
         gyro_noise_radps: s.gyro_noise_radps,
         accel_noise_mps2: s.accel_noise_mps2,
         dwell_samples: s.dwell_samples(),

@@ -71,6 +71,10 @@ pub struct CalibrationJson {
     pub prefilter: PrefilterJson,
     /// Extra: "mean" or "settled".
     pub dwell_value: &'static str,
+    /// Extra: passes of the solution (1 = the paper's linear solution).
+    pub passes: u32,
+    /// Extra: whether the refinement converged.
+    pub converged: bool,
     /// Extra: the recording.
     pub source: String,
     /// Extra: the sinscal version that wrote this.
@@ -128,16 +132,9 @@ impl CalibrationJson {
                 }
             })
             .collect();
-        let offset = s
-            .reference_offset_estimated
-            .then_some(s.reference_offset_n_rad);
+        let offset = s.reference_offset_estimated.then_some(s.reference_offset_n_rad);
         let prefilter = match c.prefilter {
-            Prefilter::None => PrefilterJson {
-                kind: "none",
-                a: None,
-                q: None,
-                r: None,
-            },
+            Prefilter::None => PrefilterJson { kind: "none", a: None, q: None, r: None },
             Prefilter::HmmKf { gyro, accel } => PrefilterJson {
                 kind: "hmmkf",
                 a: Some([gyro.a as f64, accel.a as f64]),
@@ -154,11 +151,7 @@ impl CalibrationJson {
             gyro_bias_std_radps: s.gyro_bias_b_radps.map(std),
             accel_bias_mps2: s.accel_bias_b_mps2.map(value),
             accel_bias_std_mps2: s.accel_bias_b_mps2.map(std),
-            unobservable: Parameter::ALL
-                .iter()
-                .filter(|p| s.is_unobservable(**p))
-                .map(|p| p.name())
-                .collect(),
+            unobservable: Parameter::ALL.iter().filter(|p| s.is_unobservable(**p)).map(|p| p.name()).collect(),
             reference_offset_rad: offset.map(|o| o.map(value)),
             reference_offset_std_rad: offset.map(|o| o.map(std)),
             chi_square: s.chi_square as f64,
@@ -172,6 +165,8 @@ impl CalibrationJson {
                 DwellValue::Mean => "mean",
                 DwellValue::Settled => "settled",
             },
+            passes: c.passes,
+            converged: c.converged,
             source: c.source.clone(),
             sinscal_version: env!("CARGO_PKG_VERSION"),
         }
@@ -181,13 +176,9 @@ impl CalibrationJson {
 /// Formats an estimate in a display unit: `+0.05012 ± 0.00041`, or `unobservable`.
 fn show(e: Option<Estimate>, per_unit: f64, decimals: usize) -> String {
     match e {
-        Some(e) => format!(
-            "{:+.*} ± {:.*}",
-            decimals,
-            e.value as f64 / per_unit,
-            decimals,
-            e.std_error as f64 / per_unit
-        ),
+        Some(e) => {
+            format!("{:+.*} ± {:.*}", decimals, e.value as f64 / per_unit, decimals, e.std_error as f64 / per_unit)
+        }
         None => "unobservable".to_string(),
     }
 }
@@ -211,25 +202,30 @@ pub fn summary(c: &Calibration) -> String {
     let prefilter = match c.prefilter {
         Prefilter::None => "none (plain dwell means)".to_string(),
         Prefilter::HmmKf { gyro, accel } => {
-            format!(
-                "HMM/KF, paper's Q and R, a = {:.3} (gyro), {:.3} (accel)",
-                gyro.a, accel.a
-            )
+            format!("HMM/KF, paper's Q and R, a = {:.3} (gyro), {:.3} (accel)", gyro.a, accel.a)
         }
     };
     let value = match c.options.dwell_value {
         DwellValue::Mean => "dwell mean",
         DwellValue::Settled => "settled filter output",
     };
-    let _ = writeln!(out, "prefilter: {prefilter}; alignment uses the {value}\n");
+    let passes = if c.passes == 1 {
+        "1 pass (the paper's linear solution)".to_string()
+    } else {
+        format!(
+            "{} passes (first-order solution refined{})",
+            c.passes,
+            if c.converged { ", converged" } else { ", NOT converged: the second-order terms are large" }
+        )
+    };
+    let _ = writeln!(out, "prefilter: {prefilter}; alignment uses the {value}; {passes}\n");
     let _ = writeln!(
         out,
         " pos   pitch    roll  heading  samples |  misalignment phi [arcsec]     e          n          u   | residual [arcsec] e, n, u"
     );
     for (k, p) in c.positions.iter().enumerate() {
         let phi = p.angles.phi_n_rad.map(|x| x as f64 * ARCSEC_PER_RAD);
-        let sd =
-            [0, 1, 2].map(|i| (p.angles.covariance_rad2.0[i][i] as f64).sqrt() * ARCSEC_PER_RAD);
+        let sd = [0, 1, 2].map(|i| (p.angles.covariance_rad2.0[i][i] as f64).sqrt() * ARCSEC_PER_RAD);
         let res = s.residual_n_rad[k].map(|x| x as f64 * ARCSEC_PER_RAD);
         let _ = writeln!(
             out,
@@ -251,49 +247,23 @@ pub fn summary(c: &Calibration) -> String {
         );
     }
     let axes = ["x", "y", "z"];
-    let _ = writeln!(
-        out,
-        "\nGyro bias, body frame [deg/h] (estimate ± standard error):"
-    );
+    let _ = writeln!(out, "\nGyro bias, body frame [deg/h] (estimate ± standard error):");
     for (i, axis) in axes.iter().enumerate() {
-        let _ = writeln!(
-            out,
-            "  {axis}: {}",
-            show(s.gyro_bias_b_radps[i], DEG_PER_HOUR, 5)
-        );
+        let _ = writeln!(out, "  {axis}: {}", show(s.gyro_bias_b_radps[i], DEG_PER_HOUR, 5));
     }
-    let _ = writeln!(
-        out,
-        "Accelerometer bias, body frame [ug] (1 ug = 9.80665e-6 m/s^2):"
-    );
+    let _ = writeln!(out, "Accelerometer bias, body frame [ug] (1 ug = 9.80665e-6 m/s^2):");
     for (i, axis) in axes.iter().enumerate() {
-        let _ = writeln!(
-            out,
-            "  {axis}: {}",
-            show(s.accel_bias_b_mps2[i], MICRO_G, 2)
-        );
+        let _ = writeln!(out, "  {axis}: {}", show(s.accel_bias_b_mps2[i], MICRO_G, 2));
     }
     if s.reference_offset_estimated {
         let _ = writeln!(out, "Reference (turntable) offset phi0 [arcsec]:");
         for (i, axis) in ["e", "n", "u"].iter().enumerate() {
-            let _ = writeln!(
-                out,
-                "  {axis}: {}",
-                show(s.reference_offset_n_rad[i], 1.0 / ARCSEC_PER_RAD, 2)
-            );
+            let _ = writeln!(out, "  {axis}: {}", show(s.reference_offset_n_rad[i], 1.0 / ARCSEC_PER_RAD, 2));
         }
     }
-    let unobservable: Vec<&str> = Parameter::ALL
-        .iter()
-        .filter(|p| s.is_unobservable(**p))
-        .map(|p| p.name())
-        .collect();
+    let unobservable: Vec<&str> = Parameter::ALL.iter().filter(|p| s.is_unobservable(**p)).map(|p| p.name()).collect();
     if !unobservable.is_empty() {
-        let _ = writeln!(
-            out,
-            "Not determined by this schedule: {}",
-            unobservable.join(", ")
-        );
+        let _ = writeln!(out, "Not determined by this schedule: {}", unobservable.join(", "));
     }
     let _ = writeln!(
         out,
@@ -301,7 +271,10 @@ pub fn summary(c: &Calibration) -> String {
         s.chi_square,
         s.degrees_of_freedom,
         if s.degrees_of_freedom > 0 {
-            format!(" (ratio {:.2}; about 1 when the bias-only model and white noise explain the angles)", s.chi_square as f64 / s.degrees_of_freedom as f64)
+            format!(
+                " (ratio {:.2}; about 1 when the bias-only model and white noise explain the angles)",
+                s.chi_square as f64 / s.degrees_of_freedom as f64
+            )
         } else {
             String::new()
         }

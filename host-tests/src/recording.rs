@@ -79,10 +79,7 @@ impl Recording {
     /// Parses the text of a recording; `source` names it in errors.
     pub fn parse(text: &str, source: &str) -> Result<Recording, InputError> {
         let bad = |line: usize, reason: String| InputError::at(source, line, reason);
-        let mut lines = text
-            .lines()
-            .enumerate()
-            .map(|(i, l)| (i + 1, l.trim_end_matches('\r')));
+        let mut lines = text.lines().enumerate().map(|(i, l)| (i + 1, l.trim_end_matches('\r')));
         let mut version = None;
         let mut latitude = None;
         let mut height_m = 0.0;
@@ -91,10 +88,7 @@ impl Recording {
         let mut comments = Vec::new();
         let (header_line, column_line) = loop {
             let Some((n, line)) = lines.next() else {
-                return Err(bad(
-                    text.lines().count().max(1),
-                    "no column line after the header".into(),
-                ));
+                return Err(bad(text.lines().count().max(1), "no column line after the header".into()));
             };
             if line.trim().is_empty() {
                 continue;
@@ -109,12 +103,7 @@ impl Recording {
             // A value may carry a trailing comment after whitespace, as in SPEC.md's example.
             let value = value.split_whitespace().next().unwrap_or("");
             let number = |what: &str| -> Result<f64, InputError> {
-                parse_finite(value).ok_or_else(|| {
-                    bad(
-                        n,
-                        format!("header {what}: '{value}' is not a finite number"),
-                    )
-                })
+                parse_finite(value).ok_or_else(|| bad(n, format!("header {what}: '{value}' is not a finite number")))
             };
             match key.trim() {
                 "sinscal-recording" => version = Some((n, value.to_string())),
@@ -127,33 +116,16 @@ impl Recording {
         };
         match version {
             Some((_, v)) if v == "1" => {}
-            Some((n, v)) => {
-                return Err(bad(
-                    n,
-                    format!("unsupported recording version '{v}' (this sinscal reads 1)"),
-                ))
-            }
-            None => {
-                return Err(bad(
-                    1,
-                    "not a sinscal recording: no '# sinscal-recording: 1' header line".into(),
-                ))
-            }
+            Some((n, v)) => return Err(bad(n, format!("unsupported recording version '{v}' (this sinscal reads 1)"))),
+            None => return Err(bad(1, "not a sinscal recording: no '# sinscal-recording: 1' header line".into())),
         }
-        let latitude_deg =
-            latitude.ok_or_else(|| bad(header_line, "header has no 'latitude_deg'".into()))?;
+        let latitude_deg = latitude.ok_or_else(|| bad(header_line, "header has no 'latitude_deg'".into()))?;
         if !(-90.0..=90.0).contains(&latitude_deg) {
-            return Err(bad(
-                header_line,
-                format!("latitude_deg {latitude_deg} outside [-90, 90]"),
-            ));
+            return Err(bad(header_line, format!("latitude_deg {latitude_deg} outside [-90, 90]")));
         }
         if let Some(g) = gravity {
             if !(9.7..=9.9).contains(&g) {
-                return Err(bad(
-                    header_line,
-                    format!("gravity_mps2 {g} is not a gravity on Earth (9.7..9.9)"),
-                ));
+                return Err(bad(header_line, format!("gravity_mps2 {g} is not a gravity on Earth (9.7..9.9)")));
             }
         }
 
@@ -161,8 +133,7 @@ impl Recording {
         let find = |name: &str| names.iter().position(|c| *c == name);
         let mut index = [0usize; 11];
         for (slot, name) in index.iter_mut().zip(COLUMNS) {
-            *slot =
-                find(name).ok_or_else(|| bad(header_line, format!("missing column '{name}'")))?;
+            *slot = find(name).ok_or_else(|| bad(header_line, format!("missing column '{name}'")))?;
         }
         let temp_index = find("temp_c");
 
@@ -174,44 +145,24 @@ impl Recording {
             }
             let cells: Vec<&str> = line.split(',').map(str::trim).collect();
             if cells.len() != names.len() {
-                return Err(bad(
-                    n,
-                    format!("{} cells, the column line has {}", cells.len(), names.len()),
-                ));
+                return Err(bad(n, format!("{} cells, the column line has {}", cells.len(), names.len())));
             }
             let num = |col: usize| -> Result<f64, InputError> {
-                parse_finite(cells[col]).ok_or_else(|| {
-                    bad(
-                        n,
-                        format!(
-                            "column '{}': '{}' is not a finite number",
-                            names[col], cells[col]
-                        ),
-                    )
-                })
+                parse_finite(cells[col])
+                    .ok_or_else(|| bad(n, format!("column '{}': '{}' is not a finite number", names[col], cells[col])))
             };
             let t_s = num(index[0])?;
             if let Some(prev) = previous_t {
                 if t_s <= prev {
-                    return Err(bad(
-                        n,
-                        format!("time {t_s} s does not increase (previous row: {prev} s)"),
-                    ));
+                    return Err(bad(n, format!("time {t_s} s does not increase (previous row: {prev} s)")));
                 }
             }
             previous_t = Some(t_s);
             let pos_cell = cells[index[1]];
-            let pos: u32 = pos_cell.parse().map_err(|_| {
-                bad(
-                    n,
-                    format!("column 'pos': '{pos_cell}' is not a non-negative integer"),
-                )
-            })?;
-            let heading_deg = if cells[index[4]].is_empty() {
-                None
-            } else {
-                Some(num(index[4])?)
-            };
+            let pos: u32 = pos_cell
+                .parse()
+                .map_err(|_| bad(n, format!("column 'pos': '{pos_cell}' is not a non-negative integer")))?;
+            let heading_deg = if cells[index[4]].is_empty() { None } else { Some(num(index[4])?) };
             let temp_c = match temp_index {
                 Some(i) if !cells[i].is_empty() => Some(num(i)?),
                 _ => None,
@@ -233,13 +184,7 @@ impl Recording {
         }
         Ok(Recording {
             source: source.to_string(),
-            header: Header {
-                latitude_deg,
-                height_m,
-                rate_hz,
-                gravity_mps2: gravity,
-                comments,
-            },
+            header: Header { latitude_deg, height_m, rate_hz, gravity_mps2: gravity, comments },
             rows,
         })
     }
@@ -274,11 +219,7 @@ impl Recording {
                 r.t_s, r.pos, r.pitch_deg, r.roll_deg, heading
             );
             if with_temp {
-                let _ = write!(
-                    out,
-                    ",{}",
-                    r.temp_c.map(|t| t.to_string()).unwrap_or_default()
-                );
+                let _ = write!(out, ",{}", r.temp_c.map(|t| t.to_string()).unwrap_or_default());
             }
             out.push('\n');
         }
@@ -297,10 +238,7 @@ impl Recording {
         for row in self.rows.iter().filter(|r| r.pos != 0) {
             match dwells.iter_mut().find(|d| d.pos == row.pos) {
                 Some(d) => d.rows.push(row),
-                None => dwells.push(Dwell {
-                    pos: row.pos,
-                    rows: vec![row],
-                }),
+                None => dwells.push(Dwell { pos: row.pos, rows: vec![row] }),
             }
         }
         dwells
@@ -339,32 +277,21 @@ impl Dwell<'_> {
     /// The reference attitude of the dwell: the circular mean of each angle over its rows (a read-out
     /// jitter averages out). A spread above [`MAX_DWELL_ATTITUDE_SPREAD_DEG`] means the table moved: an error.
     pub fn attitude(&self, source: &str) -> Result<DwellAttitude, InputError> {
-        let angle = |name: &str,
-                     get: &dyn Fn(&Row) -> Option<f64>|
-         -> Result<Option<f64>, InputError> {
-            let known: Vec<(usize, f64)> = self
-                .rows
-                .iter()
-                .filter_map(|r| get(r).map(|v| (r.line, v)))
-                .collect();
+        let angle = |name: &str, get: &dyn Fn(&Row) -> Option<f64>| -> Result<Option<f64>, InputError> {
+            let known: Vec<(usize, f64)> = self.rows.iter().filter_map(|r| get(r).map(|v| (r.line, v))).collect();
             if known.is_empty() {
                 return Ok(None);
             }
             if known.len() != self.rows.len() {
-                let line = self
-                    .rows
-                    .iter()
-                    .find(|r| get(r).is_none())
-                    .map_or(self.first_line(), |r| r.line);
+                let line = self.rows.iter().find(|r| get(r).is_none()).map_or(self.first_line(), |r| r.line);
                 return Err(InputError::at(
                     source,
                     line,
                     format!("dwell {}: {name} is empty in some rows only", self.pos),
                 ));
             }
-            let (s, c) = known.iter().fold((0.0, 0.0), |(s, c), (_, v)| {
-                (s + v.to_radians().sin(), c + v.to_radians().cos())
-            });
+            let (s, c) =
+                known.iter().fold((0.0, 0.0), |(s, c), (_, v)| (s + v.to_radians().sin(), c + v.to_radians().cos()));
             let mean = s.atan2(c).to_degrees();
             for (line, v) in &known {
                 let diff = (v - mean + 540.0).rem_euclid(360.0) - 180.0;
@@ -372,7 +299,10 @@ impl Dwell<'_> {
                     return Err(InputError::at(
                         source,
                         *line,
-                        format!("dwell {}: {name} {v} deg differs from the dwell's mean {mean:.4} deg: the table moves", self.pos),
+                        format!(
+                            "dwell {}: {name} {v} deg differs from the dwell's mean {mean:.4} deg: the table moves",
+                            self.pos
+                        ),
                     ));
                 }
             }
@@ -397,7 +327,8 @@ fn parse_finite(cell: &str) -> Option<f64> {
 mod tests {
     use super::*;
 
-    const GOOD: &str = "# sinscal-recording: 1\n# latitude_deg: 45.7796\n# height_m: 0                (optional)\n# rate_hz: 100\n\
+    const GOOD: &str =
+        "# sinscal-recording: 1\n# latitude_deg: 45.7796\n# height_m: 0                (optional)\n# rate_hz: 100\n\
         t_s,pos,pitch_deg,roll_deg,heading_deg,gx_radps,gy_radps,gz_radps,ax_mps2,ay_mps2,az_mps2\n\
         0.00,1,0,0,0,1.2e-06,5.1e-05,5.2e-05,1.0e-04,-3.0e-04,9.8063\n\
         0.01,1,0,0,0,1.2e-06,5.1e-05,5.2e-05,1.0e-04,-3.0e-04,9.8063\n";
@@ -415,11 +346,7 @@ mod tests {
         assert_eq!(r.rows[0].rate_b_radps, [1.2e-6, 5.1e-5, 5.2e-5]);
         let again = Recording::parse(&r.to_csv(), "r.csv").unwrap();
         assert_eq!(
-            again
-                .rows
-                .iter()
-                .map(|x| x.force_b_mps2)
-                .collect::<Vec<_>>(),
+            again.rows.iter().map(|x| x.force_b_mps2).collect::<Vec<_>>(),
             r.rows.iter().map(|x| x.force_b_mps2).collect::<Vec<_>>()
         );
         assert_eq!(again.rows[0].rate_b_radps, r.rows[0].rate_b_radps);
@@ -440,27 +367,16 @@ mod tests {
 
     #[test]
     fn bad_input_names_file_line_and_reason() {
-        assert_eq!(
-            err("t_s\n1\n"),
-            "r.csv:1: not a sinscal recording: no '# sinscal-recording: 1' header line"
-        );
+        assert_eq!(err("t_s\n1\n"), "r.csv:1: not a sinscal recording: no '# sinscal-recording: 1' header line");
         assert!(err(&GOOD.replace(",ay_mps2", ",ay")).contains("missing column 'ay_mps2'"));
-        assert!(
-            err(&GOOD.replace("0.01,1,0,0,0,1.2e-06", "0.01,1,0,0,0,NaN"))
-                .starts_with("r.csv:7: column 'gx_radps': 'NaN'")
-        );
-        assert!(
-            err(&GOOD.replace("0.01,1,0,0,0,1.2e-06", "0.01,1,0,0,0,inf"))
-                .contains("not a finite number")
-        );
-        assert!(err(&GOOD.replace("0.01,1,", "0.00,1,"))
-            .starts_with("r.csv:7: time 0 s does not increase"));
+        assert!(err(&GOOD.replace("0.01,1,0,0,0,1.2e-06", "0.01,1,0,0,0,NaN"))
+            .starts_with("r.csv:7: column 'gx_radps': 'NaN'"));
+        assert!(err(&GOOD.replace("0.01,1,0,0,0,1.2e-06", "0.01,1,0,0,0,inf")).contains("not a finite number"));
+        assert!(err(&GOOD.replace("0.01,1,", "0.00,1,")).starts_with("r.csv:7: time 0 s does not increase"));
         assert!(err(&GOOD.replace("0.01,1,", "0.01,x,")).contains("'pos': 'x'"));
         assert!(err(&GOOD.replace("# latitude_deg: 45.7796\n", "")).contains("no 'latitude_deg'"));
-        assert!(err(&GOOD.replace("-3.0e-04,9.8063\n0.01", "9.8063\n0.01"))
-            .starts_with("r.csv:6: 10 cells"));
-        assert!(err(&GOOD.replace("recording: 1", "recording: 2"))
-            .contains("unsupported recording version '2'"));
+        assert!(err(&GOOD.replace("-3.0e-04,9.8063\n0.01", "9.8063\n0.01")).starts_with("r.csv:6: 10 cells"));
+        assert!(err(&GOOD.replace("recording: 1", "recording: 2")).contains("unsupported recording version '2'"));
     }
 
     #[test]
@@ -470,15 +386,9 @@ mod tests {
         let e = r.dwells()[0].attitude("r.csv").unwrap_err().to_string();
         assert!(e.contains("the table moves"), "{e}");
         // Headings either side of north average to north, not to 180.
-        let text = GOOD
-            .replace("0.00,1,0,0,0,", "0.00,1,0,0,359.999,")
-            .replace("0.01,1,0,0,0,", "0.01,1,0,0,0.001,");
+        let text = GOOD.replace("0.00,1,0,0,0,", "0.00,1,0,0,359.999,").replace("0.01,1,0,0,0,", "0.01,1,0,0,0.001,");
         let r = Recording::parse(&text, "r.csv").unwrap();
-        let h = r.dwells()[0]
-            .attitude("r.csv")
-            .unwrap()
-            .heading_deg
-            .unwrap();
+        let h = r.dwells()[0].attitude("r.csv").unwrap().heading_deg.unwrap();
         assert!((h - 360.0).abs() < 1e-9, "{h}");
     }
 }

@@ -66,10 +66,7 @@ pub fn c_b_n(pitch_deg: f64, roll_deg: f64, heading_deg: f64) -> M3 {
         v[axis] = deg.to_radians();
         rotation(v)
     };
-    mul(
-        &mul(&about(2, -heading_deg), &about(0, pitch_deg)),
-        &about(1, roll_deg),
-    )
+    mul(&mul(&about(2, -heading_deg), &about(0, pitch_deg)), &about(1, roll_deg))
 }
 
 /// A simulated multi-position session with constant biases and white noise.
@@ -104,14 +101,8 @@ pub struct Scenario {
 }
 
 /// The six positions of the paper's Table 1 (pitch, roll, heading), degrees.
-pub const TABLE1_DEG: [[f64; 3]; 6] = [
-    [0.0, 0.0, 0.0],
-    [0.0, 0.0, 180.0],
-    [0.0, 0.0, 90.0],
-    [0.0, 0.0, 270.0],
-    [0.0, 90.0, 0.0],
-    [0.0, 270.0, 0.0],
-];
+pub const TABLE1_DEG: [[f64; 3]; 6] =
+    [[0.0, 0.0, 0.0], [0.0, 0.0, 180.0], [0.0, 0.0, 90.0], [0.0, 0.0, 270.0], [0.0, 90.0, 0.0], [0.0, 270.0, 0.0]];
 
 impl Scenario {
     /// Table 1 at the paper's site (45.7796 N), 1 minute per position at 100 Hz, no noise, no biases.
@@ -120,10 +111,7 @@ impl Scenario {
         Scenario {
             latitude_deg,
             height_m: 0.0,
-            gravity_mps2: sinscal::earth::normal_gravity_mps2(
-                (latitude_deg as f32).to_radians(),
-                0.0,
-            ) as f64,
+            gravity_mps2: sinscal::earth::normal_gravity_mps2((latitude_deg as f32).to_radians(), 0.0) as f64,
             rate_hz: 100.0,
             dwell_s: 60.0,
             settle_s: 2.0,
@@ -141,11 +129,7 @@ impl Scenario {
     /// turntable base error.
     pub fn example() -> Scenario {
         Scenario {
-            gyro_bias_b_radps: [
-                0.05 * DEG_PER_HOUR,
-                -0.03 * DEG_PER_HOUR,
-                0.02 * DEG_PER_HOUR,
-            ],
+            gyro_bias_b_radps: [0.05 * DEG_PER_HOUR, -0.03 * DEG_PER_HOUR, 0.02 * DEG_PER_HOUR],
             accel_bias_b_mps2: [100.0 * MICRO_G, -80.0 * MICRO_G, 50.0 * MICRO_G],
             gyro_noise_radps: 0.1 * DEG_PER_HOUR,
             accel_noise_mps2: 1000.0 * MICRO_G,
@@ -167,18 +151,11 @@ impl Scenario {
         let offset = self.reference_offset_n_rad.map(|x| -x);
         let c_true = mul(&rotation(offset), &c_ref);
         let lat = self.latitude_deg.to_radians();
-        let w_n = [
-            0.0,
-            EARTH_RATE_RADPS * lat.cos(),
-            EARTH_RATE_RADPS * lat.sin(),
-        ];
+        let w_n = [0.0, EARTH_RATE_RADPS * lat.cos(), EARTH_RATE_RADPS * lat.sin()];
         let f_n = [0.0, 0.0, self.gravity_mps2];
         let w_b = mul_t_vec(&c_true, w_n);
         let f_b = mul_t_vec(&c_true, f_n);
-        (
-            [0, 1, 2].map(|i| w_b[i] + self.gyro_bias_b_radps[i]),
-            [0, 1, 2].map(|i| f_b[i] + self.accel_bias_b_mps2[i]),
-        )
+        ([0, 1, 2].map(|i| w_b[i] + self.gyro_bias_b_radps[i]), [0, 1, 2].map(|i| f_b[i] + self.accel_bias_b_mps2[i]))
     }
 
     /// Calls `sink(position_index, rate_b_radps, force_b_mps2)` for every sample of every dwell, with
@@ -206,21 +183,20 @@ impl Scenario {
         let settle = (self.settle_s * self.rate_hz).round() as usize;
         let mut rows = Vec::new();
         let mut tick = 0u64;
-        let mut push =
-            |rows: &mut Vec<Row>, pos: u32, position: [f64; 3], w: [f64; 3], f: [f64; 3]| {
-                rows.push(Row {
-                    t_s: tick as f64 * dt,
-                    pos,
-                    pitch_deg: position[0],
-                    roll_deg: position[1],
-                    heading_deg: Some(position[2]),
-                    rate_b_radps: w,
-                    force_b_mps2: f,
-                    temp_c: None,
-                    line: 0,
-                });
-                tick += 1;
-            };
+        let mut push = |rows: &mut Vec<Row>, pos: u32, position: [f64; 3], w: [f64; 3], f: [f64; 3]| {
+            rows.push(Row {
+                t_s: tick as f64 * dt,
+                pos,
+                pitch_deg: position[0],
+                roll_deg: position[1],
+                heading_deg: Some(position[2]),
+                rate_b_radps: w,
+                force_b_mps2: f,
+                temp_c: None,
+                line: 0,
+            });
+            tick += 1;
+        };
         let mut current = usize::MAX;
         self.for_each_sample(seed, |k, w, f| {
             let position = self.positions_deg[k];
@@ -248,10 +224,7 @@ impl Scenario {
                 height_m: self.height_m,
                 rate_hz: Some(self.rate_hz),
                 gravity_mps2: Some(self.gravity_mps2),
-                comments: vec![
-                    format!("SIMULATION by sinscal (seed {seed}), not measured data"),
-                    truth,
-                ],
+                comments: vec![format!("SIMULATION by sinscal (seed {seed}), not measured data"), truth],
             },
             rows,
         }
@@ -275,10 +248,7 @@ mod tests {
 
     #[test]
     fn recording_is_reproducible_from_the_seed() {
-        let s = Scenario {
-            dwell_s: 1.0,
-            ..Scenario::example()
-        };
+        let s = Scenario { dwell_s: 1.0, ..Scenario::example() };
         assert_eq!(s.recording(5, "a").to_csv(), s.recording(5, "a").to_csv());
         assert_ne!(s.recording(5, "a").to_csv(), s.recording(6, "a").to_csv());
     }

@@ -10,10 +10,7 @@ fn sinscal() -> Command {
 
 fn example_file(dir: &tempfile::TempDir, seconds: f64) -> std::path::PathBuf {
     let path = dir.path().join("example.csv");
-    let scenario = Scenario {
-        dwell_s: seconds,
-        ..Scenario::example()
-    };
+    let scenario = Scenario { dwell_s: seconds, ..Scenario::example() };
     scenario.recording(3, "example.csv").write(&path).unwrap();
     path
 }
@@ -23,13 +20,7 @@ fn calibrate_writes_the_spec_json_and_numbers_read_back_bit_exact() {
     let dir = tempfile::tempdir().unwrap();
     let rec = example_file(&dir, 20.0);
     let json_path = dir.path().join("cal.json");
-    let out = sinscal()
-        .arg("calibrate")
-        .arg(&rec)
-        .arg("--json")
-        .arg(&json_path)
-        .assert()
-        .success();
+    let out = sinscal().arg("calibrate").arg(&rec).arg("--json").arg(&json_path).assert().success();
     let stdout = String::from_utf8(out.get_output().stdout.clone()).unwrap();
     assert!(stdout.contains("Gyro bias, body frame [deg/h]"), "{stdout}");
     assert!(stdout.contains("[ug]"));
@@ -40,20 +31,8 @@ fn calibrate_writes_the_spec_json_and_numbers_read_back_bit_exact() {
     assert_eq!(v["latitude_deg"], 45.7796);
     assert_eq!(v["positions"].as_array().unwrap().len(), 6);
     let p = &v["positions"][4];
-    assert_eq!(
-        (
-            p["pos"].as_u64(),
-            p["roll_deg"].as_f64(),
-            p["samples"].as_u64()
-        ),
-        (Some(5), Some(90.0), Some(2000))
-    );
-    for key in [
-        "gyro_bias_radps",
-        "gyro_bias_std_radps",
-        "accel_bias_mps2",
-        "accel_bias_std_mps2",
-    ] {
+    assert_eq!((p["pos"].as_u64(), p["roll_deg"].as_f64(), p["samples"].as_u64()), (Some(5), Some(90.0), Some(2000)));
+    for key in ["gyro_bias_radps", "gyro_bias_std_radps", "accel_bias_mps2", "accel_bias_std_mps2"] {
         let arr = v[key].as_array().unwrap();
         assert_eq!(arr.len(), 3);
         for x in arr {
@@ -72,12 +51,7 @@ fn calibrate_writes_the_spec_json_and_numbers_read_back_bit_exact() {
     assert_eq!(v["gyro_bias_radps"][0].as_f64().unwrap() as f32, eps_x);
 
     // --json - writes only the JSON to stdout.
-    let out = sinscal()
-        .arg("calibrate")
-        .arg(&rec)
-        .args(["--json", "-", "--prefilter", "none"])
-        .assert()
-        .success();
+    let out = sinscal().arg("calibrate").arg(&rec).args(["--json", "-", "--prefilter", "none"]).assert().success();
     let v: Value = serde_json::from_slice(&out.get_output().stdout).unwrap();
     assert_eq!(v["prefilter"]["kind"], "none");
 }
@@ -86,25 +60,12 @@ fn calibrate_writes_the_spec_json_and_numbers_read_back_bit_exact() {
 fn schedule_blind_spots_are_listed_as_unobservable_with_null_values() {
     let dir = tempfile::tempdir().unwrap();
     let path = dir.path().join("two.csv");
-    let scenario = Scenario {
-        dwell_s: 5.0,
-        positions_deg: vec![[0.0, 0.0, 0.0], [0.0, 0.0, 180.0]],
-        ..Scenario::example()
-    };
+    let scenario =
+        Scenario { dwell_s: 5.0, positions_deg: vec![[0.0, 0.0, 0.0], [0.0, 0.0, 180.0]], ..Scenario::example() };
     scenario.recording(1, "two.csv").write(&path).unwrap();
-    let out = sinscal()
-        .arg("calibrate")
-        .arg(&path)
-        .args(["--json", "-"])
-        .assert()
-        .success();
+    let out = sinscal().arg("calibrate").arg(&path).args(["--json", "-"]).assert().success();
     let v: Value = serde_json::from_slice(&out.get_output().stdout).unwrap();
-    let unobservable: Vec<&str> = v["unobservable"]
-        .as_array()
-        .unwrap()
-        .iter()
-        .map(|x| x.as_str().unwrap())
-        .collect();
+    let unobservable: Vec<&str> = v["unobservable"].as_array().unwrap().iter().map(|x| x.as_str().unwrap()).collect();
     assert_eq!(unobservable, ["gyro_bias_y", "gyro_bias_z", "accel_bias_z"]);
     assert!(v["gyro_bias_radps"][1].is_null() && v["gyro_bias_std_radps"][2].is_null());
     assert!(v["gyro_bias_radps"][0].as_f64().is_some());
@@ -134,31 +95,11 @@ fn bad_input_exits_1_with_file_line_and_reason() {
     let rec = example_file(&dir, 1.0);
     let text = std::fs::read_to_string(&rec).unwrap();
     let cases = [
-        (
-            "time.csv",
-            text.replace("\n0.01,", "\n0,"),
-            "does not increase",
-        ),
-        (
-            "column.csv",
-            text.replace(",gz_radps,", ",gz,"),
-            "missing column 'gz_radps'",
-        ),
-        (
-            "number.csv",
-            text.replacen(",1,0,0,0,", ",1,0,0,x,", 1),
-            "column 'heading_deg': 'x' is not a finite number",
-        ),
-        (
-            "nan.csv",
-            with_cell(&text, 1, 5, "NaN"),
-            "column 'gx_radps': 'NaN' is not a finite number",
-        ),
-        (
-            "inf.csv",
-            with_cell(&text, 2, 10, "inf"),
-            "column 'az_mps2': 'inf' is not a finite number",
-        ),
+        ("time.csv", text.replace("\n0.01,", "\n0,"), "does not increase"),
+        ("column.csv", text.replace(",gz_radps,", ",gz,"), "missing column 'gz_radps'"),
+        ("number.csv", text.replacen(",1,0,0,0,", ",1,0,0,x,", 1), "column 'heading_deg': 'x' is not a finite number"),
+        ("nan.csv", with_cell(&text, 1, 5, "NaN"), "column 'gx_radps': 'NaN' is not a finite number"),
+        ("inf.csv", with_cell(&text, 2, 10, "inf"), "column 'az_mps2': 'inf' is not a finite number"),
     ];
     for (name, body, want) in cases {
         let path = dir.path().join(name);
@@ -167,13 +108,7 @@ fn bad_input_exits_1_with_file_line_and_reason() {
         let stderr = String::from_utf8(out.get_output().stderr.clone()).unwrap();
         assert_eq!(stderr.lines().count(), 1, "one line: {stderr}");
         assert!(stderr.contains(name) && stderr.contains(want), "{stderr}");
-        let line: usize = stderr
-            .split(':')
-            .nth(2)
-            .unwrap()
-            .trim()
-            .parse()
-            .expect("a line number");
+        let line: usize = stderr.split(':').nth(2).unwrap().trim().parse().expect("a line number");
         assert!(line > 5, "{stderr}");
     }
 
@@ -191,31 +126,13 @@ fn bad_input_exits_1_with_file_line_and_reason() {
         })
         .collect();
     std::fs::write(&short, body.join("\n")).unwrap();
-    let stderr = String::from_utf8(
-        sinscal()
-            .arg("calibrate")
-            .arg(&short)
-            .assert()
-            .code(1)
-            .get_output()
-            .stderr
-            .clone(),
-    )
-    .unwrap();
-    assert!(
-        stderr.contains("dwell 6") && stderr.contains("too short"),
-        "{stderr}"
-    );
+    let stderr =
+        String::from_utf8(sinscal().arg("calibrate").arg(&short).assert().code(1).get_output().stderr.clone()).unwrap();
+    assert!(stderr.contains("dwell 6") && stderr.contains("too short"), "{stderr}");
 
     // Missing file.
     let stderr = String::from_utf8(
-        sinscal()
-            .args(["calibrate", "/nonexistent/x.csv"])
-            .assert()
-            .code(1)
-            .get_output()
-            .stderr
-            .clone(),
+        sinscal().args(["calibrate", "/nonexistent/x.csv"]).assert().code(1).get_output().stderr.clone(),
     )
     .unwrap();
     assert!(stderr.contains("/nonexistent/x.csv"), "{stderr}");
@@ -223,47 +140,25 @@ fn bad_input_exits_1_with_file_line_and_reason() {
     // Unknown heading: the calibration needs it, and says so.
     let unknown = dir.path().join("unknown.csv");
     std::fs::write(&unknown, text.replace(",2,0,0,180,", ",2,0,0,,")).unwrap();
-    let stderr = String::from_utf8(
-        sinscal()
-            .arg("calibrate")
-            .arg(&unknown)
-            .assert()
-            .code(1)
-            .get_output()
-            .stderr
-            .clone(),
-    )
-    .unwrap();
+    let stderr =
+        String::from_utf8(sinscal().arg("calibrate").arg(&unknown).assert().code(1).get_output().stderr.clone())
+            .unwrap();
     assert!(stderr.contains("dwell 2: heading is unknown"), "{stderr}");
 
     // A reference that does not match the data (axes or attitude wrong).
     let wrong = dir.path().join("wrong.csv");
-    std::fs::write(&wrong, text.replace(",3,0,0,90,", ",3,0,0,80,")).unwrap();
-    let stderr = String::from_utf8(
-        sinscal()
-            .arg("calibrate")
-            .arg(&wrong)
-            .assert()
-            .code(1)
-            .get_output()
-            .stderr
-            .clone(),
-    )
-    .unwrap();
-    assert!(
-        stderr.contains("dwell 3") && stderr.contains("differs from the reference attitude"),
-        "{stderr}"
-    );
+    // Position 3 reported with roll 90 (body x down) while the data have z up: an axis mismatch.
+    std::fs::write(&wrong, text.replace(",3,0,0,90,", ",3,0,90,90,")).unwrap();
+    let stderr =
+        String::from_utf8(sinscal().arg("calibrate").arg(&wrong).assert().code(1).get_output().stderr.clone()).unwrap();
+    assert!(stderr.contains("dwell 3") && stderr.contains("differs from the reference attitude"), "{stderr}");
 }
 
 #[test]
 fn usage_errors_exit_2() {
     sinscal().assert().code(2);
     sinscal().args(["calibrate"]).assert().code(2);
-    sinscal()
-        .args(["calibrate", "x.csv", "--prefilter", "bogus"])
-        .assert()
-        .code(2);
+    sinscal().args(["calibrate", "x.csv", "--prefilter", "bogus"]).assert().code(2);
 }
 
 #[test]
@@ -271,27 +166,14 @@ fn demo_runs_the_built_in_example() {
     let dir = tempfile::tempdir().unwrap();
     let out = dir.path().join("ex.csv");
     let json = dir.path().join("ex.json");
-    let o = sinscal()
-        .arg("demo")
-        .arg("--out")
-        .arg(&out)
-        .arg("--json")
-        .arg(&json)
-        .assert()
-        .success();
+    let o = sinscal().arg("demo").arg("--out").arg(&out).arg("--json").arg(&json).assert().success();
     let stdout = String::from_utf8(o.get_output().stdout.clone()).unwrap();
     assert!(stdout.contains("SIMULATION"), "{stdout}");
     assert!(stdout.contains("Truth of the simulation"));
     let v: Value = serde_json::from_str(&std::fs::read_to_string(&json).unwrap()).unwrap();
     // The example's biases: gyro x +0.05 deg/h, accel y -80 ug; the estimates land within 4 sigma.
-    let (eps, sd) = (
-        v["gyro_bias_radps"][0].as_f64().unwrap(),
-        v["gyro_bias_std_radps"][0].as_f64().unwrap(),
-    );
+    let (eps, sd) = (v["gyro_bias_radps"][0].as_f64().unwrap(), v["gyro_bias_std_radps"][0].as_f64().unwrap());
     assert!((eps - 0.05 * sinscal_host::synth::DEG_PER_HOUR).abs() < 4.0 * sd);
-    let (nab, sd) = (
-        v["accel_bias_mps2"][1].as_f64().unwrap(),
-        v["accel_bias_std_mps2"][1].as_f64().unwrap(),
-    );
+    let (nab, sd) = (v["accel_bias_mps2"][1].as_f64().unwrap(), v["accel_bias_std_mps2"][1].as_f64().unwrap());
     assert!((nab + 80.0 * sinscal_host::synth::MICRO_G).abs() < 4.0 * sd);
 }

@@ -9,7 +9,7 @@ use sinscal_host::synth::Scenario;
 
 #[test]
 fn two_hundred_runs_reach_the_bound_with_honest_standard_errors() {
-    let report = run(&Scenario::example(), 200, 1000, |_| {});
+    let report = run(&Scenario::example(), 200, 1000, 6, |_| {});
     for e in &report.estimators {
         for p in &e.parameters {
             println!(
@@ -36,12 +36,7 @@ fn two_hundred_runs_reach_the_bound_with_honest_standard_errors() {
                 ),
                 // The settled output uses a fraction of the dwell: for white noise its variance is the
                 // filter's noise gain (about 0.03) times the sample variance, against 1/6000 for the mean.
-                Estimator::HmmkfSettled => assert!(
-                    p.efficiency_ratio > 5.0,
-                    "{}: {}",
-                    p.parameter,
-                    p.efficiency_ratio
-                ),
+                Estimator::HmmkfSettled => assert!(p.efficiency_ratio > 5.0, "{}: {}", p.parameter, p.efficiency_ratio),
             }
         }
     }
