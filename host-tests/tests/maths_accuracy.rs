@@ -35,16 +35,17 @@ fn measure(
 fn libm_is_accurate_enough_for_alignment_and_micromath_is_not() {
     const N: usize = 200_000;
     // Angles of turntable positions and latitudes: -2 pi .. 2 pi.
-    let angles = || (0..N).map(|i| -6.283_185 + 12.566_37 * i as f32 / N as f32);
+    let tau = std::f32::consts::TAU;
+    let angles = || (0..N).map(|i| -tau + 2.0 * tau * i as f32 / N as f32);
     // Square roots of variances and squared norms: 1e-16 .. 1e3, log-spaced.
     let squares = || (0..N).map(|i| 10f32.powf(-16.0 + 19.0 * i as f32 / N as f32));
     // tan of latitudes up to 80 deg.
     let latitudes = || (0..N).map(|i| -1.396 + 2.792 * i as f32 / N as f32);
 
-    let sin = measure(angles(), f64::sin, libm::sinf, |x| F32Ext::sin(x), false);
-    let cos = measure(angles(), f64::cos, libm::cosf, |x| F32Ext::cos(x), false);
-    let tan = measure(latitudes(), f64::tan, libm::tanf, |x| F32Ext::tan(x), true);
-    let sqrt = measure(squares(), f64::sqrt, libm::sqrtf, |x| F32Ext::sqrt(x), true);
+    let sin = measure(angles(), f64::sin, libm::sinf, F32Ext::sin, false);
+    let cos = measure(angles(), f64::cos, libm::cosf, F32Ext::cos, false);
+    let tan = measure(latitudes(), f64::tan, libm::tanf, F32Ext::tan, true);
+    let sqrt = measure(squares(), f64::sqrt, libm::sqrtf, F32Ext::sqrt, true);
     println!("largest error against f64 ({N} arguments each):");
     println!("  sin  (abs): libm {:.1e}  micromath {:.1e}", sin.libm, sin.micromath);
     println!("  cos  (abs): libm {:.1e}  micromath {:.1e}", cos.libm, cos.micromath);
