@@ -141,6 +141,12 @@ impl DwellCollector {
         }
     }
 
+    /// Output variance of the settled prefilter per unit raw white-noise variance, gyro and accelerometer
+    /// (1 without prefilter).
+    pub fn noise_gain(&self) -> [f32; 2] {
+        self.noise_gain
+    }
+
     /// Samples used so far in this dwell.
     pub fn samples(&self) -> u32 {
         self.raw[0].count()

@@ -333,6 +333,17 @@ fn montecarlo_table(r: &montecarlo::Report) -> String {
             r.crb_angles[i] / r.crb_channels[i]
         );
     }
+    let _ = writeln!(
+        out,
+        "\nSettled output: variance {:.4} (gyro) and {:.4} (accel) of one raw sample, against 1/{} = {:.2e} for the dwell mean: \
+         std ratio {:.1} and {:.1}.",
+        r.settled_noise_gain[0],
+        r.settled_noise_gain[1],
+        r.dwell_samples,
+        1.0 / r.dwell_samples as f64,
+        (r.settled_noise_gain[0] * r.dwell_samples as f64).sqrt(),
+        (r.settled_noise_gain[1] * r.dwell_samples as f64).sqrt()
+    );
     let _ = writeln!(out, "\nRMS/CRB: RMS error over the angle-model bound (1 = efficient). RMS z: RMS of error / reported standard error (1 = honest standard errors).");
     out
 }

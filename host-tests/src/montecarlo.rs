@@ -101,6 +101,9 @@ pub struct Report {
     pub crb_channels: Vec<f64>,
     /// Six-channel bound per parameter with the reference attitude taken as exact (6 parameters).
     pub crb_channels_known_reference: Vec<f64>,
+    /// Output variance of the settled HMM/KF per raw sample variance, gyro and accelerometer (the dwell
+    /// mean's is 1 / samples).
+    pub settled_noise_gain: [f64; 2],
 }
 
 /// Inverse of a symmetric positive definite matrix (Gauss-Jordan with partial pivoting), f64.
@@ -319,5 +322,9 @@ pub fn run(s: &Scenario, runs: usize, seed: u64, max_passes: u32, mut progress: 
         crb_angles: crb,
         crb_channels: crb_channels(s, false),
         crb_channels_known_reference: crb_channels(s, true),
+        settled_noise_gain: DwellCollector::new(&Prefilter::paper())
+            .expect("paper prefilter")
+            .noise_gain()
+            .map(|g| g as f64),
     }
 }

@@ -47,6 +47,8 @@ fn check_at(
     let rec = Recording::parse(&text, "exact.csv").unwrap();
     let cal = calibrate(&rec, &options).unwrap();
     let s = &cal.solution;
+    assert!(cal.converged);
+    println!("  ({} pass(es), converged)", cal.passes);
     let mut worst = (0.0f64, 0.0f64);
     for i in 0..3 {
         let eps = s.gyro_bias_b_radps[i].expect("Table 1 determines every gyro bias").value as f64;
