@@ -6,6 +6,9 @@
 pub mod calibrate;
 pub mod error;
 pub mod montecarlo;
+pub mod navcheck;
+pub mod navigate;
 pub mod output;
+pub mod plot;
 pub mod recording;
 pub mod synth;

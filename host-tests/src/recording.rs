@@ -19,6 +19,26 @@ pub struct Header {
     pub gravity_mps2: Option<f64>,
     /// Free-text header lines that are not `key: value` pairs sinscal knows (kept when writing).
     pub comments: Vec<String>,
+    /// The truth of a sinscal simulation (`# truth_*` header keys), absent for measured data.
+    pub truth: Option<SimulationTruth>,
+}
+
+/// The true errors of a simulated IMU, as written by sinscal into the header of a simulated recording
+/// (extra `# truth_*: x,y,z` keys; other tools ignore them, as SPEC.md allows for unknown keys).
+#[derive(Clone, Debug, PartialEq)]
+pub struct SimulationTruth {
+    /// Noise seed of the simulation.
+    pub seed: u64,
+    /// Gyro bias, body frame, rad/s.
+    pub gyro_bias_b_radps: [f64; 3],
+    /// Accelerometer bias, body frame, m/s^2.
+    pub accel_bias_b_mps2: [f64; 3],
+    /// Gyro white noise per sample, rad/s.
+    pub gyro_noise_radps: f64,
+    /// Accelerometer white noise per sample, m/s^2.
+    pub accel_noise_mps2: f64,
+    /// Turntable reference offset (e, n, u), rad.
+    pub reference_offset_n_rad: [f64; 3],
 }
 
 /// One row (sample) of a recording.
@@ -86,6 +106,7 @@ impl Recording {
         let mut rate_hz = None;
         let mut gravity = None;
         let mut comments = Vec::new();
+        let mut truth_keys: Vec<(usize, String, String)> = Vec::new();
         let (header_line, column_line) = loop {
             let Some((n, line)) = lines.next() else {
                 return Err(bad(text.lines().count().max(1), "no column line after the header".into()));
@@ -111,6 +132,7 @@ impl Recording {
                 "height_m" => height_m = number("height_m")?,
                 "rate_hz" => rate_hz = Some(number("rate_hz")?),
                 "gravity_mps2" => gravity = Some(number("gravity_mps2")?),
+                k if k.starts_with("truth_") => truth_keys.push((n, k.to_string(), value.to_string())),
                 _ => comments.push(rest.trim().to_string()),
             }
         };
@@ -128,6 +150,8 @@ impl Recording {
                 return Err(bad(header_line, format!("gravity_mps2 {g} is not a gravity on Earth (9.7..9.9)")));
             }
         }
+
+        let truth = parse_truth(&truth_keys, source)?;
 
         let names: Vec<&str> = column_line.split(',').map(str::trim).collect();
         let find = |name: &str| names.iter().position(|c| *c == name);
@@ -184,7 +208,7 @@ impl Recording {
         }
         Ok(Recording {
             source: source.to_string(),
-            header: Header { latitude_deg, height_m, rate_hz, gravity_mps2: gravity, comments },
+            header: Header { latitude_deg, height_m, rate_hz, gravity_mps2: gravity, comments, truth },
             rows,
         })
     }
@@ -205,6 +229,15 @@ impl Recording {
         }
         if let Some(g) = h.gravity_mps2 {
             let _ = writeln!(out, "# gravity_mps2: {g}");
+        }
+        if let Some(t) = &h.truth {
+            let v3 = |v: [f64; 3]| format!("{:e},{:e},{:e}", v[0], v[1], v[2]);
+            let _ = writeln!(out, "# truth_seed: {}", t.seed);
+            let _ = writeln!(out, "# truth_gyro_bias_radps: {}", v3(t.gyro_bias_b_radps));
+            let _ = writeln!(out, "# truth_accel_bias_mps2: {}", v3(t.accel_bias_b_mps2));
+            let _ = writeln!(out, "# truth_gyro_noise_radps: {:e}", t.gyro_noise_radps);
+            let _ = writeln!(out, "# truth_accel_noise_mps2: {:e}", t.accel_noise_mps2);
+            let _ = writeln!(out, "# truth_reference_offset_rad: {}", v3(t.reference_offset_n_rad));
         }
         let with_temp = self.rows.iter().any(|r| r.temp_c.is_some());
         out.push_str(&COLUMNS.join(","));
@@ -317,6 +350,36 @@ impl Dwell<'_> {
             heading_deg: angle("heading_deg", &|r| r.heading_deg)?,
         })
     }
+}
+
+/// Reads the `# truth_*` keys of a simulated recording; all or none must be present.
+fn parse_truth(keys: &[(usize, String, String)], source: &str) -> Result<Option<SimulationTruth>, InputError> {
+    if keys.is_empty() {
+        return Ok(None);
+    }
+    let find = |name: &str| keys.iter().find(|(_, k, _)| k == name);
+    let line = keys[0].0;
+    let numbers = |name: &str, count: usize| -> Result<Vec<f64>, InputError> {
+        let (n, _, v) =
+            find(name).ok_or_else(|| InputError::at(source, line, format!("header has truth keys but no '{name}'")))?;
+        let values: Option<Vec<f64>> = v.split(',').map(parse_finite).collect();
+        match values {
+            Some(values) if values.len() == count => Ok(values),
+            _ => Err(InputError::at(source, *n, format!("header {name}: '{v}' is not {count} finite numbers"))),
+        }
+    };
+    let v3 = |name: &str| -> Result<[f64; 3], InputError> {
+        let v = numbers(name, 3)?;
+        Ok([v[0], v[1], v[2]])
+    };
+    Ok(Some(SimulationTruth {
+        seed: numbers("truth_seed", 1)?[0] as u64,
+        gyro_bias_b_radps: v3("truth_gyro_bias_radps")?,
+        accel_bias_b_mps2: v3("truth_accel_bias_mps2")?,
+        gyro_noise_radps: numbers("truth_gyro_noise_radps", 1)?[0],
+        accel_noise_mps2: numbers("truth_accel_noise_mps2", 1)?[0],
+        reference_offset_n_rad: v3("truth_reference_offset_rad")?,
+    }))
 }
 
 fn parse_finite(cell: &str) -> Option<f64> {

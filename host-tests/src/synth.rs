@@ -7,7 +7,7 @@ use rand::SeedableRng;
 use rand_chacha::ChaCha8Rng;
 use rand_distr::{Distribution, Normal};
 
-use crate::recording::{Header, Recording, Row};
+use crate::recording::{Header, Recording, Row, SimulationTruth};
 
 /// Earth rotation rate, rad/s (SPEC.md section 1).
 pub const EARTH_RATE_RADPS: f64 = 7.292115e-5;
@@ -177,6 +177,18 @@ impl Scenario {
         }
     }
 
+    /// The true errors, as written into a recording's header.
+    pub fn truth(&self, seed: u64) -> SimulationTruth {
+        SimulationTruth {
+            seed,
+            gyro_bias_b_radps: self.gyro_bias_b_radps,
+            accel_bias_b_mps2: self.accel_bias_b_mps2,
+            gyro_noise_radps: self.gyro_noise_radps,
+            accel_noise_mps2: self.accel_noise_mps2,
+            reference_offset_n_rad: self.reference_offset_n_rad,
+        }
+    }
+
     /// The session as a recording: dwells labelled 1..n, `settle_s` of `pos = 0` rows before each.
     pub fn recording(&self, seed: u64, source: &str) -> Recording {
         let dt = 1.0 / self.rate_hz;
@@ -209,14 +221,6 @@ impl Scenario {
             }
             push(&mut rows, k as u32 + 1, position, w, f);
         });
-        let truth = format!(
-            "truth: gyro_bias_radps {:?} accel_bias_mps2 {:?} reference_offset_rad {:?} gyro_noise_radps {} accel_noise_mps2 {}",
-            self.gyro_bias_b_radps,
-            self.accel_bias_b_mps2,
-            self.reference_offset_n_rad,
-            self.gyro_noise_radps,
-            self.accel_noise_mps2
-        );
         Recording {
             source: source.to_string(),
             header: Header {
@@ -224,7 +228,10 @@ impl Scenario {
                 height_m: self.height_m,
                 rate_hz: Some(self.rate_hz),
                 gravity_mps2: Some(self.gravity_mps2),
-                comments: vec![format!("SIMULATION by sinscal (seed {seed}), not measured data"), truth],
+                comments: vec![format!(
+                    "SIMULATION by sinscal (seed {seed}), not measured data; truth_* keys give its errors"
+                )],
+                truth: Some(self.truth(seed)),
             },
             rows,
         }
@@ -244,6 +251,17 @@ mod tests {
         let x = mul_vec(&c, [1.0, 0.0, 0.0]);
         let z = mul_vec(&c, [0.0, 0.0, 1.0]);
         assert!((x[2] + 1.0).abs() < 1e-15 && (z[0] - 1.0).abs() < 1e-15);
+    }
+
+    #[test]
+    fn truth_round_trips_through_the_header() {
+        let s = Scenario { dwell_s: 0.2, ..Scenario::example() };
+        let rec = s.recording(9, "a");
+        let back = Recording::parse(&rec.to_csv(), "a").unwrap();
+        assert_eq!(back.header.truth, Some(s.truth(9)));
+        let broken = rec.to_csv().replace("# truth_accel_noise_mps2", "# truth_accel_noisy");
+        let e = Recording::parse(&broken, "a").unwrap_err().to_string();
+        assert!(e.contains("no 'truth_accel_noise_mps2'"), "{e}");
     }
 
     #[test]

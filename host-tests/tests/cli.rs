@@ -177,3 +177,60 @@ fn demo_runs_the_built_in_example() {
     let (nab, sd) = (v["accel_bias_mps2"][1].as_f64().unwrap(), v["accel_bias_std_mps2"][1].as_f64().unwrap());
     assert!((nab + 80.0 * sinscal_host::synth::MICRO_G).abs() < 4.0 * sd);
 }
+
+#[test]
+fn navigate_runs_both_ways_and_writes_json_and_a_figure() {
+    let dir = tempfile::tempdir().unwrap();
+    let rec = example_file(&dir, 30.0);
+    let cal = dir.path().join("cal.json");
+    sinscal().arg("calibrate").arg(&rec).arg("--json").arg(&cal).assert().success();
+    let nav_json = dir.path().join("nav.json");
+    let png = dir.path().join("nav.png");
+    let out = sinscal()
+        .arg("navigate")
+        .arg(&rec)
+        .arg("--calibration")
+        .arg(&cal)
+        .args(["--hours", "0.1", "--json"])
+        .arg(&nav_json)
+        .arg("--plot")
+        .arg(&png)
+        .assert()
+        .success();
+    let stdout = String::from_utf8(out.get_output().stdout.clone()).unwrap();
+    assert!(stdout.contains("SIMULATED static run"), "{stdout}");
+    let stderr = String::from_utf8(out.get_output().stderr.clone()).unwrap();
+    assert!(stderr.contains("navigate: 100%"), "progress: {stderr}");
+    let v: Value = serde_json::from_str(&std::fs::read_to_string(&nav_json).unwrap()).unwrap();
+    assert_eq!(v["schema"], "sinscal-navigation/1");
+    let runs = v["runs"].as_array().unwrap();
+    assert_eq!(runs.len(), 3);
+    assert_eq!(runs[0]["name"], "uncompensated");
+    assert!(runs[0]["max_horizontal_position_error_m"].as_f64().unwrap() > 0.0);
+    let png_bytes = std::fs::read(&png).unwrap();
+    assert_eq!(&png_bytes[1..4], b"PNG");
+
+    // Without --hours: the recording's own longest dwell (30 s here), as for measured data.
+    let out =
+        sinscal().arg("navigate").arg(&rec).arg("--calibration").arg(&cal).args(["--json", "-"]).assert().success();
+    let v: Value = serde_json::from_slice(&out.get_output().stdout).unwrap();
+    assert_eq!(v["simulated"], false);
+    assert!((v["hours"].as_f64().unwrap() * 3600.0 - 30.0).abs() < 0.02);
+
+    // Bad input: a calibration file that is not one, --hours on data without a simulated truth.
+    let not_cal = dir.path().join("x.json");
+    std::fs::write(&not_cal, "{\"schema\": \"other\"}").unwrap();
+    let e = sinscal().arg("navigate").arg(&rec).arg("--calibration").arg(&not_cal).assert().code(1);
+    assert!(String::from_utf8_lossy(&e.get_output().stderr).contains("not a calibration result"));
+    let measured = dir.path().join("measured.csv");
+    let text: String = std::fs::read_to_string(&rec)
+        .unwrap()
+        .lines()
+        .filter(|l| !l.starts_with("# truth_"))
+        .map(|l| format!("{l}\n"))
+        .collect();
+    std::fs::write(&measured, text).unwrap();
+    let e =
+        sinscal().arg("navigate").arg(&measured).arg("--calibration").arg(&cal).args(["--hours", "1"]).assert().code(1);
+    assert!(String::from_utf8_lossy(&e.get_output().stderr).contains("no truth_* header"));
+}
