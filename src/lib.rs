@@ -20,11 +20,13 @@
 #![forbid(unsafe_code)]
 
 pub mod accumulate;
+pub mod adis;
 pub mod align;
 pub mod calibration;
 pub mod dwell;
 pub mod earth;
 pub mod frames;
+pub mod imu;
 pub mod linalg;
 pub mod prefilter;
 pub mod solve;

@@ -1,0 +1,358 @@
+//! Driver for the Analog Devices ADIS1647x / ADIS1650x IMU family over SPI (embedded-hal 1.0).
+//!
+//! Register map, burst format, checksum and scale factors: ADIS16470 and ADIS16505 data sheets (Analog
+//! Devices, Rev. C / Rev. A), as implemented in the Linux IIO driver `drivers/iio/imu/adis16475.c`:
+//! - registers are 16-bit, big-endian on the wire; reading register `r` sends the word `[r, 0x00]` and
+//!   returns the value in the next word; writing sends `[0x80 | r, low byte]`, `[0x80 | (r+1), high byte]`;
+//! - a burst read sends the word `[GLOB_CMD, 0x00]` = 0x6800 and then clocks out the burst:
+//!   16-bit burst (ADIS1647x, and ADIS1650x with BURST_SEL = 0): DIAG_STAT, X/Y/Z_GYRO_OUT,
+//!   X/Y/Z_ACCL_OUT, TEMP_OUT, DATA_CNTR, checksum (10 words);
+//!   32-bit burst (ADIS1650x with MSC_CTRL bit 9 set): DIAG_STAT, then for each of the six channels its
+//!   _LOW and _OUT words, TEMP_OUT, DATA_CNTR, checksum (16 words);
+//! - the checksum is the 16-bit sum of all preceding bytes of the burst (not the command);
+//! - the internal sample rate is 2000 SPS; DEC_RATE = 19 decimates to the 100 Hz output rate;
+//! - bursts are read at an SPI clock of at most 1 MHz.
+//!
+//! The 32-bit outputs are fixed-point values in units of the 16-bit LSB: `OUT` is the integer part and
+//! `LOW` the fraction (`I16F16`).
+
+use embedded_hal::spi::{Operation, SpiDevice};
+pub use fixed::types::I16F16;
+
+use crate::dwell::ImuSample;
+use crate::imu::{ClassifiedError, ImuReading, ImuSource, ReadFault};
+
+/// Register addresses (byte address of the register's low byte).
+pub mod reg {
+    /// Diagnostic status flags.
+    pub const DIAG_STAT: u8 = 0x02;
+    /// Sample counter.
+    pub const DATA_CNTR: u8 = 0x22;
+    /// Miscellaneous control (bit 9: 32-bit burst on ADIS1650x).
+    pub const MSC_CTRL: u8 = 0x60;
+    /// Decimation: output rate = 2000 SPS / (DEC_RATE + 1).
+    pub const DEC_RATE: u8 = 0x64;
+    /// Global commands; its read address starts a burst.
+    pub const GLOB_CMD: u8 = 0x68;
+    /// Product identification (decimal model number, e.g. 16505).
+    pub const PROD_ID: u8 = 0x72;
+}
+
+/// MSC_CTRL bit selecting the 32-bit burst (ADIS1650x).
+pub const MSC_CTRL_BURST32: u16 = 1 << 9;
+/// Write flag of the first byte of a register write.
+pub const WRITE_FLAG: u8 = 0x80;
+/// The burst command word.
+pub const BURST_COMMAND: [u8; 2] = [reg::GLOB_CMD, 0x00];
+/// Internal sample rate, samples per second.
+pub const INTERNAL_RATE_SPS: u16 = 2000;
+/// Output rate used by sinscal, Hz.
+pub const OUTPUT_RATE_HZ: u16 = 100;
+/// DEC_RATE for the output rate: 2000 / (19 + 1) = 100 Hz.
+pub const DEC_RATE_FOR_100HZ: u16 = INTERNAL_RATE_SPS / OUTPUT_RATE_HZ - 1;
+/// Largest SPI clock for burst reads, Hz.
+pub const BURST_MAX_SPI_HZ: u32 = 1_000_000;
+/// Bytes of a 16-bit burst after the command word.
+pub const BURST16_LEN: usize = 20;
+/// Bytes of a 32-bit burst after the command word.
+pub const BURST32_LEN: usize = 32;
+/// Temperature scale: 0.1 deg C per LSB (data sheets, TEMP_OUT).
+pub const TEMP_C_PER_LSB: f32 = 0.1;
+/// Radians per degree.
+const RAD_PER_DEG: f32 = core::f32::consts::PI / 180.0;
+
+/// Supported models and their scale factors.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub enum Model {
+    /// ADIS16470: +-2000 deg/s, +-40 g; 16-bit burst.
+    Adis16470,
+    /// ADIS16505-2: +-500 deg/s, +-8 g; 32-bit burst.
+    Adis16505_2,
+}
+
+impl Model {
+    /// PROD_ID value.
+    pub const fn product_id(self) -> u16 {
+        match self {
+            Model::Adis16470 => 16470,
+            Model::Adis16505_2 => 16505,
+        }
+    }
+
+    /// Gyro sensitivity of the 16-bit output, LSB per deg/s (ADIS16470: 10; ADIS16505-2: 40).
+    pub const fn gyro_lsb_per_dps(self) -> f32 {
+        match self {
+            Model::Adis16470 => 10.0,
+            Model::Adis16505_2 => 40.0,
+        }
+    }
+
+    /// Accelerometer scale of the 16-bit output, m/s^2 per LSB (ADIS16470: 1/800 g with
+    /// g = 9.80665; ADIS16505-2: 78/32000 m/s^2, as the Linux driver states it).
+    pub const fn accel_mps2_per_lsb(self) -> f32 {
+        match self {
+            Model::Adis16470 => 9.80665 / 800.0,
+            Model::Adis16505_2 => 78.0 / 32000.0,
+        }
+    }
+
+    /// Whether the driver uses the 32-bit burst.
+    pub const fn burst32(self) -> bool {
+        matches!(self, Model::Adis16505_2)
+    }
+
+    /// Burst length after the command word, bytes.
+    pub const fn burst_len(self) -> usize {
+        if self.burst32() {
+            BURST32_LEN
+        } else {
+            BURST16_LEN
+        }
+    }
+
+    /// rad/s per 16-bit LSB.
+    pub fn radps_per_lsb(self) -> f32 {
+        RAD_PER_DEG / self.gyro_lsb_per_dps()
+    }
+}
+
+/// A decoded burst, before conversion to SI.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Burst {
+    /// DIAG_STAT.
+    pub diag_stat: u16,
+    /// Gyro x, y, z in 16-bit LSB (fixed point, fraction from the _LOW words).
+    pub gyro_lsb: [I16F16; 3],
+    /// Accelerometer x, y, z in 16-bit LSB.
+    pub accel_lsb: [I16F16; 3],
+    /// TEMP_OUT.
+    pub temp_raw: i16,
+    /// DATA_CNTR.
+    pub data_counter: u16,
+}
+
+/// Errors of the driver. `E` is the SPI device's error.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+#[non_exhaustive]
+pub enum AdisError<E> {
+    /// The SPI transfer failed.
+    Spi(E),
+    /// Checksum mismatch.
+    Checksum {
+        /// Sum of the received bytes.
+        computed: u16,
+        /// Checksum word received.
+        received: u16,
+    },
+    /// DATA_CNTR did not advance since the last burst.
+    StalledCounter {
+        /// The counter value read twice.
+        counter: u16,
+    },
+    /// DIAG_STAT reported a fault.
+    Status {
+        /// The DIAG_STAT word.
+        diag_stat: u16,
+    },
+    /// PROD_ID is not the configured model's.
+    WrongProduct {
+        /// Expected PROD_ID.
+        expected: u16,
+        /// PROD_ID read.
+        found: u16,
+    },
+}
+
+impl<E: core::fmt::Debug> core::fmt::Display for AdisError<E> {
+    fn fmt(&self, f: &mut core::fmt::Formatter<'_>) -> core::fmt::Result {
+        match self {
+            AdisError::Spi(e) => write!(f, "SPI error: {e:?}"),
+            AdisError::Checksum { computed, received } => {
+                write!(f, "burst checksum {received:#06x} does not match the data ({computed:#06x})")
+            }
+            AdisError::StalledCounter { counter } => write!(f, "data counter stalled at {counter}"),
+            AdisError::Status { diag_stat } => write!(f, "DIAG_STAT flags {diag_stat:#06x}"),
+            AdisError::WrongProduct { expected, found } => write!(f, "PROD_ID {found}, expected {expected}"),
+        }
+    }
+}
+
+impl<E: core::fmt::Debug> core::error::Error for AdisError<E> {}
+
+impl<E: core::fmt::Debug> ClassifiedError for AdisError<E> {
+    fn fault(&self) -> ReadFault {
+        match self {
+            AdisError::Spi(_) | AdisError::WrongProduct { .. } => ReadFault::Bus,
+            AdisError::Checksum { .. } => ReadFault::Checksum,
+            AdisError::StalledCounter { .. } => ReadFault::StalledCounter,
+            AdisError::Status { .. } => ReadFault::StatusFlag,
+        }
+    }
+}
+
+fn word(bytes: &[u8], index: usize) -> u16 {
+    u16::from_be_bytes([bytes[2 * index], bytes[2 * index + 1]])
+}
+
+/// The 16-bit sum of bytes (the burst checksum).
+pub fn checksum(bytes: &[u8]) -> u16 {
+    bytes.iter().fold(0u16, |s, &b| s.wrapping_add(b as u16))
+}
+
+/// Decodes a burst of `model.burst_len()` bytes (after the command word) and checks its checksum.
+pub fn decode_burst<E>(model: Model, bytes: &[u8]) -> Result<Burst, AdisError<E>> {
+    let len = model.burst_len();
+    let words = len / 2;
+    let received = word(bytes, words - 1);
+    let computed = checksum(&bytes[..len - 2]);
+    if computed != received {
+        return Err(AdisError::Checksum { computed, received });
+    }
+    let channel = |i: usize| -> I16F16 {
+        if model.burst32() {
+            let low = word(bytes, 1 + 2 * i);
+            let high = word(bytes, 2 + 2 * i);
+            I16F16::from_bits((((high as u32) << 16) | low as u32) as i32)
+        } else {
+            I16F16::from_num(word(bytes, 1 + i) as i16)
+        }
+    };
+    let after = if model.burst32() { 13 } else { 7 };
+    Ok(Burst {
+        diag_stat: word(bytes, 0),
+        gyro_lsb: [channel(0), channel(1), channel(2)],
+        accel_lsb: [channel(3), channel(4), channel(5)],
+        temp_raw: word(bytes, after) as i16,
+        data_counter: word(bytes, after + 1),
+    })
+}
+
+/// Encodes a burst (the inverse of [`decode_burst`], with a valid checksum): what the device would send.
+/// Used by the replay device and by tests.
+pub fn encode_burst(model: Model, burst: &Burst, out: &mut [u8]) {
+    let len = model.burst_len();
+    let mut put = |index: usize, value: u16| out[2 * index..2 * index + 2].copy_from_slice(&value.to_be_bytes());
+    put(0, burst.diag_stat);
+    let (g, a) = (burst.gyro_lsb, burst.accel_lsb);
+    let channels = [g[0], g[1], g[2], a[0], a[1], a[2]];
+    for (i, v) in channels.iter().enumerate() {
+        if model.burst32() {
+            let bits = v.to_bits() as u32;
+            put(1 + 2 * i, bits as u16);
+            put(2 + 2 * i, (bits >> 16) as u16);
+        } else {
+            put(1 + i, v.to_num::<i16>() as u16);
+        }
+    }
+    let after = if model.burst32() { 13 } else { 7 };
+    put(after, burst.temp_raw as u16);
+    put(after + 1, burst.data_counter);
+    let sum = checksum(&out[..len - 2]);
+    out[len - 2..len].copy_from_slice(&sum.to_be_bytes());
+}
+
+impl Burst {
+    /// The burst in SI units, body frame (the sensor axes are the body axes).
+    pub fn to_sample(&self, model: Model) -> ImuSample {
+        let w = model.radps_per_lsb();
+        let a = model.accel_mps2_per_lsb();
+        ImuSample {
+            rate_b_radps: self.gyro_lsb.map(|v| v.to_num::<f32>() * w),
+            force_b_mps2: self.accel_lsb.map(|v| v.to_num::<f32>() * a),
+        }
+    }
+}
+
+/// The driver.
+#[derive(Debug)]
+pub struct Adis<SPI> {
+    spi: SPI,
+    model: Model,
+    last_counter: Option<u16>,
+}
+
+impl<SPI: SpiDevice> Adis<SPI> {
+    /// A driver for a device of the given model (no bus traffic yet).
+    pub fn new(spi: SPI, model: Model) -> Adis<SPI> {
+        Adis { spi, model, last_counter: None }
+    }
+
+    /// The model.
+    pub fn model(&self) -> Model {
+        self.model
+    }
+
+    /// Gives the SPI device back.
+    pub fn release(self) -> SPI {
+        self.spi
+    }
+
+    /// Reads a 16-bit register: the address word, then the value in the following word.
+    pub fn read_register(&mut self, register: u8) -> Result<u16, AdisError<SPI::Error>> {
+        self.spi.write(&[register, 0x00]).map_err(AdisError::Spi)?;
+        let mut value = [0u8; 2];
+        self.spi.read(&mut value).map_err(AdisError::Spi)?;
+        Ok(u16::from_be_bytes(value))
+    }
+
+    /// Writes a 16-bit register, low byte first.
+    pub fn write_register(&mut self, register: u8, value: u16) -> Result<(), AdisError<SPI::Error>> {
+        let [high, low] = value.to_be_bytes();
+        self.spi.write(&[WRITE_FLAG | register, low]).map_err(AdisError::Spi)?;
+        self.spi.write(&[WRITE_FLAG | (register + 1), high]).map_err(AdisError::Spi)
+    }
+
+    /// Checks PROD_ID, sets DEC_RATE for 100 Hz and, for ADIS1650x, the 32-bit burst.
+    pub fn init(&mut self) -> Result<(), AdisError<SPI::Error>> {
+        let found = self.read_register(reg::PROD_ID)?;
+        let expected = self.model.product_id();
+        if found != expected {
+            return Err(AdisError::WrongProduct { expected, found });
+        }
+        self.write_register(reg::DEC_RATE, DEC_RATE_FOR_100HZ)?;
+        if self.model.burst32() {
+            let msc = self.read_register(reg::MSC_CTRL)?;
+            self.write_register(reg::MSC_CTRL, msc | MSC_CTRL_BURST32)?;
+        }
+        self.last_counter = None;
+        Ok(())
+    }
+
+    /// One burst read: command word, then the burst, in one chip-select cycle.
+    pub fn read_burst(&mut self) -> Result<Burst, AdisError<SPI::Error>> {
+        let mut buf = [0u8; BURST32_LEN];
+        let len = self.model.burst_len();
+        self.spi
+            .transaction(&mut [Operation::Write(&BURST_COMMAND), Operation::Read(&mut buf[..len])])
+            .map_err(AdisError::Spi)?;
+        decode_burst(self.model, &buf[..len])
+    }
+}
+
+impl<SPI: SpiDevice> ImuSource for Adis<SPI> {
+    type Error = AdisError<SPI::Error>;
+
+    /// Burst read, checksum, counter and status checks, conversion to SI.
+    fn read(&mut self) -> Result<ImuReading, Self::Error> {
+        let burst = self.read_burst()?;
+        let missed = match self.last_counter {
+            Some(last) if burst.data_counter == last => {
+                return Err(AdisError::StalledCounter { counter: last });
+            }
+            Some(last) => burst.data_counter.wrapping_sub(last).wrapping_sub(1),
+            None => 0,
+        };
+        self.last_counter = Some(burst.data_counter);
+        if burst.diag_stat != 0 {
+            return Err(AdisError::Status { diag_stat: burst.diag_stat });
+        }
+        Ok(ImuReading {
+            sample: burst.to_sample(self.model),
+            counter: burst.data_counter,
+            missed,
+            temperature_c: burst.temp_raw as f32 * TEMP_C_PER_LSB,
+        })
+    }
+}

@@ -1,0 +1,50 @@
+//! The IMU sample source abstraction: what the sampling code needs from any sensor driver.
+//!
+//! A driver turns the sensor's frames into [`ImuReading`]s in SI units, body frame (SPEC.md: x right,
+//! y forward, z up; the sensor's axes must be mounted or remapped to it). Faults are classified into
+//! [`ReadFault`] so that the sampling layer can count and report them without knowing the driver.
+
+use crate::dwell::ImuSample;
+
+/// One sample from the sensor.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub struct ImuReading {
+    /// Angular rate and specific force, body frame, SI.
+    pub sample: ImuSample,
+    /// The sensor's sample counter (wraps).
+    pub counter: u16,
+    /// Samples the sensor produced but the host never read, from the counter gap since the last reading.
+    pub missed: u16,
+    /// Sensor temperature, deg C.
+    pub temperature_c: f32,
+}
+
+/// The kinds of read failure, as the sampling layer counts them.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub enum ReadFault {
+    /// The bus transfer failed.
+    Bus,
+    /// The frame's checksum did not match: corrupted transfer.
+    Checksum,
+    /// The sample counter did not advance: the same (old) sample was read again.
+    StalledCounter,
+    /// The sensor flagged a fault in its status word.
+    StatusFlag,
+}
+
+/// An error that knows its [`ReadFault`] class.
+pub trait ClassifiedError: core::fmt::Debug {
+    /// The class of this failure.
+    fn fault(&self) -> ReadFault;
+}
+
+/// A source of IMU samples, one per data-ready event.
+pub trait ImuSource {
+    /// The driver's error.
+    type Error: ClassifiedError;
+
+    /// Reads the newest sample. Called once per data-ready event (100 Hz), from interrupt context.
+    fn read(&mut self) -> Result<ImuReading, Self::Error>;
+}
