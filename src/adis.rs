@@ -284,6 +284,11 @@ impl<SPI: SpiDevice> Adis<SPI> {
         self.model
     }
 
+    /// The SPI device (for a replay device that is fed frame by frame).
+    pub fn spi_mut(&mut self) -> &mut SPI {
+        &mut self.spi
+    }
+
     /// Gives the SPI device back.
     pub fn release(self) -> SPI {
         self.spi

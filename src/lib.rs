@@ -29,4 +29,7 @@ pub mod frames;
 pub mod imu;
 pub mod linalg;
 pub mod prefilter;
+pub mod replay;
+pub mod sampling;
+pub mod sequence;
 pub mod solve;

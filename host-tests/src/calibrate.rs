@@ -105,6 +105,11 @@ pub struct Calibration {
     pub passes: u32,
     /// Whether the refinement converged.
     pub converged: bool,
+    /// Sampling counters of the firmware path (`--on host|qemu`); `None` when the recording's values were
+    /// read directly.
+    pub sampling: Option<sinscal::sampling::SamplingStats>,
+    /// "recording", "host" or "qemu".
+    pub on: &'static str,
 }
 
 fn to_f32(v: [f64; 3]) -> [f32; 3] {
@@ -200,6 +205,8 @@ pub fn calibrate(recording: &Recording, options: &Options) -> Result<Calibration
         solution,
         passes,
         converged,
+        sampling: None,
+        on: "recording",
     })
 }
 
@@ -211,7 +218,12 @@ pub const MAX_LEVEL_MISALIGNMENT_RAD: f32 = 0.05;
 /// is not a calibration method any more.
 pub const MAX_HEADING_MISALIGNMENT_RAD: f32 = 0.5;
 
-fn identify_coefficients(rows: &[&crate::recording::Row], source: &str, line: usize) -> Result<[f32; 2], InputError> {
+/// Identifies the prefilter coefficient `a` of the gyros and of the accelerometers from a dwell.
+pub fn identify_coefficients(
+    rows: &[&crate::recording::Row],
+    source: &str,
+    line: usize,
+) -> Result<[f32; 2], InputError> {
     let mut ids = [CoefficientIdentifier::new(); 6];
     for row in rows {
         let channels = [to_f32(row.rate_b_radps), to_f32(row.force_b_mps2)];

@@ -10,5 +10,7 @@ pub mod navcheck;
 pub mod navigate;
 pub mod output;
 pub mod plot;
+pub mod qemu;
 pub mod recording;
+pub mod replayfile;
 pub mod synth;

@@ -14,7 +14,9 @@ use sinscal_host::montecarlo;
 use sinscal_host::navcheck::{navigate, CalibrationBiases, NavOptions, NavReport};
 use sinscal_host::output::{summary, CalibrationJson, ARCSEC_PER_RAD};
 use sinscal_host::plot::navigation_plot;
+use sinscal_host::qemu::calibrate_on_qemu;
 use sinscal_host::recording::Recording;
+use sinscal_host::replayfile::calibrate_on_host;
 use sinscal_host::synth::{Scenario, DEG_PER_HOUR, MICRO_G};
 
 #[derive(Parser)]
@@ -46,9 +48,9 @@ enum DwellValueArg {
 
 #[derive(Clone, Copy, ValueEnum)]
 enum OnArg {
-    /// Replay through the firmware path on x86 (not yet available).
+    /// Replay through the firmware path on x86 (device frames, driver, queue, sequence, core).
     Host,
-    /// Replay through the firmware in QEMU (not yet available).
+    /// Replay through the firmware in QEMU (mps2-an386, Cortex-M4F).
     Qemu,
 }
 
@@ -77,7 +79,8 @@ enum Command {
         /// second-order error by realigning the bias-compensated dwells.
         #[arg(long, default_value_t = 6, value_parser = clap::value_parser!(u32).range(1..=50))]
         passes: u32,
-        /// Replay through the firmware path (device frames, driver, sequence): comes with the firmware.
+        /// Replay through the firmware path (device frames quantised by an ADIS16505-2, driver, sampling
+        /// queue, calibration sequence) on this machine or in the emulated Cortex-M4F.
         #[arg(long, value_enum)]
         on: Option<OnArg>,
     },
@@ -182,13 +185,6 @@ fn run(command: Command) -> anyhow::Result<()> {
             passes,
             on,
         } => {
-            if let Some(on) = on {
-                let which = match on {
-                    OnArg::Host => "host",
-                    OnArg::Qemu => "qemu",
-                };
-                anyhow::bail!("--on {which}: the firmware replay path is not built yet (see the README's status)");
-            }
             let coefficient = if prefilter_a == "auto" {
                 Coefficient::Identify
             } else {
@@ -211,7 +207,11 @@ fn run(command: Command) -> anyhow::Result<()> {
                 max_passes: passes,
             };
             let rec = Recording::read(&recording)?;
-            let cal = calibrate(&rec, &options)?;
+            let cal = match on {
+                None => calibrate(&rec, &options)?,
+                Some(OnArg::Host) => calibrate_on_host(&rec, &options)?,
+                Some(OnArg::Qemu) => calibrate_on_qemu(&rec, &options)?,
+            };
             finish(&cal, json.as_deref())
         }
         Command::Example { out, seed } => {

@@ -75,10 +75,30 @@ pub struct CalibrationJson {
     pub passes: u32,
     /// Extra: whether the refinement converged.
     pub converged: bool,
+    /// Extra: where it ran: "recording" (values read directly), or the firmware path "host" / "qemu".
+    pub on: &'static str,
+    /// Extra: sampling counters of the firmware path.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub sampling: Option<SamplingJson>,
     /// Extra: the recording.
     pub source: String,
     /// Extra: the sinscal version that wrote this.
     pub sinscal_version: &'static str,
+}
+
+/// Sampling counters of the firmware path.
+#[derive(Debug, Serialize)]
+pub struct SamplingJson {
+    /// Data-ready events.
+    pub events: u32,
+    /// Good readings.
+    pub readings: u32,
+    /// Items lost to a full queue.
+    pub queue_full: u32,
+    /// Bus errors, checksum errors, stalled counters, status flags.
+    pub faults: [u32; 4],
+    /// Samples missed by the data counter.
+    pub missed_samples: u32,
 }
 
 /// The prefilter in the JSON.
@@ -167,6 +187,14 @@ impl CalibrationJson {
             },
             passes: c.passes,
             converged: c.converged,
+            on: c.on,
+            sampling: c.sampling.map(|s| SamplingJson {
+                events: s.events,
+                readings: s.readings,
+                queue_full: s.queue_full,
+                faults: [s.bus_errors, s.checksum_errors, s.stalled_counters, s.status_flags],
+                missed_samples: s.missed_samples,
+            }),
             source: c.source.clone(),
             sinscal_version: env!("CARGO_PKG_VERSION"),
         }

@@ -1,0 +1,378 @@
+//! The calibration sequence: a state machine over the positions of a schedule.
+//!
+//! Per position: wait until the turntable reports "in position", let it settle, collect the dwell, then
+//! go on; after the last position, solve. Call rate: [`CalibrationSequence::on_sample`] once per queue
+//! item (100 Hz), with the turntable's in-position signal at that sample.
+//!
+//! A dwell is aborted, with its reason, and collected again (after settling) when a sample contradicts
+//! the announced position (specific force more than [`SequenceSettings::max_gravity_angle_rad`] away from
+//! the direction of up in the body frame), when the body moves (rate or specific force out of bounds),
+//! when too many read faults hit it, or when the table leaves before the dwell is long enough. A position
+//! aborted [`SequenceSettings::max_aborts`] times fails the sequence. The checks compare squared
+//! magnitudes, so no square root or trigonometry runs per sample.
+
+use heapless::Vec;
+
+use crate::calibration::{
+    calibrate_positions, CalibrationError, CalibrationResult, CalibrationSettings, PositionInput,
+};
+use crate::dwell::{DwellCollector, DwellSummary, Prefilter, MIN_DWELL_SAMPLES};
+use crate::earth::Site;
+use crate::frames::Attitude;
+use crate::linalg::{cross, dot, Mat3};
+use crate::prefilter::PrefilterError;
+use crate::sampling::QueueItem;
+use crate::solve::MAX_POSITIONS;
+
+/// Settings of the sequence.
+#[derive(Clone, Copy, Debug, PartialEq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub struct SequenceSettings {
+    /// Samples ignored after the table reports in position.
+    pub settle_samples: u32,
+    /// Samples of a full dwell (the dwell also ends, complete, when the table leaves after at least
+    /// `min_dwell_samples`).
+    pub dwell_samples: u32,
+    /// Fewest samples of a usable dwell.
+    pub min_dwell_samples: u32,
+    /// Largest angle between measured specific force and the announced up direction, rad.
+    pub max_gravity_angle_rad: f32,
+    /// Largest angular rate magnitude of a body at rest, rad/s.
+    pub max_rate_radps: f32,
+    /// Largest | |f| - g | of a body at rest, m/s^2.
+    pub max_force_error_mps2: f32,
+    /// Most read faults in one dwell.
+    pub max_faults_per_dwell: u32,
+    /// Aborts of one position before the sequence fails.
+    pub max_aborts: u32,
+    /// Prefilter of the dwell collector.
+    pub prefilter: Prefilter,
+    /// The solution.
+    pub calibration: CalibrationSettings,
+}
+
+impl Default for SequenceSettings {
+    fn default() -> SequenceSettings {
+        SequenceSettings {
+            settle_samples: 200,
+            dwell_samples: 6000,
+            min_dwell_samples: 1000,
+            max_gravity_angle_rad: 0.1,
+            max_rate_radps: 2.0f32.to_radians(),
+            max_force_error_mps2: 0.5,
+            max_faults_per_dwell: 60,
+            max_aborts: 3,
+            prefilter: Prefilter::paper(),
+            calibration: CalibrationSettings::default(),
+        }
+    }
+}
+
+/// Why a dwell was aborted.
+#[derive(Clone, Copy, Debug, PartialEq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+#[non_exhaustive]
+pub enum AbortReason {
+    /// The measured specific force is not along the announced position's up direction.
+    GravityContradictsPosition,
+    /// Angular rate above the rest bound.
+    Rotation,
+    /// Specific force magnitude away from g.
+    Acceleration,
+    /// More read faults than allowed.
+    TooManyFaults,
+    /// The table left before the dwell had enough samples.
+    TableLeft,
+    /// A sample was NaN or infinite.
+    NotFinite,
+}
+
+/// What the sequence reports.
+#[derive(Clone, Copy, Debug, PartialEq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub enum Event {
+    /// The table is in position `index`; settling.
+    Settling {
+        /// Position index in the schedule.
+        index: usize,
+    },
+    /// Collection of position `index` started.
+    DwellStarted {
+        /// Position index.
+        index: usize,
+    },
+    /// The dwell of position `index` was aborted; it will be collected again.
+    DwellAborted {
+        /// Position index.
+        index: usize,
+        /// Why.
+        reason: AbortReason,
+        /// The sample of the dwell that caused it.
+        at_sample: u32,
+    },
+    /// Position `index` is done.
+    DwellCompleted {
+        /// Position index.
+        index: usize,
+        /// Its statistics.
+        summary: DwellSummary,
+        /// Read faults during the dwell.
+        faults: u32,
+    },
+    /// All positions done and solved.
+    Solved(CalibrationResult),
+    /// The sequence failed.
+    Failed(SequenceFailure),
+}
+
+/// Why a sequence failed.
+#[derive(Clone, Copy, Debug, PartialEq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+#[non_exhaustive]
+pub enum SequenceFailure {
+    /// A position was aborted too often; the last reason.
+    PositionAborted {
+        /// Position index.
+        index: usize,
+        /// Last reason.
+        reason: AbortReason,
+    },
+    /// The solution failed.
+    Calibration(CalibrationError),
+}
+
+/// Errors of construction.
+#[derive(Clone, Copy, Debug, PartialEq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+#[non_exhaustive]
+pub enum SequenceError {
+    /// No positions, or more than [`MAX_POSITIONS`].
+    BadSchedule,
+    /// The prefilter settings are invalid.
+    Prefilter(PrefilterError),
+}
+
+/// Where the sequence is.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub enum Phase {
+    /// Waiting for the table to report the next position.
+    WaitingForTable,
+    /// Settling; samples left.
+    Settling(u32),
+    /// Collecting the dwell.
+    Collecting,
+    /// The dwell is complete; waiting for the table to leave the position.
+    WaitingForTableToLeave,
+    /// Solved or failed.
+    Finished,
+}
+
+/// The calibration sequence.
+#[derive(Clone, Debug)]
+pub struct CalibrationSequence {
+    settings: SequenceSettings,
+    site: Site,
+    schedule: Vec<Mat3, MAX_POSITIONS>,
+    /// Up direction in the body frame per position (third row of C_b^n).
+    up_b: Vec<[f32; 3], MAX_POSITIONS>,
+    inputs: Vec<PositionInput, MAX_POSITIONS>,
+    collector: DwellCollector,
+    phase: Phase,
+    index: usize,
+    dwell_sample: u32,
+    faults: u32,
+    aborts: u32,
+    sin2_max: f32,
+}
+
+impl CalibrationSequence {
+    /// A sequence over a schedule of turntable attitudes.
+    pub fn new(schedule: &[Attitude], site: Site, settings: SequenceSettings) -> Result<Self, SequenceError> {
+        if schedule.is_empty() || schedule.len() > MAX_POSITIONS {
+            return Err(SequenceError::BadSchedule);
+        }
+        let mut matrices = Vec::new();
+        let mut up_b = Vec::new();
+        for a in schedule {
+            let c = a.c_b_n();
+            // Capacity checked above.
+            let _ = matrices.push(c);
+            let _ = up_b.push(c.row(2));
+        }
+        let s = libm::sinf(settings.max_gravity_angle_rad);
+        Ok(CalibrationSequence {
+            collector: DwellCollector::new(&settings.prefilter).map_err(SequenceError::Prefilter)?,
+            settings,
+            site,
+            schedule: matrices,
+            up_b,
+            inputs: Vec::new(),
+            phase: Phase::WaitingForTable,
+            index: 0,
+            dwell_sample: 0,
+            faults: 0,
+            aborts: 0,
+            sin2_max: s * s,
+        })
+    }
+
+    /// Where the sequence is.
+    pub fn phase(&self) -> Phase {
+        self.phase
+    }
+
+    /// The position being worked on.
+    pub fn position(&self) -> usize {
+        self.index
+    }
+
+    /// Completed positions so far, with their statistics.
+    pub fn completed(&self) -> &[PositionInput] {
+        &self.inputs
+    }
+
+    fn abort(&mut self, reason: AbortReason, in_position: bool) -> Event {
+        let event = Event::DwellAborted { index: self.index, reason, at_sample: self.dwell_sample };
+        self.aborts += 1;
+        if self.aborts >= self.settings.max_aborts {
+            self.phase = Phase::Finished;
+            return Event::Failed(SequenceFailure::PositionAborted { index: self.index, reason });
+        }
+        self.phase = if in_position { Phase::Settling(self.settings.settle_samples) } else { Phase::WaitingForTable };
+        event
+    }
+
+    fn complete(&mut self) -> Event {
+        let summary = match self.collector.summary() {
+            Ok(s) => s,
+            Err(_) => return self.abort(AbortReason::TableLeft, false),
+        };
+        let faults = self.faults;
+        let _ = self.inputs.push(PositionInput { c_b_n: self.schedule[self.index], summary });
+        let event = Event::DwellCompleted { index: self.index, summary, faults };
+        self.index += 1;
+        self.aborts = 0;
+        self.phase = Phase::WaitingForTableToLeave;
+        event
+    }
+
+    /// Solves once every position is complete (called by [`Self::on_sample`]; public for the last dwell
+    /// of a replay that ends while the table is still in position).
+    pub fn finish(&mut self) -> Option<Event> {
+        if self.phase == Phase::Collecting && self.dwell_sample >= self.settings.min_dwell_samples {
+            let e = self.complete();
+            if self.index < self.schedule.len() {
+                return Some(e);
+            }
+        }
+        if self.phase == Phase::Finished || self.index < self.schedule.len() {
+            return None;
+        }
+        self.phase = Phase::Finished;
+        Some(match calibrate_positions(&self.inputs, &self.site, &self.settings.calibration) {
+            Ok(result) => Event::Solved(result),
+            Err(e) => Event::Failed(SequenceFailure::Calibration(e)),
+        })
+    }
+
+    /// One queue item, with the turntable's in-position signal at that sample.
+    pub fn on_sample(&mut self, in_position: bool, item: QueueItem) -> Option<Event> {
+        match self.phase {
+            Phase::Finished => None,
+            Phase::WaitingForTableToLeave => {
+                if !in_position {
+                    self.phase = Phase::WaitingForTable;
+                }
+                if self.index == self.schedule.len() {
+                    return self.finish();
+                }
+                None
+            }
+            Phase::WaitingForTable => {
+                if self.index >= self.schedule.len() {
+                    return self.finish();
+                }
+                if !in_position {
+                    return None;
+                }
+                self.phase = Phase::Settling(self.settings.settle_samples);
+                if self.settings.settle_samples == 0 {
+                    self.start_dwell();
+                    let started = Event::DwellStarted { index: self.index };
+                    // The first in-position sample belongs to the dwell.
+                    return self.collect(in_position, item).or(Some(started));
+                }
+                Some(Event::Settling { index: self.index })
+            }
+            Phase::Settling(left) => {
+                if !in_position {
+                    self.phase = Phase::WaitingForTable;
+                    return None;
+                }
+                if left <= 1 {
+                    self.start_dwell();
+                    return Some(Event::DwellStarted { index: self.index });
+                }
+                self.phase = Phase::Settling(left - 1);
+                None
+            }
+            Phase::Collecting => self.collect(in_position, item),
+        }
+    }
+
+    fn start_dwell(&mut self) {
+        self.collector.reset();
+        self.dwell_sample = 0;
+        self.faults = 0;
+        self.phase = Phase::Collecting;
+    }
+
+    fn collect(&mut self, in_position: bool, item: QueueItem) -> Option<Event> {
+        if !in_position {
+            if self.dwell_sample >= self.settings.min_dwell_samples.max(MIN_DWELL_SAMPLES) {
+                let e = self.complete();
+                self.phase = Phase::WaitingForTable;
+                return Some(e);
+            }
+            return Some(self.abort(AbortReason::TableLeft, false));
+        }
+        self.dwell_sample += 1;
+        let reading = match item {
+            Ok(r) => r,
+            Err(_) => {
+                self.faults += 1;
+                if self.faults > self.settings.max_faults_per_dwell {
+                    return Some(self.abort(AbortReason::TooManyFaults, true));
+                }
+                return None;
+            }
+        };
+        let f = reading.sample.force_b_mps2;
+        let w = reading.sample.rate_b_radps;
+        if !(f.iter().chain(w.iter()).all(|x| x.is_finite())) {
+            return Some(self.abort(AbortReason::NotFinite, true));
+        }
+        let up = self.up_b[self.index];
+        let f2 = dot(f, f);
+        let side = cross(f, up);
+        // |f x up|^2 > sin^2(max) |f|^2 |up|^2, with |up| = 1; and f must point up, not down.
+        if dot(side, side) > self.sin2_max * f2 || dot(f, up) <= 0.0 {
+            return Some(self.abort(AbortReason::GravityContradictsPosition, true));
+        }
+        if dot(w, w) > self.settings.max_rate_radps * self.settings.max_rate_radps {
+            return Some(self.abort(AbortReason::Rotation, true));
+        }
+        let g = self.site.gravity_mps2;
+        let (lo, hi) = (g - self.settings.max_force_error_mps2, g + self.settings.max_force_error_mps2);
+        if f2 < lo * lo || f2 > hi * hi {
+            return Some(self.abort(AbortReason::Acceleration, true));
+        }
+        // Finite values were checked: the collector cannot refuse the sample.
+        let _ = self.collector.update(&reading.sample);
+        if self.dwell_sample >= self.settings.dwell_samples {
+            return Some(self.complete());
+        }
+        None
+    }
+}
