@@ -239,7 +239,13 @@ impl CalibrationSequence {
             self.phase = Phase::Finished;
             return Event::Failed(SequenceFailure::PositionAborted { index: self.index, reason });
         }
-        self.phase = if in_position { Phase::Settling(self.settings.settle_samples) } else { Phase::WaitingForTable };
+        if !in_position {
+            self.phase = Phase::WaitingForTable;
+        } else if self.settings.settle_samples == 0 {
+            self.start_dwell();
+        } else {
+            self.phase = Phase::Settling(self.settings.settle_samples);
+        }
         event
     }
 

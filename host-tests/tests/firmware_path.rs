@@ -1,0 +1,151 @@
+//! The firmware path on the host: replay file -> replay SPI device -> ADIS driver -> sampling queue ->
+//! calibration sequence -> core. SIMULATION data with known truth; faults and motion injected into the
+//! device frames to see that the sequence reports them instead of using them.
+
+use sinscal::adis::{decode_burst, encode_burst, Model, BURST32_LEN};
+use sinscal::replay::{read_header, run_replay};
+use sinscal::sequence::{AbortReason, Event, SequenceFailure};
+use sinscal_host::calibrate::{calibrate, Options};
+use sinscal_host::recording::Recording;
+use sinscal_host::replayfile::{calibrate_on_host, replay_file};
+use sinscal_host::synth::{Scenario, DEG_PER_HOUR, MICRO_G};
+
+fn example(seconds: f64) -> Recording {
+    Scenario { dwell_s: seconds, ..Scenario::example() }.recording(4, "example.csv")
+}
+
+/// Offset of frame k's record in a replay file.
+fn frame_offset(file: &[u8], k: usize) -> usize {
+    let header = read_header(&mut &file[..]).unwrap();
+    let header_len = 20 + 12 + 16 * header.schedule.len() + 4;
+    header_len + k * (1 + BURST32_LEN)
+}
+
+#[test]
+fn replay_matches_the_direct_calibration_to_the_device_quantisation() {
+    let rec = example(60.0);
+    let direct = calibrate(&rec, &Options::default()).unwrap();
+    let replayed = calibrate_on_host(&rec, &Options::default()).unwrap();
+    let s = replayed.sampling.unwrap();
+    assert_eq!((s.events as usize, s.readings as usize), (rec.rows.len(), rec.rows.len()));
+    assert_eq!(s.faults() + s.queue_full + s.missed_samples, 0);
+    for (a, b) in direct.positions.iter().zip(&replayed.positions) {
+        assert_eq!(a.summary.samples, b.summary.samples);
+    }
+    // The ADIS16505-2's 32-bit LSB is 6.7e-9 rad/s and 3.7e-8 m/s^2; averaged over a dwell the difference
+    // is far below the standard errors.
+    for i in 0..3 {
+        let (d, r) = (direct.solution.gyro_bias_b_radps[i].unwrap(), replayed.solution.gyro_bias_b_radps[i].unwrap());
+        assert!((d.value - r.value).abs() < 0.02 * d.std_error, "gyro {i}");
+        assert!((d.value - r.value).abs() < 1e-4 * DEG_PER_HOUR as f32);
+        let (d, r) = (direct.solution.accel_bias_b_mps2[i].unwrap(), replayed.solution.accel_bias_b_mps2[i].unwrap());
+        assert!((d.value - r.value).abs() < 0.02 * d.std_error, "accel {i}");
+        assert!((d.value - r.value).abs() < 0.05 * MICRO_G as f32);
+    }
+}
+
+#[test]
+fn corrupted_frames_are_counted_and_the_dwell_survives_a_few() {
+    let rec = example(20.0);
+    let (mut file, _) = replay_file(&rec, &Options::default()).unwrap();
+    // Row 300 is in dwell 1 (after 200 settle rows): flip a byte (checksum error); row 310: repeat the
+    // previous counter (stalled); row 320: set DIAG_STAT bit 1 (data path overrun) with a valid checksum.
+    let at = frame_offset(&file, 300) + 1 + 6;
+    file[at] ^= 0x40;
+    let prev = frame_offset(&file, 309);
+    let stalled = frame_offset(&file, 310);
+    let copy: Vec<u8> = file[prev + 1..prev + 1 + BURST32_LEN].to_vec();
+    file[stalled + 1..stalled + 1 + BURST32_LEN].copy_from_slice(&copy);
+    let flagged = frame_offset(&file, 320) + 1;
+    let mut burst = decode_burst::<()>(Model::Adis16505_2, &file[flagged..flagged + BURST32_LEN]).unwrap();
+    burst.diag_stat = 0x0002;
+    let mut bytes = [0u8; BURST32_LEN];
+    encode_burst(Model::Adis16505_2, &burst, &mut bytes);
+    file[flagged..flagged + BURST32_LEN].copy_from_slice(&bytes);
+
+    let outcome = run_replay(&file[..], |_| {}).unwrap();
+    let s = outcome.sampling;
+    assert_eq!((s.checksum_errors, s.stalled_counters, s.status_flags), (1, 1, 1));
+    assert_eq!(s.readings as usize, rec.rows.len() - 3);
+    // Three faults are within the dwell's allowance: the sequence completes, with 3 fewer samples there.
+    assert!(outcome.result.is_some());
+    assert_eq!(outcome.positions[0].summary.samples, 2000 - 3);
+    assert_eq!(outcome.positions[1].summary.samples, 2000);
+}
+
+#[test]
+fn motion_and_a_wrong_position_abort_the_dwell_with_a_reason() {
+    let rec = example(20.0);
+    let (clean, _) = replay_file(&rec, &Options::default()).unwrap();
+
+    // A bump: 5 deg/s about x for one sample in the middle of dwell 2.
+    let mut file = clean.clone();
+    let k = 200 + 2000 + 200 + 1000;
+    assert_eq!(rec.rows[k].pos, 2);
+    let at = frame_offset(&file, k) + 1;
+    let mut burst = decode_burst::<()>(Model::Adis16505_2, &file[at..at + BURST32_LEN]).unwrap();
+    burst.gyro_lsb[0] = sinscal::adis::I16F16::from_num(5.0 * 40.0);
+    let mut bytes = [0u8; BURST32_LEN];
+    encode_burst(Model::Adis16505_2, &burst, &mut bytes);
+    file[at..at + BURST32_LEN].copy_from_slice(&bytes);
+    let mut events = Vec::new();
+    let outcome = run_replay(&file[..], |e| events.push(*e)).unwrap();
+    let abort = events.iter().find_map(|e| match e {
+        Event::DwellAborted { index, reason, at_sample } => Some((*index, *reason, *at_sample)),
+        _ => None,
+    });
+    assert_eq!(abort, Some((1, AbortReason::Rotation, 1001)));
+    // The dwell was collected again from the samples after the bump, and the calibration completed.
+    assert!(outcome.result.is_some());
+    assert_eq!(outcome.positions[1].summary.samples, 999);
+
+    // The schedule announces (0, 0, 0) where the data have z pointing east (roll 90): every sample of that
+    // dwell contradicts the position; after three aborts the sequence fails and says why.
+    let mut rec_wrong = rec.clone();
+    for row in rec_wrong.rows.iter_mut().filter(|r| r.pos == 5) {
+        row.roll_deg = 0.0;
+    }
+    let err = calibrate_on_host(&rec_wrong, &Options::default()).unwrap_err().to_string();
+    assert!(err.contains("position 5 (dwell 5) aborted: GravityContradictsPosition"), "{err}");
+    let (file, _) = replay_file(&rec_wrong, &Options::default()).unwrap();
+    let outcome = run_replay(&file[..], |_| {}).unwrap();
+    assert!(matches!(
+        outcome.failure,
+        Some(SequenceFailure::PositionAborted { index: 4, reason: AbortReason::GravityContradictsPosition })
+    ));
+}
+
+#[test]
+fn a_full_queue_is_counted_not_dropped_silently() {
+    use heapless::spsc::Queue;
+    use sinscal::imu::{ClassifiedError, ImuReading, ImuSource, ReadFault};
+    use sinscal::sampling::{on_data_ready, QueueItem, SamplingStats, QUEUE_SLOTS};
+
+    #[derive(Debug)]
+    struct Never;
+    impl ClassifiedError for Never {
+        fn fault(&self) -> ReadFault {
+            ReadFault::Bus
+        }
+    }
+    struct Counter(u16);
+    impl ImuSource for Counter {
+        type Error = Never;
+        fn read(&mut self) -> Result<ImuReading, Never> {
+            self.0 += 1;
+            Ok(ImuReading { counter: self.0, ..ImuReading::default() })
+        }
+    }
+    let mut queue: Queue<QueueItem, QUEUE_SLOTS> = Queue::new();
+    let (mut producer, mut consumer) = queue.split();
+    let mut stats = SamplingStats::default();
+    let mut imu = Counter(0);
+    // The processing loop stalls for 20 samples (200 ms).
+    for _ in 0..20 {
+        on_data_ready(&mut imu, &mut producer, &mut stats);
+    }
+    assert_eq!((stats.events, stats.readings, stats.queue_full), (20, 20, 20 - (QUEUE_SLOTS as u32 - 1)));
+    // What is in the queue is in order, the oldest first.
+    let counters: Vec<u16> = std::iter::from_fn(|| consumer.dequeue()).map(|i| i.unwrap().counter).collect();
+    assert_eq!(counters, (1..QUEUE_SLOTS as u16).collect::<Vec<_>>());
+}
