@@ -1,4 +1,5 @@
-//! Build script: for bare-metal targets only, put `memory.x` on the linker search path.
+//! Build script: for bare-metal targets only, put `memory.x` on the linker search path and link with the
+//! cortex-m-rt and defmt scripts.
 //! Host builds (tests, the `sinscal` tool) are left untouched.
 use std::{env, fs, path::PathBuf};
 
@@ -11,4 +12,7 @@ fn main() {
     let out = PathBuf::from(env::var_os("OUT_DIR").expect("cargo sets OUT_DIR"));
     fs::copy("memory.x", out.join("memory.x")).expect("memory.x is at the package root");
     println!("cargo:rustc-link-search={}", out.display());
+    // cortex-m-rt's and defmt's linker scripts, for every linked artefact (binaries and on-target tests).
+    println!("cargo:rustc-link-arg=-Tlink.x");
+    println!("cargo:rustc-link-arg=-Tdefmt.x");
 }

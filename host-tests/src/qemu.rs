@@ -1,10 +1,127 @@
 //! `calibrate --on qemu`: the replay file through the firmware in QEMU (mps2-an386, Cortex-M4F).
+//!
+//! The firmware ELF is `target/thumbv7em-none-eabihf/release/sinscal-replay` of this workspace (built on
+//! first use with cargo), or the file named by `SINSCAL_FIRMWARE`. QEMU runs it with semihosting: the
+//! firmware reads the replay file and writes its outcome file; its defmt log goes to QEMU's stdout and is
+//! decoded with `defmt-print` when that is installed (scripts/setup installs it).
+
+use std::path::{Path, PathBuf};
+use std::process::{Command, Stdio};
+use std::sync::atomic::{AtomicU32, Ordering};
+
+use sinscal::replay::{decode_outcome, read_header};
 
 use crate::calibrate::{Calibration, Options};
 use crate::error::InputError;
 use crate::recording::Recording;
+use crate::replayfile::{calibration_from_outcome, replay_file};
 
-/// Runs the firmware's replay in QEMU.
-pub fn calibrate_on_qemu(rec: &Recording, _options: &Options) -> Result<Calibration, InputError> {
-    Err(InputError::file(&rec.source, "--on qemu: the QEMU firmware is not built yet"))
+/// QEMU command and machine.
+pub const QEMU: &str = "qemu-system-arm";
+
+/// The workspace root (where `cargo build` of the firmware runs).
+fn workspace_root() -> PathBuf {
+    Path::new(env!("CARGO_MANIFEST_DIR")).parent().map_or_else(|| PathBuf::from("."), Path::to_path_buf)
+}
+
+/// The firmware ELF, built if needed.
+pub fn firmware_elf() -> Result<PathBuf, String> {
+    if let Some(p) = std::env::var_os("SINSCAL_FIRMWARE") {
+        return Ok(PathBuf::from(p));
+    }
+    let root = workspace_root();
+    let elf = root.join("target/thumbv7em-none-eabihf/release/sinscal-replay");
+    let status = Command::new(std::env::var("CARGO").unwrap_or_else(|_| "cargo".into()))
+        .current_dir(&root)
+        .args([
+            "build",
+            "-q",
+            "-p",
+            "sinscal",
+            "--release",
+            "--target",
+            "thumbv7em-none-eabihf",
+            "--bin",
+            "sinscal-replay",
+        ])
+        .stdout(Stdio::null())
+        .status()
+        .map_err(|e| format!("cannot run cargo to build the firmware: {e}"))?;
+    if !status.success() || !elf.exists() {
+        return Err(
+            "building the firmware failed (is the thumbv7em-none-eabihf target installed? run scripts/setup)".into()
+        );
+    }
+    Ok(elf)
+}
+
+/// Runs the firmware on a replay file in QEMU; returns the outcome bytes and the decoded defmt log (if
+/// defmt-print is available).
+pub fn run_firmware(elf: &Path, replay: &[u8]) -> Result<(Vec<u8>, String), String> {
+    static RUN: AtomicU32 = AtomicU32::new(0);
+    let dir = std::env::temp_dir().join(format!(
+        "sinscal-qemu-{}-{}",
+        std::process::id(),
+        RUN.fetch_add(1, Ordering::Relaxed)
+    ));
+    std::fs::create_dir_all(&dir).map_err(|e| format!("{}: {e}", dir.display()))?;
+    let input = dir.join("in.ssrp");
+    let output = dir.join("out.ssro");
+    std::fs::write(&input, replay).map_err(|e| format!("{}: {e}", input.display()))?;
+    let semihosting =
+        format!("enable=on,target=native,arg=sinscal-replay,arg={},arg={}", input.display(), output.display());
+    let run = Command::new(QEMU)
+        .args(["-cpu", "cortex-m4", "-machine", "mps2-an386", "-nographic", "-monitor", "none", "-serial", "none"])
+        .args(["-semihosting-config", &semihosting, "-kernel"])
+        .arg(elf)
+        .stdin(Stdio::null())
+        .output()
+        .map_err(|e| format!("cannot run {QEMU} ({e}): install it with scripts/setup"))?;
+    let log = decode_defmt(elf, &run.stdout);
+    let result = std::fs::read(&output);
+    let _ = std::fs::remove_dir_all(&dir);
+    if !run.status.success() {
+        return Err(format!("the firmware exited with {} in QEMU: {}", run.status, log.trim()));
+    }
+    let bytes = result.map_err(|e| format!("the firmware wrote no outcome ({e}); log: {}", log.trim()))?;
+    Ok((bytes, log))
+}
+
+/// Decodes defmt frames with defmt-print, if installed; otherwise says how many bytes there were.
+fn decode_defmt(elf: &Path, frames: &[u8]) -> String {
+    use std::io::Write as _;
+    let child = Command::new("defmt-print")
+        .args(["-e"])
+        .arg(elf)
+        .stdin(Stdio::piped())
+        .stdout(Stdio::piped())
+        .stderr(Stdio::null())
+        .spawn();
+    let Ok(mut child) = child else {
+        return format!("({} bytes of defmt log; install defmt-print to read them)", frames.len());
+    };
+    if let Some(mut stdin) = child.stdin.take() {
+        let _ = stdin.write_all(frames);
+    }
+    match child.wait_with_output() {
+        Ok(out) => String::from_utf8_lossy(&out.stdout).into_owned(),
+        Err(_) => String::new(),
+    }
+}
+
+/// `calibrate --on qemu`.
+pub fn calibrate_on_qemu(rec: &Recording, options: &Options) -> Result<Calibration, InputError> {
+    let source = rec.source.as_str();
+    let (file, attitudes) = replay_file(rec, options)?;
+    let elf = firmware_elf().map_err(|e| InputError::file(source, format!("--on qemu: {e}")))?;
+    let (bytes, log) = run_firmware(&elf, &file).map_err(|e| InputError::file(source, format!("--on qemu: {e}")))?;
+    if std::env::var_os("SINSCAL_FIRMWARE_LOG").is_some() {
+        eprint!("{log}");
+    }
+    let header = read_header(&mut &file[..]).map_err(|e| InputError::file(source, format!("replay: {e}")))?;
+    let outcome =
+        decode_outcome(&header, &bytes).map_err(|e| InputError::file(source, format!("--on qemu: outcome: {e}")))?;
+    let mut cal = calibration_from_outcome(rec, options, &attitudes, &outcome)?;
+    cal.on = "qemu";
+    Ok(cal)
 }

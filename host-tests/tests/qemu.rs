@@ -1,0 +1,57 @@
+//! The firmware in QEMU (mps2-an386, Cortex-M4F) against the same replay path on x86: byte-identical
+//! outcomes (every f32 bit), and identical `sinscal calibrate --on host|qemu` JSON. Needs qemu-system-arm
+//! and the thumbv7em target (scripts/setup installs both); in CI (CI=true) a missing QEMU is a failure,
+//! elsewhere the test reports itself as skipped.
+
+use sinscal::replay::{encode_outcome, run_replay, MAX_OUTCOME_BYTES};
+use sinscal_host::calibrate::Options;
+use sinscal_host::output::CalibrationJson;
+use sinscal_host::qemu::{calibrate_on_qemu, firmware_elf, run_firmware, QEMU};
+use sinscal_host::replayfile::{calibrate_on_host, replay_file};
+use sinscal_host::synth::Scenario;
+
+fn qemu_available() -> bool {
+    let found = std::process::Command::new(QEMU).arg("--version").output().is_ok_and(|o| o.status.success());
+    if !found {
+        assert!(std::env::var("CI").is_err(), "{QEMU} is missing in CI: scripts/setup must install it");
+        println!("SKIPPED: {QEMU} not found (run scripts/setup)");
+    }
+    found
+}
+
+fn json_without_on(c: &sinscal_host::calibrate::Calibration) -> serde_json::Value {
+    let mut v = serde_json::to_value(CalibrationJson::new(c)).unwrap();
+    v.as_object_mut().unwrap().remove("on");
+    v
+}
+
+#[test]
+fn firmware_in_qemu_and_the_host_replay_agree_to_the_bit() {
+    if !qemu_available() {
+        return;
+    }
+    let elf = firmware_elf().expect("firmware builds");
+    let rec = Scenario { dwell_s: 30.0, ..Scenario::example() }.recording(11, "example.csv");
+    for options in [
+        Options::default(),
+        Options { prefilter: sinscal_host::calibrate::PrefilterKind::None, max_passes: 1, ..Options::default() },
+    ] {
+        let (mut file, _) = replay_file(&rec, &options).unwrap();
+        // Also a corrupted frame (a gyro byte of row 1000, inside dwell 1), so the fault path runs on both.
+        let header_len = 20 + 12 + 16 * 6 + 4;
+        let record = 1 + sinscal::adis::BURST32_LEN;
+        assert_eq!(rec.rows[1000].pos, 1);
+        file[header_len + 1000 * record + 1 + 4] ^= 0x01;
+        let host = run_replay(&file[..], |_| {}).unwrap();
+        let mut bytes = vec![0u8; MAX_OUTCOME_BYTES];
+        let n = encode_outcome(&host, &mut bytes).unwrap();
+        let (target, log) = run_firmware(&elf, &file).expect("firmware runs");
+        assert_eq!(target, bytes[..n].to_vec(), "outcome bytes differ; firmware log:\n{log}");
+        assert!(host.result.is_some());
+        assert_eq!(host.sampling.faults(), 1);
+    }
+    let on_host = calibrate_on_host(&rec, &Options::default()).unwrap();
+    let on_qemu = calibrate_on_qemu(&rec, &Options::default()).unwrap();
+    assert_eq!(on_qemu.on, "qemu");
+    assert_eq!(json_without_on(&on_host), json_without_on(&on_qemu));
+}

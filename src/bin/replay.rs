@@ -1,0 +1,147 @@
+//! Firmware: replays a recorded calibration sequence in the emulated Cortex-M4F (QEMU mps2-an386).
+//!
+//! Usage (through `sinscal calibrate RECORDING --on qemu`, which writes the replay file):
+//!     qemu-system-arm -cpu cortex-m4 -machine mps2-an386 -nographic \
+//!       -semihosting-config enable=on,target=native,arg=sinscal-replay,arg=IN.ssrp,arg=OUT.ssro -kernel ELF
+//! The frames of IN go through the replay SPI device, the ADIS driver, the sampling queue, the calibration
+//! sequence and the core; the outcome is written to OUT (f32 bit patterns), events are logged with defmt.
+#![cfg_attr(target_os = "none", no_std, no_main)]
+
+#[cfg(not(target_os = "none"))]
+fn main() {}
+
+#[cfg(target_os = "none")]
+mod firmware {
+    use core::ffi::CStr;
+
+    use cortex_m as _;
+    use cortex_m_rt::entry;
+    use defmt_full as defmt;
+    use defmt_semihosting as _;
+    use semihosting::fs::File;
+    use semihosting::io::{Read, Write};
+    use sinscal::replay::{encode_outcome, run_replay, ByteSource, ReplayError, MAX_OUTCOME_BYTES};
+    use sinscal::sequence::Event;
+
+    /// Buffered reader of a host file through semihosting.
+    struct FileSource {
+        file: File,
+        buf: [u8; 4096],
+        start: usize,
+        end: usize,
+    }
+
+    impl ByteSource for FileSource {
+        fn read_exact(&mut self, out: &mut [u8]) -> Result<(), ReplayError> {
+            let mut done = 0;
+            while done < out.len() {
+                if self.start == self.end {
+                    self.end = self.file.read(&mut self.buf).map_err(|_| ReplayError::Read)?;
+                    self.start = 0;
+                    if self.end == 0 {
+                        return Err(ReplayError::Read);
+                    }
+                }
+                let n = (self.end - self.start).min(out.len() - done);
+                out[done..done + n].copy_from_slice(&self.buf[self.start..self.start + n]);
+                self.start += n;
+                done += n;
+            }
+            Ok(())
+        }
+    }
+
+    /// Copies an argument into a NUL-terminated buffer.
+    fn c_path<'a>(arg: &str, buf: &'a mut [u8; 256]) -> Option<&'a CStr> {
+        let bytes = arg.as_bytes();
+        if bytes.len() >= buf.len() {
+            return None;
+        }
+        buf[..bytes.len()].copy_from_slice(bytes);
+        buf[bytes.len()] = 0;
+        CStr::from_bytes_with_nul(&buf[..=bytes.len()]).ok()
+    }
+
+    fn fail(what: &str) -> ! {
+        defmt::error!("sinscal-replay: {=str}", what);
+        semihosting::process::exit(1)
+    }
+
+    fn log(event: &Event) {
+        match event {
+            Event::Settling { index } => defmt::info!("position {=usize}: settling", index + 1),
+            Event::DwellStarted { index } => defmt::info!("position {=usize}: dwell started", index + 1),
+            Event::DwellAborted { index, at_sample, .. } => {
+                defmt::warn!("position {=usize}: dwell aborted at sample {=u32}", index + 1, at_sample)
+            }
+            Event::DwellCompleted { index, summary, faults } => defmt::info!(
+                "position {=usize}: {=u32} samples, {=u32} faults, f_b = [{=f32}, {=f32}, {=f32}] m/s^2",
+                index + 1,
+                summary.samples,
+                faults,
+                summary.force_mean_b_mps2[0],
+                summary.force_mean_b_mps2[1],
+                summary.force_mean_b_mps2[2]
+            ),
+            Event::Solved(r) => {
+                let s = &r.solution;
+                let v = |e: Option<sinscal::solve::Estimate>| e.map_or(f32::NAN, |e| e.value);
+                defmt::info!(
+                    "solved in {=u32} passes: gyro bias [{=f32}, {=f32}, {=f32}] rad/s, accel bias [{=f32}, {=f32}, {=f32}] m/s^2",
+                    r.passes,
+                    v(s.gyro_bias_b_radps[0]),
+                    v(s.gyro_bias_b_radps[1]),
+                    v(s.gyro_bias_b_radps[2]),
+                    v(s.accel_bias_b_mps2[0]),
+                    v(s.accel_bias_b_mps2[1]),
+                    v(s.accel_bias_b_mps2[2])
+                )
+            }
+            Event::Failed(_) => defmt::error!("calibration sequence failed"),
+        }
+    }
+
+    #[entry]
+    fn main() -> ! {
+        let Ok(args) = semihosting::experimental::env::args::<512>() else { fail("no command line") };
+        let mut it = (&args).flatten();
+        let _program = it.next();
+        let (Some(input), Some(output)) = (it.next(), it.next()) else { fail("usage: sinscal-replay IN OUT") };
+        let mut in_buf = [0u8; 256];
+        let mut out_buf = [0u8; 256];
+        let (Some(input), Some(output)) = (c_path(input, &mut in_buf), c_path(output, &mut out_buf)) else {
+            fail("path too long")
+        };
+        let Ok(file) = File::open(input) else { fail("cannot open the replay file") };
+        let source = FileSource { file, buf: [0; 4096], start: 0, end: 0 };
+        let outcome = match run_replay(source, log) {
+            Ok(o) => o,
+            Err(_) => fail("replay file unreadable"),
+        };
+        let s = &outcome.sampling;
+        defmt::info!(
+            "sampling: {=u32} events, {=u32} readings, {=u32} queue full, {=u32} faults, {=u32} missed",
+            s.events,
+            s.readings,
+            s.queue_full,
+            s.faults(),
+            s.missed_samples
+        );
+        static mut OUT: [u8; MAX_OUTCOME_BYTES] = [0; MAX_OUTCOME_BYTES];
+        // Single-threaded firmware: the only reference to OUT.
+        #[allow(static_mut_refs)]
+        let bytes = unsafe { &mut OUT };
+        let Ok(n) = encode_outcome(&outcome, bytes) else { fail("outcome too large") };
+        let Ok(mut out) = File::create(output) else { fail("cannot create the outcome file") };
+        if out.write_all(&bytes[..n]).is_err() {
+            fail("cannot write the outcome file");
+        }
+        semihosting::process::exit(0)
+    }
+
+    #[panic_handler]
+    fn panic(_: &core::panic::PanicInfo) -> ! {
+        defmt::error!("panic");
+        semihosting::process::exit(101)
+    }
+}
