@@ -255,12 +255,18 @@ pub fn encode_burst(model: Model, burst: &Burst, out: &mut [u8]) {
 
 impl Burst {
     /// The burst in SI units, body frame (the sensor axes are the body axes).
+    ///
+    /// The fixed-point value is `bits * 2^-16` LSB; it is converted as `(bits as f32) * (scale * 2^-16)`:
+    /// one integer-to-float conversion (a single VCVT on the Cortex-M4F) and one multiplication. Scaling by
+    /// a power of two is exact, so this equals `to_num::<f32>() * scale` bit for bit (a test shows it),
+    /// at a fraction of the cost of the generic conversion.
     pub fn to_sample(&self, model: Model) -> ImuSample {
-        let w = model.radps_per_lsb();
-        let a = model.accel_mps2_per_lsb();
+        const TWO_POW_MINUS_16: f32 = 1.0 / 65536.0;
+        let w = model.radps_per_lsb() * TWO_POW_MINUS_16;
+        let a = model.accel_mps2_per_lsb() * TWO_POW_MINUS_16;
         ImuSample {
-            rate_b_radps: self.gyro_lsb.map(|v| v.to_num::<f32>() * w),
-            force_b_mps2: self.accel_lsb.map(|v| v.to_num::<f32>() * a),
+            rate_b_radps: self.gyro_lsb.map(|v| v.to_bits() as f32 * w),
+            force_b_mps2: self.accel_lsb.map(|v| v.to_bits() as f32 * a),
         }
     }
 }

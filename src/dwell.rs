@@ -5,7 +5,7 @@
 //! variance of the raw samples (the variance gives the standard errors), the mean of the filtered
 //! samples (what the alignment consumes), and the filter's last state (the paper's "settled output").
 
-use crate::accumulate::{DwellStats, KahanSum};
+use crate::accumulate::{BlockedSum, DwellStats, BLOCK_SAMPLES};
 use crate::linalg::Vec3;
 use crate::prefilter::{HmmKf, PrefilterError, PrefilterSettings};
 
@@ -96,13 +96,18 @@ pub struct DwellSummary {
     pub settled_noise_gain: [f32; 2],
 }
 
-/// The prefilter bank and statistics for the six channels of one dwell.
+/// The prefilter bank and statistics for the six channels of one dwell (gyro x, y, z, accel x, y, z).
+///
+/// Per channel: the shift (the dwell's first raw sample, which is also the filter's first output), blocked
+/// sums of raw deviations and their squares, and of filtered deviations; the filter's last output.
 #[derive(Clone, Debug)]
 pub struct DwellCollector {
     filters: Option<[HmmKf; 6]>,
-    raw: [DwellStats; 6],
-    filtered: [KahanSum; 6],
-    filtered_shift: [f32; 6],
+    count: u32,
+    shift: [f32; 6],
+    raw_sum: [BlockedSum; 6],
+    raw_sum_sq: [BlockedSum; 6],
+    filtered_sum: [BlockedSum; 6],
     last: [f32; 6],
     rejected: u32,
     noise_gain: [f32; 2],
@@ -122,23 +127,15 @@ impl DwellCollector {
         };
         Ok(DwellCollector {
             filters,
-            raw: [DwellStats::new(); 6],
-            filtered: [KahanSum::new(); 6],
-            filtered_shift: [0.0; 6],
+            count: 0,
+            shift: [0.0; 6],
+            raw_sum: [BlockedSum::new(); 6],
+            raw_sum_sq: [BlockedSum::new(); 6],
+            filtered_sum: [BlockedSum::new(); 6],
             last: [0.0; 6],
             rejected: 0,
             noise_gain,
         })
-    }
-
-    /// Starts a new dwell: statistics cleared, filters restarted (their first sample initialises them).
-    pub fn reset(&mut self) {
-        self.raw = [DwellStats::new(); 6];
-        self.filtered = [KahanSum::new(); 6];
-        self.rejected = 0;
-        if let Some(filters) = self.filters.as_mut() {
-            filters.iter_mut().for_each(HmmKf::reset);
-        }
     }
 
     /// Output variance of the settled prefilter per unit raw white-noise variance, gyro and accelerometer
@@ -147,9 +144,18 @@ impl DwellCollector {
         self.noise_gain
     }
 
+    /// Starts a new dwell: statistics cleared; the filters restart at the dwell's first sample.
+    pub fn reset(&mut self) {
+        self.count = 0;
+        self.raw_sum = [BlockedSum::new(); 6];
+        self.raw_sum_sq = [BlockedSum::new(); 6];
+        self.filtered_sum = [BlockedSum::new(); 6];
+        self.rejected = 0;
+    }
+
     /// Samples used so far in this dwell.
     pub fn samples(&self) -> u32 {
-        self.raw[0].count()
+        self.count
     }
 
     /// Feeds one sample. A sample with a non-finite value is counted and not used.
@@ -157,36 +163,70 @@ impl DwellCollector {
     pub fn update(&mut self, sample: &ImuSample) -> Result<(), DwellError> {
         let r = sample.rate_b_radps;
         let f = sample.force_b_mps2;
-        let channels = [r[0], r[1], r[2], f[0], f[1], f[2]];
-        if !channels.iter().all(|x| x.is_finite()) {
+        let z = [r[0], r[1], r[2], f[0], f[1], f[2]];
+        if !z.iter().all(|x| x.is_finite()) {
             self.rejected = self.rejected.saturating_add(1);
             return Err(DwellError::NotFinite);
         }
-        let first = self.raw[0].count() == 0;
-        for (i, &z) in channels.iter().enumerate() {
-            self.raw[i].add(z);
-            let y = match self.filters.as_mut() {
-                Some(filters) => filters[i].update(z),
-                None => z,
-            };
-            if first {
-                self.filtered_shift[i] = y;
+        if self.count == 0 {
+            // The first sample: it is the shift, its deviations are zero, and it starts the filters.
+            self.shift = z;
+            self.last = z;
+            if let Some(filters) = self.filters.as_mut() {
+                for (filter, &x) in filters.iter_mut().zip(z.iter()) {
+                    filter.start(x);
+                }
             }
-            self.filtered[i].add(y - self.filtered_shift[i]);
-            self.last[i] = y;
+            self.count = 1;
+            return Ok(());
+        }
+        match self.filters.as_mut() {
+            Some(filters) => {
+                for i in 0..6 {
+                    let d = z[i] - self.shift[i];
+                    self.raw_sum[i].add(d);
+                    self.raw_sum_sq[i].add(d * d);
+                    let y = filters[i].step_value(z[i]);
+                    self.filtered_sum[i].add(y - self.shift[i]);
+                    self.last[i] = y;
+                }
+            }
+            None => {
+                for i in 0..6 {
+                    let d = z[i] - self.shift[i];
+                    self.raw_sum[i].add(d);
+                    self.raw_sum_sq[i].add(d * d);
+                }
+                self.last = z;
+            }
+        }
+        self.count += 1;
+        if self.count % BLOCK_SAMPLES == 0 {
+            for i in 0..6 {
+                self.raw_sum[i].flush();
+                self.raw_sum_sq[i].flush();
+                self.filtered_sum[i].flush();
+            }
         }
         Ok(())
     }
 
     /// The summary of the dwell so far.
     pub fn summary(&self) -> Result<DwellSummary, DwellError> {
-        let samples = self.raw[0].count();
+        let samples = self.count;
         if samples < MIN_DWELL_SAMPLES {
             return Err(DwellError::TooFewSamples { samples });
         }
-        let n = samples as f32;
-        let mean = |i: usize| self.filtered_shift[i] + self.filtered[i].value() / n;
-        let std = |i: usize| libm::sqrtf(self.raw[i].variance().unwrap_or(0.0));
+        let filtered = self.filters.is_some();
+        let mean = |i: usize| {
+            let sum = if filtered { self.filtered_sum[i].value() } else { self.raw_sum[i].value() };
+            DwellStats::from_sums(samples, self.shift[i], sum, 0.0).0.unwrap_or(self.shift[i])
+        };
+        let std = |i: usize| {
+            let (_, var) =
+                DwellStats::from_sums(samples, self.shift[i], self.raw_sum[i].value(), self.raw_sum_sq[i].value());
+            libm::sqrtf(var.unwrap_or(0.0))
+        };
         Ok(DwellSummary {
             samples,
             rejected: self.rejected,

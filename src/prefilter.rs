@@ -244,9 +244,24 @@ impl HmmKf {
         self.state[0]
     }
 
+    /// Starts the filter at a raw sample: state `[z, z]` (what [`Self::update`] does with its first sample).
+    #[inline(always)]
+    pub fn start(&mut self, raw: f32) {
+        self.state = [raw, raw];
+        self.previous_raw = raw;
+        self.started = true;
+    }
+
+    /// One fixed-gain step of a started filter; returns `x_k`.
+    #[inline(always)]
+    pub fn step_value(&mut self, raw: f32) -> f32 {
+        self.step(raw);
+        self.state[0]
+    }
+
     /// The fixed-gain recursion. `a x0 + (1-a) x1` is written `x1 + a (x0 - x1)` so that a constant
     /// state predicts exactly itself in floating point (zero innovation, bit-exact DC pass-through).
-    #[inline]
+    #[inline(always)]
     fn step(&mut self, raw: f32) {
         let [x0, x1] = self.state;
         let pred = [x1 + self.a * (x0 - x1), x0];

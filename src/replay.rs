@@ -280,9 +280,12 @@ pub fn run_replay<R: ByteSource>(
     let mut aborted_dwells = 0;
     let mut record = [0u8; 1 + BURST32_LEN];
     let record_len = 1 + model.burst_len();
-    let mut handle = |event: Event, result: &mut Option<CalibrationResult>, failure: &mut Option<SequenceFailure>| {
+    let mut handle = |event: Event,
+                      sequence: &CalibrationSequence,
+                      result: &mut Option<CalibrationResult>,
+                      failure: &mut Option<SequenceFailure>| {
         match event {
-            Event::Solved(r) => *result = Some(r),
+            Event::Solved => *result = sequence.result().copied(),
             Event::Failed(f) => *failure = Some(f),
             Event::DwellAborted { .. } => aborted_dwells += 1,
             _ => {}
@@ -299,12 +302,12 @@ pub fn run_replay<R: ByteSource>(
         while let Some(item) = consumer.dequeue() {
             let in_position = table as usize == sequence.position() + 1;
             if let Some(event) = sequence.on_sample(in_position, item) {
-                handle(event, &mut result, &mut failure);
+                handle(event, &sequence, &mut result, &mut failure);
             }
         }
     }
     while let Some(event) = sequence.finish() {
-        handle(event, &mut result, &mut failure);
+        handle(event, &sequence, &mut result, &mut failure);
     }
     let mut positions = Vec::new();
     for p in sequence.completed() {

@@ -12,7 +12,7 @@ use crate::imu::{ClassifiedError, ImuReading, ImuSource, ReadFault};
 /// What travels from the interrupt to the processing loop: a reading or the fault that replaced it.
 pub type QueueItem = Result<ImuReading, ReadFault>;
 
-/// Queue length (heapless 0.8: a `Queue<T, N>` holds N - 1 items): 15 samples = 150 ms of slack for the
+/// Queue length (heapless 0.9: a `Queue<T, N>` holds N - 1 items): 15 samples = 150 ms of slack for the
 /// processing loop.
 pub const QUEUE_SLOTS: usize = 16;
 
@@ -47,11 +47,7 @@ impl SamplingStats {
 
 /// Handles one data-ready event: one read, one enqueue attempt, counters updated.
 #[inline]
-pub fn on_data_ready<S: ImuSource, const N: usize>(
-    imu: &mut S,
-    queue: &mut Producer<'_, QueueItem, N>,
-    stats: &mut SamplingStats,
-) {
+pub fn on_data_ready<S: ImuSource>(imu: &mut S, queue: &mut Producer<'_, QueueItem>, stats: &mut SamplingStats) {
     stats.events = stats.events.wrapping_add(1);
     let item = match imu.read() {
         Ok(reading) => {

@@ -16,7 +16,7 @@ use heapless::Vec;
 use crate::calibration::{
     calibrate_positions, CalibrationError, CalibrationResult, CalibrationSettings, PositionInput,
 };
-use crate::dwell::{DwellCollector, DwellSummary, Prefilter, MIN_DWELL_SAMPLES};
+use crate::dwell::{DwellCollector, Prefilter, MIN_DWELL_SAMPLES};
 use crate::earth::Site;
 use crate::frames::Attitude;
 use crate::linalg::{cross, dot, Mat3};
@@ -110,17 +110,17 @@ pub enum Event {
         /// The sample of the dwell that caused it.
         at_sample: u32,
     },
-    /// Position `index` is done.
+    /// Position `index` is done; its statistics are in [`CalibrationSequence::completed`].
     DwellCompleted {
         /// Position index.
         index: usize,
-        /// Its statistics.
-        summary: DwellSummary,
+        /// Samples used.
+        samples: u32,
         /// Read faults during the dwell.
         faults: u32,
     },
-    /// All positions done and solved.
-    Solved(CalibrationResult),
+    /// All positions done and solved; the result is [`CalibrationSequence::result`].
+    Solved,
     /// The sequence failed.
     Failed(SequenceFailure),
 }
@@ -184,6 +184,7 @@ pub struct CalibrationSequence {
     faults: u32,
     aborts: u32,
     sin2_max: f32,
+    result: Option<CalibrationResult>,
 }
 
 impl CalibrationSequence {
@@ -214,6 +215,7 @@ impl CalibrationSequence {
             faults: 0,
             aborts: 0,
             sin2_max: s * s,
+            result: None,
         })
     }
 
@@ -225,6 +227,11 @@ impl CalibrationSequence {
     /// The position being worked on.
     pub fn position(&self) -> usize {
         self.index
+    }
+
+    /// The solution, once [`Event::Solved`] was reported.
+    pub fn result(&self) -> Option<&CalibrationResult> {
+        self.result.as_ref()
     }
 
     /// Completed positions so far, with their statistics.
@@ -256,7 +263,7 @@ impl CalibrationSequence {
         };
         let faults = self.faults;
         let _ = self.inputs.push(PositionInput { c_b_n: self.schedule[self.index], summary });
-        let event = Event::DwellCompleted { index: self.index, summary, faults };
+        let event = Event::DwellCompleted { index: self.index, samples: summary.samples, faults };
         self.index += 1;
         self.aborts = 0;
         self.phase = Phase::WaitingForTableToLeave;
@@ -277,7 +284,10 @@ impl CalibrationSequence {
         }
         self.phase = Phase::Finished;
         Some(match calibrate_positions(&self.inputs, &self.site, &self.settings.calibration) {
-            Ok(result) => Event::Solved(result),
+            Ok(result) => {
+                self.result = Some(result);
+                Event::Solved
+            }
             Err(e) => Event::Failed(SequenceFailure::Calibration(e)),
         })
     }

@@ -1,6 +1,6 @@
 //! `calibrate --on qemu`: the replay file through the firmware in QEMU (mps2-an386, Cortex-M4F).
 //!
-//! The firmware ELF is `target/thumbv7em-none-eabihf/release/sinscal-replay` of this workspace (built on
+//! The firmware ELF is `target/thumbv7em-none-eabihf/firmware/sinscal-replay` of this workspace (built on
 //! first use with cargo), or the file named by `SINSCAL_FIRMWARE`. QEMU runs it with semihosting: the
 //! firmware reads the replay file and writes its outcome file; its defmt log goes to QEMU's stdout and is
 //! decoded with `defmt-print` when that is installed (scripts/setup installs it).
@@ -24,13 +24,19 @@ fn workspace_root() -> PathBuf {
     Path::new(env!("CARGO_MANIFEST_DIR")).parent().map_or_else(|| PathBuf::from("."), Path::to_path_buf)
 }
 
-/// The firmware ELF, built if needed.
+/// The replay firmware ELF, built if needed.
 pub fn firmware_elf() -> Result<PathBuf, String> {
     if let Some(p) = std::env::var_os("SINSCAL_FIRMWARE") {
         return Ok(PathBuf::from(p));
     }
+    firmware_binary("sinscal-replay")
+}
+
+/// A firmware binary of this workspace (`sinscal-replay`, `sinscal-selftest`, `sinscal-bench`), built
+/// (all of them, with the firmware profile) if needed.
+pub fn firmware_binary(name: &str) -> Result<PathBuf, String> {
     let root = workspace_root();
-    let elf = root.join("target/thumbv7em-none-eabihf/release/sinscal-replay");
+    let elf = root.join("target/thumbv7em-none-eabihf/firmware").join(name);
     let status = Command::new(std::env::var("CARGO").unwrap_or_else(|_| "cargo".into()))
         .current_dir(&root)
         .args([
@@ -85,6 +91,32 @@ pub fn run_firmware(elf: &Path, replay: &[u8]) -> Result<(Vec<u8>, String), Stri
     }
     let bytes = result.map_err(|e| format!("the firmware wrote no outcome ({e}); log: {}", log.trim()))?;
     Ok((bytes, log))
+}
+
+/// Runs a firmware binary that takes one output-file argument (self-test, benchmark) and returns its exit
+/// code and the text it wrote. `icount` runs QEMU with `-icount shift=0` (instruction counting).
+pub fn run_with_output(elf: &Path, icount: bool) -> Result<(i32, String), String> {
+    static RUN: AtomicU32 = AtomicU32::new(0);
+    let out = std::env::temp_dir().join(format!(
+        "sinscal-fw-{}-{}.txt",
+        std::process::id(),
+        RUN.fetch_add(1, Ordering::Relaxed)
+    ));
+    let semihosting = format!("enable=on,target=native,arg=fw,arg={}", out.display());
+    let mut cmd = Command::new(QEMU);
+    cmd.args(["-cpu", "cortex-m4", "-machine", "mps2-an386", "-nographic", "-monitor", "none", "-serial", "none"]);
+    if icount {
+        cmd.args(["-icount", "shift=0"]);
+    }
+    let run = cmd
+        .args(["-semihosting-config", &semihosting, "-kernel"])
+        .arg(elf)
+        .stdin(Stdio::null())
+        .output()
+        .map_err(|e| format!("cannot run {QEMU} ({e}): install it with scripts/setup"))?;
+    let text = std::fs::read_to_string(&out).unwrap_or_default();
+    let _ = std::fs::remove_file(&out);
+    Ok((run.status.code().unwrap_or(-1), text))
 }
 
 /// Decodes defmt frames with defmt-print, if installed; otherwise says how many bytes there were.

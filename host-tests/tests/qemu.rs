@@ -6,7 +6,7 @@
 use sinscal::replay::{encode_outcome, run_replay, MAX_OUTCOME_BYTES};
 use sinscal_host::calibrate::Options;
 use sinscal_host::output::CalibrationJson;
-use sinscal_host::qemu::{calibrate_on_qemu, firmware_elf, run_firmware, QEMU};
+use sinscal_host::qemu::{calibrate_on_qemu, firmware_binary, firmware_elf, run_firmware, run_with_output, QEMU};
 use sinscal_host::replayfile::{calibrate_on_host, replay_file};
 use sinscal_host::synth::Scenario;
 
@@ -54,4 +54,19 @@ fn firmware_in_qemu_and_the_host_replay_agree_to_the_bit() {
     let on_qemu = calibrate_on_qemu(&rec, &Options::default()).unwrap();
     assert_eq!(on_qemu.on, "qemu");
     assert_eq!(json_without_on(&on_host), json_without_on(&on_qemu));
+}
+
+#[test]
+fn on_target_tests_pass_in_qemu() {
+    if !qemu_available() {
+        return;
+    }
+    let elf = firmware_binary("sinscal-selftest").expect("firmware builds");
+    let (code, report) = run_with_output(&elf, false).expect("QEMU runs");
+    println!("on-target tests (Cortex-M4F in QEMU):\n{report}");
+    assert_eq!(code, 0, "{report}");
+    assert!(report.lines().any(|l| l.ends_with(" passed, 0 failed")), "{report}");
+    // The steady prefilter gain computed on the target is the x86 one, bit for bit.
+    let k = sinscal::prefilter::HmmKf::new(&sinscal::prefilter::PrefilterSettings::paper_gyro()).unwrap().gain()[0][0];
+    assert!(report.contains(&format!("ok prefilter_gain_k00_bits {k:e}")), "host K00 = {k:e}\n{report}");
 }

@@ -74,16 +74,17 @@ mod firmware {
             Event::DwellAborted { index, at_sample, .. } => {
                 defmt::warn!("position {=usize}: dwell aborted at sample {=u32}", index + 1, at_sample)
             }
-            Event::DwellCompleted { index, summary, faults } => defmt::info!(
-                "position {=usize}: {=u32} samples, {=u32} faults, f_b = [{=f32}, {=f32}, {=f32}] m/s^2",
-                index + 1,
-                summary.samples,
-                faults,
-                summary.force_mean_b_mps2[0],
-                summary.force_mean_b_mps2[1],
-                summary.force_mean_b_mps2[2]
-            ),
-            Event::Solved(r) => {
+            Event::DwellCompleted { index, samples, faults } => {
+                defmt::info!("position {=usize}: {=u32} samples, {=u32} faults", index + 1, samples, faults)
+            }
+            Event::Solved => defmt::info!("all positions collected: solved"),
+            Event::Failed(_) => defmt::error!("calibration sequence failed"),
+        }
+    }
+
+    fn log_result(r: &sinscal::calibration::CalibrationResult) {
+        {
+            {
                 let s = &r.solution;
                 let v = |e: Option<sinscal::solve::Estimate>| e.map_or(f32::NAN, |e| e.value);
                 defmt::info!(
@@ -97,7 +98,6 @@ mod firmware {
                     v(s.accel_bias_b_mps2[2])
                 )
             }
-            Event::Failed(_) => defmt::error!("calibration sequence failed"),
         }
     }
 
@@ -118,6 +118,9 @@ mod firmware {
             Ok(o) => o,
             Err(_) => fail("replay file unreadable"),
         };
+        if let Some(r) = &outcome.result {
+            log_result(r);
+        }
         let s = &outcome.sampling;
         defmt::info!(
             "sampling: {=u32} events, {=u32} readings, {=u32} queue full, {=u32} faults, {=u32} missed",

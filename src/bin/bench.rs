@@ -1,0 +1,195 @@
+//! Firmware benchmark: instructions per 100 Hz sample of the whole per-sample path, in QEMU.
+//!
+//! Run with `-icount shift=0` (one instruction per virtual nanosecond): SysTick, clocked by the 25 MHz core
+//! clock of mps2-an386, then advances once per 40 instructions, deterministically. The path measured is
+//! what the firmware does for every sample: the data-ready handler (burst read through the SPI device,
+//! checksum, decode, counter and status checks, conversion to SI, enqueue) and the processing loop
+//! (dequeue, the calibration sequence's checks, the HMM/KF bank and the dwell accumulators). The SPI
+//! device is the replay device serving a fixed frame, so the bus itself costs nothing here; on hardware
+//! the burst's 32 bytes at 1 MHz add 256 us of SPI time, not instructions.
+//! The result is written as text to the file named by the first semihosting argument.
+#![cfg_attr(target_os = "none", no_std, no_main)]
+
+#[cfg(not(target_os = "none"))]
+fn main() {}
+
+#[cfg(target_os = "none")]
+mod firmware {
+    use core::ffi::CStr;
+    use core::fmt::Write as _;
+
+    use cortex_m::peripheral::syst::SystClkSource;
+    use cortex_m::peripheral::SYST;
+    use cortex_m_rt::entry;
+    use defmt_semihosting as _;
+    use heapless::spsc::Queue;
+    use semihosting::fs::File;
+    use semihosting::io::Write;
+    use sinscal::adis::{encode_burst, Adis, Burst, Model, BURST32_LEN, I16F16};
+    use sinscal::dwell::Prefilter;
+    use sinscal::earth::Site;
+    use sinscal::frames::Attitude;
+    use sinscal::replay::{replay_sequence_settings, ReplayDevice};
+    use sinscal::sampling::{on_data_ready, QueueItem, SamplingStats, QUEUE_SLOTS};
+    use sinscal::sequence::CalibrationSequence;
+
+    /// Instructions per SysTick tick under -icount shift=0 with the 25 MHz core clock.
+    const INSTRUCTIONS_PER_TICK: u32 = 40;
+    const SAMPLES: u32 = 2000;
+
+    fn ticks_between(start: u32, end: u32) -> u32 {
+        // SysTick counts down, 24 bits.
+        start.wrapping_sub(end) & 0x00FF_FFFF
+    }
+
+    fn measure(prefilter: Prefilter) -> (u32, u32, u32) {
+        let model = Model::Adis16505_2;
+        let mut imu = Adis::new(ReplayDevice::new(model), model);
+        let _ = imu.init();
+        let site = Site::with_normal_gravity(45.7796f32.to_radians(), 0.0);
+        let settings = replay_sequence_settings(prefilter, sinscal::align::DwellValue::Mean, 1, true);
+        let schedule = [Attitude::from_degrees(0.0, 0.0, 0.0)];
+        let Ok(mut sequence) = CalibrationSequence::new(&schedule, site, settings) else { return (0, 0, 0) };
+        let mut queue: Queue<QueueItem, QUEUE_SLOTS> = Queue::new();
+        let (mut producer, mut consumer) = queue.split();
+        let mut stats = SamplingStats::default();
+        let lsb_w = model.radps_per_lsb() / 65536.0;
+        let lsb_f = model.accel_mps2_per_lsb() / 65536.0;
+        let mut frame = [0u8; BURST32_LEN];
+        let mut burst = Burst {
+            diag_stat: 0,
+            gyro_lsb: [
+                I16F16::from_bits((1e-6 / lsb_w) as i32),
+                I16F16::from_bits((5.1e-5 / lsb_w) as i32),
+                I16F16::from_bits((5.2e-5 / lsb_w) as i32),
+            ],
+            accel_lsb: [
+                I16F16::from_bits((1e-3 / lsb_f) as i32),
+                I16F16::from_bits((-2e-3 / lsb_f) as i32),
+                I16F16::from_bits((9.806 / lsb_f) as i32),
+            ],
+            temp_raw: 250,
+            data_counter: 0,
+        };
+        let syst = unsafe { &*SYST::PTR };
+        let (mut isr, mut processing, mut dequeue) = (0u32, 0u32, 0u32);
+        for k in 0..SAMPLES {
+            // Prepare the next frame (the sensor's work, not timed).
+            burst.data_counter = k as u16;
+            burst.gyro_lsb[0] = I16F16::from_bits(burst.gyro_lsb[0].to_bits() ^ (k as i32 & 7));
+            encode_burst(model, &burst, &mut frame);
+            imu.spi_mut().load_frame(&frame);
+            let t0 = syst.cvr.read();
+            on_data_ready(&mut imu, &mut producer, &mut stats);
+            let t1 = syst.cvr.read();
+            let item = consumer.dequeue();
+            let t1b = syst.cvr.read();
+            if let Some(item) = item {
+                let _ = sequence.on_sample(true, item);
+            }
+            let t2 = syst.cvr.read();
+            isr += ticks_between(t0, t1);
+            processing += ticks_between(t1, t2);
+            dequeue += ticks_between(t1, t1b);
+        }
+        let per = |ticks: u32| ticks * INSTRUCTIONS_PER_TICK / SAMPLES;
+        DEQUEUE.store(per(dequeue), core::sync::atomic::Ordering::Relaxed);
+        (per(isr), per(processing), stats.readings)
+    }
+
+    static DEQUEUE: core::sync::atomic::AtomicU32 = core::sync::atomic::AtomicU32::new(0);
+
+    /// The parts on their own: burst transaction, decode + conversion, collector update.
+    fn parts() -> (u32, u32, u32, u32) {
+        use embedded_hal::spi::{Operation, SpiDevice};
+        let model = Model::Adis16505_2;
+        let mut dev = ReplayDevice::new(model);
+        let mut frame = [0u8; BURST32_LEN];
+        let burst = Burst {
+            diag_stat: 0,
+            gyro_lsb: [I16F16::from_bits(1000); 3],
+            accel_lsb: [I16F16::from_bits(263_000_000), I16F16::from_bits(1000), I16F16::from_bits(-1000)],
+            temp_raw: 250,
+            data_counter: 1,
+        };
+        encode_burst(model, &burst, &mut frame);
+        dev.load_frame(&frame);
+        let syst = unsafe { &*SYST::PTR };
+        let mut buf = [0u8; BURST32_LEN];
+        let (mut t_spi, mut t_decode, mut t_collect_none, mut t_collect_kf) = (0, 0, 0, 0);
+        let mut none =
+            sinscal::dwell::DwellCollector::new(&Prefilter::None).unwrap_or_else(|_| semihosting::process::exit(3));
+        let mut kf =
+            sinscal::dwell::DwellCollector::new(&Prefilter::paper()).unwrap_or_else(|_| semihosting::process::exit(3));
+        for k in 0..SAMPLES {
+            let t0 = syst.cvr.read();
+            let _ = dev.transaction(&mut [Operation::Write(&sinscal::adis::BURST_COMMAND), Operation::Read(&mut buf)]);
+            let t1 = syst.cvr.read();
+            let decoded = sinscal::adis::decode_burst::<()>(model, core::hint::black_box(&buf));
+            let sample = decoded.map(|b| b.to_sample(model)).unwrap_or_default();
+            let sample = core::hint::black_box(sample);
+            let t2 = syst.cvr.read();
+            let mut s = sample;
+            s.force_b_mps2[0] += (k & 3) as f32 * 1e-3;
+            let _ = core::hint::black_box(&mut none).update(&s);
+            let t3 = syst.cvr.read();
+            let _ = core::hint::black_box(&mut kf).update(&s);
+            let t4 = syst.cvr.read();
+            t_spi += ticks_between(t0, t1);
+            t_decode += ticks_between(t1, t2);
+            t_collect_none += ticks_between(t2, t3);
+            t_collect_kf += ticks_between(t3, t4);
+        }
+        let per = |ticks: u32| ticks * INSTRUCTIONS_PER_TICK / SAMPLES;
+        (per(t_spi), per(t_decode), per(t_collect_none), per(t_collect_kf))
+    }
+
+    #[entry]
+    fn main() -> ! {
+        let mut p = cortex_m::Peripherals::take().unwrap_or_else(|| semihosting::process::exit(2));
+        p.SYST.set_clock_source(SystClkSource::Core);
+        p.SYST.set_reload(0x00FF_FFFF);
+        p.SYST.clear_current();
+        p.SYST.enable_counter();
+        // The timing overhead itself (two register reads).
+        let syst = unsafe { &*SYST::PTR };
+        let t0 = syst.cvr.read();
+        let t1 = syst.cvr.read();
+        let overhead = ticks_between(t0, t1) * INSTRUCTIONS_PER_TICK;
+        let (isr_none, proc_none, n_none) = measure(Prefilter::None);
+        let (isr_kf, proc_kf, n_kf) = measure(Prefilter::paper());
+        let (spi, decode, collect_none, collect_kf) = parts();
+        let mut text: heapless::String<768> = heapless::String::new();
+        let _ = write!(text, "part_dequeue {}\n", DEQUEUE.load(core::sync::atomic::Ordering::Relaxed));
+        let _ = write!(text, "part_spi_transaction {spi}\npart_decode_and_convert {decode}\npart_collector_none {collect_none}\npart_collector_hmmkf {collect_kf}\n");
+        let _ = write!(
+            text,
+            "samples {SAMPLES} {n_none} {n_kf}\ntimer_overhead_instructions {overhead}\n\
+             isr_instructions_per_sample {isr_none}\nprocessing_instructions_per_sample_none {proc_none}\n\
+             processing_instructions_per_sample_hmmkf {proc_kf}\nisr_instructions_per_sample_hmmkf_run {isr_kf}\n"
+        );
+        let mut args_ok = false;
+        if let Ok(args) = semihosting::experimental::env::args::<256>() {
+            let mut it = (&args).flatten();
+            let _ = it.next();
+            if let Some(path) = it.next() {
+                let mut buf = [0u8; 256];
+                let b = path.as_bytes();
+                if b.len() < 255 {
+                    buf[..b.len()].copy_from_slice(b);
+                    if let Ok(c) = CStr::from_bytes_with_nul(&buf[..=b.len()]) {
+                        if let Ok(mut f) = File::create(c) {
+                            args_ok = f.write_all(text.as_bytes()).is_ok();
+                        }
+                    }
+                }
+            }
+        }
+        semihosting::process::exit(if args_ok { 0 } else { 1 })
+    }
+
+    #[panic_handler]
+    fn panic(_: &core::panic::PanicInfo) -> ! {
+        semihosting::process::exit(101)
+    }
+}

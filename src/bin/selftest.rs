@@ -1,0 +1,158 @@
+//! On-target tests: core checks run on the Cortex-M4F in QEMU (f32 hardware float, libm, no std).
+//! Writes one line per check (`ok NAME VALUE` or `FAILED NAME VALUE`) and a closing `N passed, N failed`
+//! line to the file named by the first semihosting argument; the exit status is the number of failures.
+#![cfg_attr(target_os = "none", no_std, no_main)]
+
+#[cfg(not(target_os = "none"))]
+fn main() {}
+
+#[cfg(target_os = "none")]
+mod firmware {
+    use core::ffi::CStr;
+    use core::fmt::Write as _;
+
+    use cortex_m as _;
+    use cortex_m_rt::entry;
+    use defmt_semihosting as _;
+    use semihosting::fs::File;
+    use semihosting::io::Write;
+    use sinscal::accumulate::DwellStats;
+    use sinscal::calibration::{calibrate_positions, CalibrationSettings, PositionInput};
+    use sinscal::dwell::{DwellCollector, ImuSample, Prefilter};
+    use sinscal::earth::Site;
+    use sinscal::frames::Attitude;
+    use sinscal::prefilter::{HmmKf, PrefilterSettings};
+    use sinscal::solve::TABLE1_POSITIONS_DEG;
+
+    struct Report {
+        text: heapless::String<2048>,
+        passed: u32,
+        failed: u32,
+    }
+
+    impl Report {
+        fn check(&mut self, name: &str, ok: bool, value: f32) {
+            let _ = writeln!(self.text, "{} {name} {value:e}", if ok { "ok" } else { "FAILED" });
+            if ok {
+                self.passed += 1;
+            } else {
+                self.failed += 1;
+            }
+        }
+    }
+
+    const DEG_PER_HOUR: f32 = core::f32::consts::PI / 180.0 / 3600.0;
+    const MICRO_G: f32 = 9.80665e-6;
+
+    fn exact_six_position(report: &mut Report) {
+        // Exact samples computed on the target with the core's own frames: the biases must come back with
+        // their signs, to the first-order accuracy and, refined, to f32 precision.
+        let site = Site::with_normal_gravity(45.7796f32.to_radians(), 0.0);
+        let eps = [0.05 * DEG_PER_HOUR, -0.05 * DEG_PER_HOUR, 0.05 * DEG_PER_HOUR];
+        let nabla = [-100.0 * MICRO_G, 100.0 * MICRO_G, 100.0 * MICRO_G];
+        let mut inputs: heapless::Vec<PositionInput, 6> = heapless::Vec::new();
+        let Ok(mut collector) = DwellCollector::new(&Prefilter::paper()) else {
+            report.check("collector", false, 0.0);
+            return;
+        };
+        for p in TABLE1_POSITIONS_DEG {
+            let c = Attitude::from_degrees(p[0], p[1], p[2]).c_b_n();
+            let ct = c.transpose();
+            let w = ct.mul_vec(site.earth_rate_n_radps());
+            let f = ct.mul_vec(site.force_at_rest_n_mps2());
+            let sample = ImuSample {
+                rate_b_radps: [w[0] + eps[0], w[1] + eps[1], w[2] + eps[2]],
+                force_b_mps2: [f[0] + nabla[0], f[1] + nabla[1], f[2] + nabla[2]],
+            };
+            collector.reset();
+            for _ in 0..600 {
+                let _ = collector.update(&sample);
+            }
+            let Ok(summary) = collector.summary() else { return };
+            let _ = inputs.push(PositionInput { c_b_n: c, summary });
+        }
+        for (passes, gyro_tol, accel_tol, name) in [(1, 1e-3, 3.0, "first_order"), (6, 1e-5, 0.05, "refined")] {
+            let settings = CalibrationSettings { max_passes: passes, ..CalibrationSettings::default() };
+            let Ok(r) = calibrate_positions(&inputs, &site, &settings) else {
+                report.check(name, false, 0.0);
+                return;
+            };
+            let mut worst_g: f32 = 0.0;
+            let mut worst_a: f32 = 0.0;
+            let mut signs = true;
+            for i in 0..3 {
+                let g = r.solution.gyro_bias_b_radps[i].map_or(f32::NAN, |e| e.value);
+                let a = r.solution.accel_bias_b_mps2[i].map_or(f32::NAN, |e| e.value);
+                signs &= g.signum() == eps[i].signum() && a.signum() == nabla[i].signum();
+                worst_g = worst_g.max((g - eps[i]).abs() / DEG_PER_HOUR);
+                worst_a = worst_a.max((a - nabla[i]).abs() / MICRO_G);
+            }
+            let mut label: heapless::String<48> = heapless::String::new();
+            let _ = write!(label, "six_position_{name}_signs");
+            report.check(&label, signs, 0.0);
+            label.clear();
+            let _ = write!(label, "six_position_{name}_gyro_error_deg_per_h");
+            report.check(&label, worst_g < gyro_tol, worst_g);
+            label.clear();
+            let _ = write!(label, "six_position_{name}_accel_error_ug");
+            report.check(&label, worst_a < accel_tol, worst_a);
+        }
+    }
+
+    fn prefilter(report: &mut Report) {
+        let Ok(mut f) = HmmKf::new(&PrefilterSettings::paper_gyro()) else {
+            report.check("prefilter_gain", false, 0.0);
+            return;
+        };
+        let c = 7.292_115e-5f32;
+        let exact = (0..5000).all(|_| f.update(c) == c);
+        report.check("prefilter_passes_constant_bit_exactly", exact, c);
+        let (dc, _) = f.impulse_response_sums();
+        report.check("prefilter_dc_gain_one", (dc - 1.0).abs() < 1e-4, dc);
+        // The gain bits, for the host test to compare with x86.
+        report.check("prefilter_gain_k00_bits", true, f.gain()[0][0]);
+    }
+
+    fn accumulator(report: &mut Report) {
+        // 72,000 samples of 9.80665 + a +-1e-3 square wave: mean 9.80665 exactly (in f32 terms), variance 1e-6.
+        let mut s = DwellStats::new();
+        for k in 0..72_000u32 {
+            s.add(9.806_65 + if k % 2 == 0 { 1e-3 } else { -1e-3 });
+        }
+        let mean = s.mean().unwrap_or(0.0);
+        let var = s.variance().unwrap_or(0.0);
+        report.check("accumulator_mean_m_s2", (mean - 9.806_65).abs() <= 1e-6, mean);
+        report.check("accumulator_variance_rel_error", ((var - 1e-6) / 1e-6).abs() < 1e-3, var);
+    }
+
+    #[entry]
+    fn main() -> ! {
+        let mut report = Report { text: heapless::String::new(), passed: 0, failed: 0 };
+        exact_six_position(&mut report);
+        prefilter(&mut report);
+        accumulator(&mut report);
+        let _ = writeln!(report.text, "{} passed, {} failed", report.passed, report.failed);
+        if let Ok(args) = semihosting::experimental::env::args::<256>() {
+            let mut it = (&args).flatten();
+            let _ = it.next();
+            if let Some(path) = it.next() {
+                let mut buf = [0u8; 256];
+                let b = path.as_bytes();
+                if b.len() < 255 {
+                    buf[..b.len()].copy_from_slice(b);
+                    if let Ok(c) = CStr::from_bytes_with_nul(&buf[..=b.len()]) {
+                        if let Ok(mut f) = File::create(c) {
+                            let _ = f.write_all(report.text.as_bytes());
+                        }
+                    }
+                }
+            }
+        }
+        semihosting::process::exit(report.failed as i32)
+    }
+
+    #[panic_handler]
+    fn panic(_: &core::panic::PanicInfo) -> ! {
+        semihosting::process::exit(101)
+    }
+}
