@@ -270,14 +270,12 @@ impl CalibrationSequence {
         event
     }
 
-    /// Solves once every position is complete (called by [`Self::on_sample`]; public for the last dwell
-    /// of a replay that ends while the table is still in position).
+    /// Ends the sequence when the data end: completes a dwell in progress (reported first), then solves
+    /// once every position is complete. Call until it returns `None`.
     pub fn finish(&mut self) -> Option<Event> {
         if self.phase == Phase::Collecting && self.dwell_sample >= self.settings.min_dwell_samples {
-            let e = self.complete();
-            if self.index < self.schedule.len() {
-                return Some(e);
-            }
+            // Report the completed dwell; the next call solves if it was the last.
+            return Some(self.complete());
         }
         if self.phase == Phase::Finished || self.index < self.schedule.len() {
             return None;

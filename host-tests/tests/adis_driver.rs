@@ -151,3 +151,21 @@ fn encode_and_decode_are_inverse() {
     encode_burst(Model::Adis16505_2, &burst, &mut bytes);
     assert_eq!(decode_burst::<()>(Model::Adis16505_2, &bytes), Ok(burst));
 }
+
+#[test]
+fn word_parallel_checksum_equals_the_byte_sum() {
+    let mut state = 12345u32;
+    for len in [0usize, 1, 2, 3, 4, 18, 30, 31, 32, 64, 255] {
+        for _ in 0..50 {
+            let bytes: Vec<u8> = (0..len)
+                .map(|_| {
+                    state = state.wrapping_mul(1_103_515_245).wrapping_add(12345);
+                    (state >> 16) as u8
+                })
+                .collect();
+            let plain = bytes.iter().fold(0u16, |s, &b| s.wrapping_add(b as u16));
+            assert_eq!(sinscal::adis::checksum(&bytes), plain, "{bytes:?}");
+        }
+    }
+    assert_eq!(sinscal::adis::checksum(&[0xFF; 30]), 30 * 255);
+}

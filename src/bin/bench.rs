@@ -97,6 +97,56 @@ mod firmware {
         (per(isr), per(processing), stats.readings)
     }
 
+    /// Bytes of stack below the current stack pointer that `f` writes (stack painting: fill 8 KiB below SP
+    /// with a pattern, run `f`, find the lowest word that changed).
+    #[inline(never)]
+    fn stack_used(f: &mut dyn FnMut()) -> u32 {
+        const PAINT: u32 = 0xDEAD_BEEF;
+        const DEPTH_WORDS: usize = 2048;
+        let sp = cortex_m::register::msp::read() as usize;
+        // Paint up to just below the current stack pointer: everything `f` and its callees push is below.
+        let top = (sp - 8) & !3;
+        let bottom = top - 4 * DEPTH_WORDS;
+        for a in (bottom..top).step_by(4) {
+            unsafe { core::ptr::write_volatile(a as *mut u32, PAINT) };
+        }
+        f();
+        let lowest = (bottom..top).step_by(4).find(|&a| unsafe { core::ptr::read_volatile(a as *const u32) } != PAINT);
+        lowest.map_or(0, |a| (sp - a) as u32)
+    }
+
+    /// Stack of one data-ready handler call and of one processing step.
+    fn stack_depths() -> (u32, u32) {
+        let model = Model::Adis16505_2;
+        let mut imu = Adis::new(ReplayDevice::new(model), model);
+        let _ = imu.init();
+        let site = Site::with_normal_gravity(45.7796f32.to_radians(), 0.0);
+        let settings = replay_sequence_settings(Prefilter::paper(), sinscal::align::DwellValue::Mean, 1, true);
+        let schedule = [Attitude::from_degrees(0.0, 0.0, 0.0)];
+        let Ok(mut sequence) = CalibrationSequence::new(&schedule, site, settings) else { return (0, 0) };
+        let mut queue: Queue<QueueItem, QUEUE_SLOTS> = Queue::new();
+        let (mut producer, mut consumer) = queue.split();
+        let mut stats = SamplingStats::default();
+        let mut frame = [0u8; BURST32_LEN];
+        let burst = Burst {
+            diag_stat: 0,
+            gyro_lsb: [I16F16::from_bits(1000); 3],
+            accel_lsb: [I16F16::from_bits(0), I16F16::from_bits(0), I16F16::from_bits(263_700_000)],
+            temp_raw: 250,
+            data_counter: 0,
+        };
+        encode_burst(model, &burst, &mut frame);
+        imu.spi_mut().load_frame(&frame);
+        let isr = stack_used(&mut || on_data_ready(&mut imu, &mut producer, &mut stats));
+        let item = consumer.dequeue();
+        let processing = stack_used(&mut || {
+            if let Some(item) = item {
+                let _ = sequence.on_sample(true, item);
+            }
+        });
+        (isr, processing)
+    }
+
     static DEQUEUE: core::sync::atomic::AtomicU32 = core::sync::atomic::AtomicU32::new(0);
 
     /// The parts on their own: burst transaction, decode + conversion, collector update.
@@ -159,8 +209,13 @@ mod firmware {
         let (isr_none, proc_none, n_none) = measure(Prefilter::None);
         let (isr_kf, proc_kf, n_kf) = measure(Prefilter::paper());
         let (spi, decode, collect_none, collect_kf) = parts();
+        let (stack_isr, stack_processing) = stack_depths();
         let mut text: heapless::String<768> = heapless::String::new();
         let _ = write!(text, "part_dequeue {}\n", DEQUEUE.load(core::sync::atomic::Ordering::Relaxed));
+        let _ = write!(
+            text,
+            "stack_bytes_data_ready_handler {stack_isr}\nstack_bytes_processing_step {stack_processing}\n"
+        );
         let _ = write!(text, "part_spi_transaction {spi}\npart_decode_and_convert {decode}\npart_collector_none {collect_none}\npart_collector_hmmkf {collect_kf}\n");
         let _ = write!(
             text,
