@@ -31,5 +31,7 @@ pub mod linalg;
 pub mod prefilter;
 pub mod replay;
 pub mod sampling;
+#[cfg(target_os = "none")]
+pub mod semihost;
 pub mod sequence;
 pub mod solve;

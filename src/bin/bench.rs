@@ -15,7 +15,6 @@ fn main() {}
 
 #[cfg(target_os = "none")]
 mod firmware {
-    use core::ffi::CStr;
     use core::fmt::Write as _;
 
     use cortex_m::peripheral::syst::SystClkSource;
@@ -23,8 +22,6 @@ mod firmware {
     use cortex_m_rt::entry;
     use defmt_semihosting as _;
     use heapless::spsc::Queue;
-    use semihosting::fs::File;
-    use semihosting::io::Write;
     use sinscal::adis::{encode_burst, Adis, Burst, Model, BURST32_LEN, I16F16};
     use sinscal::dwell::Prefilter;
     use sinscal::earth::Site;
@@ -211,7 +208,7 @@ mod firmware {
         let (spi, decode, collect_none, collect_kf) = parts();
         let (stack_isr, stack_processing) = stack_depths();
         let mut text: heapless::String<768> = heapless::String::new();
-        let _ = write!(text, "part_dequeue {}\n", DEQUEUE.load(core::sync::atomic::Ordering::Relaxed));
+        let _ = writeln!(text, "part_dequeue {}", DEQUEUE.load(core::sync::atomic::Ordering::Relaxed));
         let _ = write!(
             text,
             "stack_bytes_data_ready_handler {stack_isr}\nstack_bytes_processing_step {stack_processing}\n"
@@ -223,23 +220,8 @@ mod firmware {
              isr_instructions_per_sample {isr_none}\nprocessing_instructions_per_sample_none {proc_none}\n\
              processing_instructions_per_sample_hmmkf {proc_kf}\nisr_instructions_per_sample_hmmkf_run {isr_kf}\n"
         );
-        let mut args_ok = false;
-        if let Ok(args) = semihosting::experimental::env::args::<256>() {
-            let mut it = (&args).flatten();
-            let _ = it.next();
-            if let Some(path) = it.next() {
-                let mut buf = [0u8; 256];
-                let b = path.as_bytes();
-                if b.len() < 255 {
-                    buf[..b.len()].copy_from_slice(b);
-                    if let Ok(c) = CStr::from_bytes_with_nul(&buf[..=b.len()]) {
-                        if let Ok(mut f) = File::create(c) {
-                            args_ok = f.write_all(text.as_bytes()).is_ok();
-                        }
-                    }
-                }
-            }
-        }
+        let args_ok =
+            sinscal::semihost::arg_path(1).is_some_and(|p| sinscal::semihost::write_file(&p, text.as_bytes()));
         semihosting::process::exit(if args_ok { 0 } else { 1 })
     }
 

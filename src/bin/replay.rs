@@ -12,14 +12,13 @@ fn main() {}
 
 #[cfg(target_os = "none")]
 mod firmware {
-    use core::ffi::CStr;
 
     use cortex_m as _;
     use cortex_m_rt::entry;
     use defmt_full as defmt;
     use defmt_semihosting as _;
     use semihosting::fs::File;
-    use semihosting::io::{Read, Write};
+    use semihosting::io::Read;
     use sinscal::replay::{encode_outcome, run_replay, ByteSource, ReplayError, MAX_OUTCOME_BYTES};
     use sinscal::sequence::Event;
 
@@ -49,17 +48,6 @@ mod firmware {
             }
             Ok(())
         }
-    }
-
-    /// Copies an argument into a NUL-terminated buffer.
-    fn c_path<'a>(arg: &str, buf: &'a mut [u8; 256]) -> Option<&'a CStr> {
-        let bytes = arg.as_bytes();
-        if bytes.len() >= buf.len() {
-            return None;
-        }
-        buf[..bytes.len()].copy_from_slice(bytes);
-        buf[bytes.len()] = 0;
-        CStr::from_bytes_with_nul(&buf[..=bytes.len()]).ok()
     }
 
     fn fail(what: &str) -> ! {
@@ -103,16 +91,10 @@ mod firmware {
 
     #[entry]
     fn main() -> ! {
-        let Ok(args) = semihosting::experimental::env::args::<512>() else { fail("no command line") };
-        let mut it = (&args).flatten();
-        let _program = it.next();
-        let (Some(input), Some(output)) = (it.next(), it.next()) else { fail("usage: sinscal-replay IN OUT") };
-        let mut in_buf = [0u8; 256];
-        let mut out_buf = [0u8; 256];
-        let (Some(input), Some(output)) = (c_path(input, &mut in_buf), c_path(output, &mut out_buf)) else {
-            fail("path too long")
+        let (Some(input), Some(output)) = (sinscal::semihost::arg_path(1), sinscal::semihost::arg_path(2)) else {
+            fail("usage: sinscal-replay IN OUT (paths up to 255 bytes)")
         };
-        let Ok(file) = File::open(input) else { fail("cannot open the replay file") };
+        let Ok(file) = File::open(input.as_c_str()) else { fail("cannot open the replay file") };
         let source = FileSource { file, buf: [0; 4096], start: 0, end: 0 };
         let outcome = match run_replay(source, log) {
             Ok(o) => o,
@@ -135,8 +117,7 @@ mod firmware {
         #[allow(static_mut_refs)]
         let bytes = unsafe { &mut OUT };
         let Ok(n) = encode_outcome(&outcome, bytes) else { fail("outcome too large") };
-        let Ok(mut out) = File::create(output) else { fail("cannot create the outcome file") };
-        if out.write_all(&bytes[..n]).is_err() {
+        if !sinscal::semihost::write_file(&output, &bytes[..n]) {
             fail("cannot write the outcome file");
         }
         semihosting::process::exit(0)

@@ -8,14 +8,11 @@ fn main() {}
 
 #[cfg(target_os = "none")]
 mod firmware {
-    use core::ffi::CStr;
     use core::fmt::Write as _;
 
     use cortex_m as _;
     use cortex_m_rt::entry;
     use defmt_semihosting as _;
-    use semihosting::fs::File;
-    use semihosting::io::Write;
     use sinscal::accumulate::DwellStats;
     use sinscal::calibration::{calibrate_positions, CalibrationSettings, PositionInput};
     use sinscal::dwell::{DwellCollector, ImuSample, Prefilter};
@@ -132,21 +129,8 @@ mod firmware {
         prefilter(&mut report);
         accumulator(&mut report);
         let _ = writeln!(report.text, "{} passed, {} failed", report.passed, report.failed);
-        if let Ok(args) = semihosting::experimental::env::args::<256>() {
-            let mut it = (&args).flatten();
-            let _ = it.next();
-            if let Some(path) = it.next() {
-                let mut buf = [0u8; 256];
-                let b = path.as_bytes();
-                if b.len() < 255 {
-                    buf[..b.len()].copy_from_slice(b);
-                    if let Ok(c) = CStr::from_bytes_with_nul(&buf[..=b.len()]) {
-                        if let Ok(mut f) = File::create(c) {
-                            let _ = f.write_all(report.text.as_bytes());
-                        }
-                    }
-                }
-            }
+        if let Some(path) = sinscal::semihost::arg_path(1) {
+            sinscal::semihost::write_file(&path, report.text.as_bytes());
         }
         semihosting::process::exit(report.failed as i32)
     }
