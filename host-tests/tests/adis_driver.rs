@@ -169,3 +169,21 @@ fn word_parallel_checksum_equals_the_byte_sum() {
     }
     assert_eq!(sinscal::adis::checksum(&[0xFF; 30]), 30 * 255);
 }
+
+#[test]
+fn vcvt_conversion_equals_fixed_to_num_bit_for_bit() {
+    // Burst::to_sample converts (bits as f32) * (scale * 2^-16); the generic fixed conversion is
+    // to_num::<f32>() * scale. Scaling by a power of two is exact, so both round once, identically.
+    let model = Model::Adis16505_2;
+    let mut state = 0x9E37_79B9u32;
+    for _ in 0..200_000 {
+        state ^= state << 13;
+        state ^= state >> 17;
+        state ^= state << 5;
+        let v = I16F16::from_bits(state as i32);
+        let burst = Burst { diag_stat: 0, gyro_lsb: [v; 3], accel_lsb: [v; 3], temp_raw: 0, data_counter: 0 };
+        let s = burst.to_sample(model);
+        assert_eq!(s.rate_b_radps[0].to_bits(), (v.to_num::<f32>() * model.radps_per_lsb()).to_bits(), "{v}");
+        assert_eq!(s.force_b_mps2[0].to_bits(), (v.to_num::<f32>() * model.accel_mps2_per_lsb()).to_bits(), "{v}");
+    }
+}
