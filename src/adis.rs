@@ -156,6 +156,11 @@ pub enum AdisError<E> {
         /// The DIAG_STAT word.
         diag_stat: u16,
     },
+    /// The buffer is shorter than the model's burst.
+    ShortBurst {
+        /// Bytes given.
+        len: usize,
+    },
     /// PROD_ID is not the configured model's.
     WrongProduct {
         /// Expected PROD_ID.
@@ -175,6 +180,7 @@ impl<E: core::fmt::Debug> core::fmt::Display for AdisError<E> {
             AdisError::StalledCounter { counter } => write!(f, "data counter stalled at {counter}"),
             AdisError::Status { diag_stat } => write!(f, "DIAG_STAT flags {diag_stat:#06x}"),
             AdisError::WrongProduct { expected, found } => write!(f, "PROD_ID {found}, expected {expected}"),
+            AdisError::ShortBurst { len } => write!(f, "burst of {len} bytes is too short"),
         }
     }
 }
@@ -184,7 +190,7 @@ impl<E: core::fmt::Debug> core::error::Error for AdisError<E> {}
 impl<E: core::fmt::Debug> ClassifiedError for AdisError<E> {
     fn fault(&self) -> ReadFault {
         match self {
-            AdisError::Spi(_) | AdisError::WrongProduct { .. } => ReadFault::Bus,
+            AdisError::Spi(_) | AdisError::WrongProduct { .. } | AdisError::ShortBurst { .. } => ReadFault::Bus,
             AdisError::Checksum { .. } => ReadFault::Checksum,
             AdisError::StalledCounter { .. } => ReadFault::StalledCounter,
             AdisError::Status { .. } => ReadFault::StatusFlag,
@@ -218,6 +224,9 @@ pub fn checksum(bytes: &[u8]) -> u16 {
 #[inline(always)]
 pub fn decode_burst<E>(model: Model, bytes: &[u8]) -> Result<Burst, AdisError<E>> {
     let len = model.burst_len();
+    if bytes.len() < len {
+        return Err(AdisError::ShortBurst { len: bytes.len() });
+    }
     let words = len / 2;
     let received = word(bytes, words - 1);
     let computed = checksum(&bytes[..len - 2]);

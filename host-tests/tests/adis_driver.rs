@@ -150,6 +150,7 @@ fn encode_and_decode_are_inverse() {
     let mut bytes = [0u8; 32];
     encode_burst(Model::Adis16505_2, &burst, &mut bytes);
     assert_eq!(decode_burst::<()>(Model::Adis16505_2, &bytes), Ok(burst));
+    assert_eq!(decode_burst::<()>(Model::Adis16505_2, &bytes[..20]), Err(AdisError::ShortBurst { len: 20 }));
 }
 
 #[test]
