@@ -116,15 +116,19 @@ impl DwellStats {
         }
     }
 
-    /// Mean and unbiased variance from a count, a shift and the sums of deviations and squared deviations
-    /// (shared with the dwell collector, which keeps its sums itself).
-    pub fn from_sums(count: u32, shift: f32, sum: f32, sum_sq: f32) -> (Option<f32>, Option<f32>) {
+    /// Mean from a count, a shift and the sum of deviations from the shift; `None` when empty.
+    /// (Shared with the dwell collector, which keeps its sums itself.)
+    pub fn shifted_mean(count: u32, shift: f32, sum: f32) -> Option<f32> {
+        (count > 0).then(|| shift + sum / count as f32)
+    }
+
+    /// Unbiased variance (divisor n - 1) from a count and the sums of deviations and squared deviations;
+    /// `None` with fewer than two samples.
+    pub fn shifted_variance(count: u32, sum: f32, sum_sq: f32) -> Option<f32> {
         let n = count as f32;
-        let mean = (count > 0).then(|| shift + sum / n);
         // sum (d - mean_d)^2 = sum d^2 - (sum d)^2 / n; with shifted data the two terms are of the order
         // of the spread, not of the offset, so the difference does not cancel catastrophically.
-        let variance = (count > 1).then(|| ((sum_sq - sum * (sum / n)) / (n - 1.0)).max(0.0));
-        (mean, variance)
+        (count > 1).then(|| ((sum_sq - sum * (sum / n)) / (n - 1.0)).max(0.0))
     }
 
     /// Number of samples.
@@ -134,12 +138,12 @@ impl DwellStats {
 
     /// Mean of the samples; `None` when empty.
     pub fn mean(&self) -> Option<f32> {
-        DwellStats::from_sums(self.count, self.shift, self.sum.value(), self.sum_sq.value()).0
+        DwellStats::shifted_mean(self.count, self.shift, self.sum.value())
     }
 
     /// Unbiased sample variance (divisor n - 1); `None` with fewer than two samples.
     pub fn variance(&self) -> Option<f32> {
-        DwellStats::from_sums(self.count, self.shift, self.sum.value(), self.sum_sq.value()).1
+        DwellStats::shifted_variance(self.count, self.sum.value(), self.sum_sq.value())
     }
 }
 

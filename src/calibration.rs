@@ -109,19 +109,16 @@ fn rotation(v: Vec3) -> Mat3 {
     Mat3(m)
 }
 
-fn value_or_zero(e: Option<Estimate>) -> f32 {
-    e.map_or(0.0, |e| e.value)
-}
-
 /// Calibrates from a set of positions (any number up to [`crate::solve::MAX_POSITIONS`]).
 pub fn calibrate_positions(
     positions: &[PositionInput],
     site: &Site,
     settings: &CalibrationSettings,
 ) -> Result<CalibrationResult, CalibrationError> {
-    let mut gyro_bias = [0.0f32; 3];
-    let mut accel_bias = [0.0f32; 3];
-    let mut offset = [0.0f32; 3];
+    // Estimates accumulated over the passes (unobservable parameters stay at zero: nothing is known of them).
+    let mut gyro_bias_b_radps = [0.0f32; 3];
+    let mut accel_bias_b_mps2 = [0.0f32; 3];
+    let mut offset_n_rad = [0.0f32; 3];
     let mut passes = 0;
     let mut last: Option<BiasSolution> = None;
     let mut last_sigma = f32::INFINITY;
@@ -129,15 +126,15 @@ pub fn calibrate_positions(
     while passes < settings.max_passes.max(1) {
         passes += 1;
         // The reference seen through the current offset: C' = R(-phi0) C, so that C_hat ~ C' for exact data.
-        let correct_reference = rotation([-offset[0], -offset[1], -offset[2]]);
+        let correct_reference = rotation(offset_n_rad.map(|x| -x));
         let mut solver = BiasSolver::new(*site, settings.solver);
         for (index, p) in positions.iter().enumerate() {
             let mut s = p.summary;
             for i in 0..3 {
-                s.rate_mean_b_radps[i] -= gyro_bias[i];
-                s.rate_settled_b_radps[i] -= gyro_bias[i];
-                s.force_mean_b_mps2[i] -= accel_bias[i];
-                s.force_settled_b_mps2[i] -= accel_bias[i];
+                s.rate_mean_b_radps[i] -= gyro_bias_b_radps[i];
+                s.rate_settled_b_radps[i] -= gyro_bias_b_radps[i];
+                s.force_mean_b_mps2[i] -= accel_bias_b_mps2[i];
+                s.force_settled_b_mps2[i] -= accel_bias_b_mps2[i];
             }
             let c_b_n = correct_reference.mul(&p.c_b_n);
             let angles = position_angles(&s, settings.dwell_value, &c_b_n, site)
@@ -150,27 +147,23 @@ pub fn calibrate_positions(
         let mut small = true;
         let mut step = |total: &mut [f32; 3], est: &mut [Option<Estimate>; 3]| {
             for i in 0..3 {
-                if let Some(e) = est[i].as_mut() {
-                    let correction = e.value;
-                    total[i] += correction;
-                    e.value = total[i];
-                    let ratio = if e.std_error > 0.0 { correction.abs() / e.std_error } else { 0.0 };
-                    sigma = sigma.max(ratio);
-                    small &= ratio < 1e-3 || correction.abs() <= 1e-5 * total[i].abs();
+                match est[i].as_mut() {
+                    Some(e) => {
+                        let correction = e.value;
+                        total[i] += correction;
+                        e.value = total[i];
+                        let ratio = if e.std_error > 0.0 { correction.abs() / e.std_error } else { 0.0 };
+                        sigma = sigma.max(ratio);
+                        small &= ratio < 1e-3 || correction.abs() <= 1e-5 * total[i].abs();
+                    }
+                    None => total[i] = 0.0,
                 }
             }
         };
-        step(&mut gyro_bias, &mut sol.gyro_bias_b_radps);
-        step(&mut accel_bias, &mut sol.accel_bias_b_mps2);
+        step(&mut gyro_bias_b_radps, &mut sol.gyro_bias_b_radps);
+        step(&mut accel_bias_b_mps2, &mut sol.accel_bias_b_mps2);
         if sol.reference_offset_estimated {
-            step(&mut offset, &mut sol.reference_offset_n_rad);
-        }
-        // Unobservable parameters stay at zero: nothing is known of them.
-        for (total, est) in gyro_bias.iter_mut().zip(sol.gyro_bias_b_radps.iter()) {
-            *total = value_or_zero(*est);
-        }
-        for (total, est) in accel_bias.iter_mut().zip(sol.accel_bias_b_mps2.iter()) {
-            *total = value_or_zero(*est);
+            step(&mut offset_n_rad, &mut sol.reference_offset_n_rad);
         }
         last = Some(sol);
         last_sigma = sigma;

@@ -220,11 +220,10 @@ impl DwellCollector {
         let filtered = self.filters.is_some();
         let mean = |i: usize| {
             let sum = if filtered { self.filtered_sum[i].value() } else { self.raw_sum[i].value() };
-            DwellStats::from_sums(samples, self.shift[i], sum, 0.0).0.unwrap_or(self.shift[i])
+            DwellStats::shifted_mean(samples, self.shift[i], sum).unwrap_or(self.shift[i])
         };
         let std = |i: usize| {
-            let (_, var) =
-                DwellStats::from_sums(samples, self.shift[i], self.raw_sum[i].value(), self.raw_sum_sq[i].value());
+            let var = DwellStats::shifted_variance(samples, self.raw_sum[i].value(), self.raw_sum_sq[i].value());
             libm::sqrtf(var.unwrap_or(0.0))
         };
         Ok(DwellSummary {

@@ -98,7 +98,7 @@ impl ReplayDevice {
     /// A device of `model` with its PROD_ID set.
     pub fn new(model: Model) -> ReplayDevice {
         let mut registers = [0u16; 64];
-        registers[(reg::PROD_ID / 2) as usize] = model.product_id();
+        registers[register_index(reg::PROD_ID)] = model.product_id();
         ReplayDevice { model, frame: [0; BURST32_LEN], pending: None, registers }
     }
 
@@ -110,8 +110,13 @@ impl ReplayDevice {
 
     /// A register's value (as last written).
     pub fn register(&self, address: u8) -> u16 {
-        self.registers[((address & 0x7F) / 2) as usize]
+        self.registers[register_index(address)]
     }
+}
+
+/// Index of a register in the device's register file: byte address without the write flag, in words.
+fn register_index(address: u8) -> usize {
+    ((address & !WRITE_FLAG) / 2) as usize
 }
 
 impl spi::ErrorType for ReplayDevice {
@@ -127,7 +132,7 @@ impl SpiDevice for ReplayDevice {
                 buf[n..].fill(0);
             }
             [Operation::Write([address, value])] if address & WRITE_FLAG != 0 => {
-                let index = ((*address & 0x7F) / 2) as usize % 64;
+                let index = register_index(*address);
                 let current = self.registers[index].to_be_bytes();
                 self.registers[index] = if address & 1 == 0 {
                     u16::from_be_bytes([current[0], *value])
@@ -137,7 +142,7 @@ impl SpiDevice for ReplayDevice {
             }
             [Operation::Write([address, _])] => self.pending = Some(*address),
             [Operation::Read(buf)] => {
-                let value = self.pending.take().map_or(0, |a| self.registers[((a & 0x7F) / 2) as usize % 64]);
+                let value = self.pending.take().map_or(0, |a| self.registers[register_index(a)]);
                 let bytes = value.to_be_bytes();
                 for (i, b) in buf.iter_mut().enumerate() {
                     *b = bytes.get(i).copied().unwrap_or(0);
@@ -275,18 +280,13 @@ pub fn run_replay<R: ByteSource>(
     let mut queue: Queue<QueueItem, QUEUE_SLOTS> = Queue::new();
     let (mut producer, mut consumer) = queue.split();
     let mut stats = SamplingStats::default();
-    let mut result = None;
     let mut failure = None;
     let mut aborted_dwells = 0;
     let mut record = [0u8; 1 + BURST32_LEN];
     let record_len = 1 + model.burst_len();
-    let mut handle = |event: Event,
-                      sequence: &CalibrationSequence,
-                      result: &mut Option<CalibrationResult>,
-                      failure: &mut Option<SequenceFailure>| {
+    let mut handle = |event: Event| {
         match event {
-            Event::Solved => *result = sequence.result().copied(),
-            Event::Failed(f) => *failure = Some(f),
+            Event::Failed(f) => failure = Some(f),
             Event::DwellAborted { .. } => aborted_dwells += 1,
             _ => {}
         }
@@ -302,13 +302,14 @@ pub fn run_replay<R: ByteSource>(
         while let Some(item) = consumer.dequeue() {
             let in_position = table as usize == sequence.position() + 1;
             if let Some(event) = sequence.on_sample(in_position, item) {
-                handle(event, &sequence, &mut result, &mut failure);
+                handle(event);
             }
         }
     }
     while let Some(event) = sequence.finish() {
-        handle(event, &sequence, &mut result, &mut failure);
+        handle(event);
     }
+    let result = sequence.result().copied();
     let mut positions = Vec::new();
     for p in sequence.completed() {
         let _ = positions.push(*p);
@@ -378,20 +379,9 @@ impl Reader<'_> {
 }
 
 fn failure_code(f: &Option<SequenceFailure>) -> [u32; 3] {
-    use crate::sequence::AbortReason as R;
     match f {
         None => [0, 0, 0],
-        Some(SequenceFailure::PositionAborted { index, reason }) => {
-            let r = match reason {
-                R::GravityContradictsPosition => 1,
-                R::Rotation => 2,
-                R::Acceleration => 3,
-                R::TooManyFaults => 4,
-                R::TableLeft => 5,
-                R::NotFinite => 6,
-            };
-            [1, *index as u32, r]
-        }
+        Some(SequenceFailure::PositionAborted { index, reason }) => [1, *index as u32, reason.code() as u32],
         Some(SequenceFailure::Calibration(_)) => [2, 0, 0],
     }
 }
@@ -480,14 +470,7 @@ pub fn decode_outcome(header: &ReplayHeader, bytes: &[u8]) -> Result<ReplayOutco
         0 => None,
         1 => Some(SequenceFailure::PositionAborted {
             index: index as usize,
-            reason: match reason {
-                1 => R::GravityContradictsPosition,
-                2 => R::Rotation,
-                3 => R::Acceleration,
-                4 => R::TooManyFaults,
-                5 => R::TableLeft,
-                _ => R::NotFinite,
-            },
+            reason: R::from_code(reason as u8).ok_or(ReplayError::Format)?,
         }),
         _ => Some(SequenceFailure::Calibration(crate::calibration::CalibrationError::Solve(
             crate::solve::SolveError::BadInput,

@@ -87,6 +87,28 @@ pub enum AbortReason {
     NotFinite,
 }
 
+impl AbortReason {
+    /// All reasons, in code order (code = index + 1).
+    pub const ALL: [AbortReason; 6] = [
+        AbortReason::GravityContradictsPosition,
+        AbortReason::Rotation,
+        AbortReason::Acceleration,
+        AbortReason::TooManyFaults,
+        AbortReason::TableLeft,
+        AbortReason::NotFinite,
+    ];
+
+    /// A small code for logs and files (1..=6).
+    pub fn code(self) -> u8 {
+        AbortReason::ALL.iter().position(|r| *r == self).map_or(0, |i| i as u8 + 1)
+    }
+
+    /// The reason of a code.
+    pub fn from_code(code: u8) -> Option<AbortReason> {
+        AbortReason::ALL.get((code as usize).checked_sub(1)?).copied()
+    }
+}
+
 /// What the sequence reports.
 #[derive(Clone, Copy, Debug, PartialEq)]
 #[cfg_attr(feature = "defmt", derive(defmt::Format))]
@@ -173,9 +195,8 @@ pub enum Phase {
 pub struct CalibrationSequence {
     settings: SequenceSettings,
     site: Site,
-    schedule: Vec<Mat3, MAX_POSITIONS>,
-    /// Up direction in the body frame per position (third row of C_b^n).
-    up_b: Vec<[f32; 3], MAX_POSITIONS>,
+    /// `C_b^n` of each position; its third row is the up direction in the body frame.
+    schedule_c_b_n: Vec<Mat3, MAX_POSITIONS>,
     inputs: Vec<PositionInput, MAX_POSITIONS>,
     collector: DwellCollector,
     phase: Phase,
@@ -183,7 +204,10 @@ pub struct CalibrationSequence {
     dwell_sample: u32,
     faults: u32,
     aborts: u32,
-    sin2_max: f32,
+    /// `sin^2` of the largest gravity angle, and the squared bounds of rest, computed once.
+    gravity_sin2_max: f32,
+    rate2_max_radps2: f32,
+    force2_bounds_mps2sq: (f32, f32),
     result: Option<CalibrationResult>,
 }
 
@@ -193,28 +217,27 @@ impl CalibrationSequence {
         if schedule.is_empty() || schedule.len() > MAX_POSITIONS {
             return Err(SequenceError::BadSchedule);
         }
-        let mut matrices = Vec::new();
-        let mut up_b = Vec::new();
+        let mut schedule_c_b_n = Vec::new();
         for a in schedule {
-            let c = a.c_b_n();
             // Capacity checked above.
-            let _ = matrices.push(c);
-            let _ = up_b.push(c.row(2));
+            let _ = schedule_c_b_n.push(a.c_b_n());
         }
         let s = libm::sinf(settings.max_gravity_angle_rad);
+        let (g, e) = (site.gravity_mps2, settings.max_force_error_mps2);
         Ok(CalibrationSequence {
             collector: DwellCollector::new(&settings.prefilter).map_err(SequenceError::Prefilter)?,
             settings,
             site,
-            schedule: matrices,
-            up_b,
+            schedule_c_b_n,
             inputs: Vec::new(),
             phase: Phase::WaitingForTable,
             index: 0,
             dwell_sample: 0,
             faults: 0,
             aborts: 0,
-            sin2_max: s * s,
+            gravity_sin2_max: s * s,
+            rate2_max_radps2: settings.max_rate_radps * settings.max_rate_radps,
+            force2_bounds_mps2sq: ((g - e) * (g - e), (g + e) * (g + e)),
             result: None,
         })
     }
@@ -256,17 +279,18 @@ impl CalibrationSequence {
         event
     }
 
-    fn complete(&mut self) -> Event {
+    /// Completes the dwell; `table_left` says whether the table has already left the position.
+    fn complete(&mut self, table_left: bool) -> Event {
         let summary = match self.collector.summary() {
             Ok(s) => s,
             Err(_) => return self.abort(AbortReason::TableLeft, false),
         };
         let faults = self.faults;
-        let _ = self.inputs.push(PositionInput { c_b_n: self.schedule[self.index], summary });
+        let _ = self.inputs.push(PositionInput { c_b_n: self.schedule_c_b_n[self.index], summary });
         let event = Event::DwellCompleted { index: self.index, samples: summary.samples, faults };
         self.index += 1;
         self.aborts = 0;
-        self.phase = Phase::WaitingForTableToLeave;
+        self.phase = if table_left { Phase::WaitingForTable } else { Phase::WaitingForTableToLeave };
         event
     }
 
@@ -275,9 +299,9 @@ impl CalibrationSequence {
     pub fn finish(&mut self) -> Option<Event> {
         if self.phase == Phase::Collecting && self.dwell_sample >= self.settings.min_dwell_samples {
             // Report the completed dwell; the next call solves if it was the last.
-            return Some(self.complete());
+            return Some(self.complete(false));
         }
-        if self.phase == Phase::Finished || self.index < self.schedule.len() {
+        if self.phase == Phase::Finished || self.index < self.schedule_c_b_n.len() {
             return None;
         }
         self.phase = Phase::Finished;
@@ -298,13 +322,13 @@ impl CalibrationSequence {
                 if !in_position {
                     self.phase = Phase::WaitingForTable;
                 }
-                if self.index == self.schedule.len() {
+                if self.index == self.schedule_c_b_n.len() {
                     return self.finish();
                 }
                 None
             }
             Phase::WaitingForTable => {
-                if self.index >= self.schedule.len() {
+                if self.index >= self.schedule_c_b_n.len() {
                     return self.finish();
                 }
                 if !in_position {
@@ -345,9 +369,7 @@ impl CalibrationSequence {
     fn collect(&mut self, in_position: bool, item: QueueItem) -> Option<Event> {
         if !in_position {
             if self.dwell_sample >= self.settings.min_dwell_samples.max(MIN_DWELL_SAMPLES) {
-                let e = self.complete();
-                self.phase = Phase::WaitingForTable;
-                return Some(e);
+                return Some(self.complete(true));
             }
             return Some(self.abort(AbortReason::TableLeft, false));
         }
@@ -362,31 +384,43 @@ impl CalibrationSequence {
                 return None;
             }
         };
+        // The checks below let NaN through (every comparison with NaN is false); the collector refuses it.
         let f = reading.sample.force_b_mps2;
         let w = reading.sample.rate_b_radps;
-        if !(f.iter().chain(w.iter()).all(|x| x.is_finite())) {
-            return Some(self.abort(AbortReason::NotFinite, true));
-        }
-        let up = self.up_b[self.index];
+        let up_b = self.schedule_c_b_n[self.index].row(2);
         let f2 = dot(f, f);
-        let side = cross(f, up);
+        let side = cross(f, up_b);
         // |f x up|^2 > sin^2(max) |f|^2 |up|^2, with |up| = 1; and f must point up, not down.
-        if dot(side, side) > self.sin2_max * f2 || dot(f, up) <= 0.0 {
+        if dot(side, side) > self.gravity_sin2_max * f2 || dot(f, up_b) <= 0.0 {
             return Some(self.abort(AbortReason::GravityContradictsPosition, true));
         }
-        if dot(w, w) > self.settings.max_rate_radps * self.settings.max_rate_radps {
+        if dot(w, w) > self.rate2_max_radps2 {
             return Some(self.abort(AbortReason::Rotation, true));
         }
-        let g = self.site.gravity_mps2;
-        let (lo, hi) = (g - self.settings.max_force_error_mps2, g + self.settings.max_force_error_mps2);
-        if f2 < lo * lo || f2 > hi * hi {
+        let (lo, hi) = self.force2_bounds_mps2sq;
+        if f2 < lo || f2 > hi {
             return Some(self.abort(AbortReason::Acceleration, true));
         }
-        // Finite values were checked: the collector cannot refuse the sample.
-        let _ = self.collector.update(&reading.sample);
+        if self.collector.update(&reading.sample).is_err() {
+            return Some(self.abort(AbortReason::NotFinite, true));
+        }
         if self.dwell_sample >= self.settings.dwell_samples {
-            return Some(self.complete());
+            return Some(self.complete(false));
         }
         None
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn abort_reason_codes_round_trip() {
+        for r in AbortReason::ALL {
+            assert_eq!(AbortReason::from_code(r.code()), Some(r));
+        }
+        assert_eq!(AbortReason::from_code(0), None);
+        assert_eq!(AbortReason::from_code(7), None);
     }
 }
