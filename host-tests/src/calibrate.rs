@@ -10,7 +10,7 @@ use sinscal::prefilter::{CoefficientIdentifier, PrefilterSettings};
 use sinscal::solve::{BiasSolution, SolverSettings, MAX_POSITIONS};
 
 use crate::error::InputError;
-use crate::recording::{DwellAttitude, Recording};
+use crate::recording::{Dwell, DwellAttitude, Header, Recording};
 
 /// Which prefilter runs in front of the dwell statistics.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -116,17 +116,22 @@ fn to_f32(v: [f64; 3]) -> [f32; 3] {
     v.map(|x| x as f32)
 }
 
-/// Runs a calibration of a recording.
-pub fn calibrate(recording: &Recording, options: &Options) -> Result<Calibration, InputError> {
-    let source = recording.source.as_str();
-    let header = &recording.header;
+/// The site of a recording: gravity from the header, otherwise WGS-84 normal gravity at its latitude and
+/// height (SPEC.md section 1), and which of the two it is.
+pub fn site_of(header: &Header) -> (Site, GravitySource) {
     let latitude_rad = (header.latitude_deg as f32).to_radians();
-    let (gravity_mps2, gravity_source) = match header.gravity_mps2 {
-        Some(g) => (g as f32, GravitySource::Header),
-        None => (normal_gravity_mps2(latitude_rad, header.height_m as f32), GravitySource::NormalGravity),
-    };
-    let site = Site { latitude_rad, gravity_mps2 };
+    match header.gravity_mps2 {
+        Some(g) => (Site { latitude_rad, gravity_mps2: g as f32 }, GravitySource::Header),
+        None => (
+            Site { latitude_rad, gravity_mps2: normal_gravity_mps2(latitude_rad, header.height_m as f32) },
+            GravitySource::NormalGravity,
+        ),
+    }
+}
 
+/// The dwells of a recording, at least one and at most the core's limit.
+pub fn calibration_dwells(recording: &Recording) -> Result<Vec<Dwell<'_>>, InputError> {
+    let source = recording.source.as_str();
     let dwells = recording.dwells();
     if dwells.is_empty() {
         return Err(InputError::file(source, "no dwell: every row has pos = 0"));
@@ -135,20 +140,33 @@ pub fn calibrate(recording: &Recording, options: &Options) -> Result<Calibration
         let line = dwells[MAX_POSITIONS].first_line();
         return Err(InputError::at(source, line, format!("more than {MAX_POSITIONS} positions (the core's limit)")));
     }
+    Ok(dwells)
+}
 
-    let prefilter = match options.prefilter {
+/// The prefilter the options ask for; `a` identified from `first` when they say so.
+pub fn prefilter_of(options: &Options, first: &Dwell<'_>, source: &str) -> Result<Prefilter, InputError> {
+    Ok(match options.prefilter {
         PrefilterKind::None => Prefilter::None,
         PrefilterKind::HmmKf => {
             let [a_gyro, a_accel] = match options.coefficient {
                 Coefficient::Fixed(a) => [a, a],
-                Coefficient::Identify => identify_coefficients(&dwells[0].rows, source, dwells[0].first_line())?,
+                Coefficient::Identify => identify_coefficients(&first.rows, source, first.first_line())?,
             };
             Prefilter::HmmKf {
                 gyro: PrefilterSettings::paper_gyro().with_a(a_gyro),
                 accel: PrefilterSettings::paper_accel().with_a(a_accel),
             }
         }
-    };
+    })
+}
+
+/// Runs a calibration of a recording.
+pub fn calibrate(recording: &Recording, options: &Options) -> Result<Calibration, InputError> {
+    let source = recording.source.as_str();
+    let header = &recording.header;
+    let (site, gravity_source) = site_of(header);
+    let dwells = calibration_dwells(recording)?;
+    let prefilter = prefilter_of(options, &dwells[0], source)?;
     let mut collector =
         DwellCollector::new(&prefilter).map_err(|e| InputError::file(source, format!("prefilter: {e}")))?;
     let settings = CalibrationSettings {
@@ -163,10 +181,7 @@ pub fn calibrate(recording: &Recording, options: &Options) -> Result<Calibration
     let mut positions = Vec::with_capacity(dwells.len());
     for dwell in &dwells {
         let at = |reason: String| InputError::at(source, dwell.first_line(), format!("dwell {}: {reason}", dwell.pos));
-        let attitude = dwell.attitude(source)?;
-        let heading_deg = attitude.heading_deg.ok_or_else(|| {
-            at("heading is unknown (empty): the calibration needs the reference heading of every position".into())
-        })?;
+        let (attitude, heading_deg) = dwell.attitude_with_heading(source, "the calibration")?;
         collector.reset();
         for row in &dwell.rows {
             let sample = ImuSample { rate_b_radps: to_f32(row.rate_b_radps), force_b_mps2: to_f32(row.force_b_mps2) };

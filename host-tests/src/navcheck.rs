@@ -147,10 +147,7 @@ pub fn navigate(
         None if options.hours.is_some() => &dwells[0],
         None => dwells.iter().max_by_key(|d| d.rows.len()).expect("non-empty"),
     };
-    let attitude = dwell.attitude(source)?;
-    let heading = attitude.heading_deg.ok_or_else(|| {
-        InputError::at(source, dwell.first_line(), format!("dwell {}: heading unknown; navigation needs it", dwell.pos))
-    })?;
+    let (attitude, heading) = dwell.attitude_with_heading(source, "navigation")?;
     let attitude_deg = [attitude.pitch_deg, attitude.roll_deg, heading];
     let rate_hz = match header.rate_hz {
         Some(r) if r > 0.0 => r,

@@ -382,6 +382,22 @@ fn parse_truth(keys: &[(usize, String, String)], source: &str) -> Result<Option<
     }))
 }
 
+impl Dwell<'_> {
+    /// The reference attitude with its heading, which `purpose` ("the calibration", "navigation") needs;
+    /// an empty heading is an error naming the dwell.
+    pub fn attitude_with_heading(&self, source: &str, purpose: &str) -> Result<(DwellAttitude, f64), InputError> {
+        let attitude = self.attitude(source)?;
+        let heading_deg = attitude.heading_deg.ok_or_else(|| {
+            InputError::at(
+                source,
+                self.first_line(),
+                format!("dwell {}: heading is unknown (empty): {purpose} needs the reference heading", self.pos),
+            )
+        })?;
+        Ok((attitude, heading_deg))
+    }
+}
+
 fn parse_finite(cell: &str) -> Option<f64> {
     cell.parse::<f64>().ok().filter(|v| v.is_finite())
 }

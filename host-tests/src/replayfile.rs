@@ -4,15 +4,13 @@
 
 use sinscal::adis::{encode_burst, Burst, Model, BURST32_LEN, I16F16};
 use sinscal::align::{position_angles, DwellValue};
-use sinscal::earth::normal_gravity_mps2;
+use sinscal::dwell::Prefilter;
 use sinscal::replay::{
     decode_outcome, encode_outcome, read_header, run_replay, ReplayOutcome, MAGIC, MAX_OUTCOME_BYTES, VERSION,
 };
 use sinscal::sequence::SequenceFailure;
 
-use crate::calibrate::{
-    identify_coefficients, Calibration, Coefficient, GravitySource, Options, PositionResult, PrefilterKind,
-};
+use crate::calibrate::{calibration_dwells, prefilter_of, site_of, Calibration, Options, PositionResult};
 use crate::error::InputError;
 use crate::recording::{DwellAttitude, Recording};
 
@@ -22,13 +20,7 @@ pub const REPLAY_MODEL: Model = Model::Adis16505_2;
 /// Writes the replay file of a recording for the given calibration options.
 pub fn replay_file(rec: &Recording, options: &Options) -> Result<(Vec<u8>, Vec<DwellAttitude>), InputError> {
     let source = rec.source.as_str();
-    let dwells = rec.dwells();
-    if dwells.is_empty() {
-        return Err(InputError::file(source, "no dwell: every row has pos = 0"));
-    }
-    if dwells.len() > sinscal::solve::MAX_POSITIONS {
-        return Err(InputError::file(source, "more than 24 positions (the core's limit)"));
-    }
+    let dwells = calibration_dwells(rec)?;
     // The firmware path needs each dwell as one contiguous stretch of rows (one turntable stop).
     let mut seen = Vec::new();
     let mut previous = 0;
@@ -45,31 +37,21 @@ pub fn replay_file(rec: &Recording, options: &Options) -> Result<(Vec<u8>, Vec<D
         }
         previous = row.pos;
     }
-    let latitude_rad = (rec.header.latitude_deg as f32).to_radians();
-    let gravity = rec
-        .header
-        .gravity_mps2
-        .map_or_else(|| normal_gravity_mps2(latitude_rad, rec.header.height_m as f32), |g| g as f32);
-    let [a_gyro, a_accel] = match (options.prefilter, options.coefficient) {
-        (PrefilterKind::HmmKf, Coefficient::Identify) => {
-            identify_coefficients(&dwells[0].rows, source, dwells[0].first_line())?
-        }
-        (_, Coefficient::Fixed(a)) => [a, a],
-        (PrefilterKind::None, Coefficient::Identify) => [1.0, 1.0],
+    let (site, _) = site_of(&rec.header);
+    let (prefilter_code, [a_gyro, a_accel]) = match prefilter_of(options, &dwells[0], source)? {
+        Prefilter::None => (0u8, [1.0f32, 1.0]),
+        Prefilter::HmmKf { gyro, accel } => (1, [gyro.a, accel.a]),
     };
     let mut out = Vec::with_capacity(64 + rec.rows.len() * (1 + BURST32_LEN));
     out.extend_from_slice(&MAGIC);
     out.extend_from_slice(&VERSION.to_le_bytes());
     out.push(1); // ADIS16505-2
     out.push(0);
-    out.extend_from_slice(&latitude_rad.to_le_bytes());
-    out.extend_from_slice(&gravity.to_le_bytes());
+    out.extend_from_slice(&site.latitude_rad.to_le_bytes());
+    out.extend_from_slice(&site.gravity_mps2.to_le_bytes());
     out.extend_from_slice(&(dwells.len() as u16).to_le_bytes());
     out.extend_from_slice(&[0, 0]);
-    out.push(match options.prefilter {
-        PrefilterKind::None => 0,
-        PrefilterKind::HmmKf => 1,
-    });
+    out.push(prefilter_code);
     out.push(match options.dwell_value {
         DwellValue::Mean => 0,
         DwellValue::Settled => 1,
@@ -80,10 +62,7 @@ pub fn replay_file(rec: &Recording, options: &Options) -> Result<(Vec<u8>, Vec<D
     out.extend_from_slice(&a_accel.to_le_bytes());
     let mut attitudes = Vec::new();
     for d in &dwells {
-        let att = d.attitude(source)?;
-        let heading = att.heading_deg.ok_or_else(|| {
-            InputError::at(source, d.first_line(), format!("dwell {}: heading is unknown (empty): the calibration needs the reference heading of every position", d.pos))
-        })?;
+        let (att, heading) = d.attitude_with_heading(source, "the calibration")?;
         for v in [att.pitch_deg, att.roll_deg, heading] {
             out.extend_from_slice(&(v as f32).to_radians().to_le_bytes());
         }
@@ -169,11 +148,7 @@ pub fn calibration_from_outcome(
         source: source.to_string(),
         latitude_deg: rec.header.latitude_deg,
         site,
-        gravity_source: if rec.header.gravity_mps2.is_some() {
-            GravitySource::Header
-        } else {
-            GravitySource::NormalGravity
-        },
+        gravity_source: site_of(&rec.header).1,
         prefilter: outcome.header.settings.prefilter,
         options: *options,
         positions,
