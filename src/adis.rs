@@ -198,57 +198,126 @@ impl<E: core::fmt::Debug> ClassifiedError for AdisError<E> {
     }
 }
 
+/// The big-endian word at `index`. The two bytes are read as one `[u8; 2]` (one halfword load), not
+/// byte by byte.
 #[inline(always)]
 fn word(bytes: &[u8], index: usize) -> u16 {
-    u16::from_be_bytes([bytes[2 * index], bytes[2 * index + 1]])
+    u16::from_be_bytes(bytes[2 * index..2 * index + 2].try_into().unwrap_or([0; 2]))
+}
+
+/// The little-endian `u32` at `offset`, read as one `[u8; 4]` (one word load; the Cortex-M4 allows it
+/// unaligned). Byte-wise reads would cost four loads and three merges.
+#[inline(always)]
+fn le_u32(bytes: &[u8], offset: usize) -> u32 {
+    u32::from_le_bytes(bytes[offset..offset + 4].try_into().unwrap_or([0; 4]))
+}
+
+/// Two 16-bit lanes of byte-pair sums of a little-endian word: `b0 + b1` and `b2 + b3`.
+#[inline(always)]
+fn byte_pair_lanes(x: u32) -> u32 {
+    (x & 0x00FF_00FF) + ((x >> 8) & 0x00FF_00FF)
+}
+
+/// The byte sum from its two lanes and the bytes after the last whole word, modulo 2^16.
+#[inline(always)]
+fn fold_lanes(lanes: u32, tail: u32) -> u16 {
+    ((lanes & 0xFFFF) + (lanes >> 16) + tail) as u16
 }
 
 /// The 16-bit sum of bytes (the burst checksum).
 ///
-/// Computed four bytes at a time: `(x & 0x00FF00FF) + ((x >> 8) & 0x00FF00FF)` holds two 16-bit lanes of
-/// byte-pair sums; with at most 8 words per burst the lanes cannot overflow, and the two lanes added give
-/// the byte sum modulo 2^16 (a test compares it with the plain sum).
+/// Computed four bytes at a time: `(x & 0x00FF00FF) + ((x >> 8) & 0x00FF00FF)` holds two 16-bit lanes
+/// of byte-pair sums; with at most 8 words per burst the lanes cannot overflow, and the two lanes added
+/// give the byte sum modulo 2^16 (a test compares it with the plain sum).
 #[inline(always)]
 pub fn checksum(bytes: &[u8]) -> u16 {
     let mut lanes = 0u32;
-    let mut chunks = bytes.chunks_exact(4);
-    for c in &mut chunks {
-        let x = u32::from_le_bytes([c[0], c[1], c[2], c[3]]);
-        lanes = lanes.wrapping_add((x & 0x00FF_00FF) + ((x >> 8) & 0x00FF_00FF));
+    let words = bytes.len() / 4;
+    for k in 0..words {
+        lanes = lanes.wrapping_add(byte_pair_lanes(le_u32(bytes, 4 * k)));
     }
-    let tail = chunks.remainder().iter().fold(0u32, |s, &b| s + b as u32);
-    ((lanes & 0xFFFF) + (lanes >> 16) + tail) as u16
+    let tail = bytes[4 * words..].iter().fold(0u32, |s, &b| s + b as u32);
+    fold_lanes(lanes, tail)
+}
+
+/// [`checksum`] of the 30 bytes before the checksum word of a 32-bit burst, written out word by word
+/// (size optimisation keeps a loop rolled; this is the interrupt path).
+#[inline(always)]
+fn checksum32(f: &[u8; BURST32_LEN]) -> u16 {
+    let w = |offset: usize| byte_pair_lanes(le_u32(f, offset));
+    fold_lanes(w(0) + w(4) + w(8) + w(12) + w(16) + w(20) + w(24), f[28] as u32 + f[29] as u32)
+}
+
+/// [`checksum`] of the 18 bytes before the checksum word of a 16-bit burst, written out.
+#[inline(always)]
+fn checksum16(f: &[u8; BURST16_LEN]) -> u16 {
+    let w = |offset: usize| byte_pair_lanes(le_u32(f, offset));
+    fold_lanes(w(0) + w(4) + w(8) + w(12), f[16] as u32 + f[17] as u32)
 }
 
 /// Decodes a burst of `model.burst_len()` bytes (after the command word) and checks its checksum.
+///
+/// Straight-line code on fixed-size arrays: every index is a constant, so there are no bounds checks and
+/// no per-channel closure calls on the interrupt path.
 #[inline(always)]
 pub fn decode_burst<E>(model: Model, bytes: &[u8]) -> Result<Burst, AdisError<E>> {
-    let len = model.burst_len();
-    if bytes.len() < len {
-        return Err(AdisError::ShortBurst { len: bytes.len() });
+    if model.burst32() {
+        match bytes.first_chunk::<BURST32_LEN>() {
+            Some(frame) => decode_burst32(frame),
+            None => Err(AdisError::ShortBurst { len: bytes.len() }),
+        }
+    } else {
+        match bytes.first_chunk::<BURST16_LEN>() {
+            Some(frame) => decode_burst16(frame),
+            None => Err(AdisError::ShortBurst { len: bytes.len() }),
+        }
     }
-    let words = len / 2;
-    let received = word(bytes, words - 1);
-    let computed = checksum(&bytes[..len - 2]);
+}
+
+/// The checksum check shared by both burst formats: the last word must equal the byte sum of the others.
+#[inline(always)]
+fn check_sum<E>(computed: u16, received: u16) -> Result<(), AdisError<E>> {
     if computed != received {
         return Err(AdisError::Checksum { computed, received });
     }
-    let channel = |i: usize| -> I16F16 {
-        if model.burst32() {
-            let low = word(bytes, 1 + 2 * i);
-            let high = word(bytes, 2 + 2 * i);
-            I16F16::from_bits((((high as u32) << 16) | low as u32) as i32)
-        } else {
-            I16F16::from_num(word(bytes, 1 + i) as i16)
-        }
-    };
-    let after = if model.burst32() { 13 } else { 7 };
+    Ok(())
+}
+
+/// One 32-bit channel: the _LOW word, then the _OUT word, each big-endian. Read as one little-endian word
+/// `b0 | b1 << 8 | b2 << 16 | b3 << 24`, the value `(b2 b3) << 16 | (b0 b1)` is that word with the bytes of
+/// each half swapped (one REV16 on the Cortex-M4).
+#[inline(always)]
+fn channel32(frame: &[u8; BURST32_LEN], offset: usize) -> I16F16 {
+    let x = le_u32(frame, offset);
+    I16F16::from_bits((((x & 0x00FF_00FF) << 8) | ((x >> 8) & 0x00FF_00FF)) as i32)
+}
+
+/// Decodes the 32-bit burst (ADIS1650x): DIAG_STAT, six channels of two words, TEMP_OUT, DATA_CNTR,
+/// checksum.
+#[inline(always)]
+pub fn decode_burst32<E>(frame: &[u8; BURST32_LEN]) -> Result<Burst, AdisError<E>> {
+    check_sum(checksum32(frame), word(frame, 15))?;
+    let c = |i: usize| channel32(frame, 2 + 4 * i);
     Ok(Burst {
-        diag_stat: word(bytes, 0),
-        gyro_lsb: [channel(0), channel(1), channel(2)],
-        accel_lsb: [channel(3), channel(4), channel(5)],
-        temp_raw: word(bytes, after) as i16,
-        data_counter: word(bytes, after + 1),
+        diag_stat: word(frame, 0),
+        gyro_lsb: [c(0), c(1), c(2)],
+        accel_lsb: [c(3), c(4), c(5)],
+        temp_raw: word(frame, 13) as i16,
+        data_counter: word(frame, 14),
+    })
+}
+
+/// Decodes the 16-bit burst (ADIS1647x): DIAG_STAT, six 16-bit channels, TEMP_OUT, DATA_CNTR, checksum.
+#[inline(always)]
+pub fn decode_burst16<E>(frame: &[u8; BURST16_LEN]) -> Result<Burst, AdisError<E>> {
+    check_sum(checksum16(frame), word(frame, 9))?;
+    let c = |i: usize| I16F16::from_bits(((word(frame, 1 + i) as i16) as i32) << 16);
+    Ok(Burst {
+        diag_stat: word(frame, 0),
+        gyro_lsb: [c(0), c(1), c(2)],
+        accel_lsb: [c(3), c(4), c(5)],
+        temp_raw: word(frame, 7) as i16,
+        data_counter: word(frame, 8),
     })
 }
 
@@ -288,9 +357,11 @@ impl Burst {
         const TWO_POW_MINUS_16: f32 = 1.0 / 65536.0;
         let w = model.radps_per_lsb() * TWO_POW_MINUS_16;
         let a = model.accel_mps2_per_lsb() * TWO_POW_MINUS_16;
+        // Written out rather than mapped: size optimisation keeps a three-step loop rolled.
+        let (g, f) = (&self.gyro_lsb, &self.accel_lsb);
         ImuSample {
-            rate_b_radps: self.gyro_lsb.map(|v| v.to_bits() as f32 * w),
-            force_b_mps2: self.accel_lsb.map(|v| v.to_bits() as f32 * a),
+            rate_b_radps: [g[0].to_bits() as f32 * w, g[1].to_bits() as f32 * w, g[2].to_bits() as f32 * w],
+            force_b_mps2: [f[0].to_bits() as f32 * a, f[1].to_bits() as f32 * a, f[2].to_bits() as f32 * a],
         }
     }
 }
@@ -367,12 +438,13 @@ impl<SPI: SpiDevice> Adis<SPI> {
     }
 }
 
-impl<SPI: SpiDevice> ImuSource for Adis<SPI> {
-    type Error = AdisError<SPI::Error>;
-
-    /// Burst read, checksum, counter and status checks, conversion to SI.
-    fn read(&mut self) -> Result<ImuReading, Self::Error> {
-        let burst = self.read_burst()?;
+impl<SPI: SpiDevice> Adis<SPI> {
+    /// Everything after the bus transfer: checksum, decode, counter and status checks, conversion to SI.
+    /// [`ImuSource::read`] is one burst transaction followed by this; with a DMA transfer, call it on the
+    /// received bytes.
+    #[inline(always)]
+    pub fn decode_reading(&mut self, burst_bytes: &[u8]) -> Result<ImuReading, AdisError<SPI::Error>> {
+        let burst = decode_burst(self.model, burst_bytes)?;
         let missed = match self.last_counter {
             Some(last) if burst.data_counter == last => {
                 return Err(AdisError::StalledCounter { counter: last });
@@ -390,5 +462,42 @@ impl<SPI: SpiDevice> ImuSource for Adis<SPI> {
             missed,
             temperature_c: burst.temp_raw as f32 * TEMP_C_PER_LSB,
         })
+    }
+}
+
+impl<SPI: SpiDevice> ImuSource for Adis<SPI> {
+    type Error = AdisError<SPI::Error>;
+
+    /// Burst read, then [`Adis::decode_reading`].
+    fn read(&mut self) -> Result<ImuReading, Self::Error> {
+        let mut buf = [0u8; BURST32_LEN];
+        let len = self.model.burst_len();
+        self.spi
+            .transaction(&mut [Operation::Write(&BURST_COMMAND), Operation::Read(&mut buf[..len])])
+            .map_err(AdisError::Spi)?;
+        self.decode_reading(&buf[..len])
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// Frames whose bytes cover the whole range, so that every lane carries.
+    fn frames<const N: usize>() -> impl Iterator<Item = [u8; N]> {
+        (0u32..200).map(|seed| core::array::from_fn(|i| (seed.wrapping_mul(2_654_435_761) >> (i % 24)) as u8 ^ i as u8))
+    }
+
+    #[test]
+    fn written_out_checksums_equal_the_general_one() {
+        for f in frames::<BURST32_LEN>().chain([[0xFF; BURST32_LEN], [0; BURST32_LEN]]) {
+            let plain = f[..30].iter().map(|&b| b as u32).sum::<u32>() as u16;
+            assert_eq!(checksum32(&f), plain);
+            assert_eq!(checksum(&f[..30]), plain);
+        }
+        for f in frames::<BURST16_LEN>().chain([[0xFF; BURST16_LEN]]) {
+            let plain = f[..18].iter().map(|&b| b as u32).sum::<u32>() as u16;
+            assert_eq!(checksum16(&f), plain);
+        }
     }
 }

@@ -7,7 +7,7 @@
 
 use crate::accumulate::{BlockedSum, DwellStats, BLOCK_SAMPLES};
 use crate::linalg::Vec3;
-use crate::prefilter::{HmmKf, PrefilterError, PrefilterSettings};
+use crate::prefilter::{FixedGain, HmmKf, PrefilterError, PrefilterSettings};
 
 /// One IMU sample in the body frame.
 #[derive(Clone, Copy, Debug, Default, PartialEq)]
@@ -96,19 +96,34 @@ pub struct DwellSummary {
     pub settled_noise_gain: [f32; 2],
 }
 
+/// Whether all six values are finite, branch-free: `x - x` is +0 for every finite x and NaN for NaN and
+/// the infinities, so the sum of the six differences is 0 exactly when all are finite (unlike a sum of the
+/// values themselves, it cannot overflow).
+#[inline(always)]
+#[allow(clippy::eq_op, reason = "x - x is the finiteness test, not a mistake")]
+fn all_finite(z: &[f32; 6]) -> bool {
+    (z[0] - z[0]) + (z[1] - z[1]) + (z[2] - z[2]) + (z[3] - z[3]) + (z[4] - z[4]) + (z[5] - z[5]) == 0.0
+}
+
 /// The prefilter bank and statistics for the six channels of one dwell (gyro x, y, z, accel x, y, z).
 ///
 /// Per channel: the shift (the dwell's first raw sample, which is also the filter's first output), blocked
-/// sums of raw deviations and their squares, and of filtered deviations; the filter's last output.
+/// sums of raw deviations and their squares, and of filtered deviations; the filter's state. The filter
+/// constants are held once per sensor ([`FixedGain`]), the states channel by channel.
 #[derive(Clone, Debug)]
 pub struct DwellCollector {
-    filters: Option<[HmmKf; 6]>,
+    /// Gyro and accelerometer filter constants; `None` without prefilter.
+    gains: Option<[FixedGain; 2]>,
+    /// Filter states `[x_k, x_{k-1}]` and previous raw samples `z_{k-1}`, per channel.
+    state: [[f32; 2]; 6],
+    previous_raw: [f32; 6],
     count: u32,
     shift: [f32; 6],
     raw_sum: [BlockedSum; 6],
     raw_sum_sq: [BlockedSum; 6],
     filtered_sum: [BlockedSum; 6],
-    last: [f32; 6],
+    /// The last raw sample (without prefilter).
+    last_raw: [f32; 6],
     rejected: u32,
     noise_gain: [f32; 2],
 }
@@ -116,23 +131,25 @@ pub struct DwellCollector {
 impl DwellCollector {
     /// A collector with the given prefilter. The Riccati iteration runs here, once.
     pub fn new(prefilter: &Prefilter) -> Result<DwellCollector, PrefilterError> {
-        let (filters, noise_gain) = match prefilter {
+        let (gains, noise_gain) = match prefilter {
             Prefilter::None => (None, [1.0, 1.0]),
             Prefilter::HmmKf { gyro, accel } => {
                 let g = HmmKf::new(gyro)?;
                 let a = HmmKf::new(accel)?;
-                let gains = [g.impulse_response_sums().1, a.impulse_response_sums().1];
-                (Some([g, g, g, a, a, a]), gains)
+                let noise = [g.impulse_response_sums().1, a.impulse_response_sums().1];
+                (Some([g.fixed_gain(), a.fixed_gain()]), noise)
             }
         };
         Ok(DwellCollector {
-            filters,
+            gains,
+            state: [[0.0; 2]; 6],
+            previous_raw: [0.0; 6],
             count: 0,
             shift: [0.0; 6],
             raw_sum: [BlockedSum::new(); 6],
             raw_sum_sq: [BlockedSum::new(); 6],
             filtered_sum: [BlockedSum::new(); 6],
-            last: [0.0; 6],
+            last_raw: [0.0; 6],
             rejected: 0,
             noise_gain,
         })
@@ -158,38 +175,45 @@ impl DwellCollector {
         self.count
     }
 
+    /// One channel with its filter: raw statistics, one fixed-gain step, filtered sum.
+    #[inline(always)]
+    fn filtered_channel(&mut self, i: usize, x: f32, gain: &FixedGain) {
+        let d = x - self.shift[i];
+        self.raw_sum[i].add(d);
+        self.raw_sum_sq[i].add(d * d);
+        let y = gain.step(&mut self.state[i], &mut self.previous_raw[i], x);
+        self.filtered_sum[i].add(y - self.shift[i]);
+    }
+
     /// Feeds one sample. A sample with a non-finite value is counted and not used.
     #[inline]
     pub fn update(&mut self, sample: &ImuSample) -> Result<(), DwellError> {
         let r = sample.rate_b_radps;
         let f = sample.force_b_mps2;
         let z = [r[0], r[1], r[2], f[0], f[1], f[2]];
-        if !z.iter().all(|x| x.is_finite()) {
+        if !all_finite(&z) {
             self.rejected = self.rejected.saturating_add(1);
             return Err(DwellError::NotFinite);
         }
         if self.count == 0 {
             // The first sample: it is the shift, its deviations are zero, and it starts the filters.
             self.shift = z;
-            self.last = z;
-            if let Some(filters) = self.filters.as_mut() {
-                for (filter, &x) in filters.iter_mut().zip(z.iter()) {
-                    filter.start(x);
-                }
-            }
+            self.last_raw = z;
+            self.state = z.map(|x| [x, x]);
+            self.previous_raw = z;
             self.count = 1;
             return Ok(());
         }
-        match self.filters.as_mut() {
-            Some(filters) => {
-                for i in 0..6 {
-                    let d = z[i] - self.shift[i];
-                    self.raw_sum[i].add(d);
-                    self.raw_sum_sq[i].add(d * d);
-                    let y = filters[i].step_value(z[i]);
-                    self.filtered_sum[i].add(y - self.shift[i]);
-                    self.last[i] = y;
-                }
+        match self.gains {
+            Some([gyro, accel]) => {
+                // Written out channel by channel: constant indices are constant offsets, and the gains stay
+                // in registers (a loop, which size optimisation keeps rolled, recomputes addresses).
+                self.filtered_channel(0, z[0], &gyro);
+                self.filtered_channel(1, z[1], &gyro);
+                self.filtered_channel(2, z[2], &gyro);
+                self.filtered_channel(3, z[3], &accel);
+                self.filtered_channel(4, z[4], &accel);
+                self.filtered_channel(5, z[5], &accel);
             }
             None => {
                 for i in 0..6 {
@@ -197,7 +221,7 @@ impl DwellCollector {
                     self.raw_sum[i].add(d);
                     self.raw_sum_sq[i].add(d * d);
                 }
-                self.last = z;
+                self.last_raw = z;
             }
         }
         self.count += 1;
@@ -217,7 +241,8 @@ impl DwellCollector {
         if samples < MIN_DWELL_SAMPLES {
             return Err(DwellError::TooFewSamples { samples });
         }
-        let filtered = self.filters.is_some();
+        let filtered = self.gains.is_some();
+        let last = if filtered { self.state.map(|x| x[0]) } else { self.last_raw };
         let mean = |i: usize| {
             let sum = if filtered { self.filtered_sum[i].value() } else { self.raw_sum[i].value() };
             DwellStats::shifted_mean(samples, self.shift[i], sum).unwrap_or(self.shift[i])
@@ -233,8 +258,8 @@ impl DwellCollector {
             force_mean_b_mps2: [mean(3), mean(4), mean(5)],
             rate_sample_std_b_radps: [std(0), std(1), std(2)],
             force_sample_std_b_mps2: [std(3), std(4), std(5)],
-            rate_settled_b_radps: [self.last[0], self.last[1], self.last[2]],
-            force_settled_b_mps2: [self.last[3], self.last[4], self.last[5]],
+            rate_settled_b_radps: [last[0], last[1], last[2]],
+            force_settled_b_mps2: [last[3], last[4], last[5]],
             settled_noise_gain: self.noise_gain,
         })
     }
@@ -273,6 +298,22 @@ mod tests {
         let d = c.summary().unwrap();
         assert_eq!((d.samples, d.rejected), (20, 1));
         assert_eq!(d.force_mean_b_mps2, [0.0, 0.0, 9.8]);
+    }
+
+    #[test]
+    fn finiteness_test_catches_every_non_finite_value_and_no_finite_one() {
+        let finite = [0.0, -0.0, 1.0, -1.0, f32::MAX, f32::MIN, f32::MIN_POSITIVE, 1e-45];
+        for &x in &finite {
+            for i in 0..6 {
+                let mut z = [f32::MAX; 6];
+                z[i] = x;
+                assert!(all_finite(&z), "{x} at {i}");
+                for bad in [f32::NAN, f32::INFINITY, f32::NEG_INFINITY] {
+                    z[i] = bad;
+                    assert!(!all_finite(&z), "{bad} at {i}");
+                }
+            }
+        }
     }
 
     #[test]

@@ -190,6 +190,36 @@ pub fn steady_gain(settings: &PrefilterSettings) -> Result<SteadyGain, Prefilter
 /// Longest impulse response [`HmmKf::impulse_response_sums`] follows (it stops once the state is below 1e-9).
 pub const MAX_IMPULSE_SAMPLES: u32 = 1_000_000;
 
+/// The constants of a settled filter: `a` and the gain `K_off`. Shared by the channels of one sensor, so
+/// that a filter bank keeps them in registers and only the per-channel state in memory.
+#[derive(Clone, Copy, Debug, PartialEq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub struct FixedGain {
+    /// The HMM coefficient `a` of `F = [[a, 1-a], [1, 0]]`.
+    pub a: f32,
+    /// The settled gain `K_off`.
+    pub gain: Mat2,
+}
+
+impl FixedGain {
+    /// One step of the fixed-gain recursion on a channel's state `[x_k, x_{k-1}]` and previous raw sample
+    /// `z_{k-1}`; returns the new `x_k`. `a x0 + (1-a) x1` is written `x1 + a (x0 - x1)` so that a
+    /// constant state predicts exactly itself in floating point (zero innovation, bit-exact DC
+    /// pass-through). The one definition of the recursion: [`HmmKf`] and the dwell collector's bank both
+    /// call it.
+    #[inline(always)]
+    pub fn step(&self, state: &mut [f32; 2], previous_raw: &mut f32, raw: f32) -> f32 {
+        let [x0, x1] = *state;
+        let pred = [x1 + self.a * (x0 - x1), x0];
+        let innov = [raw - pred[0], *previous_raw - pred[1]];
+        let k = &self.gain;
+        let x = pred[0] + k[0][0] * innov[0] + k[0][1] * innov[1];
+        *state = [x, pred[1] + k[1][0] * innov[0] + k[1][1] * innov[1]];
+        *previous_raw = raw;
+        x
+    }
+}
+
 /// One channel's fixed-gain HMM/KF filter.
 #[derive(Clone, Copy, Debug, PartialEq)]
 #[cfg_attr(feature = "defmt", derive(defmt::Format))]
@@ -219,6 +249,11 @@ impl HmmKf {
     /// The gain `K_off` in use.
     pub fn gain(&self) -> Mat2 {
         self.gain
+    }
+
+    /// The filter's constants (`a` and `K_off`).
+    pub fn fixed_gain(&self) -> FixedGain {
+        FixedGain { a: self.a, gain: self.gain }
     }
 
     /// Forgets the state; the next sample starts the filter again.
@@ -259,17 +294,10 @@ impl HmmKf {
         self.state[0]
     }
 
-    /// The fixed-gain recursion. `a x0 + (1-a) x1` is written `x1 + a (x0 - x1)` so that a constant
-    /// state predicts exactly itself in floating point (zero innovation, bit-exact DC pass-through).
+    /// The fixed-gain recursion ([`FixedGain::step`]).
     #[inline(always)]
     fn step(&mut self, raw: f32) {
-        let [x0, x1] = self.state;
-        let pred = [x1 + self.a * (x0 - x1), x0];
-        let innov = [raw - pred[0], self.previous_raw - pred[1]];
-        let k = &self.gain;
-        self.state =
-            [pred[0] + k[0][0] * innov[0] + k[0][1] * innov[1], pred[1] + k[1][0] * innov[0] + k[1][1] * innov[1]];
-        self.previous_raw = raw;
+        FixedGain { a: self.a, gain: self.gain }.step(&mut self.state, &mut self.previous_raw, raw);
     }
 
     /// Response of the settled filter to raw white noise: returns `(sum h_k, sum h_k^2)` of its impulse

@@ -24,7 +24,7 @@ use crate::dwell::{Prefilter, MIN_DWELL_SAMPLES};
 use crate::earth::Site;
 use crate::frames::Attitude;
 use crate::prefilter::PrefilterSettings;
-use crate::sampling::{on_data_ready, QueueItem, SamplingStats, QUEUE_SLOTS};
+use crate::sampling::{on_data_ready, process_next, QueueItem, SamplingStats, QUEUE_SLOTS};
 use crate::sequence::{CalibrationSequence, Event, SequenceError, SequenceFailure, SequenceSettings};
 use crate::solve::MAX_POSITIONS;
 
@@ -85,11 +85,16 @@ impl ByteSource for &[u8] {
     }
 }
 
+/// A burst frame, word-aligned so that serving it is a word copy, as a DMA transfer would be.
+#[derive(Clone, Debug)]
+#[repr(align(4))]
+struct Frame([u8; BURST32_LEN]);
+
 /// A simulated ADIS device on the SPI bus that serves recorded burst frames and answers register reads.
 #[derive(Clone, Debug)]
 pub struct ReplayDevice {
     model: Model,
-    frame: [u8; BURST32_LEN],
+    frame: Frame,
     pending: Option<u8>,
     registers: [u16; 64],
 }
@@ -99,13 +104,13 @@ impl ReplayDevice {
     pub fn new(model: Model) -> ReplayDevice {
         let mut registers = [0u16; 64];
         registers[register_index(reg::PROD_ID)] = model.product_id();
-        ReplayDevice { model, frame: [0; BURST32_LEN], pending: None, registers }
+        ReplayDevice { model, frame: Frame([0; BURST32_LEN]), pending: None, registers }
     }
 
     /// Sets the burst the next burst read returns.
     pub fn load_frame(&mut self, bytes: &[u8]) {
         let n = self.model.burst_len().min(bytes.len());
-        self.frame[..n].copy_from_slice(&bytes[..n]);
+        self.frame.0[..n].copy_from_slice(&bytes[..n]);
     }
 
     /// A register's value (as last written).
@@ -128,8 +133,10 @@ impl SpiDevice for ReplayDevice {
         match operations {
             [Operation::Write(cmd), Operation::Read(buf)] if *cmd == BURST_COMMAND => {
                 let n = buf.len().min(self.model.burst_len());
-                buf[..n].copy_from_slice(&self.frame[..n]);
-                buf[n..].fill(0);
+                buf[..n].copy_from_slice(&self.frame.0[..n]);
+                if n < buf.len() {
+                    buf[n..].fill(0);
+                }
             }
             [Operation::Write([address, value])] if address & WRITE_FLAG != 0 => {
                 let index = register_index(*address);
@@ -299,9 +306,11 @@ pub fn run_replay<R: ByteSource>(
         // What the data-ready interrupt does.
         on_data_ready(&mut imu, &mut producer, &mut stats);
         // What the processing loop does.
-        while let Some(item) = consumer.dequeue() {
+        while let Some(event) = process_next(&mut consumer, |item| {
             let in_position = table as usize == sequence.position() + 1;
-            if let Some(event) = sequence.on_sample(in_position, item) {
+            sequence.on_sample(in_position, item)
+        }) {
+            if let Some(event) = event {
                 handle(event);
             }
         }

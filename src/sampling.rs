@@ -5,7 +5,7 @@
 //! (data counter gaps) are counted in [`SamplingStats`]. Faults travel through the queue too, in order,
 //! so the processing side knows which dwell they hit.
 
-use heapless::spsc::Producer;
+use heapless::spsc::{Consumer, Producer};
 
 use crate::imu::{ClassifiedError, ImuReading, ImuSource, ReadFault};
 
@@ -69,4 +69,15 @@ pub fn on_data_ready<S: ImuSource>(imu: &mut S, queue: &mut Producer<'_, QueueIt
     if queue.enqueue(item).is_err() {
         stats.queue_full += 1;
     }
+}
+
+/// Hands the oldest queued item to `f` by reference, then removes it: the item is read in place, never
+/// copied out of the queue (a copy of the 36-byte item costs more instructions than its checks). Returns
+/// `f`'s result, or `None` when the queue is empty.
+#[inline]
+pub fn process_next<R>(queue: &mut Consumer<'_, QueueItem>, f: impl FnOnce(&QueueItem) -> R) -> Option<R> {
+    let result = f(queue.peek()?);
+    // The value just processed; nothing reads it, so the compiler drops the copy.
+    let _ = queue.dequeue();
+    Some(result)
 }

@@ -19,7 +19,7 @@ use crate::calibration::{
 use crate::dwell::{DwellCollector, Prefilter, MIN_DWELL_SAMPLES};
 use crate::earth::Site;
 use crate::frames::Attitude;
-use crate::linalg::{cross, dot, Mat3};
+use crate::linalg::{dot, Mat3, Vec3};
 use crate::prefilter::PrefilterError;
 use crate::sampling::QueueItem;
 use crate::solve::MAX_POSITIONS;
@@ -204,8 +204,10 @@ pub struct CalibrationSequence {
     dwell_sample: u32,
     faults: u32,
     aborts: u32,
-    /// `sin^2` of the largest gravity angle, and the squared bounds of rest, computed once.
-    gravity_sin2_max: f32,
+    /// The announced up direction of the current position, body frame (third row of its `C_b^n`).
+    up_b: Vec3,
+    /// `cos^2` of the largest gravity angle, and the squared bounds of rest, computed once.
+    gravity_cos2_max: f32,
     rate2_max_radps2: f32,
     force2_bounds_mps2sq: (f32, f32),
     result: Option<CalibrationResult>,
@@ -222,7 +224,8 @@ impl CalibrationSequence {
             // Capacity checked above.
             let _ = schedule_c_b_n.push(a.c_b_n());
         }
-        let s = libm::sinf(settings.max_gravity_angle_rad);
+        let c = libm::cosf(settings.max_gravity_angle_rad);
+        let up_b = schedule_c_b_n[0].row(2);
         let (g, e) = (site.gravity_mps2, settings.max_force_error_mps2);
         Ok(CalibrationSequence {
             collector: DwellCollector::new(&settings.prefilter).map_err(SequenceError::Prefilter)?,
@@ -235,7 +238,8 @@ impl CalibrationSequence {
             dwell_sample: 0,
             faults: 0,
             aborts: 0,
-            gravity_sin2_max: s * s,
+            up_b,
+            gravity_cos2_max: c * c,
             rate2_max_radps2: settings.max_rate_radps * settings.max_rate_radps,
             force2_bounds_mps2sq: ((g - e) * (g - e), (g + e) * (g + e)),
             result: None,
@@ -315,7 +319,7 @@ impl CalibrationSequence {
     }
 
     /// One queue item, with the turntable's in-position signal at that sample.
-    pub fn on_sample(&mut self, in_position: bool, item: QueueItem) -> Option<Event> {
+    pub fn on_sample(&mut self, in_position: bool, item: &QueueItem) -> Option<Event> {
         match self.phase {
             Phase::Finished => None,
             Phase::WaitingForTableToLeave => {
@@ -360,13 +364,16 @@ impl CalibrationSequence {
     }
 
     fn start_dwell(&mut self) {
+        if let Some(c_b_n) = self.schedule_c_b_n.get(self.index) {
+            self.up_b = c_b_n.row(2);
+        }
         self.collector.reset();
         self.dwell_sample = 0;
         self.faults = 0;
         self.phase = Phase::Collecting;
     }
 
-    fn collect(&mut self, in_position: bool, item: QueueItem) -> Option<Event> {
+    fn collect(&mut self, in_position: bool, item: &QueueItem) -> Option<Event> {
         if !in_position {
             if self.dwell_sample >= self.settings.min_dwell_samples.max(MIN_DWELL_SAMPLES) {
                 return Some(self.complete(true));
@@ -387,11 +394,11 @@ impl CalibrationSequence {
         // The checks below let NaN through (every comparison with NaN is false); the collector refuses it.
         let f = reading.sample.force_b_mps2;
         let w = reading.sample.rate_b_radps;
-        let up_b = self.schedule_c_b_n[self.index].row(2);
         let f2 = dot(f, f);
-        let side = cross(f, up_b);
-        // |f x up|^2 > sin^2(max) |f|^2 |up|^2, with |up| = 1; and f must point up, not down.
-        if dot(side, side) > self.gravity_sin2_max * f2 || dot(f, up_b) <= 0.0 {
+        // The angle between f and the announced up direction (a unit vector) is within the bound when
+        // f.up > 0 and (f.up)^2 >= cos^2(max) |f|^2.
+        let along = dot(f, self.up_b);
+        if along <= 0.0 || along * along < self.gravity_cos2_max * f2 {
             return Some(self.abort(AbortReason::GravityContradictsPosition, true));
         }
         if dot(w, w) > self.rate2_max_radps2 {

@@ -4,7 +4,7 @@
 //! clock of mps2-an386, then advances once per 40 instructions, deterministically. The path measured is
 //! what the firmware does for every sample: the data-ready handler (burst read through the SPI device,
 //! checksum, decode, counter and status checks, conversion to SI, enqueue) and the processing loop
-//! (dequeue, the calibration sequence's checks, the HMM/KF bank and the dwell accumulators). The SPI
+//! (queue hand-over by reference, the calibration sequence's checks, the HMM/KF bank and the dwell accumulators). The SPI
 //! device is the replay device serving a fixed frame, so the bus itself costs nothing here; on hardware
 //! the burst's 32 bytes at 1 MHz add 256 us of SPI time, not instructions.
 //! The result is written as text to the file named by the first semihosting argument.
@@ -27,7 +27,7 @@ mod firmware {
     use sinscal::earth::Site;
     use sinscal::frames::Attitude;
     use sinscal::replay::{replay_sequence_settings, ReplayDevice};
-    use sinscal::sampling::{on_data_ready, QueueItem, SamplingStats, QUEUE_SLOTS};
+    use sinscal::sampling::{on_data_ready, process_next, QueueItem, SamplingStats, QUEUE_SLOTS};
     use sinscal::sequence::CalibrationSequence;
 
     /// Instructions per SysTick tick under -icount shift=0 with the 25 MHz core clock.
@@ -69,7 +69,7 @@ mod firmware {
             data_counter: 0,
         };
         let syst = unsafe { &*SYST::PTR };
-        let (mut isr, mut processing, mut dequeue) = (0u32, 0u32, 0u32);
+        let (mut isr, mut processing) = (0u32, 0u32);
         for k in 0..SAMPLES {
             // Prepare the next frame (the sensor's work, not timed).
             burst.data_counter = k as u16;
@@ -79,18 +79,22 @@ mod firmware {
             let t0 = syst.cvr.read();
             on_data_ready(&mut imu, &mut producer, &mut stats);
             let t1 = syst.cvr.read();
-            let item = consumer.dequeue();
-            let t1b = syst.cvr.read();
-            if let Some(item) = item {
-                let _ = sequence.on_sample(true, item);
-            }
+            let _ = process_next(&mut consumer, |item| sequence.on_sample(true, item));
             let t2 = syst.cvr.read();
             isr += ticks_between(t0, t1);
             processing += ticks_between(t1, t2);
-            dequeue += ticks_between(t1, t1b);
+        }
+        // The queue hand-over on its own: one item enqueued (not timed), then taken by reference.
+        let mut handover = 0u32;
+        for _ in 0..SAMPLES {
+            let _ = producer.enqueue(Ok(sinscal::imu::ImuReading::default()));
+            let t0 = syst.cvr.read();
+            let _ = process_next(&mut consumer, |item| core::hint::black_box(item).is_ok());
+            let t1 = syst.cvr.read();
+            handover += ticks_between(t0, t1);
         }
         let per = |ticks: u32| ticks * INSTRUCTIONS_PER_TICK / SAMPLES;
-        DEQUEUE.store(per(dequeue), core::sync::atomic::Ordering::Relaxed);
+        HANDOVER.store(per(handover), core::sync::atomic::Ordering::Relaxed);
         (per(isr), per(processing), stats.readings)
     }
 
@@ -135,60 +139,65 @@ mod firmware {
         encode_burst(model, &burst, &mut frame);
         imu.spi_mut().load_frame(&frame);
         let isr = stack_used(&mut || on_data_ready(&mut imu, &mut producer, &mut stats));
-        let item = consumer.dequeue();
         let processing = stack_used(&mut || {
-            if let Some(item) = item {
-                let _ = sequence.on_sample(true, item);
-            }
+            let _ = process_next(&mut consumer, |item| sequence.on_sample(true, item));
         });
         (isr, processing)
     }
 
-    static DEQUEUE: core::sync::atomic::AtomicU32 = core::sync::atomic::AtomicU32::new(0);
+    static HANDOVER: core::sync::atomic::AtomicU32 = core::sync::atomic::AtomicU32::new(0);
 
-    /// The parts on their own: burst transaction, decode + conversion, collector update.
+    /// The parts on their own: the bus transfer (replay device), the driver's decode (checksum, decode,
+    /// counter and status checks, conversion to SI: everything after the bus), and the collector update
+    /// (prefilter bank and accumulators) without and with the HMM/KF.
     fn parts() -> (u32, u32, u32, u32) {
         use embedded_hal::spi::{Operation, SpiDevice};
         let model = Model::Adis16505_2;
-        let mut dev = ReplayDevice::new(model);
+        let mut imu = Adis::new(ReplayDevice::new(model), model);
+        let _ = imu.init();
         let mut frame = [0u8; BURST32_LEN];
-        let burst = Burst {
+        let mut burst = Burst {
             diag_stat: 0,
             gyro_lsb: [I16F16::from_bits(1000); 3],
             accel_lsb: [I16F16::from_bits(263_000_000), I16F16::from_bits(1000), I16F16::from_bits(-1000)],
             temp_raw: 250,
             data_counter: 1,
         };
-        encode_burst(model, &burst, &mut frame);
-        dev.load_frame(&frame);
         let syst = unsafe { &*SYST::PTR };
-        let mut buf = [0u8; BURST32_LEN];
-        let (mut t_spi, mut t_decode, mut t_collect_none, mut t_collect_kf) = (0, 0, 0, 0);
+        let (mut t_bus, mut t_decode, mut t_collect_none, mut t_collect_kf) = (0, 0, 0, 0);
         let mut none =
             sinscal::dwell::DwellCollector::new(&Prefilter::None).unwrap_or_else(|_| semihosting::process::exit(3));
         let mut kf =
             sinscal::dwell::DwellCollector::new(&Prefilter::paper()).unwrap_or_else(|_| semihosting::process::exit(3));
         for k in 0..SAMPLES {
+            // A new frame each sample (the counter advances), prepared outside the timed spans.
+            burst.data_counter = k as u16;
+            burst.gyro_lsb[0] = I16F16::from_bits(1000 ^ (k as i32 & 7));
+            encode_burst(model, &burst, &mut frame);
+            imu.spi_mut().load_frame(&frame);
+            let mut buf = [0u8; BURST32_LEN];
             let t0 = syst.cvr.read();
-            let _ = dev.transaction(&mut [Operation::Write(&sinscal::adis::BURST_COMMAND), Operation::Read(&mut buf)]);
+            let bus = core::hint::black_box(imu.spi_mut())
+                .transaction(&mut [Operation::Write(&sinscal::adis::BURST_COMMAND), Operation::Read(&mut buf)]);
             let t1 = syst.cvr.read();
-            let decoded = sinscal::adis::decode_burst::<()>(model, core::hint::black_box(&buf));
-            let sample = decoded.map(|b| b.to_sample(model)).unwrap_or_default();
-            let sample = core::hint::black_box(sample);
+            let reading = imu.decode_reading(core::hint::black_box(&buf));
             let t2 = syst.cvr.read();
-            let mut s = sample;
-            s.force_b_mps2[0] += (k & 3) as f32 * 1e-3;
-            let _ = core::hint::black_box(&mut none).update(&s);
+            let sample = match (bus, reading) {
+                (Ok(()), Ok(r)) => core::hint::black_box(r.sample),
+                _ => semihosting::process::exit(4),
+            };
             let t3 = syst.cvr.read();
-            let _ = core::hint::black_box(&mut kf).update(&s);
+            let _ = core::hint::black_box(&mut none).update(&sample);
             let t4 = syst.cvr.read();
-            t_spi += ticks_between(t0, t1);
+            let _ = core::hint::black_box(&mut kf).update(&sample);
+            let t5 = syst.cvr.read();
+            t_bus += ticks_between(t0, t1);
             t_decode += ticks_between(t1, t2);
-            t_collect_none += ticks_between(t2, t3);
-            t_collect_kf += ticks_between(t3, t4);
+            t_collect_none += ticks_between(t3, t4);
+            t_collect_kf += ticks_between(t4, t5);
         }
         let per = |ticks: u32| ticks * INSTRUCTIONS_PER_TICK / SAMPLES;
-        (per(t_spi), per(t_decode), per(t_collect_none), per(t_collect_kf))
+        (per(t_bus), per(t_decode), per(t_collect_none), per(t_collect_kf))
     }
 
     #[entry]
@@ -205,15 +214,15 @@ mod firmware {
         let overhead = ticks_between(t0, t1) * INSTRUCTIONS_PER_TICK;
         let (isr_none, proc_none, n_none) = measure(Prefilter::None);
         let (isr_kf, proc_kf, n_kf) = measure(Prefilter::paper());
-        let (spi, decode, collect_none, collect_kf) = parts();
+        let (bus, decode, collect_none, collect_kf) = parts();
         let (stack_isr, stack_processing) = stack_depths();
         let mut text: heapless::String<768> = heapless::String::new();
-        let _ = writeln!(text, "part_dequeue {}", DEQUEUE.load(core::sync::atomic::Ordering::Relaxed));
+        let _ = writeln!(text, "part_queue_handover {}", HANDOVER.load(core::sync::atomic::Ordering::Relaxed));
         let _ = write!(
             text,
             "stack_bytes_data_ready_handler {stack_isr}\nstack_bytes_processing_step {stack_processing}\n"
         );
-        let _ = write!(text, "part_spi_transaction {spi}\npart_decode_and_convert {decode}\npart_collector_none {collect_none}\npart_collector_hmmkf {collect_kf}\n");
+        let _ = write!(text, "part_bus_transfer_replay {bus}\npart_driver_decode {decode}\npart_collector_none {collect_none}\npart_collector_hmmkf {collect_kf}\n");
         let _ = write!(
             text,
             "samples {SAMPLES} {n_none} {n_kf}\ntimer_overhead_instructions {overhead}\n\

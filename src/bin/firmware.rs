@@ -26,7 +26,7 @@ mod firmware {
     use sinscal::adis::{Adis, Model};
     use sinscal::earth::Site;
     use sinscal::frames::Attitude;
-    use sinscal::sampling::{on_data_ready, QueueItem, SamplingStats, QUEUE_SLOTS};
+    use sinscal::sampling::{on_data_ready, process_next, QueueItem, SamplingStats, QUEUE_SLOTS};
     use sinscal::sequence::{CalibrationSequence, Event, SequenceSettings};
     use sinscal::solve::TABLE1_POSITIONS_DEG;
 
@@ -202,9 +202,11 @@ mod firmware {
         write(TIMER0 + TIMER_CTRL, 0b1001);
         unsafe { cortex_m::peripheral::NVIC::unmask(Irq(TIMER0_IRQ as u16)) };
         loop {
-            while let Some(item) = consumer.dequeue() {
+            while let Some(event) = process_next(&mut consumer, |item| {
                 let in_position = read(GPIO0 + GPIO_DATA) & PIN_IN_POSITION != 0;
-                if let Some(event) = sequence.on_sample(in_position, item) {
+                sequence.on_sample(in_position, item)
+            }) {
+                if let Some(event) = event {
                     log_event(&event, &sequence);
                 }
             }
