@@ -5,12 +5,15 @@
 
 pub mod calibrate;
 pub mod error;
+pub mod import;
 pub mod montecarlo;
 pub mod navcheck;
 pub mod navigate;
+pub mod noise;
 pub mod output;
 pub mod plot;
 pub mod qemu;
 pub mod recording;
 pub mod replayfile;
+pub mod simulate;
 pub mod synth;

@@ -17,6 +17,7 @@ use sinscal_host::plot::navigation_plot;
 use sinscal_host::qemu::calibrate_on_qemu;
 use sinscal_host::recording::Recording;
 use sinscal_host::replayfile::calibrate_on_host;
+use sinscal_host::simulate::{simulate, ScenarioFile};
 use sinscal_host::synth::{Scenario, DEG_PER_HOUR, MICRO_G};
 
 #[derive(Parser)]
@@ -93,6 +94,17 @@ enum Command {
         #[arg(long, default_value_t = 1)]
         seed: u64,
     },
+    /// SIMULATION of a turntable session from a scenario file (TOML; every effect of SPEC.md section 6).
+    Simulate {
+        /// Scenario file (see README, "Simulation"; examples in host-tests/scenarios/).
+        scenario: PathBuf,
+        /// Noise seed: the same seed gives the same recording.
+        #[arg(long, default_value_t = 1)]
+        seed: u64,
+        /// Output recording.
+        #[arg(long)]
+        out: PathBuf,
+    },
     /// Write the built-in example and calibrate it, showing the truth beside the estimates.
     Demo {
         /// Where to write the example recording.
@@ -129,6 +141,8 @@ enum Command {
         #[arg(long)]
         plot: Option<PathBuf>,
     },
+    /// Convert a measured data set (PSINS .imu, imucal Ferraris session, imu_tk counts) into a recording.
+    Import(sinscal_host::import::ImportArgs),
     /// SIMULATION: Monte Carlo of the estimators against the Cramer-Rao bound (Table 1, white noise).
     Montecarlo {
         /// Number of runs.
@@ -224,6 +238,22 @@ fn run(command: Command) -> anyhow::Result<()> {
             );
             Ok(())
         }
+        Command::Simulate { scenario, seed, out } => {
+            let file = ScenarioFile::read(&scenario)?;
+            let rec = simulate(&file, seed, &scenario.display().to_string());
+            rec.write(&out)?;
+            let s = &file.schedule;
+            println!(
+                "wrote {} ({} rows, {:.1} s at {} Hz, {} positions; SIMULATION of {}, seed {seed})",
+                out.display(),
+                rec.rows.len(),
+                rec.rows.len() as f64 / s.rate_hz,
+                s.rate_hz,
+                s.positions_deg.len(),
+                scenario.display()
+            );
+            Ok(())
+        }
         Command::Demo { out, json } => demo(&out, json.as_deref()),
         Command::Navigate { recording, calibration, compare, hours, position, seed, json, plot } => {
             let rec = Recording::read(&recording)?;
@@ -257,6 +287,13 @@ fn run(command: Command) -> anyhow::Result<()> {
             if let Some(path) = json {
                 write_json(&path, &report)?;
             }
+            Ok(())
+        }
+        Command::Import(args) => {
+            if let Err(usage) = args.validate() {
+                usage.exit();
+            }
+            print!("{}", sinscal_host::import::run(&args)?);
             Ok(())
         }
         Command::Montecarlo { runs, seed, json, passes } => {

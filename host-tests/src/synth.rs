@@ -19,7 +19,8 @@ pub const MICRO_G: f64 = 9.80665e-6;
 /// A 3x3 matrix, row-major, f64.
 pub type M3 = [[f64; 3]; 3];
 
-fn mul(a: &M3, b: &M3) -> M3 {
+/// `a * b`.
+pub fn mul(a: &M3, b: &M3) -> M3 {
     let mut c = [[0.0; 3]; 3];
     for i in 0..3 {
         for j in 0..3 {

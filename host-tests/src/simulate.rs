@@ -1,0 +1,620 @@
+//! SIMULATION of a turntable session from a scenario file (TOML): `sinscal simulate SCENARIO --seed N
+//! --out RECORDING`. Every effect of the catalogue of SPEC.md section 6 can be switched on.
+//!
+//! The model (SPEC.md section 6, row vectors, per sensor):
+//!
+//! ```text
+//! w_meas = (I + S_g + M_g) w + G f + b_g + b_g(t) + n_g
+//! f_meas = (I + S_a + M_a) f       + b_a + b_a(t) + n_a
+//! ```
+//!
+//! with the time-varying bias `b(t)`: drift `d t`, plus warm-up `A exp(-t/tau)`, plus temperature
+//! `k (T(t) - T_ref)`, plus vibration `A sin(2 pi f t + phase)`, plus Gauss-Markov `x(t)`, plus rate random
+//! walk; `n` is white noise; then the output is quantised.
+//!
+//! **Discretisation.** Every sample is the *average over its interval* `[t_k, t_k + dt)`, as an integrating
+//! IMU delivers it, and each noise is discretised so that its Allan deviation is right at any sample rate:
+//! - white noise of density `N` (rad/s/sqrt(Hz) = rad/sqrt(s); m/s/sqrt(s) for accelerometers): the
+//!   interval average has standard deviation `N / sqrt(dt)`, so `ADEV(tau) = N / sqrt(tau)`;
+//! - rate random walk `K` (rad/s/sqrt(s)): the walk `b` moves by `K sqrt(dt) xi1` over an interval, and the
+//!   average over the interval is `b_k + K sqrt(dt) (xi1 / 2 + xi2 / sqrt(12))` with `xi2` independent:
+//!   the exact interval average of Brownian motion, so `ADEV(tau) = K sqrt(tau / 3)` at every tau = m dt;
+//! - Gauss-Markov of standard deviation `sigma` and correlation time `T`: the exact AR(1) transition
+//!   `x_{k+1} = e^{-dt/T} x_k + sigma sqrt(1 - e^{-2 dt/T}) xi` (point values; for `T >> dt` the interval
+//!   average differs by O(dt/T));
+//! - vibration: the exact interval average of the sinusoid, so a vibration above the Nyquist frequency
+//!   aliases as it would in a real sensor;
+//! - quantisation with output step `q`: the *integrated* output is quantised, carrying the remainder from
+//!   sample to sample (pulse output, as a ring-laser gyro or a counter delivers it); every output is a
+//!   multiple of `q` and no increment is lost, giving the quantisation noise `ADEV(tau) = sqrt(3) Q / tau`
+//!   with `Q = q dt / sqrt(12)` in the angle domain.
+//!
+//! Peers (gnss-ins-sim, the PSINS toolbox's error simulation) also draw white noise per sample from the
+//! density and the sample rate; the interval average of the random walk and the quantisation of the
+//! integrated output are what this simulator adds. They were not run side by side here.
+//!
+//! **Moves.** Between dwells the table turns from one attitude to the next at constant angle rates of its
+//! pitch, roll and heading axes (`move_s`), then stays still for `settle_s`; those rows have `pos = 0`. The
+//! body rate of each interval is the rotation vector of its attitude change, divided by dt.
+
+use std::path::Path;
+
+use rand::SeedableRng;
+use rand_chacha::ChaCha8Rng;
+use rand_distr::{Distribution, StandardNormal};
+use serde::Deserialize;
+
+use crate::error::InputError;
+use crate::recording::{Header, Recording, Row, SimulationTruth};
+use crate::synth::{c_b_n, mul, mul_t_vec, rotation, EARTH_RATE_RADPS, M3, TABLE1_DEG};
+
+/// A scenario file.
+#[derive(Clone, Debug, Default, Deserialize, PartialEq)]
+#[serde(deny_unknown_fields)]
+pub struct ScenarioFile {
+    /// Where the table stands.
+    pub site: SiteSpec,
+    /// The turntable schedule and its errors.
+    #[serde(default)]
+    pub schedule: ScheduleSpec,
+    /// Gyro errors.
+    #[serde(default)]
+    pub gyro: GyroSpec,
+    /// Accelerometer errors.
+    #[serde(default)]
+    pub accel: AccelSpec,
+    /// Sensor temperature profile (omitted: no temperature column, no temperature effect).
+    pub temperature: Option<TemperatureSpec>,
+}
+
+/// The site.
+#[derive(Clone, Debug, Default, Deserialize, PartialEq)]
+#[serde(deny_unknown_fields)]
+pub struct SiteSpec {
+    /// Geodetic latitude, degrees north.
+    pub latitude_deg: f64,
+    /// Height above the ellipsoid, m.
+    #[serde(default)]
+    pub height_m: f64,
+    /// Local gravity, m/s^2; omitted: WGS-84 normal gravity at the latitude and height.
+    pub gravity_mps2: Option<f64>,
+}
+
+/// The schedule: positions, times, and the table's own errors.
+#[derive(Clone, Debug, Deserialize, PartialEq)]
+#[serde(deny_unknown_fields, default)]
+pub struct ScheduleSpec {
+    /// Output rate, Hz.
+    pub rate_hz: f64,
+    /// Dwell length, s.
+    pub dwell_s: f64,
+    /// Table motion from one position to the next, s.
+    pub move_s: f64,
+    /// Stillness after a move (and before the first dwell) that is not part of a dwell, s.
+    pub settle_s: f64,
+    /// Positions (pitch, roll, heading), degrees; default the paper's Table 1.
+    pub positions_deg: Vec<[f64; 3]>,
+    /// Constant error of the table's reference, `phi0` (e, n, u), rad: the reported attitude is the true one
+    /// seen through `C_ref = (I + [phi0 x]) C_true` to first order.
+    pub reference_offset_enu_rad: [f64; 3],
+    /// Attitude errors of single positions (in addition to the constant offset).
+    pub position_error: Vec<PositionError>,
+}
+
+impl Default for ScheduleSpec {
+    fn default() -> Self {
+        ScheduleSpec {
+            rate_hz: 100.0,
+            dwell_s: 60.0,
+            move_s: 5.0,
+            settle_s: 1.0,
+            positions_deg: TABLE1_DEG.to_vec(),
+            reference_offset_enu_rad: [0.0; 3],
+            position_error: Vec::new(),
+        }
+    }
+}
+
+/// The table's attitude error at one position.
+#[derive(Clone, Debug, Deserialize, PartialEq)]
+#[serde(deny_unknown_fields)]
+pub struct PositionError {
+    /// Position label (1-based).
+    pub pos: u32,
+    /// Error (e, n, u), rad, same sense as the reference offset.
+    pub enu_rad: [f64; 3],
+}
+
+/// A first-order Gauss-Markov process per axis.
+#[derive(Clone, Debug, Deserialize, PartialEq)]
+#[serde(deny_unknown_fields)]
+pub struct GaussMarkovSpec {
+    /// Standard deviation per axis (rad/s for gyros, m/s^2 for accelerometers).
+    #[serde(alias = "sigma_radps", alias = "sigma_mps2")]
+    pub sigma: [f64; 3],
+    /// Correlation time, s.
+    pub tau_s: f64,
+}
+
+/// A sinusoid per axis (vibration or sway).
+#[derive(Clone, Debug, Deserialize, PartialEq)]
+#[serde(deny_unknown_fields)]
+pub struct VibrationSpec {
+    /// Amplitude per axis (rad/s for gyros, m/s^2 for accelerometers).
+    #[serde(alias = "amplitude_radps", alias = "amplitude_mps2")]
+    pub amplitude: [f64; 3],
+    /// Frequency, Hz.
+    pub frequency_hz: f64,
+}
+
+/// An exponential warm-up `A exp(-t / tau)` per axis.
+#[derive(Clone, Debug, Deserialize, PartialEq)]
+#[serde(deny_unknown_fields)]
+pub struct WarmupSpec {
+    /// Amplitude per axis at t = 0 (rad/s for gyros, m/s^2 for accelerometers).
+    #[serde(alias = "amplitude_radps", alias = "amplitude_mps2")]
+    pub amplitude: [f64; 3],
+    /// Time constant, s.
+    pub tau_s: f64,
+}
+
+/// Gyro errors (rad, s).
+#[derive(Clone, Debug, Default, Deserialize, PartialEq)]
+#[serde(deny_unknown_fields, default)]
+pub struct GyroSpec {
+    /// Constant bias, body frame, rad/s.
+    pub bias_radps: [f64; 3],
+    /// Relative scale-factor errors (diagonal of S_g), 1.
+    pub scale_factor: [f64; 3],
+    /// Misalignment M_g (row i, column j: sensitivity of axis i to rate about j), 1; diagonal must be 0.
+    pub misalignment: M3,
+    /// g-sensitivity G (row i, column j: rate error of axis i per specific force along j), (rad/s)/(m/s^2).
+    pub g_sensitivity_radps_per_mps2: M3,
+    /// Angle random walk (white rate noise density), rad/s/sqrt(Hz) = rad/sqrt(s).
+    pub angle_random_walk_rad_per_sqrt_s: f64,
+    /// Rate random walk, rad/s/sqrt(s).
+    pub rate_random_walk_radps_per_sqrt_s: f64,
+    /// Bias instability as a Gauss-Markov process (`sigma_radps`, `tau_s`).
+    pub bias_instability: Option<GaussMarkovSpec>,
+    /// Output step, rad/s (0 = not quantised).
+    pub quantization_radps: [f64; 3],
+    /// Vibration or sway seen by the gyros (`amplitude_radps`, `frequency_hz`).
+    pub vibration: Option<VibrationSpec>,
+    /// Linear bias drift, rad/s per s.
+    pub drift_radps_per_s: [f64; 3],
+    /// Warm-up transient (`amplitude_radps`, `tau_s`).
+    pub warmup: Option<WarmupSpec>,
+    /// Bias per kelvin of sensor temperature above the reference, (rad/s)/K.
+    pub temperature_coefficient_radps_per_k: [f64; 3],
+}
+
+/// Accelerometer errors (m, s).
+#[derive(Clone, Debug, Default, Deserialize, PartialEq)]
+#[serde(deny_unknown_fields, default)]
+pub struct AccelSpec {
+    /// Constant bias, body frame, m/s^2.
+    pub bias_mps2: [f64; 3],
+    /// Relative scale-factor errors (diagonal of S_a), 1.
+    pub scale_factor: [f64; 3],
+    /// Misalignment M_a (row i, column j: sensitivity of axis i to force along j), 1; diagonal must be 0.
+    pub misalignment: M3,
+    /// Velocity random walk (white force noise density), m/s^2/sqrt(Hz) = m/s/sqrt(s).
+    pub velocity_random_walk_mps_per_sqrt_s: f64,
+    /// Acceleration random walk, m/s^2/sqrt(s).
+    pub acceleration_random_walk_mps2_per_sqrt_s: f64,
+    /// Bias instability as a Gauss-Markov process (`sigma_mps2`, `tau_s`).
+    pub bias_instability: Option<GaussMarkovSpec>,
+    /// Output step, m/s^2 (0 = not quantised).
+    pub quantization_mps2: [f64; 3],
+    /// Vibration or sway seen by the accelerometers (`amplitude_mps2`, `frequency_hz`).
+    pub vibration: Option<VibrationSpec>,
+    /// Linear bias drift, m/s^2 per s.
+    pub drift_mps2_per_s: [f64; 3],
+    /// Warm-up transient (`amplitude_mps2`, `tau_s`).
+    pub warmup: Option<WarmupSpec>,
+    /// Bias per kelvin of sensor temperature above the reference, (m/s^2)/K.
+    pub temperature_coefficient_mps2_per_k: [f64; 3],
+}
+
+/// Sensor temperature `T(t) = end + (start - end) exp(-t / tau)` (tau = 0: constant `start`).
+#[derive(Clone, Debug, Deserialize, PartialEq)]
+#[serde(deny_unknown_fields)]
+pub struct TemperatureSpec {
+    /// Temperature at t = 0, deg C.
+    pub start_c: f64,
+    /// Temperature approached, deg C.
+    pub end_c: f64,
+    /// Time constant, s.
+    #[serde(default)]
+    pub tau_s: f64,
+    /// Temperature at which the constant biases hold, deg C.
+    pub reference_c: f64,
+}
+
+impl TemperatureSpec {
+    /// Temperature at `t_s`, deg C.
+    pub fn at(&self, t_s: f64) -> f64 {
+        if self.tau_s > 0.0 {
+            self.end_c + (self.start_c - self.end_c) * (-t_s / self.tau_s).exp()
+        } else {
+            self.start_c
+        }
+    }
+}
+
+/// The error model of one sensor triad in SI, whatever the sensor.
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct TriadModel {
+    /// Constant bias.
+    pub bias: [f64; 3],
+    /// `I + S + M`.
+    pub gain: M3,
+    /// Cross-coupling to the other sensor's true quantity (the gyros' g-sensitivity; zero for accels).
+    pub cross: M3,
+    /// White noise density, unit * sqrt(s).
+    pub white_density: f64,
+    /// Random walk of the bias, unit / sqrt(s).
+    pub random_walk: f64,
+    /// Gauss-Markov sigma per axis and correlation time, s.
+    pub gauss_markov: Option<([f64; 3], f64)>,
+    /// Output step per axis (0 = off).
+    pub quantization: [f64; 3],
+    /// Vibration amplitude per axis and frequency, Hz.
+    pub vibration: Option<([f64; 3], f64)>,
+    /// Drift per second.
+    pub drift_per_s: [f64; 3],
+    /// Warm-up amplitude per axis and time constant, s.
+    pub warmup: Option<([f64; 3], f64)>,
+    /// Bias per kelvin.
+    pub temperature_coefficient_per_k: [f64; 3],
+}
+
+fn identity_plus(scale: [f64; 3], misalignment: &M3) -> M3 {
+    let mut g = *misalignment;
+    for i in 0..3 {
+        g[i][i] = 1.0 + scale[i];
+    }
+    g
+}
+
+fn check_offdiagonal(m: &M3, what: &str) -> Result<(), String> {
+    if (0..3).any(|i| m[i][i] != 0.0) {
+        return Err(format!("{what}: the diagonal must be 0 (scale factors go in scale_factor)"));
+    }
+    Ok(())
+}
+
+impl ScenarioFile {
+    /// Reads and checks a scenario file.
+    pub fn read(path: &Path) -> Result<ScenarioFile, InputError> {
+        let text = std::fs::read_to_string(path).map_err(|e| InputError::io(path, e))?;
+        ScenarioFile::parse(&text, &path.display().to_string())
+    }
+
+    /// Parses and checks the text of a scenario; `source` names it in errors.
+    pub fn parse(text: &str, source: &str) -> Result<ScenarioFile, InputError> {
+        let scenario: ScenarioFile = toml::from_str(text).map_err(|e| {
+            let line = e.span().map(|s| text[..s.start.min(text.len())].matches('\n').count() + 1);
+            let message = e.message().to_string();
+            match line {
+                Some(line) => InputError::at(source, line, message),
+                None => InputError::file(source, message),
+            }
+        })?;
+        scenario.check().map_err(|reason| InputError::file(source, reason))?;
+        Ok(scenario)
+    }
+
+    fn check(&self) -> Result<(), String> {
+        let s = &self.schedule;
+        if self.site.latitude_deg.is_nan() || self.site.latitude_deg.abs() > 90.0 {
+            return Err(format!("site.latitude_deg {} is not in [-90, 90]", self.site.latitude_deg));
+        }
+        if !s.rate_hz.is_finite() || s.rate_hz <= 0.0 {
+            return Err(format!("schedule.rate_hz {} must be positive", s.rate_hz));
+        }
+        if s.dwell_s.is_nan() || s.dwell_s * s.rate_hz < 10.0 {
+            return Err(format!("schedule.dwell_s {} s gives fewer than 10 samples", s.dwell_s));
+        }
+        if s.move_s.is_nan() || s.settle_s.is_nan() || s.move_s < 0.0 || s.settle_s < 0.0 {
+            return Err("schedule.move_s and settle_s must not be negative".into());
+        }
+        if s.positions_deg.is_empty() {
+            return Err("schedule.positions_deg is empty".into());
+        }
+        for e in &s.position_error {
+            if e.pos == 0 || e.pos as usize > s.positions_deg.len() {
+                return Err(format!("schedule.position_error: pos {} is not a position of the schedule", e.pos));
+            }
+        }
+        check_offdiagonal(&self.gyro.misalignment, "gyro.misalignment")?;
+        check_offdiagonal(&self.accel.misalignment, "accel.misalignment")?;
+        let taus = [
+            self.gyro.bias_instability.as_ref().map(|g| g.tau_s),
+            self.accel.bias_instability.as_ref().map(|g| g.tau_s),
+            self.gyro.warmup.as_ref().map(|w| w.tau_s),
+            self.accel.warmup.as_ref().map(|w| w.tau_s),
+        ];
+        if taus.iter().flatten().any(|&t| t.is_nan() || t <= 0.0) {
+            return Err("every tau_s of bias_instability and warmup must be positive".into());
+        }
+        let densities = [
+            self.gyro.angle_random_walk_rad_per_sqrt_s,
+            self.gyro.rate_random_walk_radps_per_sqrt_s,
+            self.accel.velocity_random_walk_mps_per_sqrt_s,
+            self.accel.acceleration_random_walk_mps2_per_sqrt_s,
+        ];
+        if densities.iter().any(|&d| d.is_nan() || d < 0.0) {
+            return Err("noise densities must not be negative".into());
+        }
+        if self.gyro.quantization_radps.iter().chain(&self.accel.quantization_mps2).any(|&q| q.is_nan() || q < 0.0) {
+            return Err("quantization steps must not be negative".into());
+        }
+        Ok(())
+    }
+
+    /// Gravity used: the file's, or WGS-84 normal gravity.
+    pub fn gravity_mps2(&self) -> f64 {
+        self.site.gravity_mps2.unwrap_or_else(|| {
+            sinscal::earth::normal_gravity_mps2((self.site.latitude_deg as f32).to_radians(), self.site.height_m as f32)
+                as f64
+        })
+    }
+
+    /// The gyro triad in SI.
+    pub fn gyro_model(&self) -> TriadModel {
+        let g = &self.gyro;
+        TriadModel {
+            bias: g.bias_radps,
+            gain: identity_plus(g.scale_factor, &g.misalignment),
+            cross: g.g_sensitivity_radps_per_mps2,
+            white_density: g.angle_random_walk_rad_per_sqrt_s,
+            random_walk: g.rate_random_walk_radps_per_sqrt_s,
+            gauss_markov: g.bias_instability.as_ref().map(|b| (b.sigma, b.tau_s)),
+            quantization: g.quantization_radps,
+            vibration: g.vibration.as_ref().map(|v| (v.amplitude, v.frequency_hz)),
+            drift_per_s: g.drift_radps_per_s,
+            warmup: g.warmup.as_ref().map(|w| (w.amplitude, w.tau_s)),
+            temperature_coefficient_per_k: g.temperature_coefficient_radps_per_k,
+        }
+    }
+
+    /// The accelerometer triad in SI.
+    pub fn accel_model(&self) -> TriadModel {
+        let a = &self.accel;
+        TriadModel {
+            bias: a.bias_mps2,
+            gain: identity_plus(a.scale_factor, &a.misalignment),
+            cross: [[0.0; 3]; 3],
+            white_density: a.velocity_random_walk_mps_per_sqrt_s,
+            random_walk: a.acceleration_random_walk_mps2_per_sqrt_s,
+            gauss_markov: a.bias_instability.as_ref().map(|b| (b.sigma, b.tau_s)),
+            quantization: a.quantization_mps2,
+            vibration: a.vibration.as_ref().map(|v| (v.amplitude, v.frequency_hz)),
+            drift_per_s: a.drift_mps2_per_s,
+            warmup: a.warmup.as_ref().map(|w| (w.amplitude, w.tau_s)),
+            temperature_coefficient_per_k: a.temperature_coefficient_mps2_per_k,
+        }
+    }
+}
+
+/// The running state of one triad's random processes.
+struct TriadState {
+    model: TriadModel,
+    /// One generator per process and axis family, so that switching one effect on does not change the
+    /// random numbers of the others.
+    white: ChaCha8Rng,
+    walk: ChaCha8Rng,
+    markov: ChaCha8Rng,
+    walk_b: [f64; 3],
+    markov_x: [f64; 3],
+    vibration_phase: [f64; 3],
+    /// Integrated output not yet delivered by the quantiser, in output steps * samples.
+    quantizer_carry: [f64; 3],
+}
+
+fn rng(seed: u64, stream: u64) -> ChaCha8Rng {
+    let mut r = ChaCha8Rng::seed_from_u64(seed);
+    r.set_stream(stream);
+    r
+}
+
+fn normal(r: &mut ChaCha8Rng) -> f64 {
+    StandardNormal.sample(r)
+}
+
+impl TriadState {
+    fn new(model: TriadModel, seed: u64, base_stream: u64) -> TriadState {
+        let mut phase_rng = rng(seed, base_stream + 3);
+        let mut markov = rng(seed, base_stream + 2);
+        // The Gauss-Markov process starts in its stationary distribution.
+        let markov_x = match model.gauss_markov {
+            Some((sigma, _)) => [0, 1, 2].map(|i| sigma[i] * normal(&mut markov)),
+            None => [0.0; 3],
+        };
+        TriadState {
+            vibration_phase: [0, 1, 2].map(|_| rand::Rng::random::<f64>(&mut phase_rng) * std::f64::consts::TAU),
+            model,
+            white: rng(seed, base_stream),
+            walk: rng(seed, base_stream + 1),
+            markov,
+            walk_b: [0.0; 3],
+            markov_x,
+            quantizer_carry: [0.0; 3],
+        }
+    }
+
+    /// The output over `[t0, t0 + dt)` for the interval-averaged true quantity `own` and the other
+    /// sensor's `other`, at sensor temperature `temp_c` relative to the reference.
+    fn sample(&mut self, t0: f64, dt: f64, own: [f64; 3], other: [f64; 3], delta_temp_k: f64) -> [f64; 3] {
+        let m = &self.model;
+        let mut out = [0.0; 3];
+        let t_mid = t0 + 0.5 * dt;
+        for i in 0..3 {
+            let mut y = m.bias[i];
+            for j in 0..3 {
+                y += m.gain[i][j] * own[j] + m.cross[i][j] * other[j];
+            }
+            y += m.drift_per_s[i] * t_mid;
+            if let Some((a, tau)) = m.warmup {
+                // Exact interval average of A exp(-t/tau).
+                y += a[i] * tau / dt * ((-t0 / tau).exp() - (-(t0 + dt) / tau).exp());
+            }
+            y += m.temperature_coefficient_per_k[i] * delta_temp_k;
+            if let Some((a, f)) = m.vibration {
+                let w = std::f64::consts::TAU * f;
+                let p = self.vibration_phase[i];
+                y += a[i] / (w * dt) * ((w * t0 + p).cos() - (w * (t0 + dt) + p).cos());
+            }
+            if m.random_walk > 0.0 {
+                let step = m.random_walk * dt.sqrt();
+                let (xi1, xi2) = (normal(&mut self.walk), normal(&mut self.walk));
+                y += self.walk_b[i] + step * (0.5 * xi1 + xi2 / 12f64.sqrt());
+                self.walk_b[i] += step * xi1;
+            }
+            if let Some((sigma, tau)) = m.gauss_markov {
+                y += self.markov_x[i];
+                let phi = (-dt / tau).exp();
+                self.markov_x[i] =
+                    phi * self.markov_x[i] + sigma[i] * (1.0 - phi * phi).sqrt() * normal(&mut self.markov);
+            }
+            if m.white_density > 0.0 {
+                y += m.white_density / dt.sqrt() * normal(&mut self.white);
+            }
+            out[i] = y;
+        }
+        for i in 0..3 {
+            let q = m.quantization[i];
+            if q > 0.0 {
+                let total = self.quantizer_carry[i] + out[i] / q;
+                let steps = total.round();
+                self.quantizer_carry[i] = total - steps;
+                out[i] = steps * q;
+            }
+        }
+        out
+    }
+}
+
+/// The rotation vector of `r` (inverse of [`rotation`]), for the small rotations of one sample interval and
+/// any angle below pi.
+fn rotation_vector(r: &M3) -> [f64; 3] {
+    let v = [r[2][1] - r[1][2], r[0][2] - r[2][0], r[1][0] - r[0][1]];
+    let s = 0.5 * (v[0] * v[0] + v[1] * v[1] + v[2] * v[2]).sqrt();
+    let c = 0.5 * (r[0][0] + r[1][1] + r[2][2] - 1.0);
+    let angle = s.atan2(c);
+    let k = if s > 1e-300 { angle / (2.0 * s) } else { 0.5 };
+    v.map(|x| x * k)
+}
+
+fn transpose(a: &M3) -> M3 {
+    [0, 1, 2].map(|i| [0, 1, 2].map(|j| a[j][i]))
+}
+
+/// Shortest signed angle from `a` to `b`, degrees.
+fn angle_step_deg(a: f64, b: f64) -> f64 {
+    (b - a + 540.0).rem_euclid(360.0) - 180.0
+}
+
+/// The simulated session as a recording, reproducible from `seed`.
+pub fn simulate(scenario: &ScenarioFile, seed: u64, source: &str) -> Recording {
+    let s = &scenario.schedule;
+    let dt = 1.0 / s.rate_hz;
+    let g = scenario.gravity_mps2();
+    let lat = scenario.site.latitude_deg.to_radians();
+    let w_ie_n = [0.0, EARTH_RATE_RADPS * lat.cos(), EARTH_RATE_RADPS * lat.sin()];
+    let f_n = [0.0, 0.0, g];
+    let mut gyro = TriadState::new(scenario.gyro_model(), seed, 0);
+    let mut accel = TriadState::new(scenario.accel_model(), seed, 16);
+    let temperature = scenario.temperature.clone();
+    // The table's attitude error (e, n, u) at each position: the constant offset plus that position's own.
+    let error_at = |k: usize| -> [f64; 3] {
+        let mut err = s.reference_offset_enu_rad;
+        for e in s.position_error.iter().filter(|e| e.pos as usize == k + 1) {
+            for i in 0..3 {
+                err[i] += e.enu_rad[i];
+            }
+        }
+        err
+    };
+    // One entry per sample boundary: reported attitude, pos label of the interval that starts there, and
+    // the table's error there (interpolated during moves, so that the error never jumps).
+    let samples = |secs: f64| (secs * s.rate_hz).round() as usize;
+    let mut boundaries: Vec<([f64; 3], u32, [f64; 3])> = Vec::new();
+    for (k, &p) in s.positions_deg.iter().enumerate() {
+        let err = error_at(k);
+        if k > 0 {
+            let (from, from_err) = (s.positions_deg[k - 1], error_at(k - 1));
+            let n = samples(s.move_s);
+            let steps = [0, 1, 2].map(|i| angle_step_deg(from[i], p[i]));
+            for j in 0..n {
+                let x = j as f64 / n as f64;
+                let att = [0, 1, 2].map(|i| from[i] + x * steps[i]);
+                boundaries.push((att, 0, [0, 1, 2].map(|i| (1.0 - x) * from_err[i] + x * err[i])));
+            }
+        }
+        for _ in 0..samples(s.settle_s) {
+            boundaries.push((p, 0, err));
+        }
+        for _ in 0..samples(s.dwell_s) {
+            boundaries.push((p, k as u32 + 1, err));
+        }
+    }
+    if let Some(&(att, _, err)) = boundaries.last() {
+        boundaries.push((att, 0, err));
+    }
+    let c_true =
+        |(att, _, err): ([f64; 3], u32, [f64; 3])| mul(&rotation(err.map(|x| -x)), &c_b_n(att[0], att[1], att[2]));
+    let mut rows = Vec::with_capacity(boundaries.len());
+    for k in 0..boundaries.len().saturating_sub(1) {
+        let (att0, pos, _) = boundaries[k];
+        let c0 = c_true(boundaries[k]);
+        let c1 = c_true(boundaries[k + 1]);
+        let t0 = k as f64 * dt;
+        // Body rate of the interval: rotation vector of C0^T C1 over dt, plus Earth rate at mid-interval.
+        let relative = mul(&transpose(&c0), &c1);
+        let turn = rotation_vector(&relative);
+        let c_mid = mul(&c0, &rotation(turn.map(|x| 0.5 * x)));
+        let earth_b = mul_t_vec(&c_mid, w_ie_n);
+        let w_b = [0, 1, 2].map(|i| turn[i] / dt + earth_b[i]);
+        let f_b = mul_t_vec(&c_mid, f_n);
+        let temp_c = temperature.as_ref().map(|t| t.at(t0 + 0.5 * dt));
+        let delta_temp = match (&temperature, temp_c) {
+            (Some(t), Some(c)) => c - t.reference_c,
+            _ => 0.0,
+        };
+        let w = gyro.sample(t0, dt, w_b, f_b, delta_temp);
+        let f = accel.sample(t0, dt, f_b, w_b, delta_temp);
+        rows.push(Row {
+            t_s: t0,
+            pos,
+            pitch_deg: att0[0],
+            roll_deg: att0[1],
+            heading_deg: Some(att0[2].rem_euclid(360.0)),
+            rate_b_radps: w,
+            force_b_mps2: f,
+            temp_c,
+            line: 0,
+        });
+    }
+    let truth = SimulationTruth {
+        seed,
+        gyro_bias_b_radps: scenario.gyro.bias_radps,
+        accel_bias_b_mps2: scenario.accel.bias_mps2,
+        gyro_noise_radps: scenario.gyro.angle_random_walk_rad_per_sqrt_s / dt.sqrt(),
+        accel_noise_mps2: scenario.accel.velocity_random_walk_mps_per_sqrt_s / dt.sqrt(),
+        reference_offset_n_rad: s.reference_offset_enu_rad,
+    };
+    Recording {
+        source: source.to_string(),
+        header: Header {
+            latitude_deg: scenario.site.latitude_deg,
+            height_m: scenario.site.height_m,
+            rate_hz: Some(s.rate_hz),
+            gravity_mps2: Some(g),
+            comments: vec![format!("SIMULATION by sinscal simulate (seed {seed}) of {source}, not measured data")],
+            truth: Some(truth),
+        },
+        rows,
+    }
+}
