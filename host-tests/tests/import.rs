@@ -546,7 +546,12 @@ fn cli_imucal_finds_the_label_file_beside_the_session() {
 /// The shared data directory, or `None` (with a message) when `SINSCAL_DATA` is not set.
 fn data_dir() -> Option<PathBuf> {
     match std::env::var_os("SINSCAL_DATA") {
-        Some(dir) => Some(PathBuf::from(dir)),
+        // A relative path means relative to the repository root (as CI gives it), not to this package's
+        // directory, where cargo runs the tests.
+        Some(dir) => {
+            let dir = PathBuf::from(dir);
+            Some(if dir.is_relative() { Path::new(env!("CARGO_MANIFEST_DIR")).join("..").join(dir) } else { dir })
+        }
         None => {
             // Written to the stderr handle, not through eprintln!, so that the test harness's output capture
             // does not hide it: a skipped test must say so in a plain `cargo test` run.
