@@ -114,16 +114,15 @@ fn all_finite(z: &[f32; 6]) -> bool {
 pub struct DwellCollector {
     /// Gyro and accelerometer filter constants; `None` without prefilter.
     gains: Option<[FixedGain; 2]>,
-    /// Filter states `[x_k, x_{k-1}]` and previous raw samples `z_{k-1}`, per channel.
+    /// Filter states `[x_k, x_{k-1}]` per channel.
     state: [[f32; 2]; 6],
+    /// The previous raw sample `z_{k-1}` per channel (with or without prefilter).
     previous_raw: [f32; 6],
     count: u32,
     shift: [f32; 6],
     raw_sum: [BlockedSum; 6],
     raw_sum_sq: [BlockedSum; 6],
     filtered_sum: [BlockedSum; 6],
-    /// The last raw sample (without prefilter).
-    last_raw: [f32; 6],
     rejected: u32,
     noise_gain: [f32; 2],
 }
@@ -149,7 +148,6 @@ impl DwellCollector {
             raw_sum: [BlockedSum::new(); 6],
             raw_sum_sq: [BlockedSum::new(); 6],
             filtered_sum: [BlockedSum::new(); 6],
-            last_raw: [0.0; 6],
             rejected: 0,
             noise_gain,
         })
@@ -198,7 +196,6 @@ impl DwellCollector {
         if self.count == 0 {
             // The first sample: it is the shift, its deviations are zero, and it starts the filters.
             self.shift = z;
-            self.last_raw = z;
             self.state = z.map(|x| [x, x]);
             self.previous_raw = z;
             self.count = 1;
@@ -221,7 +218,7 @@ impl DwellCollector {
                     self.raw_sum[i].add(d);
                     self.raw_sum_sq[i].add(d * d);
                 }
-                self.last_raw = z;
+                self.previous_raw = z;
             }
         }
         self.count += 1;
@@ -242,7 +239,7 @@ impl DwellCollector {
             return Err(DwellError::TooFewSamples { samples });
         }
         let filtered = self.gains.is_some();
-        let last = if filtered { self.state.map(|x| x[0]) } else { self.last_raw };
+        let last = if filtered { self.state.map(|x| x[0]) } else { self.previous_raw };
         let mean = |i: usize| {
             let sum = if filtered { self.filtered_sum[i].value() } else { self.raw_sum[i].value() };
             DwellStats::shifted_mean(samples, self.shift[i], sum).unwrap_or(self.shift[i])

@@ -224,8 +224,7 @@ impl FixedGain {
 #[derive(Clone, Copy, Debug, PartialEq)]
 #[cfg_attr(feature = "defmt", derive(defmt::Format))]
 pub struct HmmKf {
-    a: f32,
-    gain: Mat2,
+    constants: FixedGain,
     /// `[x_k, x_{k-1}]` in the channel's unit.
     state: [f32; 2],
     /// The previous raw sample `z_{k-1}`.
@@ -243,17 +242,17 @@ impl HmmKf {
 
     /// A filter with a given gain (for example one computed once and shared by three channels).
     pub fn with_gain(a: f32, gain: Mat2) -> HmmKf {
-        HmmKf { a, gain, state: [0.0; 2], previous_raw: 0.0, started: false }
+        HmmKf { constants: FixedGain { a, gain }, state: [0.0; 2], previous_raw: 0.0, started: false }
     }
 
     /// The gain `K_off` in use.
     pub fn gain(&self) -> Mat2 {
-        self.gain
+        self.constants.gain
     }
 
     /// The filter's constants (`a` and `K_off`).
     pub fn fixed_gain(&self) -> FixedGain {
-        FixedGain { a: self.a, gain: self.gain }
+        self.constants
     }
 
     /// Forgets the state; the next sample starts the filter again.
@@ -275,29 +274,13 @@ impl HmmKf {
             self.started = true;
             return raw;
         }
-        self.step(raw);
-        self.state[0]
+        self.step(raw)
     }
 
-    /// Starts the filter at a raw sample: state `[z, z]` (what [`Self::update`] does with its first sample).
+    /// The fixed-gain recursion ([`FixedGain::step`]); returns `x_k`.
     #[inline(always)]
-    pub fn start(&mut self, raw: f32) {
-        self.state = [raw, raw];
-        self.previous_raw = raw;
-        self.started = true;
-    }
-
-    /// One fixed-gain step of a started filter; returns `x_k`.
-    #[inline(always)]
-    pub fn step_value(&mut self, raw: f32) -> f32 {
-        self.step(raw);
-        self.state[0]
-    }
-
-    /// The fixed-gain recursion ([`FixedGain::step`]).
-    #[inline(always)]
-    fn step(&mut self, raw: f32) {
-        FixedGain { a: self.a, gain: self.gain }.step(&mut self.state, &mut self.previous_raw, raw);
+    fn step(&mut self, raw: f32) -> f32 {
+        self.constants.step(&mut self.state, &mut self.previous_raw, raw)
     }
 
     /// Response of the settled filter to raw white noise: returns `(sum h_k, sum h_k^2)` of its impulse
@@ -305,8 +288,8 @@ impl HmmKf {
     /// `z_{k-1}`). The first is the DC gain (1 for a row-stochastic F); the second is the ratio of the
     /// output variance to the raw per-sample variance, used for the standard error of the settled output.
     pub fn impulse_response_sums(&self) -> (f32, f32) {
-        let mut probe = HmmKf::with_gain(self.a, self.gain);
-        probe.started = true;
+        // `step` runs the recursion whether or not the filter was started: state and previous raw are zero.
+        let mut probe = HmmKf::with_gain(self.constants.a, self.constants.gain);
         let mut sum = KahanSum::new();
         let mut sum_sq = KahanSum::new();
         let mut raw = 1.0;
