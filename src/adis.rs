@@ -297,28 +297,27 @@ fn channel32(frame: &[u8; BURST32_LEN], offset: usize) -> I16F16 {
 #[inline(always)]
 pub fn decode_burst32<E>(frame: &[u8; BURST32_LEN]) -> Result<Burst, AdisError<E>> {
     check_sum(checksum32(frame), word(frame, 15))?;
-    let c = |i: usize| channel32(frame, 2 + 4 * i);
-    Ok(Burst {
-        diag_stat: word(frame, 0),
-        gyro_lsb: [c(0), c(1), c(2)],
-        accel_lsb: [c(3), c(4), c(5)],
-        temp_raw: word(frame, 13) as i16,
-        data_counter: word(frame, 14),
-    })
+    Ok(burst_fields(frame, |i| channel32(frame, 2 + 4 * i), 13))
 }
 
 /// Decodes the 16-bit burst (ADIS1647x): DIAG_STAT, six 16-bit channels, TEMP_OUT, DATA_CNTR, checksum.
 #[inline(always)]
 pub fn decode_burst16<E>(frame: &[u8; BURST16_LEN]) -> Result<Burst, AdisError<E>> {
     check_sum(checksum16(frame), word(frame, 9))?;
-    let c = |i: usize| I16F16::from_bits(((word(frame, 1 + i) as i16) as i32) << 16);
-    Ok(Burst {
+    Ok(burst_fields(frame, |i| I16F16::from_bits(((word(frame, 1 + i) as i16) as i32) << 16), 7))
+}
+
+/// The fields of either burst format: DIAG_STAT in word 0, the six channels (gyro x, y, z, accel x, y, z)
+/// as `channel(i)`, TEMP_OUT in word `temp_word` and DATA_CNTR after it.
+#[inline(always)]
+fn burst_fields(frame: &[u8], channel: impl Fn(usize) -> I16F16, temp_word: usize) -> Burst {
+    Burst {
         diag_stat: word(frame, 0),
-        gyro_lsb: [c(0), c(1), c(2)],
-        accel_lsb: [c(3), c(4), c(5)],
-        temp_raw: word(frame, 7) as i16,
-        data_counter: word(frame, 8),
-    })
+        gyro_lsb: [channel(0), channel(1), channel(2)],
+        accel_lsb: [channel(3), channel(4), channel(5)],
+        temp_raw: word(frame, temp_word) as i16,
+        data_counter: word(frame, temp_word + 1),
+    }
 }
 
 /// Encodes a burst (the inverse of [`decode_burst`], with a valid checksum): what the device would send.
@@ -426,19 +425,25 @@ impl<SPI: SpiDevice> Adis<SPI> {
         Ok(())
     }
 
-    /// One burst read: command word, then the burst, in one chip-select cycle.
+    /// The burst transaction: the command word, then the model's burst into `buf`, in one chip-select
+    /// cycle. Returns the bytes received.
     #[inline(always)]
-    pub fn read_burst(&mut self) -> Result<Burst, AdisError<SPI::Error>> {
-        let mut buf = [0u8; BURST32_LEN];
+    fn transfer<'b>(&mut self, buf: &'b mut [u8; BURST32_LEN]) -> Result<&'b [u8], AdisError<SPI::Error>> {
         let len = self.model.burst_len();
         self.spi
             .transaction(&mut [Operation::Write(&BURST_COMMAND), Operation::Read(&mut buf[..len])])
             .map_err(AdisError::Spi)?;
-        decode_burst(self.model, &buf[..len])
+        Ok(&buf[..len])
     }
-}
 
-impl<SPI: SpiDevice> Adis<SPI> {
+    /// One burst read, decoded but without the counter and status checks.
+    #[inline(always)]
+    pub fn read_burst(&mut self) -> Result<Burst, AdisError<SPI::Error>> {
+        let mut buf = [0u8; BURST32_LEN];
+        let bytes = self.transfer(&mut buf)?;
+        decode_burst(self.model, bytes)
+    }
+
     /// Everything after the bus transfer: checksum, decode, counter and status checks, conversion to SI.
     /// [`ImuSource::read`] is one burst transaction followed by this; with a DMA transfer, call it on the
     /// received bytes.
@@ -471,11 +476,8 @@ impl<SPI: SpiDevice> ImuSource for Adis<SPI> {
     /// Burst read, then [`Adis::decode_reading`].
     fn read(&mut self) -> Result<ImuReading, Self::Error> {
         let mut buf = [0u8; BURST32_LEN];
-        let len = self.model.burst_len();
-        self.spi
-            .transaction(&mut [Operation::Write(&BURST_COMMAND), Operation::Read(&mut buf[..len])])
-            .map_err(AdisError::Spi)?;
-        self.decode_reading(&buf[..len])
+        let bytes = self.transfer(&mut buf)?;
+        self.decode_reading(bytes)
     }
 }
 
