@@ -13,19 +13,17 @@
 //! `# latitude_source: ...`, `# attitude_source: ...`, and the nominal scales used). Malformed input is reported as
 //! an [`InputError`] naming the file, the line and the reason; nothing here panics on bad input.
 
-use std::f64::consts::PI;
 use std::fmt::Write as _;
 use std::ops::Range;
 use std::path::{Path, PathBuf};
 
 use crate::error::InputError;
+use crate::output::ARCSEC_PER_RAD;
 use crate::recording::{Header, Recording, Row};
 
-/// Standard gravity, m/s^2: the "g" of accelerometer ranges given in LSB/g.
+/// Standard gravity, m/s^2: the "g" of accelerometer ranges given in LSB/g. The f64 twin of the core's
+/// f32 `sinscal::earth::STANDARD_GRAVITY_MPS2` (its f32 value would be off by 1.6e-8 relative).
 pub const STANDARD_GRAVITY_MPS2: f64 = 9.80665;
-
-/// Radians per arcsecond (pi / 648000).
-pub const RAD_PER_ARCSEC: f64 = PI / 648_000.0;
 
 /// Sample rate of the imucal example session `example_ferraris_session.csv`, Hz (not written in the file).
 pub const IMUCAL_RATE_HZ: f64 = 102.4;
@@ -374,7 +372,7 @@ pub fn parse_psins(text: &str, source: &str, latitude_deg: Option<f64>) -> Resul
     }
     let dt_s = interval_ms / 1000.0;
     let rate_hz = 1000.0 / interval_ms;
-    let gyro_radps_per_count = [0, 1, 2].map(|i| scale[i] * RAD_PER_ARCSEC / dt_s);
+    let gyro_radps_per_count = [0, 1, 2].map(|i| scale[i] / ARCSEC_PER_RAD / dt_s);
     let accel_mps2_per_count = [3, 4, 5].map(|i| scale[i] * 1e-6 * gravity_mps2 / dt_s);
 
     let mut rows = Vec::new();

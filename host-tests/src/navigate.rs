@@ -13,27 +13,13 @@
 
 use sinscal::earth::{WGS84_A_M, WGS84_E2};
 
-use crate::synth::{mul_vec, rotation, EARTH_RATE_RADPS, M3};
+use crate::synth::{mul, mul_vec, rotation, transpose, EARTH_RATE_RADPS, M3};
 
 /// Meridian and prime-vertical radii of curvature of WGS-84 at a latitude, m.
 pub fn radii_m(latitude_rad: f64) -> (f64, f64) {
     let s2 = latitude_rad.sin().powi(2);
     let w = 1.0 - WGS84_E2 * s2;
     (WGS84_A_M * (1.0 - WGS84_E2) / w.powf(1.5), WGS84_A_M / w.sqrt())
-}
-
-fn mul(a: &M3, b: &M3) -> M3 {
-    let mut c = [[0.0; 3]; 3];
-    for i in 0..3 {
-        for j in 0..3 {
-            c[i][j] = (0..3).map(|k| a[i][k] * b[k][j]).sum();
-        }
-    }
-    c
-}
-
-fn transpose(a: &M3) -> M3 {
-    [0, 1, 2].map(|i| [0, 1, 2].map(|j| a[j][i]))
 }
 
 fn cross(a: [f64; 3], b: [f64; 3]) -> [f64; 3] {

@@ -46,7 +46,7 @@ use serde::Deserialize;
 
 use crate::error::InputError;
 use crate::recording::{Header, Recording, Row, SimulationTruth};
-use crate::synth::{c_b_n, mul, mul_t_vec, rotation, EARTH_RATE_RADPS, M3, TABLE1_DEG};
+use crate::synth::{c_b_n, mul, mul_t_vec, rotation, transpose, EARTH_RATE_RADPS, M3, TABLE1_DEG};
 
 /// A scenario file.
 #[derive(Clone, Debug, Default, Deserialize, PartialEq)]
@@ -507,10 +507,6 @@ fn rotation_vector(r: &M3) -> [f64; 3] {
     v.map(|x| x * k)
 }
 
-fn transpose(a: &M3) -> M3 {
-    [0, 1, 2].map(|i| [0, 1, 2].map(|j| a[j][i]))
-}
-
 /// Shortest signed angle from `a` to `b`, degrees.
 fn angle_step_deg(a: f64, b: f64) -> f64 {
     (b - a + 540.0).rem_euclid(360.0) - 180.0
@@ -526,7 +522,6 @@ pub fn simulate(scenario: &ScenarioFile, seed: u64, source: &str) -> Recording {
     let f_n = [0.0, 0.0, g];
     let mut gyro = TriadState::new(scenario.gyro_model(), seed, 0);
     let mut accel = TriadState::new(scenario.accel_model(), seed, 16);
-    let temperature = scenario.temperature.clone();
     // The table's attitude error (e, n, u) at each position: the constant offset plus that position's own.
     let error_at = |k: usize| -> [f64; 3] {
         let mut err = s.reference_offset_enu_rad;
@@ -578,10 +573,12 @@ pub fn simulate(scenario: &ScenarioFile, seed: u64, source: &str) -> Recording {
         let earth_b = mul_t_vec(&c_mid, w_ie_n);
         let w_b = [0, 1, 2].map(|i| turn[i] / dt + earth_b[i]);
         let f_b = mul_t_vec(&c_mid, f_n);
-        let temp_c = temperature.as_ref().map(|t| t.at(t0 + 0.5 * dt));
-        let delta_temp = match (&temperature, temp_c) {
-            (Some(t), Some(c)) => c - t.reference_c,
-            _ => 0.0,
+        let (temp_c, delta_temp) = match &scenario.temperature {
+            Some(t) => {
+                let c = t.at(t0 + 0.5 * dt);
+                (Some(c), c - t.reference_c)
+            }
+            None => (None, 0.0),
         };
         let w = gyro.sample(t0, dt, w_b, f_b, delta_temp);
         let f = accel.sample(t0, dt, f_b, w_b, delta_temp);

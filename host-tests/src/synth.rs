@@ -30,6 +30,11 @@ pub fn mul(a: &M3, b: &M3) -> M3 {
     c
 }
 
+/// `a^T`.
+pub fn transpose(a: &M3) -> M3 {
+    [0, 1, 2].map(|i| [0, 1, 2].map(|j| a[j][i]))
+}
+
 /// `a * v`.
 pub fn mul_vec(a: &M3, v: [f64; 3]) -> [f64; 3] {
     [0, 1, 2].map(|i| (0..3).map(|k| a[i][k] * v[k]).sum())
