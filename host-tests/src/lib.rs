@@ -3,9 +3,13 @@
 //! simulation), and reports.
 #![deny(missing_docs)]
 
+pub mod analysis_report;
+pub mod analyze;
 pub mod calibrate;
 pub mod error;
+pub mod hidden;
 pub mod import;
+pub mod linfit;
 pub mod montecarlo;
 pub mod navcheck;
 pub mod navigate;
@@ -16,4 +20,5 @@ pub mod qemu;
 pub mod recording;
 pub mod replayfile;
 pub mod simulate;
+pub mod study;
 pub mod synth;

@@ -94,6 +94,18 @@ enum Command {
         #[arg(long, default_value_t = 1)]
         seed: u64,
     },
+    /// What the base model (biases + white noise) gets wrong: the effects of SPEC.md section 6 that a
+    /// recording or an angles file shows, with estimates, standard errors and the BIC gain.
+    Analyze {
+        /// A recording (SPEC.md section 2) or an angles file (section 3, '# sinscal-angles: 1').
+        input: PathBuf,
+        /// Write the result as JSON (SPEC.md section 6) to this file ('-' = stdout).
+        #[arg(long)]
+        json: Option<PathBuf>,
+        /// Write a report (summary.md and figures) into this directory.
+        #[arg(long)]
+        report: Option<PathBuf>,
+    },
     /// SIMULATION of a turntable session from a scenario file (TOML; every effect of SPEC.md section 6).
     Simulate {
         /// Scenario file (see README, "Simulation"; examples in host-tests/scenarios/).
@@ -143,6 +155,22 @@ enum Command {
     },
     /// Convert a measured data set (PSINS .imu, imucal Ferraris session, imu_tk counts) into a recording.
     Import(sinscal_host::import::ImportArgs),
+    /// Study of a measured data set against a SIMULATION of it: base model, disagreement, cause, extended model,
+    /// gain on held-out data (report with figures).
+    Study {
+        /// The data set.
+        #[arg(value_enum)]
+        dataset: sinscal_host::study::Dataset,
+        /// The data directory (default: $SINSCAL_DATA).
+        #[arg(long)]
+        data: Option<PathBuf>,
+        /// Directory for summary.md and the figures.
+        #[arg(long)]
+        report: PathBuf,
+        /// Write the study as JSON to this file ('-' = stdout).
+        #[arg(long)]
+        json: Option<PathBuf>,
+    },
     /// SIMULATION: Monte Carlo of the estimators against the Cramer-Rao bound (Table 1, white noise).
     Montecarlo {
         /// Number of runs.
@@ -238,6 +266,23 @@ fn run(command: Command) -> anyhow::Result<()> {
             );
             Ok(())
         }
+        Command::Analyze { input, json, report } => {
+            eprintln!("sinscal analyze: reading {}", input.display());
+            let analysis = sinscal_host::analyze::analyze_path(&input)?;
+            if json.as_deref() != Some(Path::new("-")) {
+                print!("{}", sinscal_host::analyze::summary(&analysis));
+            }
+            if let Some(dir) = report {
+                let files = sinscal_host::analysis_report::write_report(&analysis, &dir)?;
+                if json.as_deref() != Some(Path::new("-")) {
+                    println!("report: {} ({})", dir.display(), files.join(", "));
+                }
+            }
+            if let Some(path) = json {
+                write_json(&path, &analysis)?;
+            }
+            Ok(())
+        }
         Command::Simulate { scenario, seed, out } => {
             let file = ScenarioFile::read(&scenario)?;
             let rec = simulate(&file, seed, &scenario.display().to_string());
@@ -288,6 +333,9 @@ fn run(command: Command) -> anyhow::Result<()> {
                 write_json(&path, &report)?;
             }
             Ok(())
+        }
+        Command::Study { dataset, data, report, json } => {
+            sinscal_host::study::run(dataset, data.as_deref(), &report, json.as_deref()).map(|_| ())
         }
         Command::Import(args) => {
             if let Err(usage) = args.validate() {
