@@ -104,7 +104,11 @@ pub fn write_report(a: &Analysis, dir: &Path) -> anyhow::Result<Vec<String>> {
             );
         }
     }
-    let _ = writeln!(md, "\n## Unobservable with this data\n\n{}\n", if a.unobservable.is_empty() { "-".to_string() } else { a.unobservable.join(", ") });
+    let _ = writeln!(
+        md,
+        "\n## Unobservable with this data\n\n{}\n",
+        if a.unobservable.is_empty() { "-".to_string() } else { a.unobservable.join(", ") }
+    );
     let _ = writeln!(md, "## Figures\n");
     let _ = writeln!(md, "- `residuals.png`: residual of every observation (block means, or angles) by position, for the base model (grey) and the final model (colour).");
     if files.len() > 2 {
@@ -143,10 +147,19 @@ fn residuals_plot(a: &Analysis, path: &Path) -> anyhow::Result<()> {
         let n = points.len().max(1) as f64;
         let jitter = |i: usize| -0.3 + 0.6 * (i as f64 / n * 37.0).fract();
         chart
-            .draw_series(points.iter().enumerate().map(|(i, p)| Circle::new((p.0 as f64 + jitter(i) - 0.05, p.1), 2, RGBColor(150, 150, 150).filled())))
+            .draw_series(
+                points.iter().enumerate().map(|(i, p)| {
+                    Circle::new((p.0 as f64 + jitter(i) - 0.05, p.1), 2, RGBColor(150, 150, 150).filled())
+                }),
+            )
             .map_err(|e| err(path, &e))?;
         chart
-            .draw_series(points.iter().enumerate().map(|(i, p)| Circle::new((p.0 as f64 + jitter(i) + 0.05, p.2), 2, RGBColor(30, 70, 200).filled())))
+            .draw_series(
+                points
+                    .iter()
+                    .enumerate()
+                    .map(|(i, p)| Circle::new((p.0 as f64 + jitter(i) + 0.05, p.2), 2, RGBColor(30, 70, 200).filled())),
+            )
             .map_err(|e| err(path, &e))?;
     }
     root.present().map_err(|e| err(path, &e))?;
@@ -202,12 +215,18 @@ fn allan_plot(a: &Analysis, path: &Path) -> anyhow::Result<()> {
             .label("data")
             .legend(|(x, y)| PathElement::new(vec![(x, y), (x + 20, y)], BLACK.stroke_width(2)));
         chart
-            .draw_series(LineSeries::new(points.iter().map(|p| (p.tau_s, base(p.tau_s))), RGBColor(200, 30, 30).stroke_width(2)))
+            .draw_series(LineSeries::new(
+                points.iter().map(|p| (p.tau_s, base(p.tau_s))),
+                RGBColor(200, 30, 30).stroke_width(2),
+            ))
             .map_err(|e| err(path, &e))?
             .label("base model (white)")
             .legend(|(x, y)| PathElement::new(vec![(x, y), (x + 20, y)], RGBColor(200, 30, 30).stroke_width(2)));
         chart
-            .draw_series(LineSeries::new(points.iter().map(|p| (p.tau_s, extended(p.tau_s))), RGBColor(30, 70, 200).stroke_width(2)))
+            .draw_series(LineSeries::new(
+                points.iter().map(|p| (p.tau_s, extended(p.tau_s))),
+                RGBColor(30, 70, 200).stroke_width(2),
+            ))
             .map_err(|e| err(path, &e))?
             .label("with noise effects found")
             .legend(|(x, y)| PathElement::new(vec![(x, y), (x + 20, y)], RGBColor(30, 70, 200).stroke_width(2)));
@@ -233,8 +252,14 @@ fn psd_plot(a: &Analysis, path: &Path) -> anyhow::Result<()> {
         let Some(samples) = a.figures.longest_dwell.get(channel) else { continue };
         let seg = 1024.min(samples.len().next_power_of_two() / 2).max(2);
         let Ok(psd) = welch_psd(samples, rate, seg) else { continue };
-        let pts: Vec<(f64, f64)> =
-            psd.frequencies_hz.iter().zip(&psd.density).skip(1).filter(|(_, d)| **d > 0.0).map(|(f, d)| (*f, *d)).collect();
+        let pts: Vec<(f64, f64)> = psd
+            .frequencies_hz
+            .iter()
+            .zip(&psd.density)
+            .skip(1)
+            .filter(|(_, d)| **d > 0.0)
+            .map(|(f, d)| (*f, *d))
+            .collect();
         if pts.is_empty() {
             continue;
         }

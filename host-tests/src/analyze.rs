@@ -48,7 +48,7 @@ use crate::error::InputError;
 use crate::linfit::{chi_square_quantile_upper, chi_square_upper, fit, solve_spd, LinearFit, Observations};
 use crate::noise::{detect_quantization, fft_in_place, ljung_box, GRID_TOLERANCE};
 use crate::recording::Recording;
-use crate::synth::{c_b_n, mul_t_vec, M3, EARTH_RATE_RADPS};
+use crate::synth::{c_b_n, mul_t_vec, EARTH_RATE_RADPS, M3};
 
 /// Family-wise significance level of the effect search.
 pub const ALPHA: f64 = 0.01;
@@ -314,7 +314,8 @@ struct Selection {
 /// Forward selection over the problem's candidates; `m` = candidates tested in all (Bonferroni).
 fn select(problem: &mut Problem, extra_tests: usize) -> Result<Selection, String> {
     let base_cols: Vec<&[f64]> = problem.base.iter().map(|c| c.as_slice()).collect();
-    let base_fit = fit(&problem.obs, &base_cols).ok_or("the base model's biases cannot be fitted (dependent columns)")?;
+    let base_fit =
+        fit(&problem.obs, &base_cols).ok_or("the base model's biases cannot be fitted (dependent columns)")?;
     let n = problem.obs.y.len() as f64;
     let weights: Vec<f64> = (0..problem.obs.y.len())
         .map(|i| match &problem.obs.sigma {
@@ -364,12 +365,20 @@ fn select(problem: &mut Problem, extra_tests: usize) -> Result<Selection, String
             let lr = 2.0 * (f.log_likelihood - current.log_likelihood);
             if step == 0 {
                 let j = f.beta.len() - 1;
-                tested.push(Tested { name: c.name(), estimate: f.beta[j], std_error: f.std_error(j), likelihood_ratio: lr });
+                tested.push(Tested {
+                    name: c.name(),
+                    estimate: f.beta[j],
+                    std_error: f.std_error(j),
+                    likelihood_ratio: lr,
+                });
             }
             // Ranked by the BIC gain: of two candidates that explain the data equally well, the one with
             // fewer parameters (a temperature coefficient rather than a warm-up of free time constant).
             let gain = lr - c.parameters() as f64 * n.ln();
-            if best.as_ref().is_none_or(|(bi, _, _, b)| gain > *b - problem.candidates[*bi].parameters() as f64 * n.ln()) {
+            if best
+                .as_ref()
+                .is_none_or(|(bi, _, _, b)| gain > *b - problem.candidates[*bi].parameters() as f64 * n.ln())
+            {
                 best = Some((ci, vi, f, lr));
             }
         }
@@ -704,7 +713,9 @@ pub fn analyze_recording(recording: &Recording) -> Result<Analysis, InputError> 
             }
         }
     } else {
-        for name in ["gyro_scale_factor", "gyro_misalignment", "gyro_g_sensitivity", "reference_offset", "position_error"] {
+        for name in
+            ["gyro_scale_factor", "gyro_misalignment", "gyro_g_sensitivity", "reference_offset", "position_error"]
+        {
             unobservable.push(format!("{name}: heading unknown"));
         }
     }
@@ -984,12 +995,8 @@ fn finish(
 ) -> Analysis {
     let k = problem.base.len() as f64;
     let ll = selection.base_fit.log_likelihood;
-    let biases = problem
-        .base_names
-        .iter()
-        .enumerate()
-        .map(|(j, name)| (name.clone(), selection.base_fit.beta[j]))
-        .collect();
+    let biases =
+        problem.base_names.iter().enumerate().map(|(j, name)| (name.clone(), selection.base_fit.beta[j])).collect();
     let verdict = effects.first().map_or("none".to_string(), |e| e.effect.clone());
     let mut unobservable = problem.unobservable.clone();
     if input == "angles" {
@@ -1340,10 +1347,9 @@ impl AnglesFile {
                 if let Some((k, v)) = h.split_once(':') {
                     let v = v.split_whitespace().next().unwrap_or("");
                     let num = || {
-                        v.parse::<f64>()
-                            .ok()
-                            .filter(|x| x.is_finite())
-                            .ok_or_else(|| InputError::at(source, n, format!("header {}: '{v}' is not a number", k.trim())))
+                        v.parse::<f64>().ok().filter(|x| x.is_finite()).ok_or_else(|| {
+                            InputError::at(source, n, format!("header {}: '{v}' is not a number", k.trim()))
+                        })
                     };
                     match k.trim() {
                         "sinscal-angles" => version = Some((n, v.to_string())),
@@ -1360,17 +1366,18 @@ impl AnglesFile {
                 continue;
             };
             if cells.len() != cols.len() {
-                return Err(InputError::at(source, n, format!("{} cells, the column line has {}", cells.len(), cols.len())));
+                return Err(InputError::at(
+                    source,
+                    n,
+                    format!("{} cells, the column line has {}", cells.len(), cols.len()),
+                ));
             }
             let get = |name: &str| -> Result<Option<f64>, InputError> {
                 match cols.iter().position(|c| c == name) {
                     None => Ok(None),
-                    Some(j) => cells[j]
-                        .parse::<f64>()
-                        .ok()
-                        .filter(|v| v.is_finite())
-                        .map(Some)
-                        .ok_or_else(|| InputError::at(source, n, format!("column '{name}': '{}' is not a finite number", cells[j]))),
+                    Some(j) => cells[j].parse::<f64>().ok().filter(|v| v.is_finite()).map(Some).ok_or_else(|| {
+                        InputError::at(source, n, format!("column '{name}': '{}' is not a finite number", cells[j]))
+                    }),
                 }
             };
             let need = |name: &str| -> Result<f64, InputError> {
@@ -1395,7 +1402,13 @@ impl AnglesFile {
         }
         match version {
             Some((_, v)) if v == "1" => {}
-            Some((n, v)) => return Err(InputError::at(source, n, format!("unsupported angles version '{v}' (this sinscal reads 1)"))),
+            Some((n, v)) => {
+                return Err(InputError::at(
+                    source,
+                    n,
+                    format!("unsupported angles version '{v}' (this sinscal reads 1)"),
+                ))
+            }
             None => return Err(InputError::file(source, "not an angles file: no '# sinscal-angles: 1' line")),
         }
         let latitude_deg = latitude.ok_or_else(|| InputError::file(source, "header has no latitude_deg"))?;
@@ -1469,35 +1482,59 @@ pub fn analyze_angles(file: &AnglesFile) -> Result<Analysis, InputError> {
         groups: vec![0, 1],
     };
     for i in 0..3 {
-        candidates.push(single("accel_scale_factor", "accel", AXES[i].into(), "1", mapped(&|(_, f)| {
-            let mut e = [0.0; 6];
-            e[3 + i] = f[i];
-            e
-        })));
+        candidates.push(single(
+            "accel_scale_factor",
+            "accel",
+            AXES[i].into(),
+            "1",
+            mapped(&|(_, f)| {
+                let mut e = [0.0; 6];
+                e[3 + i] = f[i];
+                e
+            }),
+        ));
     }
     for i in 0..3 {
         for j in (0..3).filter(|&j| j != i) {
-            candidates.push(single("accel_misalignment", "accel", format!("{}{}", AXES[i], AXES[j]), "1", mapped(&|(_, f)| {
-                let mut e = [0.0; 6];
-                e[3 + i] = f[j];
-                e
-            })));
+            candidates.push(single(
+                "accel_misalignment",
+                "accel",
+                format!("{}{}", AXES[i], AXES[j]),
+                "1",
+                mapped(&|(_, f)| {
+                    let mut e = [0.0; 6];
+                    e[3 + i] = f[j];
+                    e
+                }),
+            ));
         }
     }
     for i in 0..3 {
-        candidates.push(single("gyro_scale_factor", "gyro", AXES[i].into(), "1", mapped(&|(w, _)| {
-            let mut e = [0.0; 6];
-            e[i] = w[i];
-            e
-        })));
+        candidates.push(single(
+            "gyro_scale_factor",
+            "gyro",
+            AXES[i].into(),
+            "1",
+            mapped(&|(w, _)| {
+                let mut e = [0.0; 6];
+                e[i] = w[i];
+                e
+            }),
+        ));
     }
     for i in 0..3 {
         for j in (0..3).filter(|&j| j != i) {
-            candidates.push(single("gyro_misalignment", "gyro", format!("{}{}", AXES[i], AXES[j]), "1", mapped(&|(w, _)| {
-                let mut e = [0.0; 6];
-                e[i] = w[j];
-                e
-            })));
+            candidates.push(single(
+                "gyro_misalignment",
+                "gyro",
+                format!("{}{}", AXES[i], AXES[j]),
+                "1",
+                mapped(&|(w, _)| {
+                    let mut e = [0.0; 6];
+                    e[i] = w[j];
+                    e
+                }),
+            ));
         }
     }
     for i in 0..3 {
@@ -1517,7 +1554,10 @@ pub fn analyze_angles(file: &AnglesFile) -> Result<Analysis, InputError> {
     }
     for k in 0..3 {
         let col: Vec<f64> = which.iter().map(|&(_, kk)| if kk == k { 1.0 } else { 0.0 }).collect();
-        candidates.push(Candidate { groups: vec![if k == 2 { 1 } else { 0 }], ..single("reference_offset", "reference", ENU[k].into(), "rad", col) });
+        candidates.push(Candidate {
+            groups: vec![if k == 2 { 1 } else { 0 }],
+            ..single("reference_offset", "reference", ENU[k].into(), "rad", col)
+        });
     }
     for (pi, r) in file.rows.iter().enumerate() {
         for k in 0..3 {
@@ -1553,7 +1593,19 @@ pub fn analyze_angles(file: &AnglesFile) -> Result<Analysis, InputError> {
         residual_names: problem.group_names.clone(),
         ..FigureData::default()
     };
-    Ok(finish(problem, selection, effects, residual_rms, Default::default(), nobs, m, "angles", &file.source, Vec::new(), figures))
+    Ok(finish(
+        problem,
+        selection,
+        effects,
+        residual_rms,
+        Default::default(),
+        nobs,
+        m,
+        "angles",
+        &file.source,
+        Vec::new(),
+        figures,
+    ))
 }
 
 /// Reads `path` as an angles file when it starts with `# sinscal-angles`, otherwise as a recording, and
@@ -1573,7 +1625,11 @@ pub fn summary(a: &Analysis) -> String {
     use std::fmt::Write as _;
     let mut s = String::new();
     let _ = writeln!(s, "analysis of {} ({})", a.source, a.input);
-    let _ = writeln!(s, "base model: constant biases + white noise, {} observations, ln L = {:.2}, BIC = {:.2}", a.base_model.observations, a.base_model.log_likelihood, a.base_model.bic);
+    let _ = writeln!(
+        s,
+        "base model: constant biases + white noise, {} observations, ln L = {:.2}, BIC = {:.2}",
+        a.base_model.observations, a.base_model.log_likelihood, a.base_model.bic
+    );
     for (k, v) in &a.base_model.residual_rms {
         let _ = writeln!(s, "  residual RMS {k}: {v:.4e}");
     }

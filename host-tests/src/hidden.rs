@@ -105,13 +105,15 @@ fn axis(c: char) -> usize {
 /// Draws the trial `seed` of `effect` (one of [`catalogue`]) and returns its scenario and truth.
 pub fn draw(effect: &'static str, seed: u64, reference: &ReferenceErrors) -> (ScenarioFile, Hidden) {
     let mut rng = ChaCha8Rng::seed_from_u64(seed.wrapping_mul(0x9E37_79B9_7F4A_7C15) ^ effect.len() as u64);
-    let axes_list = catalogue().into_iter().find(|(e, _)| *e == effect).map(|(_, a)| a).expect("effect in the catalogue");
+    let axes_list =
+        catalogue().into_iter().find(|(e, _)| *e == effect).map(|(_, a)| a).expect("effect in the catalogue");
     let axes = axes_list[rng.random_range(0..axes_list.len())];
     let sign = if rng.random::<bool>() { 1.0 } else { -1.0 };
     let snr = rng.random_range(10.0..20.0);
     let mut s = clean_scenario();
     let positions = s.schedule.positions_deg.len() as u32;
-    let mut hidden = Hidden { effect, sensor: "", axes: axes.to_string(), pos: None, value: 0.0, tau_s: None, frequency_hz: None };
+    let mut hidden =
+        Hidden { effect, sensor: "", axes: axes.to_string(), pos: None, value: 0.0, tau_s: None, frequency_hz: None };
     let se = |name: String| -> f64 {
         *reference.std_error.get(&name).unwrap_or_else(|| panic!("no reference standard error for {name}"))
     };

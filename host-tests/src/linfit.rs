@@ -111,8 +111,17 @@ pub fn fit(obs: &Observations, columns: &[&[f64]]) -> Option<LinearFit> {
     // Start from the group's mean square (or the known variances).
     let mut variance: Vec<f64> = (0..obs.groups)
         .map(|g| {
-            let (s, c) = obs.y.iter().zip(&obs.group).filter(|(_, &gi)| gi == g).fold((0.0, 0usize), |(s, c), (y, _)| (s + y * y, c + 1));
-            if c > 0 { (s / c as f64).max(1e-300) } else { 1.0 }
+            let (s, c) = obs
+                .y
+                .iter()
+                .zip(&obs.group)
+                .filter(|(_, &gi)| gi == g)
+                .fold((0.0, 0usize), |(s, c), (y, _)| (s + y * y, c + 1));
+            if c > 0 {
+                (s / c as f64).max(1e-300)
+            } else {
+                1.0
+            }
         })
         .collect();
     let weight = |i: usize, variance: &[f64]| -> f64 {
@@ -156,7 +165,9 @@ pub fn fit(obs: &Observations, columns: &[&[f64]]) -> Option<LinearFit> {
         }
         let ll = match &obs.sigma {
             Some(s) => (0..n)
-                .map(|i| -0.5 * ((2.0 * std::f64::consts::PI * s[i] * s[i]).ln() + residual[i] * residual[i] / (s[i] * s[i])))
+                .map(|i| {
+                    -0.5 * ((2.0 * std::f64::consts::PI * s[i] * s[i]).ln() + residual[i] * residual[i] / (s[i] * s[i]))
+                })
                 .sum(),
             None => {
                 for g in 0..obs.groups {
@@ -174,7 +185,14 @@ pub fn fit(obs: &Observations, columns: &[&[f64]]) -> Option<LinearFit> {
             (0..obs.groups).map(|g| if count[g] > 0 { (ss[g] / count[g] as f64).sqrt() } else { 0.0 }).collect();
         let converged = (ll - previous_ll).abs() <= 1e-9 * ll.abs().max(1.0);
         previous_ll = ll;
-        result = Some(LinearFit { beta, covariance: inverse, residual, variance: variance.clone(), rms, log_likelihood: ll });
+        result = Some(LinearFit {
+            beta,
+            covariance: inverse,
+            residual,
+            variance: variance.clone(),
+            rms,
+            log_likelihood: ll,
+        });
         if converged {
             break;
         }

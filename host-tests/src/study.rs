@@ -352,7 +352,7 @@ fn solve(mut a: Vec<Vec<f64>>, mut b: Vec<f64>) -> Option<Vec<f64>> {
     let n = b.len();
     for k in 0..n {
         let p = (k..n).max_by(|&i, &j| a[i][k].abs().total_cmp(&a[j][k].abs()))?;
-        if !(a[p][k].abs() > 1e-300) {
+        if a[p][k].is_nan() || a[p][k].abs() <= 1e-300 {
             return None;
         }
         a.swap(k, p);
@@ -679,7 +679,7 @@ fn nnls(rows: &[Vec<f64>], y: &[f64]) -> Option<(Vec<f64>, f64)> {
     for mask in 1u32..(1 << p) {
         let cols: Vec<usize> = (0..p).filter(|j| mask & (1 << j) != 0).collect();
         let norms: Vec<f64> = cols.iter().map(|&j| rows.iter().map(|r| r[j] * r[j]).sum::<f64>().sqrt()).collect();
-        if norms.iter().any(|v| !(*v > 0.0)) {
+        if norms.iter().any(|v| v.is_nan() || *v <= 0.0) {
             continue;
         }
         let sub_rows: Vec<Vec<f64>> =
@@ -733,7 +733,7 @@ pub fn fit_extended_noise(points: &[crate::noise::AllanPoint]) -> (NoiseTerms, O
                 .map(|((q, m), md)| ((md - m) / (2.0 * q.rel_uncertainty * md.max(f64::MIN_POSITIVE))).powi(2))
                 .sum();
             out = Some((c, ss));
-            if model.iter().any(|v| !(*v > 0.0)) {
+            if model.iter().any(|v| v.is_nan() || *v <= 0.0) {
                 break;
             }
             reference = model;
@@ -1025,7 +1025,8 @@ fn gyro_spread(poses: &[Pose], sigma: [f64; 3]) -> (f64, f64) {
 
 /// Held-out RMS residual (rad/s) of per-pose gyro mean models fitted on even poses, evaluated on odd ones.
 fn gyro_models(poses: &[Pose]) -> (Vec<(&'static str, f64)>, Option<M3>) {
-    let designs: [(&'static str, fn(&Pose) -> Vec<f64>); 3] = [
+    type Design = (&'static str, fn(&Pose) -> Vec<f64>);
+    let designs: [Design; 3] = [
         ("constant bias", |_| vec![1.0]),
         ("bias + drift", |p| vec![1.0, p.t_mid_s]),
         ("bias + g-sensitivity", |p| vec![1.0, p.mean_force_mps2[0], p.mean_force_mps2[1], p.mean_force_mps2[2]]),

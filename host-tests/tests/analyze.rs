@@ -21,7 +21,8 @@ fn json_report_and_verdict_none_on_a_clean_session() {
     simulate(&clean_scenario(), 7, "clean").write(&rec).unwrap();
     let json = dir.path().join("a.json");
     let report = dir.path().join("report");
-    let out = sinscal().arg("analyze").arg(&rec).arg("--json").arg(&json).arg("--report").arg(&report).assert().success();
+    let out =
+        sinscal().arg("analyze").arg(&rec).arg("--json").arg(&json).arg("--report").arg(&report).assert().success();
     let stdout = String::from_utf8(out.get_output().stdout.clone()).unwrap();
     assert!(stdout.contains("verdict: none"), "{stdout}");
     let v: Value = serde_json::from_str(&std::fs::read_to_string(&json).unwrap()).unwrap();
@@ -62,7 +63,17 @@ fn effects_have_the_spec_fields_strongest_first_and_the_verdict_is_the_first() {
     let effects = v["effects"].as_array().unwrap();
     assert!(effects.len() >= 2, "{effects:?}");
     for e in effects {
-        for key in ["effect", "sensor", "axes", "estimate", "std_error", "unit", "delta_bic", "residual_rms_before", "residual_rms_after"] {
+        for key in [
+            "effect",
+            "sensor",
+            "axes",
+            "estimate",
+            "std_error",
+            "unit",
+            "delta_bic",
+            "residual_rms_before",
+            "residual_rms_after",
+        ] {
             assert!(!e[key].is_null(), "{key} missing in {e}");
         }
         assert!(e["delta_bic"].as_f64().unwrap() < 0.0);
@@ -72,7 +83,10 @@ fn effects_have_the_spec_fields_strongest_first_and_the_verdict_is_the_first() {
     assert!(bics.windows(2).all(|w| w[0] <= w[1]), "{bics:?}");
     assert_eq!(v["verdict"], effects[0]["effect"]);
     let sf = effects.iter().find(|e| e["effect"] == "accel_scale_factor").expect("scale factor found");
-    assert_eq!((sf["sensor"].as_str(), sf["axes"].as_str(), sf["unit"].as_str()), (Some("accel"), Some("x"), Some("1")));
+    assert_eq!(
+        (sf["sensor"].as_str(), sf["axes"].as_str(), sf["unit"].as_str()),
+        (Some("accel"), Some("x"), Some("1"))
+    );
     assert!((sf["estimate"].as_f64().unwrap() / 3.0e-4 - 1.0).abs() < 0.2);
     let drift = effects.iter().find(|e| e["effect"] == "bias_drift").expect("drift found");
     assert_eq!((drift["sensor"].as_str(), drift["axes"].as_str()), (Some("gyro"), Some("z")));
@@ -134,7 +148,8 @@ fn angles_files_find_a_position_error_and_stay_quiet_when_clean() {
         assert!(clean.unobservable.iter().any(|u| u.starts_with("bias_drift")));
     }
     // 30 arcsec about north at position 3, with the standard deviations given.
-    let a = analyze_angles(&AnglesFile::parse(&angles_text(Some((3, 1, -30.0 * ARCSEC)), true), "p3.csv").unwrap()).unwrap();
+    let a = analyze_angles(&AnglesFile::parse(&angles_text(Some((3, 1, -30.0 * ARCSEC)), true), "p3.csv").unwrap())
+        .unwrap();
     let e = &a.effects[0];
     assert_eq!((e.effect.as_str(), e.axes.as_str(), e.pos), ("position_error", "n", Some(3)), "{:?}", a.effects);
     assert!((e.estimate / (-30.0 * ARCSEC) - 1.0).abs() < 0.3, "{}", e.estimate / ARCSEC);
@@ -154,11 +169,23 @@ fn a_table_error_seen_in_a_recording_has_the_same_sign_through_calibrate_and_the
     let rec = sinscal_host::recording::Recording::read(&rec_path).unwrap();
     let from_recording = analyze_recording(&rec).unwrap();
     let e = &from_recording.effects[0];
-    assert_eq!((e.effect.as_str(), e.axes.as_str(), e.pos), ("position_error", "e", Some(4)), "{:?}", from_recording.effects);
+    assert_eq!(
+        (e.effect.as_str(), e.axes.as_str(), e.pos),
+        ("position_error", "e", Some(4)),
+        "{:?}",
+        from_recording.effects
+    );
     assert!((e.estimate / (20.0 * ARCSEC) - 1.0).abs() < 0.3);
 
     let cal_path = dir.path().join("cal.json");
-    sinscal().arg("calibrate").arg(&rec_path).arg("--no-reference-offset").arg("--json").arg(&cal_path).assert().success();
+    sinscal()
+        .arg("calibrate")
+        .arg(&rec_path)
+        .arg("--no-reference-offset")
+        .arg("--json")
+        .arg(&cal_path)
+        .assert()
+        .success();
     let cal: Value = serde_json::from_str(&std::fs::read_to_string(&cal_path).unwrap()).unwrap();
     let mut text = String::from("# sinscal-angles: 1\n# latitude_deg: 45.7796\n# gravity_mps2: ");
     text += &format!("{}\npos,pitch_deg,roll_deg,heading_deg,phi_e_rad,phi_n_rad,phi_u_rad,phi_e_std_rad,phi_n_std_rad,phi_u_std_rad\n", cal["gravity_mps2"]);
@@ -166,8 +193,16 @@ fn a_table_error_seen_in_a_recording_has_the_same_sign_through_calibrate_and_the
         let f = |k: &str, i: usize| p[k][i].as_f64().unwrap();
         text += &format!(
             "{},{},{},{},{:e},{:e},{:e},{:e},{:e},{:e}\n",
-            p["pos"], p["pitch_deg"], p["roll_deg"], p["heading_deg"],
-            f("phi_rad", 0), f("phi_rad", 1), f("phi_rad", 2), f("phi_std_rad", 0), f("phi_std_rad", 1), f("phi_std_rad", 2)
+            p["pos"],
+            p["pitch_deg"],
+            p["roll_deg"],
+            p["heading_deg"],
+            f("phi_rad", 0),
+            f("phi_rad", 1),
+            f("phi_rad", 2),
+            f("phi_std_rad", 0),
+            f("phi_std_rad", 1),
+            f("phi_std_rad", 2)
         );
     }
     let angles_path = dir.path().join("angles.csv");
@@ -176,7 +211,11 @@ fn a_table_error_seen_in_a_recording_has_the_same_sign_through_calibrate_and_the
     let v: Value = serde_json::from_slice(&out.get_output().stdout).unwrap();
     assert_eq!(v["input"], "angles");
     let e = &v["effects"][0];
-    assert_eq!((e["effect"].as_str(), e["axes"].as_str(), e["pos"].as_u64()), (Some("position_error"), Some("e"), Some(4)), "{v}");
+    assert_eq!(
+        (e["effect"].as_str(), e["axes"].as_str(), e["pos"].as_u64()),
+        (Some("position_error"), Some("e"), Some(4)),
+        "{v}"
+    );
     assert!((e["estimate"].as_f64().unwrap() / (20.0 * ARCSEC) - 1.0).abs() < 0.3, "{e}");
 }
 

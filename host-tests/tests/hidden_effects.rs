@@ -63,7 +63,13 @@ fn campaign_detection_and_false_alarm_rates() {
                 .map(|w| {
                     let jobs = &jobs;
                     let reference = &reference;
-                    s.spawn(move || jobs.iter().skip(w).step_by(workers).map(|&seed| trial(effect, seed, reference)).collect::<Vec<_>>())
+                    s.spawn(move || {
+                        jobs.iter()
+                            .skip(w)
+                            .step_by(workers)
+                            .map(|&seed| trial(effect, seed, reference))
+                            .collect::<Vec<_>>()
+                    })
                 })
                 .collect();
             handles.into_iter().flat_map(|h| h.join().expect("trial thread")).collect()
@@ -81,7 +87,9 @@ fn campaign_detection_and_false_alarm_rates() {
         let handles: Vec<_> = (0..workers)
             .map(|w| {
                 let clean = &clean;
-                s.spawn(move || clean.iter().skip(w).step_by(workers).filter(|&&seed| clean_trial(seed).verdict != "none").count())
+                s.spawn(move || {
+                    clean.iter().skip(w).step_by(workers).filter(|&&seed| clean_trial(seed).verdict != "none").count()
+                })
             })
             .collect();
         handles.into_iter().map(|h| h.join().expect("clean thread")).sum()
