@@ -57,16 +57,6 @@ pub fn write_report(a: &Analysis, dir: &Path) -> anyhow::Result<Vec<String>> {
             "| effect | sensor | axes | estimate | std error | unit | delta BIC | residual RMS before -> after | extra | aliases |\n|---|---|---|---|---|---|---|---|---|---|"
         );
         for e in &a.effects {
-            let mut extra = String::new();
-            if let Some(p) = e.pos {
-                let _ = write!(extra, "pos {p} ");
-            }
-            if let Some(t) = e.tau_s {
-                let _ = write!(extra, "tau {t:.3} s ");
-            }
-            if let Some(f) = e.frequency_hz {
-                let _ = write!(extra, "f {f:.4} Hz");
-            }
             let _ = writeln!(
                 md,
                 "| {} | {} | {} | {:+.4e} | {:.2e} | {} | {:.1} | {:.3e} -> {:.3e} {} ({}) | {} | {} |",
@@ -81,7 +71,7 @@ pub fn write_report(a: &Analysis, dir: &Path) -> anyhow::Result<Vec<String>> {
                 e.residual_rms_after,
                 e.residual_unit,
                 e.residual_of,
-                extra.trim(),
+                e.extras(),
                 e.aliases.join(", ")
             );
         }

@@ -111,6 +111,23 @@ pub struct Effect {
     pub aliases: Vec<String>,
 }
 
+impl Effect {
+    /// The extra fields in words: "pos 3", "tau 1.234 s", "f 7.3000 Hz" (comma-separated, empty if none).
+    pub fn extras(&self) -> String {
+        let mut parts = Vec::new();
+        if let Some(p) = self.pos {
+            parts.push(format!("pos {p}"));
+        }
+        if let Some(t) = self.tau_s {
+            parts.push(format!("tau {t:.3} s"));
+        }
+        if let Some(f) = self.frequency_hz {
+            parts.push(format!("f {f:.4} Hz"));
+        }
+        parts.join(", ")
+    }
+}
+
 /// The base model's fit.
 #[derive(Clone, Debug, Serialize)]
 pub struct BaseModel {
@@ -459,6 +476,65 @@ fn effect_of(problem: &Problem, selection: &Selection, index: usize) -> Effect {
 // Recordings
 // ---------------------------------------------------------------------------------------------------
 
+/// A sensor error proportional to the true rate or force: the output `channel` (gx..az = 0..5) sees
+/// `parameter * source[axis]`, with `source` the body rate (rad/s) or specific force (m/s^2) of SPEC.md's
+/// sensor model (scale factors, misalignments, gyro g-sensitivity).
+struct SensorTerm {
+    effect: &'static str,
+    sensor: &'static str,
+    axes: String,
+    unit: &'static str,
+    channel: usize,
+    from_force: bool,
+    axis: usize,
+}
+
+impl SensorTerm {
+    /// The output error per unit parameter at true body rate `rate_b_radps` and force `force_b_mps2`.
+    fn per_unit(&self, rate_b_radps: [f64; 3], force_b_mps2: [f64; 3]) -> f64 {
+        if self.from_force {
+            force_b_mps2[self.axis]
+        } else {
+            rate_b_radps[self.axis]
+        }
+    }
+}
+
+/// The terms of the catalogue's sensor model: accelerometer scale factors and misalignments, and, with
+/// `gyros`, the gyro scale factors, misalignments and g-sensitivity.
+fn sensor_terms(gyros: bool) -> Vec<SensorTerm> {
+    let mut terms = Vec::new();
+    let mut add = |effect: &'static str, sensor, unit, channel: usize, from_force, i: usize, j: usize| {
+        let axes =
+            if effect.ends_with("scale_factor") { AXES[i].to_string() } else { format!("{}{}", AXES[i], AXES[j]) };
+        terms.push(SensorTerm { effect, sensor, axes, unit, channel, from_force, axis: j });
+    };
+    for i in 0..3 {
+        add("accel_scale_factor", "accel", "1", 3 + i, true, i, i);
+    }
+    for i in 0..3 {
+        for j in (0..3).filter(|&j| j != i) {
+            add("accel_misalignment", "accel", "1", 3 + i, true, i, j);
+        }
+    }
+    if gyros {
+        for i in 0..3 {
+            add("gyro_scale_factor", "gyro", "1", i, false, i, i);
+        }
+        for i in 0..3 {
+            for j in (0..3).filter(|&j| j != i) {
+                add("gyro_misalignment", "gyro", "1", i, false, i, j);
+            }
+        }
+        for i in 0..3 {
+            for j in 0..3 {
+                add("gyro_g_sensitivity", "gyro", "(rad/s)/(m/s^2)", i, true, i, j);
+            }
+        }
+    }
+    terms
+}
+
 struct DwellData {
     pos: u32,
     /// Reference C_b^n, when the heading is known.
@@ -480,15 +556,26 @@ fn unit(k: usize) -> [f64; 3] {
     e
 }
 
-/// Straight-line fit `y = a + b (t - t_mean)`; returns (a, b, residuals).
-fn detrend(t: &[f64], y: &[f64]) -> (f64, f64, Vec<f64>) {
+/// A dwell's straight-line fit `y = a + b (t - t_mean)`.
+struct Trend {
+    /// Slope `b`, channel unit per second.
+    slope_per_s: f64,
+    /// Its standard error for white residuals, same unit.
+    slope_std_error_per_s: f64,
+    /// `y` minus the line.
+    residual: Vec<f64>,
+}
+
+fn detrend(t: &[f64], y: &[f64]) -> Trend {
     let n = t.len() as f64;
     let tm = t.iter().sum::<f64>() / n;
     let ym = y.iter().sum::<f64>() / n;
     let stt: f64 = t.iter().map(|t| (t - tm) * (t - tm)).sum();
     let sty: f64 = t.iter().zip(y).map(|(t, y)| (t - tm) * (y - ym)).sum();
     let b = if stt > 0.0 { sty / stt } else { 0.0 };
-    (ym, b, t.iter().zip(y).map(|(t, y)| y - ym - b * (t - tm)).collect())
+    let residual: Vec<f64> = t.iter().zip(y).map(|(t, y)| y - ym - b * (t - tm)).collect();
+    let s2 = residual.iter().map(|v| v * v).sum::<f64>() / (n - 2.0).max(1.0);
+    Trend { slope_per_s: b, slope_std_error_per_s: (s2 / stt).sqrt(), residual }
 }
 
 fn block_ranges(n: usize) -> Vec<(usize, usize)> {
@@ -613,63 +700,12 @@ pub fn analyze_recording(recording: &Recording) -> Result<Analysis, InputError> 
         variants: vec![(None, col)],
         groups,
     };
-    for i in 0..3 {
-        candidates.push(one(
-            "accel_scale_factor",
-            "accel",
-            AXES[i].into(),
-            "1",
-            column(&|b: &BlockObs| if b.channel == 3 + i { force_b(b)[i] } else { 0.0 }),
-            vec![3 + i],
-        ));
-    }
-    for i in 0..3 {
-        for j in (0..3).filter(|&j| j != i) {
-            candidates.push(one(
-                "accel_misalignment",
-                "accel",
-                format!("{}{}", AXES[i], AXES[j]),
-                "1",
-                column(&|b: &BlockObs| if b.channel == 3 + i { force_b(b)[j] } else { 0.0 }),
-                vec![3 + i],
-            ));
-        }
+    for t in sensor_terms(all_heading) {
+        let col = column(&|b: &BlockObs| if b.channel == t.channel { t.per_unit(rate_b(b), force_b(b)) } else { 0.0 });
+        let groups = vec![t.channel];
+        candidates.push(one(t.effect, t.sensor, t.axes, t.unit, col, groups));
     }
     if all_heading {
-        for i in 0..3 {
-            candidates.push(one(
-                "gyro_scale_factor",
-                "gyro",
-                AXES[i].into(),
-                "1",
-                column(&|b: &BlockObs| if b.channel == i { rate_b(b)[i] } else { 0.0 }),
-                vec![i],
-            ));
-        }
-        for i in 0..3 {
-            for j in (0..3).filter(|&j| j != i) {
-                candidates.push(one(
-                    "gyro_misalignment",
-                    "gyro",
-                    format!("{}{}", AXES[i], AXES[j]),
-                    "1",
-                    column(&|b: &BlockObs| if b.channel == i { rate_b(b)[j] } else { 0.0 }),
-                    vec![i],
-                ));
-            }
-        }
-        for i in 0..3 {
-            for j in 0..3 {
-                candidates.push(one(
-                    "gyro_g_sensitivity",
-                    "gyro",
-                    format!("{}{}", AXES[i], AXES[j]),
-                    "(rad/s)/(m/s^2)",
-                    column(&|b: &BlockObs| if b.channel == i { force_b(b)[j] } else { 0.0 }),
-                    vec![i],
-                ));
-            }
-        }
         // Table attitude errors: d(measurement)/d(err_k) = C^T (e_k x v).
         let attitude_column = |k: usize, only: Option<usize>| {
             column(&|b: &BlockObs| {
@@ -804,8 +840,11 @@ pub fn analyze_recording(recording: &Recording) -> Result<Analysis, InputError> 
     let mut effects: Vec<Effect> = (0..selection.chosen.len()).map(|i| effect_of(&problem, &selection, i)).collect();
 
     // Samples after each dwell's mean and trend.
-    let detrended: Vec<Vec<Vec<f64>>> =
-        (0..6).map(|c| dwells.iter().map(|d| detrend(&d.t, &d.y[c]).2).collect()).collect();
+    let mut trends: Vec<Vec<Trend>> = (0..6).map(|c| dwells.iter().map(|d| detrend(&d.t, &d.y[c])).collect()).collect();
+    let detrended: Vec<Vec<Vec<f64>>> = trends
+        .iter_mut()
+        .map(|per_dwell| per_dwell.iter_mut().map(|t| std::mem::take(&mut t.residual)).collect())
+        .collect();
     let mut figures = FigureData { rate_hz, ..FigureData::default() };
     let longest = (0..dwells.len()).max_by_key(|&i| dwells[i].t.len()).unwrap_or(0);
     let mut diagnostics = Vec::new();
@@ -923,17 +962,7 @@ pub fn analyze_recording(recording: &Recording) -> Result<Analysis, InputError> 
         }
         let long = &detrended[c][longest];
         let whiteness = ljung_box(long, 20).map(|l| l.p_value).unwrap_or(f64::NAN);
-        let max_trend_z = dwells
-            .iter()
-            .map(|d| {
-                let (_, b, r) = detrend(&d.t, &d.y[c]);
-                let n = r.len() as f64;
-                let s2 = r.iter().map(|v| v * v).sum::<f64>() / (n - 2.0).max(1.0);
-                let tm = d.t.iter().sum::<f64>() / n;
-                let stt: f64 = d.t.iter().map(|t| (t - tm) * (t - tm)).sum();
-                (b / (s2 / stt).sqrt()).abs()
-            })
-            .fold(0.0, f64::max);
+        let max_trend_z = trends[c].iter().map(|t| (t.slope_per_s / t.slope_std_error_per_s).abs()).fold(0.0, f64::max);
         diagnostics.push(ChannelDiagnostics {
             channel: CHANNELS[c].into(),
             detrended_rms: rms,
@@ -953,13 +982,12 @@ pub fn analyze_recording(recording: &Recording) -> Result<Analysis, InputError> 
     let mut block_rms = std::collections::BTreeMap::new();
     for c in 0..6 {
         if present[c] {
-            let d: Vec<f64> = detrended[c].iter().flatten().copied().collect();
-            // Samples minus the base model: the dwell's deviation from the fitted bias plus the detrended part.
-            let gi = c;
-            let block = selection.base_fit.rms[gi];
+            // Samples minus the base model: the dwell's deviation from the fitted bias (block level) plus the
+            // detrended part (diagnostics).
+            let block = selection.base_fit.rms[c];
             block_rms.insert(CHANNELS[c].to_string(), block);
-            let sample_rms = (d.iter().map(|v| v * v).sum::<f64>() / d.len() as f64 + block * block).sqrt();
-            residual_rms.insert(CHANNELS[c].to_string(), sample_rms);
+            let detrended_rms = diagnostics[c].detrended_rms;
+            residual_rms.insert(CHANNELS[c].to_string(), (detrended_rms * detrended_rms + block * block).sqrt());
         }
     }
     figures.residual_names = CHANNELS.iter().map(|s| s.to_string()).collect();
@@ -1467,10 +1495,6 @@ pub fn analyze_angles(file: &AnglesFile) -> Result<Analysis, InputError> {
         .iter()
         .map(|s| s.to_string())
         .collect();
-    // A sensor error delta (gyro 0..3, accel 3..6) at a position maps to the angles through the design rows.
-    let mapped = |sensor_error: &dyn Fn(([f64; 3], [f64; 3])) -> [f64; 6]| -> Vec<f64> {
-        (0..nobs).map(|i| (0..6).map(|j| design[i][j] * sensor_error(predicted[i])[j]).sum()).collect()
-    };
     let mut candidates = Vec::new();
     let single = |effect, sensor, axes: String, unit, col: Vec<f64>| Candidate {
         effect,
@@ -1481,76 +1505,10 @@ pub fn analyze_angles(file: &AnglesFile) -> Result<Analysis, InputError> {
         variants: vec![(None, col)],
         groups: vec![0, 1],
     };
-    for i in 0..3 {
-        candidates.push(single(
-            "accel_scale_factor",
-            "accel",
-            AXES[i].into(),
-            "1",
-            mapped(&|(_, f)| {
-                let mut e = [0.0; 6];
-                e[3 + i] = f[i];
-                e
-            }),
-        ));
-    }
-    for i in 0..3 {
-        for j in (0..3).filter(|&j| j != i) {
-            candidates.push(single(
-                "accel_misalignment",
-                "accel",
-                format!("{}{}", AXES[i], AXES[j]),
-                "1",
-                mapped(&|(_, f)| {
-                    let mut e = [0.0; 6];
-                    e[3 + i] = f[j];
-                    e
-                }),
-            ));
-        }
-    }
-    for i in 0..3 {
-        candidates.push(single(
-            "gyro_scale_factor",
-            "gyro",
-            AXES[i].into(),
-            "1",
-            mapped(&|(w, _)| {
-                let mut e = [0.0; 6];
-                e[i] = w[i];
-                e
-            }),
-        ));
-    }
-    for i in 0..3 {
-        for j in (0..3).filter(|&j| j != i) {
-            candidates.push(single(
-                "gyro_misalignment",
-                "gyro",
-                format!("{}{}", AXES[i], AXES[j]),
-                "1",
-                mapped(&|(w, _)| {
-                    let mut e = [0.0; 6];
-                    e[i] = w[j];
-                    e
-                }),
-            ));
-        }
-    }
-    for i in 0..3 {
-        for j in 0..3 {
-            candidates.push(single(
-                "gyro_g_sensitivity",
-                "gyro",
-                format!("{}{}", AXES[i], AXES[j]),
-                "(rad/s)/(m/s^2)",
-                mapped(&|(_, f)| {
-                    let mut e = [0.0; 6];
-                    e[i] = f[j];
-                    e
-                }),
-            ));
-        }
+    // A sensor error at a position maps to the angles through the design rows.
+    for t in sensor_terms(true) {
+        let col = (0..nobs).map(|i| design[i][t.channel] * t.per_unit(predicted[i].0, predicted[i].1)).collect();
+        candidates.push(single(t.effect, t.sensor, t.axes, t.unit, col));
     }
     for k in 0..3 {
         let col: Vec<f64> = which.iter().map(|&(_, kk)| if kk == k { 1.0 } else { 0.0 }).collect();
@@ -1641,11 +1599,10 @@ pub fn summary(a: &Analysis) -> String {
         for e in &a.effects {
             let _ = write!(
                 s,
-                "  {:<20} {:<9} {:<4}{} estimate {:+.4e} +- {:.2e} {}  delta BIC {:.1}  residual RMS {:.3e} -> {:.3e} {} ({})",
+                "  {:<20} {:<9} {:<4} estimate {:+.4e} +- {:.2e} {}  delta BIC {:.1}  residual RMS {:.3e} -> {:.3e} {} ({})",
                 e.effect,
                 e.sensor,
                 e.axes,
-                e.pos.map_or(String::new(), |p| format!(" pos {p}")),
                 e.estimate,
                 e.std_error,
                 e.unit,
@@ -1655,11 +1612,9 @@ pub fn summary(a: &Analysis) -> String {
                 e.residual_unit,
                 e.residual_of
             );
-            if let Some(t) = e.tau_s {
-                let _ = write!(s, "  tau {t:.3} s");
-            }
-            if let Some(f) = e.frequency_hz {
-                let _ = write!(s, "  f {f:.4} Hz");
+            let extras = e.extras();
+            if !extras.is_empty() {
+                let _ = write!(s, "  {extras}");
             }
             if !e.aliases.is_empty() {
                 let _ = write!(s, "  (indistinguishable here from: {})", e.aliases.join(", "));
