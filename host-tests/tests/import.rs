@@ -2,10 +2,12 @@
 //! mapping, error messages with line numbers, the command line) and on the real data sets in the directory named by
 //! the environment variable `SINSCAL_DATA` (skipped with a message when it is not set).
 
-use std::io::Write as _;
-use std::path::{Path, PathBuf};
+use std::path::PathBuf;
+
+mod common;
 
 use assert_cmd::Command;
+use common::{data_dir, data_file};
 use sinscal_host::import::{
     detect_static_intervals, ferraris_pose, import_imucal, import_imucal_raw, import_imutk, import_psins,
     level_attitude_deg, parse_imucal, parse_imucal_labels, parse_imucal_raw, parse_imutk, parse_psins, position_stats,
@@ -542,34 +544,6 @@ fn cli_imucal_finds_the_label_file_beside_the_session() {
 
 // -------------------------------------------------------------------------------------------------------------
 // Real data (SINSCAL_DATA)
-
-/// The shared data directory, or `None` (with a message) when `SINSCAL_DATA` is not set.
-fn data_dir() -> Option<PathBuf> {
-    match std::env::var_os("SINSCAL_DATA") {
-        // A relative path means relative to the repository root (as CI gives it), not to this package's
-        // directory, where cargo runs the tests.
-        Some(dir) => {
-            let dir = PathBuf::from(dir);
-            Some(if dir.is_relative() { Path::new(env!("CARGO_MANIFEST_DIR")).join("..").join(dir) } else { dir })
-        }
-        None => {
-            // Written to the stderr handle, not through eprintln!, so that the test harness's output capture
-            // does not hide it: a skipped test must say so in a plain `cargo test` run.
-            let _ = writeln!(
-                std::io::stderr(),
-                "SKIPPED (real-data test): SINSCAL_DATA is not set; set it to the shared data directory"
-            );
-            None
-        }
-    }
-}
-
-/// A file of the data directory; missing is a failure (SINSCAL_DATA is set).
-fn data_file(dir: &Path, relative: &str) -> PathBuf {
-    let path = dir.join(relative);
-    assert!(path.is_file(), "SINSCAL_DATA is set but {} is missing", path.display());
-    path
-}
 
 fn print_stats(name: &str, rec: &Recording) {
     for s in position_stats(rec) {

@@ -2,10 +2,12 @@
 //! recover it), the command line's errors, and the three measured data sets in the directory named by
 //! `SINSCAL_DATA` (skipped with a message when it is not set).
 
-use std::io::Write as _;
-use std::path::{Path, PathBuf};
+use std::path::Path;
+
+mod common;
 
 use assert_cmd::Command;
+use common::data_dir;
 use rand::SeedableRng;
 use rand_chacha::ChaCha8Rng;
 use rand_distr::{Distribution, StandardNormal};
@@ -213,28 +215,6 @@ fn cli_usage_errors_exit_2() {
 
 // -------------------------------------------------------------------------------------------------------------
 // Real data (SINSCAL_DATA)
-
-/// The shared data directory, or `None` (with a message) when `SINSCAL_DATA` is not set (the pattern of
-/// tests/import.rs).
-fn data_dir() -> Option<PathBuf> {
-    match std::env::var_os("SINSCAL_DATA") {
-        // A relative path means relative to the repository root (as CI gives it), not to this package's
-        // directory, where cargo runs the tests.
-        Some(dir) => {
-            let dir = PathBuf::from(dir);
-            Some(if dir.is_relative() { Path::new(env!("CARGO_MANIFEST_DIR")).join("..").join(dir) } else { dir })
-        }
-        None => {
-            // Written to the stderr handle, not through eprintln!, so that the test harness's output capture
-            // does not hide it: a skipped test must say so in a plain `cargo test` run.
-            let _ = writeln!(
-                std::io::stderr(),
-                "SKIPPED (real-data test): SINSCAL_DATA is not set; set it to the shared data directory"
-            );
-            None
-        }
-    }
-}
 
 /// Runs the command line on a data set into a temporary report directory; returns the JSON and the directory.
 fn run_cli(dir: &Path, dataset: &str) -> (serde_json::Value, tempfile::TempDir) {

@@ -1,0 +1,33 @@
+//! Helpers shared by the tests that read the measured data sets (`SINSCAL_DATA`).
+#![allow(dead_code)] // each test file uses what it needs
+
+use std::io::Write as _;
+use std::path::{Path, PathBuf};
+
+/// The shared data directory, or `None` (with a message) when `SINSCAL_DATA` is not set.
+pub fn data_dir() -> Option<PathBuf> {
+    match std::env::var_os("SINSCAL_DATA") {
+        // A relative path means relative to the repository root (as CI gives it), not to this package's
+        // directory, where cargo runs the tests.
+        Some(dir) => {
+            let dir = PathBuf::from(dir);
+            Some(if dir.is_relative() { Path::new(env!("CARGO_MANIFEST_DIR")).join("..").join(dir) } else { dir })
+        }
+        None => {
+            // Written to the stderr handle, not through eprintln!, so that the test harness's output capture
+            // does not hide it: a skipped test must say so in a plain `cargo test` run.
+            let _ = writeln!(
+                std::io::stderr(),
+                "SKIPPED (real-data test): SINSCAL_DATA is not set; set it to the shared data directory"
+            );
+            None
+        }
+    }
+}
+
+/// A file of the data directory; missing is a failure (SINSCAL_DATA is set).
+pub fn data_file(dir: &Path, relative: &str) -> PathBuf {
+    let path = dir.join(relative);
+    assert!(path.is_file(), "SINSCAL_DATA is set but {} is missing", path.display());
+    path
+}
