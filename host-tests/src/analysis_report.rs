@@ -6,17 +6,10 @@ use std::path::Path;
 use plotters::prelude::*;
 
 use crate::analyze::{Analysis, CHANNELS};
-use crate::noise::{log_spaced_clusters, overlapping_allan_deviation, welch_psd};
+use crate::noise::{gauss_markov_allan_variance, log_spaced_clusters, overlapping_allan_deviation, welch_psd};
 
 fn err(path: &Path, e: &dyn std::fmt::Display) -> anyhow::Error {
     anyhow::anyhow!("plot {}: {e}", path.display())
-}
-
-/// Allan variance of a first-order Gauss-Markov process of standard deviation `sigma` and time constant
-/// `tau_c` at averaging time `tau` (IEEE 952 closed form).
-pub fn gauss_markov_avar(sigma: f64, tau_c: f64, tau: f64) -> f64 {
-    let x = tau / tau_c;
-    (2.0 * sigma * sigma * tau_c / tau) * (1.0 - (3.0 - 4.0 * (-x).exp() + (-2.0 * x).exp()) / (2.0 * x))
 }
 
 /// Writes `summary.md`, `residuals.png` and, for recordings, `allan.png` and `psd.png` into `dir`.
@@ -179,7 +172,7 @@ fn allan_plot(a: &Analysis, path: &Path) -> anyhow::Result<()> {
             let mut avar = 0.0;
             if let Some((s, t)) = a.figures.correlated[channel] {
                 white = (white - s * s).max(0.0);
-                avar += gauss_markov_avar(s, t, tau);
+                avar += gauss_markov_allan_variance(s, t, tau);
             }
             if let Some((amp, f)) = a.figures.vibration[channel] {
                 white = (white - 0.5 * amp * amp).max(0.0);

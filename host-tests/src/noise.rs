@@ -813,6 +813,17 @@ fn gamma_continued_fraction(a: f64, x: f64) -> f64 {
     ((-x + a * x.ln() - ln_gamma(a)).exp() * h).clamp(0.0, 1.0)
 }
 
+/// Allan variance at averaging time `tau_s` of a first-order Gauss-Markov process of standard deviation
+/// `sigma` (any unit; the result is in that unit squared) and correlation time `tau_c_s` (IEEE Std 952):
+/// `sigma^2 (tau_c/tau)^2 (2 x - 3 + 4 e^-x - e^-2x)` with `x = tau / tau_c` (series `2/3 x` for small `x`).
+pub fn gauss_markov_allan_variance(sigma: f64, tau_c_s: f64, tau_s: f64) -> f64 {
+    let x = tau_s / tau_c_s;
+    if x < 1e-4 {
+        return sigma * sigma * 2.0 / 3.0 * x;
+    }
+    sigma * sigma * (tau_c_s / tau_s).powi(2) * (2.0 * x - 3.0 + 4.0 * (-x).exp() - (-2.0 * x).exp())
+}
+
 // ---------------------------------------------------------------------------------------------------
 // Quantization
 // ---------------------------------------------------------------------------------------------------

@@ -413,13 +413,15 @@ struct TriadState {
     quantizer_carry: [f64; 3],
 }
 
-fn rng(seed: u64, stream: u64) -> ChaCha8Rng {
+/// The seeded random stream `stream` of `seed` (ChaCha8), shared by the simulations.
+pub(crate) fn rng(seed: u64, stream: u64) -> ChaCha8Rng {
     let mut r = ChaCha8Rng::seed_from_u64(seed);
     r.set_stream(stream);
     r
 }
 
-fn normal(r: &mut ChaCha8Rng) -> f64 {
+/// A standard normal draw.
+pub(crate) fn normal(r: &mut ChaCha8Rng) -> f64 {
     StandardNormal.sample(r)
 }
 

@@ -21,9 +21,7 @@
 use std::fmt::Write as _;
 use std::path::{Path, PathBuf};
 
-use rand::SeedableRng;
 use rand_chacha::ChaCha8Rng;
-use rand_distr::{Distribution, StandardNormal};
 use serde_json::{json, Map, Value};
 
 use crate::error::InputError;
@@ -31,9 +29,12 @@ use crate::import::{
     import_imucal, import_imutk, import_psins, position_stats, StaticDetection, FERRARIS_POSES,
     IMUTK_ACCEL_GAIN_COUNTS_PER_MPS2, IMUTK_GRAVITY_MPS2,
 };
-use crate::noise::{fit_noise_terms, log_spaced_clusters, overlapping_allan_deviation, NoiseTerms};
+use crate::noise::{
+    fit_noise_terms, gauss_markov_allan_variance, log_spaced_clusters, overlapping_allan_deviation, NoiseTerms,
+};
 use crate::recording::Recording;
-use crate::synth::{DEG_PER_HOUR, M3, MICRO_G};
+use crate::simulate::{normal, rng};
+use crate::synth::{mul_vec, DEG_PER_HOUR, M3, MICRO_G};
 
 /// Seed of every SIMULATION of a study (the same seed gives the same numbers).
 pub const STUDY_SEED: u64 = 952;
@@ -318,10 +319,6 @@ pub struct Study {
 
 const IDENTITY: M3 = [[1.0, 0.0, 0.0], [0.0, 1.0, 0.0], [0.0, 0.0, 1.0]];
 
-fn mul_vec(a: &M3, v: [f64; 3]) -> [f64; 3] {
-    [0, 1, 2].map(|i| (0..3).map(|k| a[i][k] * v[k]).sum())
-}
-
 fn norm(v: [f64; 3]) -> f64 {
     (v[0] * v[0] + v[1] * v[1] + v[2] * v[2]).sqrt()
 }
@@ -466,16 +463,6 @@ fn white_std(segments: &[&[f64]]) -> f64 {
     (s / (2.0 * n.max(1) as f64)).sqrt()
 }
 
-fn rng(seed: u64, stream: u64) -> ChaCha8Rng {
-    let mut r = ChaCha8Rng::seed_from_u64(seed);
-    r.set_stream(stream);
-    r
-}
-
-fn normal(r: &mut ChaCha8Rng) -> f64 {
-    StandardNormal.sample(r)
-}
-
 // ---------------------------------------------------------------------------------------------------------------
 // Allan deviation helpers and the IEEE 952 generator
 
@@ -505,15 +492,6 @@ fn rms_log10(sim: &Curve, data: &Curve, n: usize, rate_hz: f64) -> f64 {
         .map(|((_, s), d)| (s / d).log10()))
 }
 
-/// The ADEV of a Gauss-Markov process of variance 1 and correlation time `tc` at `tau`, squared.
-fn gm_avar(tau: f64, tc: f64) -> f64 {
-    let x = tau / tc;
-    if x < 1e-4 {
-        return 2.0 / 3.0 * x;
-    }
-    (tc / tau).powi(2) * (2.0 * x - 3.0 + 4.0 * (-x).exp() - (-2.0 * x).exp())
-}
-
 /// The Gauss-Markov processes (standard deviation SI, correlation time s) whose sum approximates a flicker
 /// (bias instability) Allan floor of 0.664 B between `tau_lo` and `tau_hi`: correlation times two per decade,
 /// equal variances, scaled so that the geometric mean of the sum's ADEV over that range equals 0.664 B.
@@ -528,8 +506,11 @@ pub fn flicker_as_gauss_markov(b: f64, tau_lo_s: f64, tau_hi_s: f64) -> Vec<(f64
         tc *= 10f64.sqrt();
     }
     let grid: Vec<f64> = (0..=20).map(|i| tau_lo_s * (tau_hi_s / tau_lo_s).powf(i as f64 / 20.0)).collect();
-    let log_mean =
-        grid.iter().map(|&t| tcs.iter().map(|&tc| gm_avar(t, tc)).sum::<f64>().ln()).sum::<f64>() / grid.len() as f64;
+    let log_mean = grid
+        .iter()
+        .map(|&t| tcs.iter().map(|&tc| gauss_markov_allan_variance(1.0, tc, t)).sum::<f64>().ln())
+        .sum::<f64>()
+        / grid.len() as f64;
     let target = (2.0 * std::f64::consts::LN_2 / std::f64::consts::PI) * b * b;
     let var = target / log_mean.exp();
     tcs.into_iter().map(|tc| (var.sqrt(), tc)).collect()
@@ -662,7 +643,7 @@ fn extended_basis(tau: f64, extra: Option<ExtraShape>) -> Vec<f64> {
         tau * tau / 2.0,
     ];
     match extra {
-        Some(ExtraShape::Gm(tc)) => b.push(gm_avar(tau, tc)),
+        Some(ExtraShape::Gm(tc)) => b.push(gauss_markov_allan_variance(1.0, tc, tau)),
         Some(ExtraShape::Sine(f)) => {
             let x = std::f64::consts::PI * f * tau;
             b.push(x.sin().powi(4) / (x * x));
