@@ -1,37 +1,64 @@
 //! # sinscal core
 //!
-//! Fast six-position bias calibration of a strapdown IMU on a turntable (METHOD.md of the project): the
-//! two-state HMM/KF prefilter, dwell statistics, analytic coarse alignment, and the weighted
-//! least-squares bias solution with standard errors and observability. `no_std`, f32, no allocation,
-//! no panics on the data path: the same code runs on a Cortex-M4F and, through the `sinscal` tool, on a
-//! workstation.
+//! Fast calibration of a strapdown IMU on a turntable (docs/method.md): the two-state HMM/KF prefilter,
+//! dwell statistics, analytic coarse alignment, and the weighted least-squares bias solution with
+//! standard errors and observability; the ADIS driver, the sampling queue and the calibration sequence
+//! of the firmware. `no_std`, f32, no allocation, no panics on the data path: the same code runs on a
+//! Cortex-M4F and, through the `sinscal` tool, on a workstation.
 //!
-//! Conventions (SPEC.md section 1): navigation frame East-North-Up; body frame x right, y forward, z up;
+//! Conventions (docs/conventions.md): navigation frame East-North-Up; body frame x right, y forward, z up;
 //! `C_b^n = Rz(-heading) Rx(pitch) Ry(roll)`; specific force at rest `[0, 0, +g]`; misalignment
 //! `C_hat_b^n = (I - [phi x]) C_b^n`. SI units everywhere; names carry unit and frame
 //! (`rate_b_radps`, `force_b_mps2`, `phi_n_rad`, `c_b_n`).
 //!
-//! Data flow for one calibration:
-//! 1. per position, [`dwell::DwellCollector`] takes the samples of the dwell (prefilter + statistics);
-//! 2. [`align::position_angles`] aligns the dwell and measures `phi` against the turntable attitude;
-//! 3. [`solve::BiasSolver`] stacks the positions and solves for gyro and accelerometer biases.
+//! ## Layers
+//! Each layer uses only the layers listed before it (a test checks this):
+//!
+//! | layer | what |
+//! |---|---|
+//! | [`math`] | 3-vectors, 3x3 matrices, dwell accumulators |
+//! | [`nav`] | frames, attitudes, Earth rate and gravity: every sign convention |
+//! | [`sensor`] | [`ImuSample`], the [`ImuSource`] trait, the ADIS driver |
+//! | [`calib`] | prefilter, dwell statistics, alignment, the bias solution, the calibration |
+//! | [`run`] | the data-ready handler and its queue, the calibration sequence |
+//! | [`rig`] | replay of a recording through the firmware path, semihosting (emulation and tests) |
+//! | `board` | register-level code of each board, the panic handler and exit (target only) |
+//!
+//! ## Data flow
+//! On the firmware, at 100 Hz:
+//! 1. the data-ready interrupt calls [`run::sampling::on_data_ready`]: the driver
+//!    ([`sensor::adis::Adis`], an [`ImuSource`]) reads one burst, checks and converts it to an
+//!    [`ImuSample`] in SI units, and the reading is queued (every fault counted, never unwrapped);
+//! 2. the main loop hands each queued reading to the [`CalibrationSequence`] with the turntable's
+//!    "in position" signal: it waits, lets the table settle, and feeds the dwell's
+//!    [`DwellCollector`] (HMM/KF prefilter and statistics per channel), aborting a dwell that moves;
+//! 3. after the last position, [`calibrate_positions`] aligns every dwell
+//!    ([`calib::align::position_angles`]: `phi` against the turntable attitude), stacks the positions in
+//!    the [`BiasSolver`] and solves for the gyro and accelerometer biases with their standard errors,
+//!    refining in passes.
+//!
+//! On the workstation, `sinscal calibrate` runs steps 2 and 3 on a recording's rows directly, or the whole
+//! path through [`rig::replay`] (`--on host`), or the firmware itself in QEMU (`--on qemu`).
 #![cfg_attr(not(test), no_std)]
 #![deny(missing_docs)]
-#![forbid(unsafe_code)]
+#![deny(unsafe_code)]
 
-pub mod accumulate;
-pub mod adis;
-pub mod align;
-pub mod calibration;
-pub mod dwell;
-pub mod earth;
-pub mod frames;
-pub mod imu;
-pub mod linalg;
-pub mod prefilter;
-pub mod replay;
-pub mod sampling;
 #[cfg(target_os = "none")]
-pub mod semihost;
-pub mod sequence;
-pub mod solve;
+#[allow(unsafe_code)] // memory-mapped registers
+pub mod board;
+pub mod calib;
+pub mod math;
+pub mod nav;
+pub mod rig;
+pub mod run;
+pub mod sensor;
+
+pub use calib::calibration::{calibrate_positions, CalibrationResult, CalibrationSettings, PositionInput};
+pub use calib::dwell::{DwellCollector, DwellSummary, Prefilter};
+pub use calib::solve::{BiasSolution, BiasSolver, Estimate};
+pub use math::linalg::{Mat3, Vec3};
+pub use nav::earth::Site;
+pub use nav::frames::Attitude;
+pub use run::sequence::CalibrationSequence;
+pub use sensor::sample::{ImuReading, ImuSample};
+pub use sensor::source::ImuSource;

@@ -5,11 +5,12 @@
 use std::hint::black_box;
 
 use criterion::{criterion_group, criterion_main, Criterion};
-use sinscal::align::{position_angles, DwellValue};
-use sinscal::dwell::{DwellCollector, ImuSample, Prefilter};
-use sinscal::earth::Site;
-use sinscal::frames::Attitude;
-use sinscal::solve::{BiasSolver, SolverSettings, TABLE1_POSITIONS_DEG};
+use sinscal::calib::align::{position_angles, DwellValue};
+use sinscal::calib::dwell::{DwellCollector, Prefilter};
+use sinscal::calib::solve::{BiasSolver, SolverSettings, TABLE1_POSITIONS_DEG};
+use sinscal::nav::earth::Site;
+use sinscal::nav::frames::Attitude;
+use sinscal::sensor::sample::ImuSample;
 
 fn sample(k: u32) -> ImuSample {
     let wobble = (k % 17) as f32 * 1e-7;

@@ -1477,8 +1477,8 @@ pub fn analyze_angles(file: &AnglesFile) -> Result<Analysis, InputError> {
     let mut which = Vec::new();
     for (pi, r) in file.rows.iter().enumerate() {
         let c = c_b_n(r.attitude_deg[0], r.attitude_deg[1], r.attitude_deg[2]);
-        let c32 = sinscal::linalg::Mat3(std::array::from_fn(|i| std::array::from_fn(|j| c[i][j] as f32)));
-        let rows = sinscal::solve::design_rows_si(&c32, &site);
+        let c32 = sinscal::math::linalg::Mat3(std::array::from_fn(|i| std::array::from_fn(|j| c[i][j] as f32)));
+        let rows = sinscal::calib::solve::design_rows_si(&c32, &site);
         for k in 0..3 {
             y.push(r.phi_rad[k]);
             group.push(if k == 2 { 1 } else { 0 });
@@ -1638,13 +1638,13 @@ mod tests {
         // attitude error err, C^T (e_k x v), give err back: the sign convention of the recording analysis
         // (C_true = (I - [err x]) C_ref) is the one of the angles and of METHOD.md's phi0.
         let lat = 45.7796f64.to_radians();
-        let site = sinscal::earth::Site::with_normal_gravity(lat as f32, 0.0);
+        let site = sinscal::nav::earth::Site::with_normal_gravity(lat as f32, 0.0);
         let g = site.gravity_mps2 as f64;
         let w_n = [0.0, EARTH_RATE_RADPS * lat.cos(), EARTH_RATE_RADPS * lat.sin()];
         for att in crate::synth::TABLE1_DEG {
             let c = c_b_n(att[0], att[1], att[2]);
-            let c32 = sinscal::linalg::Mat3(std::array::from_fn(|i| std::array::from_fn(|j| c[i][j] as f32)));
-            let rows = sinscal::solve::design_rows_si(&c32, &site);
+            let c32 = sinscal::math::linalg::Mat3(std::array::from_fn(|i| std::array::from_fn(|j| c[i][j] as f32)));
+            let rows = sinscal::calib::solve::design_rows_si(&c32, &site);
             for k in 0..3 {
                 let dw = mul_t_vec(&c, cross(unit(k), w_n));
                 let df = mul_t_vec(&c, cross(unit(k), [0.0, 0.0, g]));

@@ -1,13 +1,14 @@
 //! `sinscal calibrate`: a recording through the no_std core (dwell collection, alignment, solution).
 //! Every formula is the core's; this module only reads, converts to f32 at the edge, and checks input.
 
-use sinscal::align::{position_angles, DwellValue, PositionAngles};
-use sinscal::calibration::{calibrate_positions, CalibrationResult, CalibrationSettings, PositionInput};
-use sinscal::dwell::{DwellCollector, DwellSummary, ImuSample, Prefilter};
-use sinscal::earth::{normal_gravity_mps2, Site};
-use sinscal::frames::Attitude;
-use sinscal::prefilter::{CoefficientIdentifier, PrefilterSettings};
-use sinscal::solve::{BiasSolution, SolverSettings, MAX_POSITIONS};
+use sinscal::calib::align::{position_angles, DwellValue, PositionAngles};
+use sinscal::calib::calibration::{calibrate_positions, CalibrationResult, CalibrationSettings, PositionInput};
+use sinscal::calib::dwell::{DwellCollector, DwellSummary, Prefilter};
+use sinscal::calib::prefilter::{CoefficientIdentifier, PrefilterSettings};
+use sinscal::calib::solve::{BiasSolution, SolverSettings, MAX_POSITIONS};
+use sinscal::nav::earth::{normal_gravity_mps2, Site};
+use sinscal::nav::frames::Attitude;
+use sinscal::sensor::sample::ImuSample;
 
 use crate::error::InputError;
 use crate::recording::{Dwell, DwellAttitude, Header, Recording};
@@ -107,7 +108,7 @@ pub struct Calibration {
     pub converged: bool,
     /// Sampling counters of the firmware path (`--on host|qemu`); `None` when the recording's values were
     /// read directly.
-    pub sampling: Option<sinscal::sampling::SamplingStats>,
+    pub sampling: Option<sinscal::run::sampling::SamplingStats>,
     /// "recording", "host" or "qemu".
     pub on: &'static str,
 }

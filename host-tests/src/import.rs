@@ -22,7 +22,7 @@ use crate::output::ARCSEC_PER_RAD;
 use crate::recording::{Header, Recording, Row};
 
 /// Standard gravity, m/s^2: the "g" of accelerometer ranges given in LSB/g. The f64 twin of the core's
-/// f32 `sinscal::earth::STANDARD_GRAVITY_MPS2` (its f32 value would be off by 1.6e-8 relative).
+/// f32 `sinscal::nav::earth::STANDARD_GRAVITY_MPS2` (its f32 value would be off by 1.6e-8 relative).
 pub const STANDARD_GRAVITY_MPS2: f64 = 9.80665;
 
 /// Sample rate of the imucal example session `example_ferraris_session.csv`, Hz (not written in the file).

@@ -7,7 +7,7 @@ use std::process::ExitCode;
 
 use anyhow::Context as _;
 use clap::{Parser, Subcommand, ValueEnum};
-use sinscal::align::DwellValue;
+use sinscal::calib::align::DwellValue;
 use sinscal_host::calibrate::{calibrate, Calibration, Coefficient, Options, PrefilterKind};
 use sinscal_host::error::InputError;
 use sinscal_host::montecarlo;
@@ -392,7 +392,7 @@ fn demo(out: &Path, json: Option<&Path>) -> anyhow::Result<()> {
     finish(&cal, json)?;
     println!("\nTruth of the simulation, and (estimate - truth) / standard error:");
     let s = &cal.solution;
-    let rows: [(&str, Option<sinscal::solve::Estimate>, f64, f64, &str); 9] = [
+    let rows: [(&str, Option<sinscal::calib::solve::Estimate>, f64, f64, &str); 9] = [
         ("gyro x", s.gyro_bias_b_radps[0], scenario.gyro_bias_b_radps[0], DEG_PER_HOUR, "deg/h"),
         ("gyro y", s.gyro_bias_b_radps[1], scenario.gyro_bias_b_radps[1], DEG_PER_HOUR, "deg/h"),
         ("gyro z", s.gyro_bias_b_radps[2], scenario.gyro_bias_b_radps[2], DEG_PER_HOUR, "deg/h"),
@@ -526,7 +526,7 @@ fn montecarlo_table(r: &montecarlo::Report) -> String {
         "  {:<20} {:>7} {:>11} {:>14} {:>16} {:>12}",
         "parameter", "unit", "angles", "six channels", "channels, ref. exact", "angles/chan."
     );
-    for (i, p) in sinscal::solve::Parameter::ALL.iter().enumerate() {
+    for (i, p) in sinscal::calib::solve::Parameter::ALL.iter().enumerate() {
         let (u, name) = unit(p.name());
         let known = r.crb_channels_known_reference.get(i).map_or("-".to_string(), |v| format!("{:.5}", v / u));
         let _ = writeln!(

@@ -11,12 +11,13 @@
 //!   could give at best.
 
 use serde::Serialize;
-use sinscal::align::{angle_covariance_rad2, DwellValue};
-use sinscal::calibration::{calibrate_positions, CalibrationSettings, PositionInput};
-use sinscal::dwell::{DwellCollector, DwellSummary, ImuSample, Prefilter};
-use sinscal::earth::Site;
-use sinscal::frames::Attitude;
-use sinscal::solve::{design_rows_si, BiasSolution, Parameter, MAX_PARAMETERS};
+use sinscal::calib::align::{angle_covariance_rad2, DwellValue};
+use sinscal::calib::calibration::{calibrate_positions, CalibrationSettings, PositionInput};
+use sinscal::calib::dwell::{DwellCollector, DwellSummary, Prefilter};
+use sinscal::calib::solve::{design_rows_si, BiasSolution, Parameter, MAX_PARAMETERS};
+use sinscal::nav::earth::Site;
+use sinscal::nav::frames::Attitude;
+use sinscal::sensor::sample::ImuSample;
 
 use crate::synth::{c_b_n as c_b_n_f64, mul_t_vec, Scenario, EARTH_RATE_RADPS};
 

@@ -160,9 +160,9 @@ pub fn navigate(
         }
     };
     let latitude_rad = header.latitude_deg.to_radians();
-    let gravity_mps2 = header
-        .gravity_mps2
-        .unwrap_or_else(|| sinscal::earth::normal_gravity_mps2(latitude_rad as f32, header.height_m as f32) as f64);
+    let gravity_mps2 = header.gravity_mps2.unwrap_or_else(|| {
+        sinscal::nav::earth::normal_gravity_mps2(latitude_rad as f32, header.height_m as f32) as f64
+    });
     let c = c_b_n(attitude_deg[0], attitude_deg[1], attitude_deg[2]);
     let record_every = ((options.record_interval_s * rate_hz).round() as usize).max(1);
     let setup = StaticSetup {

@@ -11,7 +11,7 @@
 //! equations, constant coefficients at rest), which gives the Schuler oscillation, the level error of
 //! nabla/g, the latitude ramp and azimuth growth of the east gyro drift, and the Foucault modulation.
 
-use sinscal::earth::{WGS84_A_M, WGS84_E2};
+use sinscal::nav::earth::{WGS84_A_M, WGS84_E2};
 
 use crate::synth::{mul, mul_vec, rotation, transpose, EARTH_RATE_RADPS, M3};
 

@@ -3,9 +3,9 @@
 use std::fmt::Write as _;
 
 use serde::Serialize;
-use sinscal::align::DwellValue;
-use sinscal::dwell::Prefilter;
-use sinscal::solve::{Estimate, Parameter};
+use sinscal::calib::align::DwellValue;
+use sinscal::calib::dwell::Prefilter;
+use sinscal::calib::solve::{Estimate, Parameter};
 
 use crate::calibrate::{Calibration, GravitySource};
 use crate::synth::{DEG_PER_HOUR, MICRO_G};

@@ -9,7 +9,7 @@ use std::path::{Path, PathBuf};
 use std::process::{Command, Stdio};
 use std::sync::atomic::{AtomicU32, Ordering};
 
-use sinscal::replay::{decode_outcome, read_header};
+use sinscal::rig::replay::{decode_outcome, read_header};
 
 use crate::calibrate::{Calibration, Options};
 use crate::error::InputError;

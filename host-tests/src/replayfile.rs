@@ -1,14 +1,14 @@
-//! The recording as the IMU would have delivered it: a replay file (format in `sinscal::replay`) of
+//! The recording as the IMU would have delivered it: a replay file (format in `sinscal::rig::replay`) of
 //! ADIS16505-2 burst frames, quantised to the device's 32-bit output LSB, with the turntable's position
 //! signal; and the calibration of such a replay on the host (`--on host`) or in QEMU (`--on qemu`).
 
-use sinscal::adis::{encode_burst, Burst, Model, BURST32_LEN, I16F16};
-use sinscal::align::{position_angles, DwellValue};
-use sinscal::dwell::Prefilter;
-use sinscal::replay::{
+use sinscal::calib::align::{position_angles, DwellValue};
+use sinscal::calib::dwell::Prefilter;
+use sinscal::rig::replay::{
     decode_outcome, encode_outcome, read_header, run_replay, ReplayOutcome, MAGIC, MAX_OUTCOME_BYTES, VERSION,
 };
-use sinscal::sequence::SequenceFailure;
+use sinscal::run::sequence::SequenceFailure;
+use sinscal::sensor::adis::{encode_burst, Burst, Model, BURST32_LEN, I16F16};
 
 use crate::calibrate::{calibration_dwells, prefilter_of, site_of, Calibration, Options, PositionResult};
 use crate::error::InputError;

@@ -356,8 +356,10 @@ impl ScenarioFile {
     /// Gravity used: the file's, or WGS-84 normal gravity.
     pub fn gravity_mps2(&self) -> f64 {
         self.site.gravity_mps2.unwrap_or_else(|| {
-            sinscal::earth::normal_gravity_mps2((self.site.latitude_deg as f32).to_radians(), self.site.height_m as f32)
-                as f64
+            sinscal::nav::earth::normal_gravity_mps2(
+                (self.site.latitude_deg as f32).to_radians(),
+                self.site.height_m as f32,
+            ) as f64
         })
     }
 

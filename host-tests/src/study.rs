@@ -1501,7 +1501,7 @@ pub fn study_dataset(dataset: Dataset, data_dir: &Path) -> Result<Study, InputEr
                     }
                 }
             }
-            let g = sinscal::earth::normal_gravity_mps2(
+            let g = sinscal::nav::earth::normal_gravity_mps2(
                 (rec.header.latitude_deg as f32).to_radians(),
                 rec.header.height_m as f32,
             ) as f64;

@@ -117,7 +117,7 @@ impl Scenario {
         Scenario {
             latitude_deg,
             height_m: 0.0,
-            gravity_mps2: sinscal::earth::normal_gravity_mps2((latitude_deg as f32).to_radians(), 0.0) as f64,
+            gravity_mps2: sinscal::nav::earth::normal_gravity_mps2((latitude_deg as f32).to_radians(), 0.0) as f64,
             rate_hz: 100.0,
             dwell_s: 60.0,
             settle_s: 2.0,

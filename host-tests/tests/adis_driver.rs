@@ -3,8 +3,8 @@
 //! Register values are written out here again from the data sheets, independently of the driver.
 
 use embedded_hal_mock::eh1::spi::{Mock, Transaction};
-use sinscal::adis::{decode_burst, encode_burst, Adis, AdisError, Burst, Model, I16F16};
-use sinscal::imu::{ClassifiedError, ImuSource, ReadFault};
+use sinscal::sensor::adis::{decode_burst, encode_burst, Adis, AdisError, Burst, Model, I16F16};
+use sinscal::sensor::source::{ClassifiedError, ImuSource, ReadFault};
 
 const PROD_ID_READ: [u8; 2] = [0x72, 0x00];
 const DEC_RATE_WRITE_LOW: [u8; 2] = [0x80 | 0x64, 19];
@@ -165,10 +165,10 @@ fn word_parallel_checksum_equals_the_byte_sum() {
                 })
                 .collect();
             let plain = bytes.iter().fold(0u16, |s, &b| s.wrapping_add(b as u16));
-            assert_eq!(sinscal::adis::checksum(&bytes), plain, "{bytes:?}");
+            assert_eq!(sinscal::sensor::adis::checksum(&bytes), plain, "{bytes:?}");
         }
     }
-    assert_eq!(sinscal::adis::checksum(&[0xFF; 30]), 30 * 255);
+    assert_eq!(sinscal::sensor::adis::checksum(&[0xFF; 30]), 30 * 255);
 }
 
 #[test]

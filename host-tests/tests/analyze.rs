@@ -109,7 +109,7 @@ fn aliases_are_named_when_the_schedule_cannot_tell_effects_apart() {
 /// The angles of a Table 1 session at latitude 45.7796 from biases (through the core's alignment
 /// equations) plus a table attitude error at one position, with noise-free values.
 fn angles_text(pos_error: Option<(u32, usize, f64)>, with_std: bool) -> String {
-    let site = sinscal::earth::Site::with_normal_gravity(45.7796f32.to_radians(), 0.0);
+    let site = sinscal::nav::earth::Site::with_normal_gravity(45.7796f32.to_radians(), 0.0);
     let biases = [2.4e-7, -1.5e-7, 1.0e-7, 1.0e-3, -8.0e-4, 5.0e-4];
     let mut text = String::from("# sinscal-angles: 1\n# latitude_deg: 45.7796\npos,pitch_deg,roll_deg,heading_deg,phi_e_rad,phi_n_rad,phi_u_rad");
     text += if with_std { ",phi_e_std_rad,phi_n_std_rad,phi_u_std_rad\n" } else { "\n" };
@@ -117,8 +117,8 @@ fn angles_text(pos_error: Option<(u32, usize, f64)>, with_std: bool) -> String {
     let scatter = [0.3, -0.5, 0.2, 0.6, -0.1, -0.4, 0.5, 0.1, -0.6, -0.2, 0.4, -0.3, 0.1, 0.5, -0.5, -0.4, 0.3, 0.2];
     for (p, att) in TABLE1_DEG.iter().enumerate() {
         let c = c_b_n(att[0], att[1], att[2]);
-        let c32 = sinscal::linalg::Mat3(std::array::from_fn(|i| std::array::from_fn(|j| c[i][j] as f32)));
-        let rows = sinscal::solve::design_rows_si(&c32, &site);
+        let c32 = sinscal::math::linalg::Mat3(std::array::from_fn(|i| std::array::from_fn(|j| c[i][j] as f32)));
+        let rows = sinscal::calib::solve::design_rows_si(&c32, &site);
         let mut phi = [0.0; 3];
         for k in 0..3 {
             phi[k] = (0..6).map(|j| rows[k][j] as f64 * biases[j]).sum::<f64>();

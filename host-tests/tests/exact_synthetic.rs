@@ -3,7 +3,7 @@
 //! the conventions of METHOD.md and SPEC.md are implemented right: a flipped phi convention flips every
 //! estimate, a wrong sign of f_n breaks the level angles.
 
-use sinscal::align::DwellValue;
+use sinscal::calib::align::DwellValue;
 use sinscal_host::calibrate::{calibrate, Coefficient, Options, PrefilterKind};
 use sinscal_host::recording::Recording;
 use sinscal_host::synth::{Scenario, DEG_PER_HOUR, MICRO_G};
@@ -157,8 +157,8 @@ fn a_flipped_phi_convention_would_be_caught() {
     // The paper's printed step-4 signs (every right-hand side negated) give the negated biases. Here the
     // equivalent: feed the solver angles of the opposite sign and see that the estimates flip, so the
     // sign checks above really do distinguish the two conventions.
-    use sinscal::frames::Attitude;
-    use sinscal::solve::{BiasSolver, SolverSettings, TABLE1_POSITIONS_DEG};
+    use sinscal::calib::solve::{BiasSolver, SolverSettings, TABLE1_POSITIONS_DEG};
+    use sinscal::nav::frames::Attitude;
     let scenario = Scenario {
         gyro_bias_b_radps: [0.05 * DEG_PER_HOUR; 3],
         accel_bias_b_mps2: [100.0 * MICRO_G; 3],

@@ -2,9 +2,9 @@
 //! calibration sequence -> core. SIMULATION data with known truth; faults and motion injected into the
 //! device frames to see that the sequence reports them instead of using them.
 
-use sinscal::adis::{decode_burst, encode_burst, Model, BURST32_LEN};
-use sinscal::replay::{read_header, run_replay};
-use sinscal::sequence::{AbortReason, Event, SequenceFailure};
+use sinscal::rig::replay::{read_header, run_replay};
+use sinscal::run::sequence::{AbortReason, Event, SequenceFailure};
+use sinscal::sensor::adis::{decode_burst, encode_burst, Model, BURST32_LEN};
 use sinscal_host::calibrate::{calibrate, Options};
 use sinscal_host::recording::Recording;
 use sinscal_host::replayfile::{calibrate_on_host, replay_file};
@@ -84,7 +84,7 @@ fn motion_and_a_wrong_position_abort_the_dwell_with_a_reason() {
     assert_eq!(rec.rows[k].pos, 2);
     let at = frame_offset(&file, k) + 1;
     let mut burst = decode_burst::<()>(Model::Adis16505_2, &file[at..at + BURST32_LEN]).unwrap();
-    burst.gyro_lsb[0] = sinscal::adis::I16F16::from_num(5.0 * 40.0);
+    burst.gyro_lsb[0] = sinscal::sensor::adis::I16F16::from_num(5.0 * 40.0);
     let mut bytes = [0u8; BURST32_LEN];
     encode_burst(Model::Adis16505_2, &burst, &mut bytes);
     file[at..at + BURST32_LEN].copy_from_slice(&bytes);
@@ -118,8 +118,9 @@ fn motion_and_a_wrong_position_abort_the_dwell_with_a_reason() {
 #[test]
 fn a_full_queue_is_counted_not_dropped_silently() {
     use heapless::spsc::Queue;
-    use sinscal::imu::{ClassifiedError, ImuReading, ImuSource, ReadFault};
-    use sinscal::sampling::{on_data_ready, QueueItem, SamplingStats, QUEUE_SLOTS};
+    use sinscal::run::sampling::{on_data_ready, QueueItem, SamplingStats, QUEUE_SLOTS};
+    use sinscal::sensor::sample::ImuReading;
+    use sinscal::sensor::source::{ClassifiedError, ImuSource, ReadFault};
 
     #[derive(Debug)]
     struct Never;

@@ -3,7 +3,7 @@
 //! and the thumbv7em target (scripts/setup installs both); in CI (CI=true) a missing QEMU is a failure,
 //! elsewhere the test reports itself as skipped.
 
-use sinscal::replay::{encode_outcome, run_replay, MAX_OUTCOME_BYTES};
+use sinscal::rig::replay::{encode_outcome, run_replay, MAX_OUTCOME_BYTES};
 use sinscal_host::calibrate::Options;
 use sinscal_host::output::CalibrationJson;
 use sinscal_host::qemu::{calibrate_on_qemu, firmware_binary, firmware_elf, run_firmware, run_with_output, QEMU};
@@ -39,7 +39,7 @@ fn firmware_in_qemu_and_the_host_replay_agree_to_the_bit() {
         let (mut file, _) = replay_file(&rec, &options).unwrap();
         // Also a corrupted frame (a gyro byte of row 1000, inside dwell 1), so the fault path runs on both.
         let header_len = 20 + 12 + 16 * 6 + 4;
-        let record = 1 + sinscal::adis::BURST32_LEN;
+        let record = 1 + sinscal::sensor::adis::BURST32_LEN;
         assert_eq!(rec.rows[1000].pos, 1);
         file[header_len + 1000 * record + 1 + 4] ^= 0x01;
         let host = run_replay(&file[..], |_| {}).unwrap();
@@ -67,6 +67,8 @@ fn on_target_tests_pass_in_qemu() {
     assert_eq!(code, 0, "{report}");
     assert!(report.lines().any(|l| l.ends_with(" passed, 0 failed")), "{report}");
     // The steady prefilter gain computed on the target is the x86 one, bit for bit.
-    let k = sinscal::prefilter::HmmKf::new(&sinscal::prefilter::PrefilterSettings::paper_gyro()).unwrap().gain()[0][0];
+    let k = sinscal::calib::prefilter::HmmKf::new(&sinscal::calib::prefilter::PrefilterSettings::paper_gyro())
+        .unwrap()
+        .gain()[0][0];
     assert!(report.contains(&format!("ok prefilter_gain_k00_bits {k:e}")), "host K00 = {k:e}\n{report}");
 }

@@ -20,15 +20,15 @@ mod firmware {
     use cortex_m::peripheral::syst::SystClkSource;
     use cortex_m::peripheral::SYST;
     use cortex_m_rt::entry;
-    use defmt_semihosting as _;
     use heapless::spsc::Queue;
-    use sinscal::adis::{encode_burst, Adis, Burst, Model, BURST32_LEN, I16F16};
-    use sinscal::dwell::Prefilter;
-    use sinscal::earth::Site;
-    use sinscal::frames::Attitude;
-    use sinscal::replay::{replay_sequence_settings, ReplayDevice};
-    use sinscal::sampling::{on_data_ready, process_next, QueueItem, SamplingStats, QUEUE_SLOTS};
-    use sinscal::sequence::CalibrationSequence;
+    use sinscal::board::exit;
+    use sinscal::calib::dwell::Prefilter;
+    use sinscal::nav::earth::Site;
+    use sinscal::nav::frames::Attitude;
+    use sinscal::rig::replay::{replay_sequence_settings, ReplayDevice};
+    use sinscal::run::sampling::{on_data_ready, process_next, QueueItem, SamplingStats, QUEUE_SLOTS};
+    use sinscal::run::sequence::CalibrationSequence;
+    use sinscal::sensor::adis::{encode_burst, Adis, Burst, Model, BURST32_LEN, I16F16};
 
     /// Instructions per SysTick tick under -icount shift=0 with the 25 MHz core clock.
     const INSTRUCTIONS_PER_TICK: u32 = 40;
@@ -44,7 +44,7 @@ mod firmware {
         let mut imu = Adis::new(ReplayDevice::new(model), model);
         let _ = imu.init();
         let site = Site::with_normal_gravity(45.7796f32.to_radians(), 0.0);
-        let settings = replay_sequence_settings(prefilter, sinscal::align::DwellValue::Mean, 1, true);
+        let settings = replay_sequence_settings(prefilter, sinscal::calib::align::DwellValue::Mean, 1, true);
         let schedule = [Attitude::from_degrees(0.0, 0.0, 0.0)];
         let Ok(mut sequence) = CalibrationSequence::new(&schedule, site, settings) else { return (0, 0, 0) };
         let mut queue: Queue<QueueItem, QUEUE_SLOTS> = Queue::new();
@@ -87,7 +87,7 @@ mod firmware {
         // The queue hand-over on its own: one item enqueued (not timed), then taken by reference.
         let mut handover = 0u32;
         for _ in 0..SAMPLES {
-            let _ = producer.enqueue(Ok(sinscal::imu::ImuReading::default()));
+            let _ = producer.enqueue(Ok(sinscal::sensor::sample::ImuReading::default()));
             let t0 = syst.cvr.read();
             let _ = process_next(&mut consumer, |item| core::hint::black_box(item).is_ok());
             let t1 = syst.cvr.read();
@@ -122,7 +122,7 @@ mod firmware {
         let mut imu = Adis::new(ReplayDevice::new(model), model);
         let _ = imu.init();
         let site = Site::with_normal_gravity(45.7796f32.to_radians(), 0.0);
-        let settings = replay_sequence_settings(Prefilter::paper(), sinscal::align::DwellValue::Mean, 1, true);
+        let settings = replay_sequence_settings(Prefilter::paper(), sinscal::calib::align::DwellValue::Mean, 1, true);
         let schedule = [Attitude::from_degrees(0.0, 0.0, 0.0)];
         let Ok(mut sequence) = CalibrationSequence::new(&schedule, site, settings) else { return (0, 0) };
         let mut queue: Queue<QueueItem, QUEUE_SLOTS> = Queue::new();
@@ -165,10 +165,8 @@ mod firmware {
         };
         let syst = unsafe { &*SYST::PTR };
         let (mut t_bus, mut t_decode, mut t_collect_none, mut t_collect_kf) = (0, 0, 0, 0);
-        let mut none =
-            sinscal::dwell::DwellCollector::new(&Prefilter::None).unwrap_or_else(|_| semihosting::process::exit(3));
-        let mut kf =
-            sinscal::dwell::DwellCollector::new(&Prefilter::paper()).unwrap_or_else(|_| semihosting::process::exit(3));
+        let mut none = sinscal::calib::dwell::DwellCollector::new(&Prefilter::None).unwrap_or_else(|_| exit(3));
+        let mut kf = sinscal::calib::dwell::DwellCollector::new(&Prefilter::paper()).unwrap_or_else(|_| exit(3));
         for k in 0..SAMPLES {
             // A new frame each sample (the counter advances), prepared outside the timed spans.
             burst.data_counter = k as u16;
@@ -178,13 +176,13 @@ mod firmware {
             let mut buf = [0u8; BURST32_LEN];
             let t0 = syst.cvr.read();
             let bus = core::hint::black_box(imu.spi_mut())
-                .transaction(&mut [Operation::Write(&sinscal::adis::BURST_COMMAND), Operation::Read(&mut buf)]);
+                .transaction(&mut [Operation::Write(&sinscal::sensor::adis::BURST_COMMAND), Operation::Read(&mut buf)]);
             let t1 = syst.cvr.read();
             let reading = imu.decode_reading(core::hint::black_box(&buf));
             let t2 = syst.cvr.read();
             let sample = match (bus, reading) {
                 (Ok(()), Ok(r)) => core::hint::black_box(r.sample),
-                _ => semihosting::process::exit(4),
+                _ => exit(4),
             };
             let t3 = syst.cvr.read();
             let _ = core::hint::black_box(&mut none).update(&sample);
@@ -202,7 +200,7 @@ mod firmware {
 
     #[entry]
     fn main() -> ! {
-        let mut p = cortex_m::Peripherals::take().unwrap_or_else(|| semihosting::process::exit(2));
+        let mut p = cortex_m::Peripherals::take().unwrap_or_else(|| exit(2));
         p.SYST.set_clock_source(SystClkSource::Core);
         p.SYST.set_reload(0x00FF_FFFF);
         p.SYST.clear_current();
@@ -229,13 +227,8 @@ mod firmware {
              isr_instructions_per_sample {isr_none}\nprocessing_instructions_per_sample_none {proc_none}\n\
              processing_instructions_per_sample_hmmkf {proc_kf}\nisr_instructions_per_sample_hmmkf_run {isr_kf}\n"
         );
-        let args_ok =
-            sinscal::semihost::arg_path(1).is_some_and(|p| sinscal::semihost::write_file(&p, text.as_bytes()));
-        semihosting::process::exit(if args_ok { 0 } else { 1 })
-    }
-
-    #[panic_handler]
-    fn panic(_: &core::panic::PanicInfo) -> ! {
-        semihosting::process::exit(101)
+        let args_ok = sinscal::rig::semihost::arg_path(1)
+            .is_some_and(|p| sinscal::rig::semihost::write_file(&p, text.as_bytes()));
+        exit(if args_ok { 0 } else { 1 })
     }
 }

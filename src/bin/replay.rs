@@ -16,43 +16,14 @@ mod firmware {
     use cortex_m as _;
     use cortex_m_rt::entry;
     use defmt_full as defmt;
-    use defmt_semihosting as _;
-    use semihosting::fs::File;
-    use semihosting::io::Read;
-    use sinscal::replay::{encode_outcome, run_replay, ByteSource, ReplayError, MAX_OUTCOME_BYTES};
-    use sinscal::sequence::Event;
-
-    /// Buffered reader of a host file through semihosting.
-    struct FileSource {
-        file: File,
-        buf: [u8; 4096],
-        start: usize,
-        end: usize,
-    }
-
-    impl ByteSource for FileSource {
-        fn read_exact(&mut self, out: &mut [u8]) -> Result<(), ReplayError> {
-            let mut done = 0;
-            while done < out.len() {
-                if self.start == self.end {
-                    self.end = self.file.read(&mut self.buf).map_err(|_| ReplayError::Read)?;
-                    self.start = 0;
-                    if self.end == 0 {
-                        return Err(ReplayError::Read);
-                    }
-                }
-                let n = (self.end - self.start).min(out.len() - done);
-                out[done..done + n].copy_from_slice(&self.buf[self.start..self.start + n]);
-                self.start += n;
-                done += n;
-            }
-            Ok(())
-        }
-    }
+    use sinscal::board::exit;
+    use sinscal::rig::replay::{encode_outcome, run_replay, MAX_OUTCOME_BYTES};
+    use sinscal::rig::semihost::FileSource;
+    use sinscal::run::sequence::Event;
 
     fn fail(what: &str) -> ! {
         defmt::error!("sinscal-replay: {=str}", what);
-        semihosting::process::exit(1)
+        exit(1)
     }
 
     fn log(event: &Event) {
@@ -70,11 +41,11 @@ mod firmware {
         }
     }
 
-    fn log_result(r: &sinscal::calibration::CalibrationResult) {
+    fn log_result(r: &sinscal::calib::calibration::CalibrationResult) {
         {
             {
                 let s = &r.solution;
-                let v = |e: Option<sinscal::solve::Estimate>| e.map_or(f32::NAN, |e| e.value);
+                let v = |e: Option<sinscal::calib::solve::Estimate>| e.map_or(f32::NAN, |e| e.value);
                 defmt::info!(
                     "solved in {=u32} passes: gyro bias [{=f32}, {=f32}, {=f32}] rad/s, accel bias [{=f32}, {=f32}, {=f32}] m/s^2",
                     r.passes,
@@ -91,11 +62,11 @@ mod firmware {
 
     #[entry]
     fn main() -> ! {
-        let (Some(input), Some(output)) = (sinscal::semihost::arg_path(1), sinscal::semihost::arg_path(2)) else {
+        let (Some(input), Some(output)) = (sinscal::rig::semihost::arg_path(1), sinscal::rig::semihost::arg_path(2))
+        else {
             fail("usage: sinscal-replay IN OUT (paths up to 255 bytes)")
         };
-        let Ok(file) = File::open(input.as_c_str()) else { fail("cannot open the replay file") };
-        let source = FileSource { file, buf: [0; 4096], start: 0, end: 0 };
+        let Some(source) = FileSource::open(&input) else { fail("cannot open the replay file") };
         let outcome = match run_replay(source, log) {
             Ok(o) => o,
             Err(_) => fail("replay file unreadable"),
@@ -117,15 +88,9 @@ mod firmware {
         #[allow(static_mut_refs)]
         let bytes = unsafe { &mut OUT };
         let Ok(n) = encode_outcome(&outcome, bytes) else { fail("outcome too large") };
-        if !sinscal::semihost::write_file(&output, &bytes[..n]) {
+        if !sinscal::rig::semihost::write_file(&output, &bytes[..n]) {
             fail("cannot write the outcome file");
         }
-        semihosting::process::exit(0)
-    }
-
-    #[panic_handler]
-    fn panic(_: &core::panic::PanicInfo) -> ! {
-        defmt::error!("panic");
-        semihosting::process::exit(101)
+        exit(0)
     }
 }

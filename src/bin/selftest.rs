@@ -12,14 +12,15 @@ mod firmware {
 
     use cortex_m as _;
     use cortex_m_rt::entry;
-    use defmt_semihosting as _;
-    use sinscal::accumulate::DwellStats;
-    use sinscal::calibration::{calibrate_positions, CalibrationSettings, PositionInput};
-    use sinscal::dwell::{DwellCollector, ImuSample, Prefilter};
-    use sinscal::earth::Site;
-    use sinscal::frames::Attitude;
-    use sinscal::prefilter::{HmmKf, PrefilterSettings};
-    use sinscal::solve::TABLE1_POSITIONS_DEG;
+    use sinscal::board::exit;
+    use sinscal::calib::calibration::{calibrate_positions, CalibrationSettings, PositionInput};
+    use sinscal::calib::dwell::{DwellCollector, Prefilter};
+    use sinscal::calib::prefilter::{HmmKf, PrefilterSettings};
+    use sinscal::calib::solve::TABLE1_POSITIONS_DEG;
+    use sinscal::math::accumulate::DwellStats;
+    use sinscal::nav::earth::Site;
+    use sinscal::nav::frames::Attitude;
+    use sinscal::sensor::sample::ImuSample;
 
     struct Report {
         text: heapless::String<2048>,
@@ -129,14 +130,9 @@ mod firmware {
         prefilter(&mut report);
         accumulator(&mut report);
         let _ = writeln!(report.text, "{} passed, {} failed", report.passed, report.failed);
-        if let Some(path) = sinscal::semihost::arg_path(1) {
-            sinscal::semihost::write_file(&path, report.text.as_bytes());
+        if let Some(path) = sinscal::rig::semihost::arg_path(1) {
+            sinscal::rig::semihost::write_file(&path, report.text.as_bytes());
         }
-        semihosting::process::exit(report.failed as i32)
-    }
-
-    #[panic_handler]
-    fn panic(_: &core::panic::PanicInfo) -> ! {
-        semihosting::process::exit(101)
+        exit(report.failed as i32)
     }
 }

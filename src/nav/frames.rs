@@ -6,7 +6,7 @@
 //!     C_b^n = Rz(-heading) * Rx(pitch) * Ry(roll)
 //! where `Ra(t)` is the right-handed (active) rotation about axis `a` by angle `t`.
 
-use crate::linalg::{Mat3, Vec3};
+use crate::math::linalg::{Mat3, Vec3};
 
 /// Attitude of the body as a turntable reports it, in radians. Euler angles are an input format only:
 /// everything downstream works with the direction cosine matrix [`Attitude::c_b_n`].

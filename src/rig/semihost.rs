@@ -4,7 +4,9 @@
 use core::ffi::CStr;
 
 use semihosting::fs::File;
-use semihosting::io::Write;
+use semihosting::io::{Read, Write};
+
+use crate::rig::replay::{ByteSource, ReplayError};
 
 /// Longest path accepted, bytes.
 pub const MAX_PATH: usize = 255;
@@ -45,5 +47,41 @@ pub fn write_file(path: &CPath, bytes: &[u8]) -> bool {
     match File::create(path.as_c_str()) {
         Ok(mut f) => f.write_all(bytes).is_ok(),
         Err(_) => false,
+    }
+}
+
+/// Buffered reader of a host file through semihosting.
+pub struct FileSource {
+    file: File,
+    buf: [u8; 4096],
+    start: usize,
+    end: usize,
+}
+
+impl FileSource {
+    /// Opens the host file at `path` for reading; `None` if it cannot be opened.
+    pub fn open(path: &CPath) -> Option<FileSource> {
+        let file = File::open(path.as_c_str()).ok()?;
+        Some(FileSource { file, buf: [0; 4096], start: 0, end: 0 })
+    }
+}
+
+impl ByteSource for FileSource {
+    fn read_exact(&mut self, out: &mut [u8]) -> Result<(), ReplayError> {
+        let mut done = 0;
+        while done < out.len() {
+            if self.start == self.end {
+                self.end = self.file.read(&mut self.buf).map_err(|_| ReplayError::Read)?;
+                self.start = 0;
+                if self.end == 0 {
+                    return Err(ReplayError::Read);
+                }
+            }
+            let n = (self.end - self.start).min(out.len() - done);
+            out[done..done + n].copy_from_slice(&self.buf[self.start..self.start + n]);
+            self.start += n;
+            done += n;
+        }
+        Ok(())
     }
 }

@@ -10,11 +10,11 @@
 //! error. The first pass is exactly the paper's method; the fixed point is the estimate whose
 //! compensated data show no bias at all, to f32 precision.
 
-use crate::align::{position_angles, AlignError, DwellValue};
-use crate::dwell::DwellSummary;
-use crate::earth::Site;
-use crate::linalg::{Mat3, Vec3};
-use crate::solve::{BiasSolution, BiasSolver, Estimate, SolveError, SolverSettings};
+use crate::calib::align::{position_angles, AlignError, DwellValue};
+use crate::calib::dwell::DwellSummary;
+use crate::calib::solve::{BiasSolution, BiasSolver, Estimate, SolveError, SolverSettings};
+use crate::math::linalg::{Mat3, Vec3};
+use crate::nav::earth::Site;
 
 /// One position: the turntable's attitude and the dwell's statistics.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -109,7 +109,7 @@ fn rotation(v: Vec3) -> Mat3 {
     Mat3(m)
 }
 
-/// Calibrates from a set of positions (any number up to [`crate::solve::MAX_POSITIONS`]).
+/// Calibrates from a set of positions (any number up to [`crate::calib::solve::MAX_POSITIONS`]).
 pub fn calibrate_positions(
     positions: &[PositionInput],
     site: &Site,

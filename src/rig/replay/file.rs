@@ -1,32 +1,20 @@
-//! Replay of a recorded sequence through the firmware path: device frames, driver, sampling queue,
-//! calibration sequence, core. The same [`run_replay`] runs in the firmware under QEMU (frames read
-//! through semihosting) and on the host (`sinscal calibrate --on host`), so both see identical values.
-//!
-//! File format (little-endian), written by the host from a recording:
-//! ```text
-//! magic "SSRP", version u16 = 1, model u8 (0 = ADIS16470, 1 = ADIS16505-2), reserved u8
-//! latitude_rad f32, gravity_mps2 f32, positions u16, reserved u16
-//! prefilter u8 (0 = none, 1 = HMM/KF with the paper's Q and R), dwell value u8 (0 = mean, 1 = settled),
-//! passes u8, estimate reference offset u8, a_gyro f32, a_accel f32
-//! positions x (pitch_rad f32, roll_rad f32, heading_rad f32, label u16, reserved u16)
-//! frames u32
-//! frames x (table u8: 0 = moving, k = in position k of the list (1-based); burst bytes of the model)
-//! ```
+//! The replay file (header and frames, written by the host from a recording) and the outcome file (what
+//! the firmware path produced, written back), both little-endian; the layout is in the parent module.
 
-use embedded_hal::spi::{self, Operation, SpiDevice};
-use heapless::spsc::Queue;
+use embedded_hal::spi;
 use heapless::Vec;
 
-use crate::adis::{reg, Adis, AdisError, Model, BURST32_LEN, BURST_COMMAND, WRITE_FLAG};
-use crate::align::DwellValue;
-use crate::calibration::{CalibrationResult, CalibrationSettings, PositionInput};
-use crate::dwell::{Prefilter, MIN_DWELL_SAMPLES};
-use crate::earth::Site;
-use crate::frames::Attitude;
-use crate::prefilter::PrefilterSettings;
-use crate::sampling::{on_data_ready, process_next, QueueItem, SamplingStats, QUEUE_SLOTS};
-use crate::sequence::{CalibrationSequence, Event, SequenceError, SequenceFailure, SequenceSettings};
-use crate::solve::MAX_POSITIONS;
+use super::run::ReplayOutcome;
+use crate::calib::align::DwellValue;
+use crate::calib::calibration::{CalibrationResult, CalibrationSettings, PositionInput};
+use crate::calib::dwell::{Prefilter, MIN_DWELL_SAMPLES};
+use crate::calib::prefilter::PrefilterSettings;
+use crate::calib::solve::MAX_POSITIONS;
+use crate::nav::earth::Site;
+use crate::nav::frames::Attitude;
+use crate::run::sampling::SamplingStats;
+use crate::run::sequence::{SequenceError, SequenceFailure, SequenceSettings};
+use crate::sensor::adis::Model;
 
 /// File magic.
 pub const MAGIC: [u8; 4] = *b"SSRP";
@@ -85,79 +73,23 @@ impl ByteSource for &[u8] {
     }
 }
 
-/// A burst frame, word-aligned so that serving it is a word copy, as a DMA transfer would be.
-#[derive(Clone, Debug)]
-#[repr(align(4))]
-struct Frame([u8; BURST32_LEN]);
-
-/// A simulated ADIS device on the SPI bus that serves recorded burst frames and answers register reads.
-#[derive(Clone, Debug)]
-pub struct ReplayDevice {
-    model: Model,
-    frame: Frame,
-    pending: Option<u8>,
-    registers: [u16; 64],
-}
-
-impl ReplayDevice {
-    /// A device of `model` with its PROD_ID set.
-    pub fn new(model: Model) -> ReplayDevice {
-        let mut registers = [0u16; 64];
-        registers[register_index(reg::PROD_ID)] = model.product_id();
-        ReplayDevice { model, frame: Frame([0; BURST32_LEN]), pending: None, registers }
-    }
-
-    /// Sets the burst the next burst read returns.
-    pub fn load_frame(&mut self, bytes: &[u8]) {
-        let n = self.model.burst_len().min(bytes.len());
-        self.frame.0[..n].copy_from_slice(&bytes[..n]);
-    }
-
-    /// A register's value (as last written).
-    pub fn register(&self, address: u8) -> u16 {
-        self.registers[register_index(address)]
-    }
-}
-
-/// Index of a register in the device's register file: byte address without the write flag, in words.
-fn register_index(address: u8) -> usize {
-    ((address & !WRITE_FLAG) / 2) as usize
-}
-
-impl spi::ErrorType for ReplayDevice {
-    type Error = ReplayError;
-}
-
-impl SpiDevice for ReplayDevice {
-    fn transaction(&mut self, operations: &mut [Operation<'_, u8>]) -> Result<(), ReplayError> {
-        match operations {
-            [Operation::Write(cmd), Operation::Read(buf)] if *cmd == BURST_COMMAND => {
-                let n = buf.len().min(self.model.burst_len());
-                buf[..n].copy_from_slice(&self.frame.0[..n]);
-                if n < buf.len() {
-                    buf[n..].fill(0);
-                }
-            }
-            [Operation::Write([address, value])] if address & WRITE_FLAG != 0 => {
-                let index = register_index(*address);
-                let current = self.registers[index].to_be_bytes();
-                self.registers[index] = if address & 1 == 0 {
-                    u16::from_be_bytes([current[0], *value])
-                } else {
-                    u16::from_be_bytes([*value, current[1]])
-                };
-            }
-            [Operation::Write([address, _])] => self.pending = Some(*address),
-            [Operation::Read(buf)] => {
-                let value = self.pending.take().map_or(0, |a| self.registers[register_index(a)]);
-                let bytes = value.to_be_bytes();
-                for (i, b) in buf.iter_mut().enumerate() {
-                    *b = bytes.get(i).copied().unwrap_or(0);
-                }
-            }
-            _ => return Err(ReplayError::Format),
-        }
-        Ok(())
+/// Settings of a replayed sequence: no settling (the recording's dwells are already the static parts),
+/// dwells as long as the table says, at least [`MIN_DWELL_SAMPLES`] samples.
+pub fn replay_sequence_settings(
+    prefilter: Prefilter,
+    dwell_value: DwellValue,
+    max_passes: u32,
+    estimate_reference_offset: bool,
+) -> SequenceSettings {
+    let mut calibration = CalibrationSettings { dwell_value, max_passes, ..CalibrationSettings::default() };
+    calibration.solver.estimate_reference_offset = estimate_reference_offset;
+    SequenceSettings {
+        settle_samples: 0,
+        dwell_samples: u32::MAX,
+        min_dwell_samples: MIN_DWELL_SAMPLES,
+        prefilter,
+        calibration,
+        ..SequenceSettings::default()
     }
 }
 
@@ -177,26 +109,6 @@ pub struct ReplayHeader {
     pub settings: SequenceSettings,
     /// Number of frames that follow.
     pub frames: u32,
-}
-
-/// Settings of a replayed sequence: no settling (the recording's dwells are already the static parts),
-/// dwells as long as the table says, at least [`MIN_DWELL_SAMPLES`] samples.
-pub fn replay_sequence_settings(
-    prefilter: Prefilter,
-    dwell_value: DwellValue,
-    max_passes: u32,
-    estimate_reference_offset: bool,
-) -> SequenceSettings {
-    let mut calibration = CalibrationSettings { dwell_value, max_passes, ..CalibrationSettings::default() };
-    calibration.solver.estimate_reference_offset = estimate_reference_offset;
-    SequenceSettings {
-        settle_samples: 0,
-        dwell_samples: u32::MAX,
-        min_dwell_samples: MIN_DWELL_SAMPLES,
-        prefilter,
-        calibration,
-        ..SequenceSettings::default()
-    }
 }
 
 fn u16_at(b: &[u8], i: usize) -> u16 {
@@ -254,78 +166,6 @@ pub fn read_header<R: ByteSource>(source: &mut R) -> Result<ReplayHeader, Replay
     Ok(ReplayHeader { model, site, schedule, labels, settings, frames: u32::from_le_bytes(n) })
 }
 
-/// What a replay produced.
-#[derive(Clone, Debug, PartialEq)]
-pub struct ReplayOutcome {
-    /// The header.
-    pub header: ReplayHeader,
-    /// Completed positions (attitude and dwell statistics).
-    pub positions: Vec<PositionInput, MAX_POSITIONS>,
-    /// The solution, if the sequence got there.
-    pub result: Option<CalibrationResult>,
-    /// The failure, if it failed.
-    pub failure: Option<SequenceFailure>,
-    /// Sampling counters.
-    pub sampling: SamplingStats,
-    /// Dwells aborted (and collected again).
-    pub aborted_dwells: u32,
-}
-
-/// Replays a file: frames through the replay device, the ADIS driver, the sampling queue and the
-/// calibration sequence. `on_event` sees every event of the sequence (the firmware logs them).
-pub fn run_replay<R: ByteSource>(
-    mut source: R,
-    mut on_event: impl FnMut(&Event),
-) -> Result<ReplayOutcome, ReplayError> {
-    let header = read_header(&mut source)?;
-    let settings = header.settings;
-    let model = header.model;
-    let mut imu = Adis::new(ReplayDevice::new(model), model);
-    imu.init().map_err(|_: AdisError<ReplayError>| ReplayError::Init)?;
-    let mut sequence =
-        CalibrationSequence::new(&header.schedule, header.site, settings).map_err(ReplayError::Sequence)?;
-    let mut queue: Queue<QueueItem, QUEUE_SLOTS> = Queue::new();
-    let (mut producer, mut consumer) = queue.split();
-    let mut stats = SamplingStats::default();
-    let mut failure = None;
-    let mut aborted_dwells = 0;
-    let mut record = [0u8; 1 + BURST32_LEN];
-    let record_len = 1 + model.burst_len();
-    let mut handle = |event: Event| {
-        match event {
-            Event::Failed(f) => failure = Some(f),
-            Event::DwellAborted { .. } => aborted_dwells += 1,
-            _ => {}
-        }
-        on_event(&event);
-    };
-    for _ in 0..header.frames {
-        source.read_exact(&mut record[..record_len])?;
-        let table = record[0];
-        imu.spi_mut().load_frame(&record[1..record_len]);
-        // What the data-ready interrupt does.
-        on_data_ready(&mut imu, &mut producer, &mut stats);
-        // What the processing loop does.
-        while let Some(event) = process_next(&mut consumer, |item| {
-            let in_position = table as usize == sequence.position() + 1;
-            sequence.on_sample(in_position, item)
-        }) {
-            if let Some(event) = event {
-                handle(event);
-            }
-        }
-    }
-    while let Some(event) = sequence.finish() {
-        handle(event);
-    }
-    let result = sequence.result().copied();
-    let mut positions = Vec::new();
-    for p in sequence.completed() {
-        let _ = positions.push(*p);
-    }
-    Ok(ReplayOutcome { header, positions, result, failure, sampling: stats, aborted_dwells })
-}
-
 /// Magic of an encoded outcome.
 pub const OUTCOME_MAGIC: [u8; 4] = *b"SSRO";
 /// Largest encoded outcome, bytes.
@@ -352,7 +192,7 @@ impl Writer<'_> {
     fn f32s(&mut self, v: &[f32]) -> Result<(), ReplayError> {
         v.iter().try_for_each(|x| self.f32(*x))
     }
-    fn estimate(&mut self, e: Option<crate::solve::Estimate>) -> Result<(), ReplayError> {
+    fn estimate(&mut self, e: Option<crate::calib::solve::Estimate>) -> Result<(), ReplayError> {
         match e {
             Some(e) => {
                 self.u32(1)?;
@@ -380,10 +220,10 @@ impl Reader<'_> {
     fn vec3(&mut self) -> Result<[f32; 3], ReplayError> {
         Ok([self.f32()?, self.f32()?, self.f32()?])
     }
-    fn estimate(&mut self) -> Result<Option<crate::solve::Estimate>, ReplayError> {
+    fn estimate(&mut self) -> Result<Option<crate::calib::solve::Estimate>, ReplayError> {
         let present = self.u32()? != 0;
         let (value, std_error) = (self.f32()?, self.f32()?);
-        Ok(present.then_some(crate::solve::Estimate { value, std_error }))
+        Ok(present.then_some(crate::calib::solve::Estimate { value, std_error }))
     }
 }
 
@@ -454,9 +294,9 @@ pub fn encode_outcome(o: &ReplayOutcome, out: &mut [u8]) -> Result<usize, Replay
 
 /// Decodes an outcome written by [`encode_outcome`], with the header of the replay file it came from.
 pub fn decode_outcome(header: &ReplayHeader, bytes: &[u8]) -> Result<ReplayOutcome, ReplayError> {
-    use crate::dwell::DwellSummary;
-    use crate::sequence::AbortReason as R;
-    use crate::solve::{BiasSolution, MAX_PARAMETERS};
+    use crate::calib::dwell::DwellSummary;
+    use crate::calib::solve::{BiasSolution, MAX_PARAMETERS};
+    use crate::run::sequence::AbortReason as R;
     let mut r = Reader { input: bytes };
     let mut magic = [0u8; 4];
     r.input.read_exact(&mut magic)?;
@@ -481,8 +321,8 @@ pub fn decode_outcome(header: &ReplayHeader, bytes: &[u8]) -> Result<ReplayOutco
             index: index as usize,
             reason: R::from_code(reason as u8).ok_or(ReplayError::Format)?,
         }),
-        _ => Some(SequenceFailure::Calibration(crate::calibration::CalibrationError::Solve(
-            crate::solve::SolveError::BadInput,
+        _ => Some(SequenceFailure::Calibration(crate::calib::calibration::CalibrationError::Solve(
+            crate::calib::solve::SolveError::BadInput,
         ))),
     };
     let count = r.u32()? as usize;

@@ -4,21 +4,7 @@
 //! y forward, z up; the sensor's axes must be mounted or remapped to it). Faults are classified into
 //! [`ReadFault`] so that the sampling layer can count and report them without knowing the driver.
 
-use crate::dwell::ImuSample;
-
-/// One sample from the sensor.
-#[derive(Clone, Copy, Debug, Default, PartialEq)]
-#[cfg_attr(feature = "defmt", derive(defmt::Format))]
-pub struct ImuReading {
-    /// Angular rate and specific force, body frame, SI.
-    pub sample: ImuSample,
-    /// The sensor's sample counter (wraps).
-    pub counter: u16,
-    /// Samples the sensor produced but the host never read, from the counter gap since the last reading.
-    pub missed: u16,
-    /// Sensor temperature, deg C.
-    pub temperature_c: f32,
-}
+use crate::sensor::sample::ImuReading;
 
 /// The kinds of read failure, as the sampling layer counts them.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]

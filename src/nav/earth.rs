@@ -1,7 +1,7 @@
 //! Earth model: rotation rate, WGS-84 normal gravity, and the navigation-frame reference vectors of a
 //! body at rest (SPEC.md section 1: ENU navigation frame).
 
-use crate::linalg::Vec3;
+use crate::math::linalg::Vec3;
 
 /// Earth rotation rate relative to inertial space, rad/s (WGS-84, SPEC.md section 1).
 pub const EARTH_RATE_RADPS: f32 = 7.292115e-5;

@@ -5,19 +5,10 @@
 //! variance of the raw samples (the variance gives the standard errors), the mean of the filtered
 //! samples (what the alignment consumes), and the filter's last state (the paper's "settled output").
 
-use crate::accumulate::{BlockedSum, DwellStats, BLOCK_SAMPLES};
-use crate::linalg::Vec3;
-use crate::prefilter::{FixedGain, HmmKf, PrefilterError, PrefilterSettings};
-
-/// One IMU sample in the body frame.
-#[derive(Clone, Copy, Debug, Default, PartialEq)]
-#[cfg_attr(feature = "defmt", derive(defmt::Format))]
-pub struct ImuSample {
-    /// Angular rate measured by the gyros, body frame, rad/s.
-    pub rate_b_radps: Vec3,
-    /// Specific force measured by the accelerometers, body frame, m/s^2.
-    pub force_b_mps2: Vec3,
-}
+use crate::calib::prefilter::{FixedGain, HmmKf, PrefilterError, PrefilterSettings};
+use crate::math::accumulate::{BlockedSum, DwellStats, BLOCK_SAMPLES};
+use crate::math::linalg::Vec3;
+use crate::sensor::sample::ImuSample;
 
 /// Which prefilter the collector runs in front of the statistics.
 #[derive(Clone, Copy, Debug, PartialEq)]

@@ -7,7 +7,8 @@
 
 use heapless::spsc::{Consumer, Producer};
 
-use crate::imu::{ClassifiedError, ImuReading, ImuSource, ReadFault};
+use crate::sensor::sample::ImuReading;
+use crate::sensor::source::{ClassifiedError, ImuSource, ReadFault};
 
 /// What travels from the interrupt to the processing loop: a reading or the fault that replaced it.
 pub type QueueItem = Result<ImuReading, ReadFault>;

@@ -9,8 +9,8 @@
 //!     X_pred = F X_{k-1},   X_k = X_pred + K_off (Z_k - H X_pred)
 //! (with `Z_k`, not the printed paper's `X_k`, in the innovation). Call rate: once per sample of the channel.
 
-use crate::accumulate::KahanSum;
-use crate::earth::STANDARD_GRAVITY_MPS2;
+use crate::math::accumulate::KahanSum;
+use crate::nav::earth::STANDARD_GRAVITY_MPS2;
 
 /// One degree per hour in rad/s.
 pub const DEG_PER_HOUR_IN_RADPS: f32 = core::f32::consts::PI / 180.0 / 3600.0;

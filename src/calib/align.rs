@@ -1,10 +1,10 @@
 //! Analytic coarse alignment at one position (METHOD.md step 2), its misalignment against the turntable
 //! (step 3), and the covariance of those angles from the dwell statistics.
 
-use crate::dwell::DwellSummary;
-use crate::earth::Site;
-use crate::frames::misalignment_n_rad;
-use crate::linalg::{cross, norm, Mat3, Vec3};
+use crate::calib::dwell::DwellSummary;
+use crate::math::linalg::{cross, norm, Mat3, Vec3};
+use crate::nav::earth::Site;
+use crate::nav::frames::misalignment_n_rad;
 
 /// Why an alignment cannot be computed.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -146,7 +146,7 @@ pub fn angle_covariance_rad2(c_b_n: &Mat3, force_var_b_mps2sq: Vec3, rate_var_b_
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::frames::Attitude;
+    use crate::nav::frames::Attitude;
 
     fn site() -> Site {
         Site { latitude_rad: 45.7796f32.to_radians(), gravity_mps2: 9.8063 }

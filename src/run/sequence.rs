@@ -13,16 +13,16 @@
 
 use heapless::Vec;
 
-use crate::calibration::{
+use crate::calib::calibration::{
     calibrate_positions, CalibrationError, CalibrationResult, CalibrationSettings, PositionInput,
 };
-use crate::dwell::{DwellCollector, Prefilter, MIN_DWELL_SAMPLES};
-use crate::earth::Site;
-use crate::frames::Attitude;
-use crate::linalg::{dot, Mat3, Vec3};
-use crate::prefilter::PrefilterError;
-use crate::sampling::QueueItem;
-use crate::solve::MAX_POSITIONS;
+use crate::calib::dwell::{DwellCollector, Prefilter, MIN_DWELL_SAMPLES};
+use crate::calib::prefilter::PrefilterError;
+use crate::calib::solve::MAX_POSITIONS;
+use crate::math::linalg::{dot, Mat3, Vec3};
+use crate::nav::earth::Site;
+use crate::nav::frames::Attitude;
+use crate::run::sampling::QueueItem;
 
 /// Settings of the sequence.
 #[derive(Clone, Copy, Debug, PartialEq)]

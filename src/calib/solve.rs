@@ -6,7 +6,7 @@
 //!     phi_n =  nabla_e / g                                      + phi0_n
 //!     phi_u = -eps_e / (W cos L) + (nabla_e / g) tan L           + phi0_u
 //! Stacking all positions gives `y = A theta + noise` with the block-diagonal angle covariance of
-//! [`crate::align::angle_covariance_rad2`]. The solver whitens each block, forms the normal equations
+//! [`crate::calib::align::angle_covariance_rad2`]. The solver whitens each block, forms the normal equations
 //! in scaled units (gyro biases in units of `W cos L`, accelerometer biases in units of `g`, so every
 //! column is of order one), equilibrates them, and decomposes them with the Jacobi eigenvalue method.
 //! Directions with eigenvalues below [`SolverSettings::rank_tolerance`] of the largest are the
@@ -14,8 +14,8 @@
 //! guessed; the others come from the pseudo-inverse, which gives them uniquely, with their standard
 //! errors from the same matrix.
 
-use crate::earth::Site;
-use crate::linalg::{Mat3, Vec3};
+use crate::math::linalg::{Mat3, Vec3};
+use crate::nav::earth::Site;
 
 /// Most positions one solution takes.
 pub const MAX_POSITIONS: usize = 24;
@@ -507,7 +507,7 @@ pub fn table1_pair_solution(phi_n_rad: &[Vec3; 6], site: &Site) -> (Vec3, Vec3) 
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::frames::Attitude;
+    use crate::nav::frames::Attitude;
 
     fn site() -> Site {
         Site { latitude_rad: 45.7796f32.to_radians(), gravity_mps2: 9.8063 }

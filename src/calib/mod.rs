@@ -1,0 +1,10 @@
+//! Calibration: the HMM/KF prefilter ([`prefilter`]), one dwell's statistics ([`dwell`]), the analytic
+//! coarse alignment and misalignment angles ([`align`]), the weighted least-squares bias solution
+//! ([`solve`]) and the whole calibration with its refinement passes ([`calibration`]). The method is
+//! described in docs/method.md.
+
+pub mod align;
+pub mod calibration;
+pub mod dwell;
+pub mod prefilter;
+pub mod solve;

@@ -1,0 +1,26 @@
+//! Replay of a recorded sequence through the firmware path: device frames, driver, sampling queue,
+//! calibration sequence, core. The same [`run_replay`] runs in the firmware under QEMU (frames read
+//! through semihosting) and on the host (`sinscal calibrate --on host`), so both see identical values.
+//!
+//! File format (little-endian), written by the host from a recording:
+//! ```text
+//! magic "SSRP", version u16 = 1, model u8 (0 = ADIS16470, 1 = ADIS16505-2), reserved u8
+//! latitude_rad f32, gravity_mps2 f32, positions u16, reserved u16
+//! prefilter u8 (0 = none, 1 = HMM/KF with the paper's Q and R), dwell value u8 (0 = mean, 1 = settled),
+//! passes u8, estimate reference offset u8, a_gyro f32, a_accel f32
+//! positions x (pitch_rad f32, roll_rad f32, heading_rad f32, label u16, reserved u16)
+//! frames u32
+//! frames x (table u8: 0 = moving, k = in position k of the list (1-based); burst bytes of the model)
+//! ```
+//!
+//! Three parts: [`file`] (the replay file and the outcome file: header, frames, encoding), [`device`] (the
+//! emulated ADIS on the SPI bus that serves the recorded frames to the real driver) and [`run`] (the whole
+//! firmware path over a replay file).
+
+pub mod device;
+pub mod file;
+pub mod run;
+
+pub use device::*;
+pub use file::*;
+pub use run::*;
