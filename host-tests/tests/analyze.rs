@@ -3,10 +3,10 @@
 
 use assert_cmd::Command;
 use serde_json::Value;
-use sinscal_host::analyze::{analyze_angles, analyze_recording, AnglesFile};
-use sinscal_host::hidden::clean_scenario;
-use sinscal_host::simulate::{simulate, PositionError, ScenarioFile};
-use sinscal_host::synth::{c_b_n, TABLE1_DEG};
+use sinscal_host::analysis::hidden::clean_scenario;
+use sinscal_host::analysis::{analyze_angles, analyze_recording, AnglesFile};
+use sinscal_host::model::simulator::{simulate, PositionError, ScenarioFile};
+use sinscal_host::model::synth::{c_b_n, TABLE1_DEG};
 
 fn sinscal() -> Command {
     Command::cargo_bin("sinscal").unwrap()
@@ -166,7 +166,7 @@ fn a_table_error_seen_in_a_recording_has_the_same_sign_through_calibrate_and_the
     let dir = tempfile::tempdir().unwrap();
     let rec_path = dir.path().join("p4.csv");
     simulate(&s, 11, "p4").write(&rec_path).unwrap();
-    let rec = sinscal_host::recording::Recording::read(&rec_path).unwrap();
+    let rec = sinscal_host::io::recording::Recording::read(&rec_path).unwrap();
     let from_recording = analyze_recording(&rec).unwrap();
     let e = &from_recording.effects[0];
     assert_eq!(

@@ -2,7 +2,7 @@
 
 use assert_cmd::Command;
 use serde_json::Value;
-use sinscal_host::synth::Scenario;
+use sinscal_host::model::synth::Scenario;
 
 fn sinscal() -> Command {
     Command::cargo_bin("sinscal").unwrap()
@@ -45,8 +45,8 @@ fn calibrate_writes_the_spec_json_and_numbers_read_back_bit_exact() {
     assert_eq!(v["unobservable"].as_array().unwrap().len(), 0);
 
     // The same run as a library call gives the same bits.
-    let recording = sinscal_host::recording::Recording::read(&rec).unwrap();
-    let cal = sinscal_host::calibrate::calibrate(&recording, &Default::default()).unwrap();
+    let recording = sinscal_host::io::recording::Recording::read(&rec).unwrap();
+    let cal = sinscal_host::calibration::calibrate(&recording, &Default::default()).unwrap();
     let eps_x = cal.solution.gyro_bias_b_radps[0].unwrap().value;
     assert_eq!(v["gyro_bias_radps"][0].as_f64().unwrap() as f32, eps_x);
 
@@ -173,9 +173,9 @@ fn demo_runs_the_built_in_example() {
     let v: Value = serde_json::from_str(&std::fs::read_to_string(&json).unwrap()).unwrap();
     // The example's biases: gyro x +0.05 deg/h, accel y -80 ug; the estimates land within 4 sigma.
     let (eps, sd) = (v["gyro_bias_radps"][0].as_f64().unwrap(), v["gyro_bias_std_radps"][0].as_f64().unwrap());
-    assert!((eps - 0.05 * sinscal_host::synth::DEG_PER_HOUR).abs() < 4.0 * sd);
+    assert!((eps - 0.05 * sinscal_host::model::synth::DEG_PER_HOUR).abs() < 4.0 * sd);
     let (nab, sd) = (v["accel_bias_mps2"][1].as_f64().unwrap(), v["accel_bias_std_mps2"][1].as_f64().unwrap());
-    assert!((nab + 80.0 * sinscal_host::synth::MICRO_G).abs() < 4.0 * sd);
+    assert!((nab + 80.0 * sinscal_host::model::synth::MICRO_G).abs() < 4.0 * sd);
 }
 
 #[test]

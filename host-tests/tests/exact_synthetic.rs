@@ -4,9 +4,9 @@
 //! estimate, a wrong sign of f_n breaks the level angles.
 
 use sinscal::calib::align::DwellValue;
-use sinscal_host::calibrate::{calibrate, Coefficient, Options, PrefilterKind};
-use sinscal_host::recording::Recording;
-use sinscal_host::synth::{Scenario, DEG_PER_HOUR, MICRO_G};
+use sinscal_host::calibration::{calibrate, Coefficient, Options, PrefilterKind};
+use sinscal_host::io::recording::Recording;
+use sinscal_host::model::synth::{Scenario, DEG_PER_HOUR, MICRO_G};
 
 /// Acceptance of the issue, for the paper's first-order method (one pass): better than 1e-3 deg/h and
 /// 3 ug at biases of 0.05 deg/h and 100 ug.

@@ -5,10 +5,10 @@
 use sinscal::rig::replay::{read_header, run_replay};
 use sinscal::run::sequence::{AbortReason, Event, SequenceFailure};
 use sinscal::sensor::adis::{decode_burst, encode_burst, Model, BURST32_LEN};
-use sinscal_host::calibrate::{calibrate, Options};
-use sinscal_host::recording::Recording;
-use sinscal_host::replayfile::{calibrate_on_host, replay_file};
-use sinscal_host::synth::{Scenario, DEG_PER_HOUR, MICRO_G};
+use sinscal_host::calibration::firmware_path::{calibrate_on_host, replay_file};
+use sinscal_host::calibration::{calibrate, Options};
+use sinscal_host::io::recording::Recording;
+use sinscal_host::model::synth::{Scenario, DEG_PER_HOUR, MICRO_G};
 
 fn example(seconds: f64) -> Recording {
     Scenario { dwell_s: seconds, ..Scenario::example() }.recording(4, "example.csv")

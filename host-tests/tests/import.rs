@@ -8,12 +8,12 @@ mod common;
 
 use assert_cmd::Command;
 use common::{data_dir, data_file};
-use sinscal_host::import::{
+use sinscal_host::io::import::{
     detect_static_intervals, ferraris_pose, import_imucal, import_imucal_raw, import_imutk, import_psins,
     level_attitude_deg, parse_imucal, parse_imucal_labels, parse_imucal_raw, parse_imutk, parse_psins, position_stats,
     Imported, PositionStats, StaticDetection, FERRARIS_POSES, IMUTK_GRAVITY_MPS2,
 };
-use sinscal_host::recording::Recording;
+use sinscal_host::io::recording::Recording;
 
 fn sinscal() -> Command {
     Command::cargo_bin("sinscal").unwrap()

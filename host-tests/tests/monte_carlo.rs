@@ -4,8 +4,8 @@
 //! the estimator's own (angle) model. Both prefilter settings with the dwell mean. The paper's settled
 //! output is checked for honest standard errors and shown to be far from the bound.
 
-use sinscal_host::montecarlo::{run, Estimator};
-use sinscal_host::synth::Scenario;
+use sinscal_host::calibration::montecarlo::{run, Estimator};
+use sinscal_host::model::synth::Scenario;
 
 #[test]
 fn two_hundred_runs_reach_the_bound_with_honest_standard_errors() {

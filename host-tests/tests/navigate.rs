@@ -2,8 +2,10 @@
 //! with and without constant biases, integrated by the f64 mechanisation and compared with the truth and
 //! with the closed-form solution of the linearised static error model.
 
-use sinscal_host::navigate::{linear_error_model, navigate_runs, schuler_period_s, NavError, Run, StaticSetup};
-use sinscal_host::synth::{c_b_n, mul_vec, Scenario, DEG_PER_HOUR, MICRO_G};
+use sinscal_host::model::synth::{c_b_n, mul_vec, Scenario, DEG_PER_HOUR, MICRO_G};
+use sinscal_host::navigation::strapdown::{
+    linear_error_model, navigate_runs, schuler_period_s, NavError, Run, StaticSetup,
+};
 
 fn setup(attitude_deg: [f64; 3], scenario: &Scenario) -> StaticSetup {
     StaticSetup {
@@ -150,9 +152,9 @@ fn schuler_period_and_level_error_of_an_accelerometer_bias() {
 
 #[test]
 fn a_six_position_calibration_shows_its_gain_in_a_two_hour_run() {
-    use sinscal_host::calibrate::{calibrate, Options};
-    use sinscal_host::navcheck::{navigate, CalibrationBiases, NavOptions};
-    use sinscal_host::output::CalibrationJson;
+    use sinscal_host::calibration::{calibrate, Options};
+    use sinscal_host::io::calibration_result::CalibrationJson;
+    use sinscal_host::navigation::check::{navigate, CalibrationBiases, NavOptions};
 
     // SIMULATION: the built-in example IMU, calibrated on Table 1, then 2 hours at rest at position 1.
     let dir = tempfile::tempdir().unwrap();
@@ -201,10 +203,10 @@ fn east_gyro_drift_couples_through_earth_rate_as_the_textbook_approximation_says
     let scenario = Scenario { gyro_bias_b_radps: [eps_e, 0.0, 0.0], ..Scenario::table1_exact() };
     let nav = exact_run([0.0; 3], &scenario, 2.0);
     let lat = scenario.latitude_deg.to_radians();
-    let (r_m, r_n) = sinscal_host::navigate::radii_m(lat);
+    let (r_m, r_n) = sinscal_host::navigation::strapdown::radii_m(lat);
     let r = (r_m * r_n).sqrt();
     let w = 2.0 * std::f64::consts::PI / schuler_period_s(lat, 0.0, scenario.gravity_mps2);
-    let earth = sinscal_host::synth::EARTH_RATE_RADPS;
+    let earth = sinscal_host::model::synth::EARTH_RATE_RADPS;
     let (omega_n, omega_u) = (earth * lat.cos(), earth * lat.sin());
     let last = nav.last().unwrap();
     let t = last.t_s;

@@ -1,4 +1,4 @@
-//! SIMULATION: the noise-analysis module (`sinscal_host::noise`) on seeded synthetic noise of known
+//! SIMULATION: the noise-analysis module (`sinscal_host::stats::noise`) on seeded synthetic noise of known
 //! parameters: Allan deviation and noise-term identification (white noise, rate random walk, first-order
 //! Gauss-Markov, angle quantization), Welch PSD (white level, Parseval, a sinusoid), the FFT against a
 //! direct DFT, the Ljung-Box test and the chi-square distribution, and quantization detection.
@@ -6,7 +6,7 @@
 use rand::{Rng, SeedableRng};
 use rand_chacha::ChaCha8Rng;
 use rand_distr::{Distribution, Normal, StandardNormal};
-use sinscal_host::noise::*;
+use sinscal_host::stats::noise::*;
 
 /// `n` samples of white Gaussian noise of standard deviation `sigma`.
 fn white(seed: u64, n: usize, sigma: f64) -> Vec<f64> {

@@ -4,11 +4,13 @@
 //! elsewhere the test reports itself as skipped.
 
 use sinscal::rig::replay::{encode_outcome, run_replay, MAX_OUTCOME_BYTES};
-use sinscal_host::calibrate::Options;
-use sinscal_host::output::CalibrationJson;
-use sinscal_host::qemu::{calibrate_on_qemu, firmware_binary, firmware_elf, run_firmware, run_with_output, QEMU};
-use sinscal_host::replayfile::{calibrate_on_host, replay_file};
-use sinscal_host::synth::Scenario;
+use sinscal_host::calibration::firmware_path::{calibrate_on_host, replay_file};
+use sinscal_host::calibration::qemu::{
+    calibrate_on_qemu, firmware_binary, firmware_elf, run_firmware, run_with_output, QEMU,
+};
+use sinscal_host::calibration::Options;
+use sinscal_host::io::calibration_result::CalibrationJson;
+use sinscal_host::model::synth::Scenario;
 
 fn qemu_available() -> bool {
     let found = std::process::Command::new(QEMU).arg("--version").output().is_ok_and(|o| o.status.success());
@@ -19,7 +21,7 @@ fn qemu_available() -> bool {
     found
 }
 
-fn json_without_on(c: &sinscal_host::calibrate::Calibration) -> serde_json::Value {
+fn json_without_on(c: &sinscal_host::calibration::Calibration) -> serde_json::Value {
     let mut v = serde_json::to_value(CalibrationJson::new(c)).unwrap();
     v.as_object_mut().unwrap().remove("on");
     v
@@ -34,7 +36,7 @@ fn firmware_in_qemu_and_the_host_replay_agree_to_the_bit() {
     let rec = Scenario { dwell_s: 30.0, ..Scenario::example() }.recording(11, "example.csv");
     for options in [
         Options::default(),
-        Options { prefilter: sinscal_host::calibrate::PrefilterKind::None, max_passes: 1, ..Options::default() },
+        Options { prefilter: sinscal_host::calibration::PrefilterKind::None, max_passes: 1, ..Options::default() },
     ] {
         let (mut file, _) = replay_file(&rec, &options).unwrap();
         // Also a corrupted frame (a gyro byte of row 1000, inside dwell 1), so the fault path runs on both.

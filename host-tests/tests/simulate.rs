@@ -4,11 +4,11 @@
 
 use std::f64::consts::PI;
 
-use sinscal_host::calibrate::{calibrate, Options};
-use sinscal_host::noise::overlapping_allan_deviation;
-use sinscal_host::recording::Recording;
-use sinscal_host::simulate::{simulate, ScenarioFile};
-use sinscal_host::synth::{c_b_n, mul, mul_t_vec, mul_vec, rotation, EARTH_RATE_RADPS};
+use sinscal_host::calibration::{calibrate, Options};
+use sinscal_host::io::recording::Recording;
+use sinscal_host::model::simulator::{simulate, ScenarioFile};
+use sinscal_host::model::synth::{c_b_n, mul, mul_t_vec, mul_vec, rotation, EARTH_RATE_RADPS};
+use sinscal_host::stats::noise::overlapping_allan_deviation;
 
 fn scenario(text: &str) -> ScenarioFile {
     ScenarioFile::parse(text, "test.toml").unwrap_or_else(|e| panic!("{e}"))
@@ -137,7 +137,7 @@ fn a_move_integrates_to_the_attitude_change_with_the_spec_sign() {
     assert!(between.windows(2).all(|w| w[1].heading_deg.unwrap() >= w[0].heading_deg.unwrap()));
 }
 
-fn mean_of(rec: &Recording, pos: u32, f: impl Fn(&sinscal_host::recording::Row) -> f64) -> (f64, f64) {
+fn mean_of(rec: &Recording, pos: u32, f: impl Fn(&sinscal_host::io::recording::Row) -> f64) -> (f64, f64) {
     let rows: Vec<_> = rec.rows.iter().filter(|r| r.pos == pos).collect();
     let t = rows.iter().map(|r| r.t_s).sum::<f64>() / rows.len() as f64;
     (t, rows.iter().map(|r| f(r)).sum::<f64>() / rows.len() as f64)

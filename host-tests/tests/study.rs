@@ -11,7 +11,7 @@ use common::data_dir;
 use rand::SeedableRng;
 use rand_chacha::ChaCha8Rng;
 use rand_distr::{Distribution, StandardNormal};
-use sinscal_host::recording::{Header, Recording, Row};
+use sinscal_host::io::recording::{Header, Recording, Row};
 use sinscal_host::study::{
     lower_triangular_form, study_dataset, study_multi_pose, study_single_pose, Dataset, PoseKind, Study,
 };

@@ -13,7 +13,7 @@
 
 use sinscal::nav::earth::{WGS84_A_M, WGS84_E2};
 
-use crate::synth::{mul, mul_vec, rotation, transpose, EARTH_RATE_RADPS, M3};
+use crate::model::synth::{mul, mul_vec, rotation, transpose, EARTH_RATE_RADPS, M3};
 
 /// Meridian and prime-vertical radii of curvature of WGS-84 at a latitude, m.
 pub fn radii_m(latitude_rad: f64) -> (f64, f64) {

@@ -24,17 +24,17 @@ use std::path::{Path, PathBuf};
 use rand_chacha::ChaCha8Rng;
 use serde_json::{json, Map, Value};
 
-use crate::error::InputError;
-use crate::import::{
+use crate::io::error::InputError;
+use crate::io::import::{
     import_imucal, import_imutk, import_psins, position_stats, StaticDetection, FERRARIS_POSES,
     IMUTK_ACCEL_GAIN_COUNTS_PER_MPS2, IMUTK_GRAVITY_MPS2,
 };
-use crate::noise::{
+use crate::io::recording::Recording;
+use crate::model::simulator::{normal, rng};
+use crate::model::synth::{mul_vec, DEG_PER_HOUR, M3, MICRO_G};
+use crate::stats::noise::{
     fit_noise_terms, gauss_markov_allan_variance, log_spaced_clusters, overlapping_allan_deviation, NoiseTerms,
 };
-use crate::recording::Recording;
-use crate::simulate::{normal, rng};
-use crate::synth::{mul_vec, DEG_PER_HOUR, M3, MICRO_G};
 
 /// Seed of every SIMULATION of a study (the same seed gives the same numbers).
 pub const STUDY_SEED: u64 = 952;
@@ -688,8 +688,8 @@ fn nnls(rows: &[Vec<f64>], y: &[f64]) -> Option<(Vec<f64>, f64)> {
 /// the curve's tau range) or a sinusoid (frequency on a grid of 12 per decade from 1 / (4 tau_max) to 1 /
 /// (2 tau_min)), the one with the smallest weighted residual; it is kept only if it lowers the weighted residual
 /// sum by more than 20 %.
-pub fn fit_extended_noise(points: &[crate::noise::AllanPoint]) -> (NoiseTerms, Option<ExtraTerm>) {
-    let p: Vec<&crate::noise::AllanPoint> =
+pub fn fit_extended_noise(points: &[crate::stats::noise::AllanPoint]) -> (NoiseTerms, Option<ExtraTerm>) {
+    let p: Vec<&crate::stats::noise::AllanPoint> =
         points.iter().filter(|q| q.adev > 0.0 && q.adev.is_finite() && q.rel_uncertainty > 0.0).collect();
     let fallback = || (fit_noise_terms(points).map(|f| f.terms).unwrap_or_default(), None);
     if p.len() < 6 {
@@ -821,7 +821,8 @@ pub fn channel_noise(channel: &'static str, samples: &[f64], rate_hz: f64, seed:
             held_out_extended_sim,
         }
     });
-    let quantization_step = crate::noise::detect_quantization(samples).ok().filter(|q| q.quantized).map(|q| q.step);
+    let quantization_step =
+        crate::stats::noise::detect_quantization(samples).ok().filter(|q| q.quantized).map(|q| q.step);
     ChannelNoise {
         channel,
         white_std: sigma,
@@ -1062,7 +1063,7 @@ pub fn study_multi_pose(
     }
     let stats = position_stats(rec);
     // Noise: pooled white std per channel, ADEV on the longest pose.
-    let seg = |d: &crate::recording::Dwell<'_>, c: usize| -> Vec<f64> {
+    let seg = |d: &crate::io::recording::Dwell<'_>, c: usize| -> Vec<f64> {
         d.rows.iter().map(|r| if c < 3 { r.rate_b_radps[c] } else { r.force_b_mps2[c - 3] }).collect()
     };
     let longest = dwells.iter().max_by_key(|d| d.rows.len()).expect("non-empty");
@@ -1398,7 +1399,7 @@ pub fn name_causes(s: &Study) -> Vec<Cause> {
                         sw.correlation,
                         sw.slope_mps2_per_rad,
                         sw.accel_rms_mps2 / MICRO_G,
-                        sw.tilt_rms_rad * crate::output::ARCSEC_PER_RAD
+                        sw.tilt_rms_rad * crate::io::calibration_result::ARCSEC_PER_RAD
                     ),
                 },
             ));
@@ -1484,10 +1485,10 @@ pub fn study_dataset(dataset: Dataset, data_dir: &Path) -> Result<Study, InputEr
             eprintln!("study ferraris: reading {}", csv.display());
             let rec = import_imucal(&csv, &labels, None)?.recording;
             let label_text = std::fs::read_to_string(&labels).map_err(|e| InputError::io(&labels, e))?;
-            let ranges = crate::import::parse_imucal_labels(&label_text, &labels.display().to_string())?;
-            let rate = crate::import::IMUCAL_RATE_HZ;
+            let ranges = crate::io::import::parse_imucal_labels(&label_text, &labels.display().to_string())?;
+            let rate = crate::io::import::IMUCAL_RATE_HZ;
             let mut turns = Vec::new();
-            for (axis, label) in crate::import::FERRARIS_ROTATIONS.iter().enumerate() {
+            for (axis, label) in crate::io::import::FERRARIS_ROTATIONS.iter().enumerate() {
                 if let Some(r) = ranges.iter().find(|r| r.label == *label) {
                     let rows: Vec<usize> = (0..rec.rows.len())
                         .filter(|&k| {
@@ -1601,7 +1602,7 @@ pub fn summary_markdown(s: &Study, figures: &[String]) -> String {
             sw.correlation,
             sw.slope_mps2_per_rad,
             sw.accel_rms_mps2 / MICRO_G,
-            sw.tilt_rms_rad * crate::output::ARCSEC_PER_RAD
+            sw.tilt_rms_rad * crate::io::calibration_result::ARCSEC_PER_RAD
         );
     }
     if let Some(p) = &s.poses {

@@ -7,7 +7,7 @@ use rand::SeedableRng;
 use rand_chacha::ChaCha8Rng;
 use rand_distr::{Distribution, Normal};
 
-use crate::recording::{Header, Recording, Row, SimulationTruth};
+use crate::io::recording::{Header, Recording, Row, SimulationTruth};
 
 /// Earth rotation rate, rad/s (SPEC.md section 1).
 pub const EARTH_RATE_RADPS: f64 = 7.292115e-5;

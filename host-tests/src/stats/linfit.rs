@@ -8,7 +8,7 @@
 //! maximum because for fixed variances the `beta` step is exact and for fixed `beta` the variance step is),
 //! and the log-likelihood is the profile one, `-n_g/2 (ln(2 pi s_g^2) + 1)` per group.
 
-use crate::noise::regularized_gamma_q;
+use crate::stats::noise::regularized_gamma_q;
 
 /// The observations of a linear problem.
 #[derive(Clone, Debug)]

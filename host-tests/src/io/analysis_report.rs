@@ -5,8 +5,8 @@ use std::path::Path;
 
 use plotters::prelude::*;
 
-use crate::analyze::{Analysis, CHANNELS};
-use crate::noise::{gauss_markov_allan_variance, log_spaced_clusters, overlapping_allan_deviation, welch_psd};
+use crate::analysis::{Analysis, CHANNELS};
+use crate::stats::noise::{gauss_markov_allan_variance, log_spaced_clusters, overlapping_allan_deviation, welch_psd};
 
 fn err(path: &Path, e: &dyn std::fmt::Display) -> anyhow::Error {
     anyhow::anyhow!("plot {}: {e}", path.display())

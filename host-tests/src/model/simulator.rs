@@ -44,9 +44,9 @@ use rand_chacha::ChaCha8Rng;
 use rand_distr::{Distribution, StandardNormal};
 use serde::Deserialize;
 
-use crate::error::InputError;
-use crate::recording::{Header, Recording, Row, SimulationTruth};
-use crate::synth::{c_b_n, mul, mul_t_vec, rotation, transpose, EARTH_RATE_RADPS, M3, TABLE1_DEG};
+use crate::io::error::InputError;
+use crate::io::recording::{Header, Recording, Row, SimulationTruth};
+use crate::model::synth::{c_b_n, mul, mul_t_vec, rotation, transpose, EARTH_RATE_RADPS, M3, TABLE1_DEG};
 
 /// A scenario file.
 #[derive(Clone, Debug, Default, Deserialize, PartialEq)]

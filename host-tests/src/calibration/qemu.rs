@@ -11,10 +11,10 @@ use std::sync::atomic::{AtomicU32, Ordering};
 
 use sinscal::rig::replay::{decode_outcome, read_header};
 
-use crate::calibrate::{Calibration, Options};
-use crate::error::InputError;
-use crate::recording::Recording;
-use crate::replayfile::{calibration_from_outcome, replay_file};
+use crate::calibration::firmware_path::{calibration_from_outcome, replay_file};
+use crate::calibration::{Calibration, Options};
+use crate::io::error::InputError;
+use crate::io::recording::Recording;
 
 /// QEMU command and machine.
 pub const QEMU: &str = "qemu-system-arm";

@@ -17,9 +17,9 @@ use std::fmt::Write as _;
 use std::ops::Range;
 use std::path::{Path, PathBuf};
 
-use crate::error::InputError;
-use crate::output::ARCSEC_PER_RAD;
-use crate::recording::{Header, Recording, Row};
+use crate::io::calibration_result::ARCSEC_PER_RAD;
+use crate::io::error::InputError;
+use crate::io::recording::{Header, Recording, Row};
 
 /// Standard gravity, m/s^2: the "g" of accelerometer ranges given in LSB/g. The f64 twin of the core's
 /// f32 `sinscal::nav::earth::STANDARD_GRAVITY_MPS2` (its f32 value would be off by 1.6e-8 relative).

@@ -8,10 +8,10 @@ use rand_chacha::ChaCha8Rng;
 use rand_distr::{Distribution, Normal};
 use serde::Serialize;
 
-use crate::error::InputError;
-use crate::navigate::{linear_error_model, navigate_runs, NavError, Run, RunSummary, StaticSetup};
-use crate::recording::Recording;
-use crate::synth::{c_b_n, mul_vec, Scenario};
+use crate::io::error::InputError;
+use crate::io::recording::Recording;
+use crate::model::synth::{c_b_n, mul_vec, Scenario};
+use crate::navigation::strapdown::{linear_error_model, navigate_runs, NavError, Run, RunSummary, StaticSetup};
 
 /// The biases (and their standard errors) of a calibration JSON file (SPEC.md section 5).
 #[derive(Clone, Debug, PartialEq)]

@@ -1,6 +1,10 @@
 //! `sinscal calibrate`: a recording through the no_std core (dwell collection, alignment, solution).
 //! Every formula is the core's; this module only reads, converts to f32 at the edge, and checks input.
 
+pub mod firmware_path;
+pub mod montecarlo;
+pub mod qemu;
+
 use sinscal::calib::align::{position_angles, DwellValue, PositionAngles};
 use sinscal::calib::calibration::{calibrate_positions, CalibrationResult, CalibrationSettings, PositionInput};
 use sinscal::calib::dwell::{DwellCollector, DwellSummary, Prefilter};
@@ -10,8 +14,8 @@ use sinscal::nav::earth::{normal_gravity_mps2, Site};
 use sinscal::nav::frames::Attitude;
 use sinscal::sensor::sample::ImuSample;
 
-use crate::error::InputError;
-use crate::recording::{Dwell, DwellAttitude, Header, Recording};
+use crate::io::error::InputError;
+use crate::io::recording::{Dwell, DwellAttitude, Header, Recording};
 
 /// Which prefilter runs in front of the dwell statistics.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -236,7 +240,7 @@ pub const MAX_HEADING_MISALIGNMENT_RAD: f32 = 0.5;
 
 /// Identifies the prefilter coefficient `a` of the gyros and of the accelerometers from a dwell.
 pub fn identify_coefficients(
-    rows: &[&crate::recording::Row],
+    rows: &[&crate::io::recording::Row],
     source: &str,
     line: usize,
 ) -> Result<[f32; 2], InputError> {

@@ -10,9 +10,9 @@ use sinscal::rig::replay::{
 use sinscal::run::sequence::SequenceFailure;
 use sinscal::sensor::adis::{encode_burst, Burst, Model, BURST32_LEN, I16F16};
 
-use crate::calibrate::{calibration_dwells, prefilter_of, site_of, Calibration, Options, PositionResult};
-use crate::error::InputError;
-use crate::recording::{DwellAttitude, Recording};
+use crate::calibration::{calibration_dwells, prefilter_of, site_of, Calibration, Options, PositionResult};
+use crate::io::error::InputError;
+use crate::io::recording::{DwellAttitude, Recording};
 
 /// The sensor model the replay files emulate.
 pub const REPLAY_MODEL: Model = Model::Adis16505_2;

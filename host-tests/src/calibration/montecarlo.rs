@@ -19,7 +19,7 @@ use sinscal::nav::earth::Site;
 use sinscal::nav::frames::Attitude;
 use sinscal::sensor::sample::ImuSample;
 
-use crate::synth::{c_b_n as c_b_n_f64, mul_t_vec, Scenario, EARTH_RATE_RADPS};
+use crate::model::synth::{c_b_n as c_b_n_f64, mul_t_vec, Scenario, EARTH_RATE_RADPS};
 
 /// The estimators compared.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize)]

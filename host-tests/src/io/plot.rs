@@ -4,8 +4,8 @@ use std::path::Path;
 
 use plotters::prelude::*;
 
-use crate::navcheck::NavReport;
-use crate::output::ARCSEC_PER_RAD;
+use crate::io::calibration_result::ARCSEC_PER_RAD;
+use crate::navigation::check::NavReport;
 
 fn run_color(name: &str, index: usize) -> RGBColor {
     if name == "uncompensated" {

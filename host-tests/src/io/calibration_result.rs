@@ -7,8 +7,8 @@ use sinscal::calib::align::DwellValue;
 use sinscal::calib::dwell::Prefilter;
 use sinscal::calib::solve::{Estimate, Parameter};
 
-use crate::calibrate::{Calibration, GravitySource};
-use crate::synth::{DEG_PER_HOUR, MICRO_G};
+use crate::calibration::{Calibration, GravitySource};
+use crate::model::synth::{DEG_PER_HOUR, MICRO_G};
 
 /// Arcseconds per radian.
 pub const ARCSEC_PER_RAD: f64 = 206_264.806_247_096_36;

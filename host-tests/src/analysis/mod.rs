@@ -14,14 +14,14 @@
 //! - warm-up `A exp(-(t - t0)/tau)` (t0 = first row): the block mean of the exponential, with `tau` profiled
 //!   over a logarithmic grid (two parameters).
 //!
-//! The noise variances are estimated with the coefficients (profile likelihood, [`crate::linfit`]). Faster
+//! The noise variances are estimated with the coefficients (profile likelihood, [`crate::stats::linfit`]). Faster
 //! effects are tested on the samples themselves, after each dwell's mean and trend are removed:
 //! - vibration: the largest line of the periodogram summed over dwells, against the median of its
 //!   neighbourhood (a line, not a coloured background); amplitude corrected for the interval averaging of an
 //!   integrating sensor (`sinc(f dt)`);
 //! - correlated noise: exact Gaussian likelihood of a first-order Gauss-Markov process plus white noise
 //!   (Kalman filter), against white noise alone;
-//! - quantisation: the fraction of sample differences on a lattice ([`crate::noise::detect_quantization`]),
+//! - quantisation: the fraction of sample differences on a lattice ([`crate::stats::noise::detect_quantization`]),
 //!   against the fraction continuous data give, as a binomial likelihood ratio.
 //!
 //! # Criterion
@@ -39,16 +39,18 @@
 //! alignment equations of METHOD.md (the core's design rows); sensor effects are mapped the same way, the
 //! reference offset and position errors enter directly. Time-dependent and noise effects are unobservable.
 
+pub mod hidden;
+
 use std::path::Path;
 
 use serde::Serialize;
 
-use crate::calibrate::site_of;
-use crate::error::InputError;
-use crate::linfit::{chi_square_quantile_upper, chi_square_upper, fit, solve_spd, LinearFit, Observations};
-use crate::noise::{detect_quantization, fft_in_place, ljung_box, GRID_TOLERANCE};
-use crate::recording::Recording;
-use crate::synth::{c_b_n, mul_t_vec, EARTH_RATE_RADPS, M3};
+use crate::calibration::site_of;
+use crate::io::error::InputError;
+use crate::io::recording::Recording;
+use crate::model::synth::{c_b_n, mul_t_vec, EARTH_RATE_RADPS, M3};
+use crate::stats::linfit::{chi_square_quantile_upper, chi_square_upper, fit, solve_spd, LinearFit, Observations};
+use crate::stats::noise::{detect_quantization, fft_in_place, ljung_box, GRID_TOLERANCE};
 
 /// Family-wise significance level of the effect search.
 pub const ALPHA: f64 = 0.01;
@@ -1453,7 +1455,7 @@ impl AnglesFile {
 
 /// Analyses an angles file.
 pub fn analyze_angles(file: &AnglesFile) -> Result<Analysis, InputError> {
-    let header = crate::recording::Header {
+    let header = crate::io::recording::Header {
         latitude_deg: file.latitude_deg,
         height_m: 0.0,
         rate_hz: None,
@@ -1641,7 +1643,7 @@ mod tests {
         let site = sinscal::nav::earth::Site::with_normal_gravity(lat as f32, 0.0);
         let g = site.gravity_mps2 as f64;
         let w_n = [0.0, EARTH_RATE_RADPS * lat.cos(), EARTH_RATE_RADPS * lat.sin()];
-        for att in crate::synth::TABLE1_DEG {
+        for att in crate::model::synth::TABLE1_DEG {
             let c = c_b_n(att[0], att[1], att[2]);
             let c32 = sinscal::math::linalg::Mat3(std::array::from_fn(|i| std::array::from_fn(|j| c[i][j] as f32)));
             let rows = sinscal::calib::solve::design_rows_si(&c32, &site);

@@ -12,14 +12,14 @@ use std::collections::BTreeMap;
 use rand::{Rng, SeedableRng};
 use rand_chacha::ChaCha8Rng;
 
-use crate::analyze::{analyze_recording, Analysis};
-use crate::recording::Recording;
-use crate::simulate::{
+use crate::analysis::{analyze_recording, Analysis};
+use crate::io::recording::Recording;
+use crate::model::simulator::{
     simulate, GaussMarkovSpec, PositionError, ScenarioFile, TemperatureSpec, VibrationSpec, WarmupSpec,
 };
 
 /// The clean scenario every trial starts from (constant biases and white noise only).
-pub const CLEAN_SCENARIO: &str = include_str!("../scenarios/table1-clean.toml");
+pub const CLEAN_SCENARIO: &str = include_str!("../../scenarios/table1-clean.toml");
 
 /// Effects the trials hide, with the axes each may take in the Table 1 schedule. Entries that this
 /// schedule cannot see (body y is horizontal in every position, so nothing proportional to the force
@@ -253,7 +253,7 @@ pub fn draw(effect: &'static str, seed: u64, reference: &ReferenceErrors) -> (Sc
 /// Mid times of the analysis's blocks (6 s, ten per one-minute dwell) in the scenario's schedule, s.
 fn block_times(s: &ScenarioFile) -> Vec<f64> {
     let sch = &s.schedule;
-    let blocks = ((sch.dwell_s * sch.rate_hz) as usize / crate::analyze::BLOCK_SAMPLES).max(4);
+    let blocks = ((sch.dwell_s * sch.rate_hz) as usize / crate::analysis::BLOCK_SAMPLES).max(4);
     let mut times = Vec::new();
     for k in 0..sch.positions_deg.len() {
         let start = k as f64 * (sch.dwell_s + sch.settle_s + sch.move_s) + sch.settle_s;
@@ -267,7 +267,7 @@ fn block_times(s: &ScenarioFile) -> Vec<f64> {
 /// White noise of a block mean.
 fn block_noise(s: &ScenarioFile, per_sample: f64) -> f64 {
     let sch = &s.schedule;
-    let blocks = ((sch.dwell_s * sch.rate_hz) as usize / crate::analyze::BLOCK_SAMPLES).max(4) as f64;
+    let blocks = ((sch.dwell_s * sch.rate_hz) as usize / crate::analysis::BLOCK_SAMPLES).max(4) as f64;
     per_sample / (sch.dwell_s * sch.rate_hz / blocks).sqrt()
 }
 

@@ -4,7 +4,7 @@
 use std::fmt::Write as _;
 use std::path::Path;
 
-use crate::error::InputError;
+use crate::io::error::InputError;
 
 /// Header of a recording.
 #[derive(Clone, Debug, PartialEq)]

@@ -1,0 +1,40 @@
+//! `sinscal analyze RECORDING|ANGLES`: what the base model (biases and white noise) gets wrong, which
+//! effect of the catalogue explains it, with estimates, standard errors and the BIC gain.
+
+use std::path::PathBuf;
+
+use crate::cmd::{json_to_stdout, write_json};
+
+/// Arguments of `sinscal analyze`.
+#[derive(clap::Args)]
+pub struct Args {
+    /// A recording (docs/formats.md#recording) or an angles file (docs/formats.md#angles, '# sinscal-angles: 1').
+    input: PathBuf,
+    /// Write the result as JSON (docs/formats.md#analysis-json) to this file ('-' = stdout).
+    #[arg(long)]
+    json: Option<PathBuf>,
+    /// Write a report (summary.md and figures) into this directory.
+    #[arg(long)]
+    report: Option<PathBuf>,
+}
+
+/// Runs `sinscal analyze`.
+pub fn run(args: Args) -> anyhow::Result<()> {
+    let Args { input, json, report } = args;
+    let quiet = json_to_stdout(json.as_deref());
+    eprintln!("sinscal analyze: reading {}", input.display());
+    let analysis = crate::analysis::analyze_path(&input)?;
+    if !quiet {
+        print!("{}", crate::analysis::summary(&analysis));
+    }
+    if let Some(dir) = report {
+        let files = crate::io::analysis_report::write_report(&analysis, &dir)?;
+        if !quiet {
+            println!("report: {} ({})", dir.display(), files.join(", "));
+        }
+    }
+    if let Some(path) = json {
+        write_json(&path, &analysis)?;
+    }
+    Ok(())
+}

@@ -1,0 +1,125 @@
+//! `sinscal calibrate RECORDING`: gyro and accelerometer biases from a recording, through the core directly
+//! or through the firmware path (`--on host`, `--on qemu`).
+
+use std::path::{Path, PathBuf};
+
+use clap::ValueEnum;
+use sinscal::calib::align::DwellValue;
+
+use crate::calibration::firmware_path::calibrate_on_host;
+use crate::calibration::qemu::calibrate_on_qemu;
+use crate::calibration::{calibrate, Calibration, Coefficient, Options, PrefilterKind};
+use crate::cmd::write_json;
+use crate::io::calibration_result::{summary, CalibrationJson};
+use crate::io::recording::Recording;
+
+/// The prefilter in front of the dwell statistics.
+#[derive(Clone, Copy, ValueEnum)]
+pub enum PrefilterArg {
+    /// The paper's two-state HMM/KF with its Q and R.
+    Hmmkf,
+    /// No prefilter.
+    None,
+}
+
+/// Which dwell value the alignment uses.
+#[derive(Clone, Copy, ValueEnum)]
+pub enum DwellValueArg {
+    /// Mean of the (filtered) dwell: minimum variance for white noise.
+    Mean,
+    /// The prefilter's settled output at the end of the dwell (the paper's alternative).
+    Settled,
+}
+
+/// Where the firmware path runs.
+#[derive(Clone, Copy, ValueEnum)]
+pub enum OnArg {
+    /// Replay through the firmware path on x86 (device frames, driver, queue, sequence, core).
+    Host,
+    /// Replay through the firmware in QEMU (mps2-an386, Cortex-M4F).
+    Qemu,
+}
+
+/// Arguments of `sinscal calibrate`.
+#[derive(clap::Args)]
+pub struct Args {
+    /// The recording (CSV).
+    recording: PathBuf,
+    /// Write the result as JSON (docs/formats.md#calibration-json) to this file ('-' = stdout).
+    #[arg(long)]
+    json: Option<PathBuf>,
+    /// Prefilter in front of the dwell statistics.
+    #[arg(long, value_enum, default_value = "hmmkf")]
+    prefilter: PrefilterArg,
+    /// The prefilter's coefficient a in [0, 1], or 'auto' to identify it from the first dwell.
+    #[arg(long, default_value = "1")]
+    prefilter_a: String,
+    /// Which dwell value the alignment uses.
+    #[arg(long, value_enum, default_value = "mean")]
+    dwell_value: DwellValueArg,
+    /// Take the turntable reference as exact (do not estimate the constant offset phi0).
+    #[arg(long)]
+    no_reference_offset: bool,
+    /// Passes of the solution at most: 1 = the paper's single linear solution; more remove its
+    /// second-order error by realigning the bias-compensated dwells.
+    #[arg(long, default_value_t = 6, value_parser = clap::value_parser!(u32).range(1..=50))]
+    passes: u32,
+    /// Replay through the firmware path (device frames quantised by an ADIS16505-2, driver, sampling
+    /// queue, calibration sequence) on this machine or in the emulated Cortex-M4F.
+    #[arg(long, value_enum)]
+    on: Option<OnArg>,
+}
+
+impl Args {
+    /// The calibration options these arguments ask for.
+    fn options(&self) -> anyhow::Result<Options> {
+        let coefficient = if self.prefilter_a == "auto" {
+            Coefficient::Identify
+        } else {
+            match self.prefilter_a.parse::<f32>() {
+                Ok(a) if (0.0..=1.0).contains(&a) => Coefficient::Fixed(a),
+                _ => anyhow::bail!("--prefilter-a: '{}' is neither 'auto' nor a number in [0, 1]", self.prefilter_a),
+            }
+        };
+        Ok(Options {
+            prefilter: match self.prefilter {
+                PrefilterArg::Hmmkf => PrefilterKind::HmmKf,
+                PrefilterArg::None => PrefilterKind::None,
+            },
+            coefficient,
+            dwell_value: match self.dwell_value {
+                DwellValueArg::Mean => DwellValue::Mean,
+                DwellValueArg::Settled => DwellValue::Settled,
+            },
+            estimate_reference_offset: !self.no_reference_offset,
+            max_passes: self.passes,
+        })
+    }
+}
+
+/// Runs `sinscal calibrate`.
+pub fn run(args: Args) -> anyhow::Result<()> {
+    let options = args.options()?;
+    let rec = Recording::read(&args.recording)?;
+    let cal = match args.on {
+        None => calibrate(&rec, &options)?,
+        Some(OnArg::Host) => calibrate_on_host(&rec, &options)?,
+        Some(OnArg::Qemu) => calibrate_on_qemu(&rec, &options)?,
+    };
+    finish(&cal, args.json.as_deref())
+}
+
+/// Prints the summary (unless the JSON goes to stdout) and writes the JSON if asked.
+pub fn finish(cal: &Calibration, json: Option<&Path>) -> anyhow::Result<()> {
+    match json {
+        Some(path) if path == Path::new("-") => write_json(path, &CalibrationJson::new(cal)),
+        Some(path) => {
+            print!("{}", summary(cal));
+            write_json(path, &CalibrationJson::new(cal))
+        }
+        None => {
+            print!("{}", summary(cal));
+            Ok(())
+        }
+    }
+}

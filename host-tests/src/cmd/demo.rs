@@ -1,0 +1,72 @@
+//! `sinscal demo`: writes the built-in example (a SIMULATION of the paper's Table 1 with known biases) and
+//! calibrates it, with the truth printed beside the estimates.
+
+use std::path::PathBuf;
+
+use anyhow::Context as _;
+
+use crate::calibration::{calibrate, Calibration, Options};
+use crate::cmd::calibrate::finish;
+use crate::io::calibration_result::ARCSEC_PER_RAD;
+use crate::io::error::InputError;
+use crate::io::recording::Recording;
+use crate::model::synth::{Scenario, DEG_PER_HOUR, MICRO_G};
+
+/// Arguments of `sinscal demo`.
+#[derive(clap::Args)]
+pub struct Args {
+    /// Where to write the example recording.
+    #[arg(long, default_value = "target/sinscal-example.csv")]
+    out: PathBuf,
+    /// Also write the calibration JSON here.
+    #[arg(long)]
+    json: Option<PathBuf>,
+}
+
+/// Runs `sinscal demo`.
+pub fn run(args: Args) -> anyhow::Result<()> {
+    let (out, json) = (args.out.as_path(), args.json.as_deref());
+    if let Some(dir) = out.parent().filter(|d| !d.as_os_str().is_empty()) {
+        std::fs::create_dir_all(dir).with_context(|| format!("cannot create {}", dir.display()))?;
+    }
+    let scenario = Scenario::example();
+    let rec = scenario.recording(1, &out.display().to_string());
+    rec.write(out)?;
+    println!(
+        "Built-in example: {} (SIMULATION of the paper's Table 1, 60 s per position at 100 Hz, seed 1)\n",
+        out.display()
+    );
+    let rec = Recording::read(out)?;
+    let cal = calibrate(&rec, &Options::default()).map_err(|e: InputError| anyhow::anyhow!(e))?;
+    finish(&cal, json)?;
+    print_truth(&scenario, &cal);
+    Ok(())
+}
+
+/// The truth of the simulation beside each estimate, and the error in standard errors.
+fn print_truth(scenario: &Scenario, cal: &Calibration) {
+    println!("\nTruth of the simulation, and (estimate - truth) / standard error:");
+    let s = &cal.solution;
+    let rows: [(&str, Option<sinscal::calib::solve::Estimate>, f64, f64, &str); 9] = [
+        ("gyro x", s.gyro_bias_b_radps[0], scenario.gyro_bias_b_radps[0], DEG_PER_HOUR, "deg/h"),
+        ("gyro y", s.gyro_bias_b_radps[1], scenario.gyro_bias_b_radps[1], DEG_PER_HOUR, "deg/h"),
+        ("gyro z", s.gyro_bias_b_radps[2], scenario.gyro_bias_b_radps[2], DEG_PER_HOUR, "deg/h"),
+        ("accel x", s.accel_bias_b_mps2[0], scenario.accel_bias_b_mps2[0], MICRO_G, "ug"),
+        ("accel y", s.accel_bias_b_mps2[1], scenario.accel_bias_b_mps2[1], MICRO_G, "ug"),
+        ("accel z", s.accel_bias_b_mps2[2], scenario.accel_bias_b_mps2[2], MICRO_G, "ug"),
+        ("offset e", s.reference_offset_n_rad[0], scenario.reference_offset_n_rad[0], 1.0 / ARCSEC_PER_RAD, "arcsec"),
+        ("offset n", s.reference_offset_n_rad[1], scenario.reference_offset_n_rad[1], 1.0 / ARCSEC_PER_RAD, "arcsec"),
+        ("offset u", s.reference_offset_n_rad[2], scenario.reference_offset_n_rad[2], 1.0 / ARCSEC_PER_RAD, "arcsec"),
+    ];
+    for (name, est, truth, unit, unit_name) in rows {
+        match est {
+            Some(e) => println!(
+                "  {name:<8} truth {:>+10.5} {unit_name:<6} estimate {:>+10.5}  ({:+.2} sigma)",
+                truth / unit,
+                e.value as f64 / unit,
+                (e.value as f64 - truth) / e.std_error as f64
+            ),
+            None => println!("  {name:<8} truth {:>+10.5} {unit_name:<6} unobservable", truth / unit),
+        }
+    }
+}

@@ -1,0 +1,39 @@
+//! One module per subcommand of `sinscal`: its arguments (`Args`, clap), its `run`, and its human summary.
+//! Every subcommand prints a summary to stdout and, with `--json FILE`, writes its machine-readable result
+//! (`-` = stdout). The command line is described in docs/cli.md.
+
+use std::io::Write as _;
+use std::path::Path;
+
+use anyhow::Context as _;
+
+pub mod analyze;
+pub mod calibrate;
+pub mod demo;
+pub mod example;
+pub mod import;
+pub mod montecarlo;
+pub mod navigate;
+pub mod simulate;
+pub mod study;
+
+/// Writes `text` to `path`, or to stdout when `path` is `-`.
+pub fn write_output(path: &Path, text: &str) -> anyhow::Result<()> {
+    if path == Path::new("-") {
+        std::io::stdout().write_all(text.as_bytes())?;
+        return Ok(());
+    }
+    std::fs::write(path, text).with_context(|| format!("cannot write {}", path.display()))
+}
+
+/// Writes `value` as pretty JSON with a final newline to `path` (`-` = stdout).
+pub fn write_json(path: &Path, value: &impl serde::Serialize) -> anyhow::Result<()> {
+    let mut text = serde_json::to_string_pretty(value)?;
+    text.push('\n');
+    write_output(path, &text)
+}
+
+/// Whether the JSON goes to stdout (then the human summary is not printed).
+pub fn json_to_stdout(json: Option<&Path>) -> bool {
+    json == Some(Path::new("-"))
+}

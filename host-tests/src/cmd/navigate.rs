@@ -1,0 +1,136 @@
+//! `sinscal navigate RECORDING --calibration CAL.json`: static pure-inertial navigation with and without
+//! the calibration's biases removed.
+
+use std::path::PathBuf;
+
+use crate::cmd::{json_to_stdout, write_json};
+use crate::io::calibration_result::ARCSEC_PER_RAD;
+use crate::io::plot::navigation_plot;
+use crate::io::recording::Recording;
+use crate::navigation::check::{navigate, CalibrationBiases, NavOptions, NavReport};
+
+/// Arguments of `sinscal navigate`.
+#[derive(clap::Args)]
+pub struct Args {
+    /// The recording: its longest static dwell is navigated, or, with --hours, a simulated static run of
+    /// its IMU (for recordings written by sinscal's simulator).
+    recording: PathBuf,
+    /// The calibration result (JSON of `sinscal calibrate --json`).
+    #[arg(long)]
+    calibration: PathBuf,
+    /// A second calibration to compare.
+    #[arg(long)]
+    compare: Option<PathBuf>,
+    /// Length of a simulated static run, hours (needs a simulated recording).
+    #[arg(long)]
+    hours: Option<f64>,
+    /// The dwell (pos label) whose attitude and samples are used.
+    #[arg(long)]
+    position: Option<u32>,
+    /// Noise seed of the simulated run (default: the recording's seed + 1).
+    #[arg(long)]
+    seed: Option<u64>,
+    /// Write the summary as JSON to this file ('-' = stdout).
+    #[arg(long)]
+    json: Option<PathBuf>,
+    /// Write a PNG figure of the runs.
+    #[arg(long)]
+    plot: Option<PathBuf>,
+}
+
+/// Runs `sinscal navigate`.
+pub fn run(args: Args) -> anyhow::Result<()> {
+    let Args { recording, calibration, compare, hours, position, seed, json, plot } = args;
+    let quiet = json_to_stdout(json.as_deref());
+    let rec = Recording::read(&recording)?;
+    let cal = CalibrationBiases::read(&calibration)?;
+    let second = compare.as_deref().map(CalibrationBiases::read).transpose()?;
+    let options = NavOptions { hours, position, seed, ..NavOptions::default() };
+    let started = std::time::Instant::now();
+    let mut last_tenth = 0;
+    let report = navigate(&rec, &cal, second.as_ref(), &options, |done, total| {
+        let tenth = done * 10 / total.max(1);
+        if tenth > last_tenth {
+            last_tenth = tenth;
+            eprintln!(
+                "navigate: {}0% ({:.2} of {:.2} h)",
+                tenth,
+                done as f64 / total as f64 * report_hours(hours, total),
+                report_hours(hours, total)
+            );
+        }
+    })?;
+    let elapsed = started.elapsed().as_secs_f64();
+    if !quiet {
+        print!("{}", navigation_summary(&report, elapsed));
+    }
+    if let Some(path) = plot {
+        navigation_plot(&report, &path)?;
+        if !quiet {
+            println!("figure: {}", path.display());
+        }
+    }
+    if let Some(path) = json {
+        write_json(&path, &report)?;
+    }
+    Ok(())
+}
+
+/// Hours of a run for progress messages (the sample count is known before the rate when not simulating).
+fn report_hours(hours: Option<f64>, total: usize) -> f64 {
+    hours.unwrap_or(total as f64 / 100.0 / 3600.0)
+}
+
+fn navigation_summary(r: &NavReport, elapsed_s: f64) -> String {
+    use std::fmt::Write as _;
+    let mut out = String::new();
+    let _ = writeln!(
+        out,
+        "sinscal navigate: {} ({}), {:.2} h at {} Hz, latitude {} deg, attitude ({}, {}, {}) deg, height held",
+        r.source,
+        if r.simulated { "SIMULATED static run of the recording's IMU" } else { "recorded static dwell" },
+        r.hours,
+        r.rate_hz,
+        r.latitude_deg,
+        r.attitude_deg[0],
+        r.attitude_deg[1],
+        r.attitude_deg[2]
+    );
+    let _ = writeln!(
+        out,
+        "\n  {:<44} {:>12} {:>12} {:>11} {:>11} {:>12} {:>12}",
+        "run", "max pos [m]", "end pos [m]", "max v [m/s]", "end v [m/s]", "max hdg [\"]", "end hdg [\"]"
+    );
+    for s in &r.runs {
+        let _ = writeln!(
+            out,
+            "  {:<44} {:>12.2} {:>12.2} {:>11.4} {:>11.4} {:>12.2} {:>12.2}",
+            s.name,
+            s.max_horizontal_position_error_m,
+            s.final_horizontal_position_error_m,
+            s.max_horizontal_velocity_error_mps,
+            s.final_horizontal_velocity_error_mps,
+            s.max_heading_error_rad * ARCSEC_PER_RAD,
+            s.final_heading_error_rad * ARCSEC_PER_RAD
+        );
+    }
+    if r.runs.len() >= 2 && r.runs[1].max_horizontal_position_error_m > 0.0 {
+        let _ = writeln!(
+            out,
+            "\n  largest horizontal error: uncompensated / calibrated = {:.1}",
+            r.runs[0].max_horizontal_position_error_m / r.runs[1].max_horizontal_position_error_m
+        );
+    }
+    if let Some(p) = &r.predicted_from_std_errors {
+        let _ = writeln!(
+            out,
+            "  the calibration's standard errors predict for the calibrated run (bias uncertainty only, RMS): \
+             {:.2} m at the end, {:.2} m at most; heading {:.2} arcsec at the end",
+            p.rms_final_horizontal_position_error_m,
+            p.max_rms_horizontal_position_error_m,
+            p.rms_final_heading_error_rad * ARCSEC_PER_RAD
+        );
+    }
+    let _ = writeln!(out, "  computed in {elapsed_s:.2} s");
+    out
+}
