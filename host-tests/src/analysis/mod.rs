@@ -48,7 +48,7 @@ use serde::Serialize;
 use crate::calibration::site_of;
 use crate::io::error::InputError;
 use crate::io::recording::Recording;
-use crate::model::synth::{c_b_n, mul_t_vec, EARTH_RATE_RADPS, M3};
+use crate::model::synth::{c_b_n, earth_rate_n_radps, mul_t_vec, M3};
 use crate::stats::linfit::{chi_square_quantile_upper, chi_square_upper, fit, solve_spd, LinearFit, Observations};
 use crate::stats::noise::{detect_quantization, fft_in_place, ljung_box, GRID_TOLERANCE};
 
@@ -591,7 +591,7 @@ pub fn analyze_recording(recording: &Recording) -> Result<Analysis, InputError> 
     let (site, _) = site_of(&recording.header);
     let g = site.gravity_mps2 as f64;
     let lat = recording.header.latitude_deg.to_radians();
-    let w_n = [0.0, EARTH_RATE_RADPS * lat.cos(), EARTH_RATE_RADPS * lat.sin()];
+    let w_n = earth_rate_n_radps(lat);
     let f_n = [0.0, 0.0, g];
     let t0 = recording.rows.first().map_or(0.0, |r| r.t_s);
     let rate_hz = match recording.header.rate_hz {
@@ -1466,7 +1466,7 @@ pub fn analyze_angles(file: &AnglesFile) -> Result<Analysis, InputError> {
     let (site, _) = site_of(&header);
     let g = site.gravity_mps2 as f64;
     let lat = file.latitude_deg.to_radians();
-    let w_n = [0.0, EARTH_RATE_RADPS * lat.cos(), EARTH_RATE_RADPS * lat.sin()];
+    let w_n = earth_rate_n_radps(lat);
     let f_n = [0.0, 0.0, g];
     let known = file.rows[0].phi_std_rad.is_some();
     let mut y = Vec::new();
@@ -1642,7 +1642,7 @@ mod tests {
         let lat = 45.7796f64.to_radians();
         let site = sinscal::nav::earth::Site::with_normal_gravity(lat as f32, 0.0);
         let g = site.gravity_mps2 as f64;
-        let w_n = [0.0, EARTH_RATE_RADPS * lat.cos(), EARTH_RATE_RADPS * lat.sin()];
+        let w_n = earth_rate_n_radps(lat);
         for att in crate::model::synth::TABLE1_DEG {
             let c = c_b_n(att[0], att[1], att[2]);
             let c32 = sinscal::math::linalg::Mat3(std::array::from_fn(|i| std::array::from_fn(|j| c[i][j] as f32)));

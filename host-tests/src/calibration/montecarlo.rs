@@ -19,7 +19,7 @@ use sinscal::nav::earth::Site;
 use sinscal::nav::frames::Attitude;
 use sinscal::sensor::sample::ImuSample;
 
-use crate::model::synth::{c_b_n as c_b_n_f64, mul_t_vec, Scenario, EARTH_RATE_RADPS};
+use crate::model::synth::{c_b_n as c_b_n_f64, earth_rate_n_radps, mul_t_vec, Scenario};
 
 /// The estimators compared.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize)]
@@ -183,7 +183,7 @@ pub fn crb_channels(s: &Scenario, known_reference: bool) -> Vec<f64> {
     let n = s.dwell_samples() as f64;
     let var = [s.gyro_noise_radps.powi(2) / n, s.accel_noise_mps2.powi(2) / n];
     let lat = s.latitude_deg.to_radians();
-    let w_n = [0.0, EARTH_RATE_RADPS * lat.cos(), EARTH_RATE_RADPS * lat.sin()];
+    let w_n = earth_rate_n_radps(lat);
     let f_n = [0.0, 0.0, s.gravity_mps2];
     let mut fisher = vec![vec![0.0f64; params]; params];
     for p in &s.positions_deg {

@@ -39,17 +39,7 @@ pub fn firmware_binary(name: &str) -> Result<PathBuf, String> {
     let elf = root.join("target/thumbv7em-none-eabihf/firmware").join(name);
     let status = Command::new(std::env::var("CARGO").unwrap_or_else(|_| "cargo".into()))
         .current_dir(&root)
-        .args([
-            "build",
-            "-q",
-            "-p",
-            "sinscal",
-            "--release",
-            "--target",
-            "thumbv7em-none-eabihf",
-            "--bin",
-            "sinscal-replay",
-        ])
+        .args(["build", "-q", "-p", "sinscal", "--profile", "firmware", "--target", "thumbv7em-none-eabihf", "--bins"])
         .stdout(Stdio::null())
         .status()
         .map_err(|e| format!("cannot run cargo to build the firmware: {e}"))?;

@@ -46,7 +46,7 @@ use serde::Deserialize;
 
 use crate::io::error::InputError;
 use crate::io::recording::{Header, Recording, Row, SimulationTruth};
-use crate::model::synth::{c_b_n, mul, mul_t_vec, rotation, transpose, EARTH_RATE_RADPS, M3, TABLE1_DEG};
+use crate::model::synth::{c_b_n, earth_rate_n_radps, mul, mul_t_vec, rotation, transpose, M3, TABLE1_DEG};
 
 /// A scenario file.
 #[derive(Clone, Debug, Default, Deserialize, PartialEq)]
@@ -522,7 +522,7 @@ pub fn simulate(scenario: &ScenarioFile, seed: u64, source: &str) -> Recording {
     let dt = 1.0 / s.rate_hz;
     let g = scenario.gravity_mps2();
     let lat = scenario.site.latitude_deg.to_radians();
-    let w_ie_n = [0.0, EARTH_RATE_RADPS * lat.cos(), EARTH_RATE_RADPS * lat.sin()];
+    let w_ie_n = earth_rate_n_radps(lat);
     let f_n = [0.0, 0.0, g];
     let mut gyro = TriadState::new(scenario.gyro_model(), seed, 0);
     let mut accel = TriadState::new(scenario.accel_model(), seed, 16);

@@ -11,6 +11,12 @@ use crate::io::recording::{Header, Recording, Row, SimulationTruth};
 
 /// Earth rotation rate, rad/s (SPEC.md section 1).
 pub const EARTH_RATE_RADPS: f64 = 7.292115e-5;
+
+/// Earth rate in the navigation frame (East-North-Up) at latitude `latitude_rad`, rad/s:
+/// `[0, W cos L, W sin L]` (docs/conventions.md).
+pub fn earth_rate_n_radps(latitude_rad: f64) -> [f64; 3] {
+    [0.0, EARTH_RATE_RADPS * latitude_rad.cos(), EARTH_RATE_RADPS * latitude_rad.sin()]
+}
 /// 1 deg/h in rad/s.
 pub const DEG_PER_HOUR: f64 = std::f64::consts::PI / 180.0 / 3600.0;
 /// 1 ug in m/s^2 (SPEC.md: 1 ug = 9.80665e-6 m/s^2).
@@ -157,7 +163,7 @@ impl Scenario {
         let offset = self.reference_offset_n_rad.map(|x| -x);
         let c_true = mul(&rotation(offset), &c_ref);
         let lat = self.latitude_deg.to_radians();
-        let w_n = [0.0, EARTH_RATE_RADPS * lat.cos(), EARTH_RATE_RADPS * lat.sin()];
+        let w_n = earth_rate_n_radps(lat);
         let f_n = [0.0, 0.0, self.gravity_mps2];
         let w_b = mul_t_vec(&c_true, w_n);
         let f_b = mul_t_vec(&c_true, f_n);

@@ -10,6 +10,8 @@
 
 use crate::stats::noise::regularized_gamma_q;
 
+pub use crate::stats::solve::solve_spd;
+
 /// The observations of a linear problem.
 #[derive(Clone, Debug)]
 pub struct Observations {
@@ -45,57 +47,6 @@ impl LinearFit {
     pub fn std_error(&self, j: usize) -> f64 {
         self.covariance[j][j].max(0.0).sqrt()
     }
-}
-
-/// Solves the symmetric positive definite system `a x = b` after equilibration; `None` when `a` is
-/// singular to working precision (a column that the others explain). Returns `x` and `a^-1`.
-pub fn solve_spd(a: &[Vec<f64>], b: &[f64]) -> Option<(Vec<f64>, Vec<Vec<f64>>)> {
-    let k = b.len();
-    let d: Vec<f64> = (0..k).map(|i| if a[i][i] > 0.0 { 1.0 / a[i][i].sqrt() } else { 0.0 }).collect();
-    if d.iter().any(|&v| v == 0.0 || !v.is_finite()) {
-        return None;
-    }
-    // Cholesky of D A D.
-    let mut l = vec![vec![0.0; k]; k];
-    for i in 0..k {
-        for j in 0..=i {
-            let mut s = a[i][j] * d[i] * d[j];
-            for p in 0..j {
-                s -= l[i][p] * l[j][p];
-            }
-            if i == j {
-                if s <= 1e-11 {
-                    return None;
-                }
-                l[i][i] = s.sqrt();
-            } else {
-                l[i][j] = s / l[j][j];
-            }
-        }
-    }
-    let solve = |rhs: &[f64]| -> Vec<f64> {
-        let mut z = vec![0.0; k];
-        for i in 0..k {
-            z[i] = (rhs[i] - (0..i).map(|p| l[i][p] * z[p]).sum::<f64>()) / l[i][i];
-        }
-        let mut x = vec![0.0; k];
-        for i in (0..k).rev() {
-            x[i] = (z[i] - ((i + 1)..k).map(|p| l[p][i] * x[p]).sum::<f64>()) / l[i][i];
-        }
-        x
-    };
-    let scaled: Vec<f64> = (0..k).map(|i| b[i] * d[i]).collect();
-    let x: Vec<f64> = solve(&scaled).iter().zip(&d).map(|(x, d)| x * d).collect();
-    let mut inverse = vec![vec![0.0; k]; k];
-    for j in 0..k {
-        let mut e = vec![0.0; k];
-        e[j] = 1.0;
-        let col = solve(&e);
-        for i in 0..k {
-            inverse[i][j] = col[i] * d[i] * d[j];
-        }
-    }
-    Some((x, inverse))
 }
 
 /// Fits `columns` (each of the length of `obs.y`) to the observations. `None` when the columns are

@@ -4,3 +4,4 @@
 
 pub mod linfit;
 pub mod noise;
+pub mod solve;

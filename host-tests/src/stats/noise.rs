@@ -17,6 +17,8 @@
 
 use std::f64::consts::{LN_2, PI};
 
+use crate::stats::solve::nnls_by_enumeration;
+
 /// Why an analysis could not be done.
 #[derive(Debug, Clone, PartialEq, thiserror::Error)]
 pub enum NoiseError {
@@ -409,80 +411,6 @@ pub fn fit_noise_terms(points: &[AllanPoint]) -> Result<NoiseFit, NoiseError> {
         weighted_rms_residual: (ss / p.len() as f64).sqrt(),
         classic: classic_read_offs(&p),
     })
-}
-
-/// Non-negative least squares min |A c - y|, c >= 0, for five unknowns, by enumerating the supports.
-fn nnls_by_enumeration(rows: &[([f64; 5], f64)]) -> Option<[f64; 5]> {
-    let mut best: Option<([f64; 5], f64)> = None;
-    for mask in 1u32..32 {
-        let cols: Vec<usize> = (0..5).filter(|j| mask & (1 << j) != 0).collect();
-        let Some(x) = least_squares_subset(rows, &cols) else { continue };
-        if x.iter().any(|&v| v < 0.0 || !v.is_finite()) {
-            continue;
-        }
-        let mut c = [0.0; 5];
-        for (&j, &v) in cols.iter().zip(&x) {
-            c[j] = v;
-        }
-        let ss: f64 = rows
-            .iter()
-            .map(|(a, y)| {
-                let r = a.iter().zip(&c).map(|(a, c)| a * c).sum::<f64>() - y;
-                r * r
-            })
-            .sum();
-        if best.as_ref().is_none_or(|b| ss < b.1) {
-            best = Some((c, ss));
-        }
-    }
-    best.map(|b| b.0)
-}
-
-/// Unconstrained least squares on the columns `cols` of the rows, by Householder QR with the columns
-/// scaled to unit norm. `None` if rank-deficient.
-fn least_squares_subset(rows: &[([f64; 5], f64)], cols: &[usize]) -> Option<Vec<f64>> {
-    let (m, p) = (rows.len(), cols.len());
-    if m < p {
-        return None;
-    }
-    let mut a: Vec<Vec<f64>> = (0..p).map(|j| rows.iter().map(|r| r.0[cols[j]]).collect()).collect();
-    let mut y: Vec<f64> = rows.iter().map(|r| r.1).collect();
-    let mut scale = vec![0.0; p];
-    for j in 0..p {
-        let norm = a[j].iter().map(|v| v * v).sum::<f64>().sqrt();
-        if !(norm.is_finite() && norm > 0.0) {
-            return None;
-        }
-        scale[j] = norm;
-        a[j].iter_mut().for_each(|v| *v /= norm);
-    }
-    // Householder QR, column-major a[j][i].
-    let mut rdiag = vec![0.0; p];
-    for k in 0..p {
-        let norm = a[k][k..].iter().map(|v| v * v).sum::<f64>().sqrt();
-        if norm < 1e-12 {
-            return None;
-        }
-        let alpha = if a[k][k] > 0.0 { -norm } else { norm };
-        let mut v: Vec<f64> = a[k][k..].to_vec();
-        v[0] -= alpha;
-        let vnorm2: f64 = v.iter().map(|x| x * x).sum();
-        if vnorm2 > 0.0 {
-            for j in k..p {
-                let d: f64 = v.iter().zip(&a[j][k..]).map(|(v, x)| v * x).sum::<f64>() * 2.0 / vnorm2;
-                a[j][k..].iter_mut().zip(&v).for_each(|(x, v)| *x -= d * v);
-            }
-            let d: f64 = v.iter().zip(&y[k..]).map(|(v, x)| v * x).sum::<f64>() * 2.0 / vnorm2;
-            y[k..].iter_mut().zip(&v).for_each(|(x, v)| *x -= d * v);
-        }
-        rdiag[k] = a[k][k];
-    }
-    let mut x = vec![0.0; p];
-    for k in (0..p).rev() {
-        let s: f64 = ((k + 1)..p).map(|j| a[j][k] * x[j]).sum();
-        x[k] = (y[k] - s) / rdiag[k];
-    }
-    Some(x.iter().zip(&scale).map(|(x, s)| x / s).collect())
 }
 
 // ---------------------------------------------------------------------------------------------------
