@@ -336,38 +336,73 @@ impl BiasSolver {
         Ok(())
     }
 
-    /// Solves the weighted least-squares problem over the positions added.
+    /// Solves the weighted least-squares problem over the positions added: the whitened normal equations,
+    /// their equilibrated eigen-decomposition (rank and blind spots), the estimates with their
+    /// covariance, and the residuals with their chi-square.
     pub fn solve(&self) -> Result<BiasSolution, SolveError> {
         if self.len == 0 {
             return Err(SolveError::NoPositions);
         }
         let params = if self.settings.estimate_reference_offset { MAX_PARAMETERS } else { 6 };
-        let records = &self.records[..self.len];
-        let floor = self.settings.angle_floor_std_rad * self.settings.angle_floor_std_rad;
-        let with_floor = |m: &Mat3| {
-            let mut m = *m;
-            for i in 0..3 {
-                m.0[i][i] += floor;
+        let system = self.normal_equations(params)?;
+        let inverse = self.pseudo_inverse(&system.normal, params);
+        let (theta_scaled, covariance_si) = self.parameters(&system, &inverse, params);
+        let mut estimates = [None; MAX_PARAMETERS];
+        for i in 0..params {
+            if inverse.observable[i] {
+                let std_error = libm::sqrtf(covariance_si[i][i].max(0.0));
+                estimates[i] = Some(Estimate { value: theta_scaled[i] * inverse.scale[i], std_error });
             }
-            m
-        };
+        }
+        let (residual_n_rad, chi_square) = self.residuals(&system, &theta_scaled, params);
+        let pick = |offset: usize| [estimates[offset], estimates[offset + 1], estimates[offset + 2]];
+        Ok(BiasSolution {
+            gyro_bias_b_radps: pick(0),
+            accel_bias_b_mps2: pick(3),
+            reference_offset_n_rad: pick(6),
+            reference_offset_estimated: self.settings.estimate_reference_offset,
+            positions: self.len,
+            residual_n_rad,
+            chi_square,
+            degrees_of_freedom: (3 * self.len).saturating_sub(inverse.rank) as u32,
+            covariance_si,
+        })
+    }
+
+    /// An angle covariance with the floor of [`SolverSettings::angle_floor_std_rad`] on its diagonal.
+    fn with_floor(&self, m: &Mat3) -> Mat3 {
+        let floor = self.settings.angle_floor_std_rad * self.settings.angle_floor_std_rad;
+        let mut m = *m;
+        for i in 0..3 {
+            m.0[i][i] += floor;
+        }
+        m
+    }
+
+    /// Normal equations in scaled units, `N = sum A_w^T A_w`, `b = sum A_w^T y_w`, with every position's
+    /// rows and angles whitened by the Cholesky factor of its angle covariance (kept for the residuals).
+    fn normal_equations(&self, params: usize) -> Result<NormalEquations, SolveError> {
+        let records = &self.records[..self.len];
         // Common scale of the angle variances, so the whitened numbers are of order one.
-        let var_ref =
-            records.iter().map(|r| (0..3).map(|i| with_floor(&r.covariance_rad2).0[i][i]).sum::<f32>()).sum::<f32>()
-                / (3 * self.len) as f32;
+        let var_ref = records
+            .iter()
+            .map(|r| (0..3).map(|i| self.with_floor(&r.covariance_rad2).0[i][i]).sum::<f32>())
+            .sum::<f32>()
+            / (3 * self.len) as f32;
         if !(var_ref > 0.0 && var_ref.is_finite()) {
             return Err(SolveError::BadInput);
         }
-
-        // Normal equations in scaled units: N = sum A_w^T A_w, b = sum A_w^T y_w.
-        let mut normal = [[0.0f32; MAX_PARAMETERS]; MAX_PARAMETERS];
-        let mut rhs = [0.0f32; MAX_PARAMETERS];
-        let mut factors = [Mat3::IDENTITY; MAX_POSITIONS];
+        let mut system = NormalEquations {
+            normal: [[0.0f32; MAX_PARAMETERS]; MAX_PARAMETERS],
+            rhs: [0.0f32; MAX_PARAMETERS],
+            factors: [Mat3::IDENTITY; MAX_POSITIONS],
+            var_ref,
+        };
         for (k, r) in records.iter().enumerate() {
-            let cov = with_floor(&r.covariance_rad2);
+            let cov = self.with_floor(&r.covariance_rad2);
             let cov = Mat3(cov.0.map(|row| row.map(|x| x / var_ref)));
             let l = cholesky3(&cov).ok_or(SolveError::BadInput)?;
-            factors[k] = l;
+            system.factors[k] = l;
             let rows = design_rows_scaled(&r.c_b_n, &self.site);
             let mut white = [[0.0f32; MAX_PARAMETERS]; 3];
             for j in 0..params {
@@ -378,17 +413,22 @@ impl BiasSolver {
             }
             let y = forward_substitute(&l, r.phi_n_rad);
             for i in 0..params {
-                rhs[i] += (0..3).map(|m| white[m][i] * y[m]).sum::<f32>();
+                system.rhs[i] += (0..3).map(|m| white[m][i] * y[m]).sum::<f32>();
                 for j in 0..params {
-                    normal[i][j] += (0..3).map(|m| white[m][i] * white[m][j]).sum::<f32>();
+                    system.normal[i][j] += (0..3).map(|m| white[m][i] * white[m][j]).sum::<f32>();
                 }
             }
         }
+        Ok(system)
+    }
 
-        // Equilibrate: unit diagonal. In scaled units every parameter moves the angles by the same amount
-        // per unit, so a parameter whose diagonal is far below the largest hardly enters the data (a
-        // position that is a few arcsec off an axis, a reference corrected by a small offset): it is a
-        // blind spot, excluded before equilibration would blow its column up to full size.
+    /// The pseudo-inverse of the equilibrated normal matrix, its rank and the observable parameters.
+    ///
+    /// Equilibration gives a unit diagonal. In scaled units every parameter moves the angles by the same
+    /// amount per unit, so a parameter whose diagonal is far below the largest hardly enters the data (a
+    /// position that is a few arcsec off an axis, a reference corrected by a small offset): it is a blind
+    /// spot, excluded before equilibration would blow its column up to full size.
+    fn pseudo_inverse(&self, normal: &[[f32; MAX_PARAMETERS]; MAX_PARAMETERS], params: usize) -> PseudoInverse {
         let largest = (0..params).map(|i| normal[i][i]).fold(0.0f32, f32::max);
         let mut d = [0.0f32; MAX_PARAMETERS];
         for i in 0..params {
@@ -409,14 +449,11 @@ impl BiasSolver {
         let lambda_max = (0..params).map(|i| a[i][i]).fold(0.0f32, f32::max);
         let kept = |k: usize| a[k][k] > self.settings.rank_tolerance * lambda_max;
         let rank = (0..params).filter(|&k| kept(k)).count();
-
         let mut observable = [false; MAX_PARAMETERS];
         for i in 0..params {
             let blind_share: f32 = (0..params).filter(|&k| !kept(k)).map(|k| v[i][k] * v[i][k]).sum();
             observable[i] = d[i] > 0.0 && blind_share < 0.01;
         }
-
-        // Pseudo-inverse of the equilibrated matrix, then back to scaled and SI units.
         let mut pinv = [[0.0f32; MAX_PARAMETERS]; MAX_PARAMETERS];
         for k in (0..params).filter(|&k| kept(k)) {
             for i in 0..params {
@@ -425,7 +462,17 @@ impl BiasSolver {
                 }
             }
         }
-        let scale = parameter_scale(&self.site);
+        PseudoInverse { pinv, d, observable, rank, scale: parameter_scale(&self.site) }
+    }
+
+    /// The parameters in scaled units and their covariance in SI units (zero for unobservable ones).
+    fn parameters(
+        &self,
+        system: &NormalEquations,
+        inverse: &PseudoInverse,
+        params: usize,
+    ) -> ([f32; MAX_PARAMETERS], [[f32; MAX_PARAMETERS]; MAX_PARAMETERS]) {
+        let PseudoInverse { pinv, d, observable, scale, .. } = inverse;
         let mut theta_scaled = [0.0f32; MAX_PARAMETERS];
         let mut covariance_si = [[0.0f32; MAX_PARAMETERS]; MAX_PARAMETERS];
         for i in 0..params {
@@ -433,51 +480,60 @@ impl BiasSolver {
                 continue;
             }
             theta_scaled[i] =
-                (0..params).filter(|&j| d[j] > 0.0).map(|j| pinv[i][j] * rhs[j] / d[j]).sum::<f32>() / d[i];
+                (0..params).filter(|&j| d[j] > 0.0).map(|j| pinv[i][j] * system.rhs[j] / d[j]).sum::<f32>() / d[i];
         }
         for i in 0..params {
             for j in 0..params {
                 if observable[i] && observable[j] {
-                    covariance_si[i][j] = pinv[i][j] / (d[i] * d[j]) * var_ref * scale[i] * scale[j];
+                    covariance_si[i][j] = pinv[i][j] / (d[i] * d[j]) * system.var_ref * scale[i] * scale[j];
                 }
             }
         }
+        (theta_scaled, covariance_si)
+    }
 
-        let mut estimates = [None; MAX_PARAMETERS];
-        for i in 0..params {
-            if observable[i] {
-                let std_error = libm::sqrtf(covariance_si[i][i].max(0.0));
-                estimates[i] = Some(Estimate { value: theta_scaled[i] * scale[i], std_error });
-            }
-        }
-
-        // Residuals in rad and the weighted residual sum of squares.
+    /// Residuals in rad per position and the weighted residual sum of squares.
+    fn residuals(
+        &self,
+        system: &NormalEquations,
+        theta_scaled: &[f32; MAX_PARAMETERS],
+        params: usize,
+    ) -> ([[f32; 3]; MAX_POSITIONS], f32) {
         let mut residual_n_rad = [[0.0f32; 3]; MAX_POSITIONS];
         let mut chi_square = 0.0f32;
-        for (k, r) in records.iter().enumerate() {
+        for (k, r) in self.records[..self.len].iter().enumerate() {
             let rows = design_rows_scaled(&r.c_b_n, &self.site);
             let mut res = r.phi_n_rad;
             for (i, out) in res.iter_mut().enumerate() {
                 *out -= (0..params).map(|j| rows[i][j] * theta_scaled[j]).sum::<f32>();
             }
             residual_n_rad[k] = res;
-            let w = forward_substitute(&factors[k], res);
-            chi_square += (w[0] * w[0] + w[1] * w[1] + w[2] * w[2]) / var_ref;
+            let w = forward_substitute(&system.factors[k], res);
+            chi_square += (w[0] * w[0] + w[1] * w[1] + w[2] * w[2]) / system.var_ref;
         }
-
-        let pick = |offset: usize| [estimates[offset], estimates[offset + 1], estimates[offset + 2]];
-        Ok(BiasSolution {
-            gyro_bias_b_radps: pick(0),
-            accel_bias_b_mps2: pick(3),
-            reference_offset_n_rad: pick(6),
-            reference_offset_estimated: self.settings.estimate_reference_offset,
-            positions: self.len,
-            residual_n_rad,
-            chi_square,
-            degrees_of_freedom: (3 * self.len).saturating_sub(rank) as u32,
-            covariance_si,
-        })
+        (residual_n_rad, chi_square)
     }
+}
+
+/// The whitened normal equations of [`BiasSolver::solve`], in scaled units.
+struct NormalEquations {
+    normal: [[f32; MAX_PARAMETERS]; MAX_PARAMETERS],
+    rhs: [f32; MAX_PARAMETERS],
+    /// Cholesky factor of each position's scaled angle covariance.
+    factors: [Mat3; MAX_POSITIONS],
+    /// The common scale of the angle variances, rad^2.
+    var_ref: f32,
+}
+
+/// The equilibrated pseudo-inverse of the normal matrix and what it says about the parameters.
+struct PseudoInverse {
+    pinv: [[f32; MAX_PARAMETERS]; MAX_PARAMETERS],
+    /// Equilibration: square roots of the normal matrix's diagonal (0 for a blind spot).
+    d: [f32; MAX_PARAMETERS],
+    observable: [bool; MAX_PARAMETERS],
+    rank: usize,
+    /// Physical size of each parameter (scaled to SI).
+    scale: [f32; MAX_PARAMETERS],
 }
 
 /// Table 1 of the paper: turntable (pitch, roll, heading) in degrees, in table order t1..t6.

@@ -9,7 +9,7 @@ use rand_distr::{Distribution, Normal};
 use serde::Serialize;
 
 use crate::io::error::InputError;
-use crate::io::recording::Recording;
+use crate::io::recording::{Dwell, Header, Recording, SimulationTruth};
 use crate::model::synth::{c_b_n, mul_vec, Scenario};
 use crate::navigation::strapdown::{linear_error_model, navigate_runs, NavError, Run, RunSummary, StaticSetup};
 
@@ -136,29 +136,10 @@ pub fn navigate(
     let source = recording.source.as_str();
     let header = &recording.header;
     let dwells = recording.dwells();
-    if dwells.is_empty() {
-        return Err(InputError::file(source, "no dwell (every row has pos = 0): nothing static to navigate"));
-    }
-    let dwell = match options.position {
-        Some(p) => dwells
-            .iter()
-            .find(|d| d.pos == p)
-            .ok_or_else(|| InputError::file(source, format!("no dwell with pos = {p}")))?,
-        None if options.hours.is_some() => &dwells[0],
-        None => dwells.iter().max_by_key(|d| d.rows.len()).expect("non-empty"),
-    };
+    let dwell = chosen_dwell(source, &dwells, options)?;
     let (attitude, heading) = dwell.attitude_with_heading(source, "navigation")?;
     let attitude_deg = [attitude.pitch_deg, attitude.roll_deg, heading];
-    let rate_hz = match header.rate_hz {
-        Some(r) if r > 0.0 => r,
-        _ => {
-            let span = dwell.rows.last().unwrap().t_s - dwell.rows[0].t_s;
-            if dwell.rows.len() < 2 || span <= 0.0 {
-                return Err(InputError::file(source, "no rate_hz in the header and a dwell too short to measure it"));
-            }
-            (dwell.rows.len() - 1) as f64 / span
-        }
-    };
+    let rate_hz = sample_rate_hz(source, header.rate_hz, dwell)?;
     let latitude_rad = header.latitude_deg.to_radians();
     let gravity_mps2 = header.gravity_mps2.unwrap_or_else(|| {
         sinscal::nav::earth::normal_gravity_mps2(latitude_rad as f32, header.height_m as f32) as f64
@@ -173,88 +154,16 @@ pub fn navigate(
         dt_s: 1.0 / rate_hz,
         record_every,
     };
-
-    let mut runs = vec![
-        Run { name: "uncompensated".into(), gyro_bias_radps: [0.0; 3], accel_bias_mps2: [0.0; 3], history: vec![] },
-        Run {
-            name: format!("calibrated ({})", calibration.source),
-            gyro_bias_radps: calibration.gyro_bias_radps,
-            accel_bias_mps2: calibration.accel_bias_mps2,
-            history: vec![],
-        },
-    ];
-    if let Some(second) = second {
-        runs.push(Run {
-            name: format!("calibrated ({})", second.source),
-            gyro_bias_radps: second.gyro_bias_radps,
-            accel_bias_mps2: second.accel_bias_mps2,
-            history: vec![],
-        });
-    }
-    if let Some(t) = &header.truth {
-        runs.push(Run {
-            name: "true errors removed".into(),
-            gyro_bias_radps: t.gyro_bias_b_radps,
-            accel_bias_mps2: t.accel_bias_b_mps2,
-            history: vec![],
-        });
-    }
-
+    let mut runs = runs_to_compare(calibration, second, header.truth.as_ref());
     let (simulated, samples) = match options.hours {
         Some(hours) => {
-            let truth = header.truth.as_ref().ok_or_else(|| {
-                InputError::file(
-                    source,
-                    "--hours simulates the recording's IMU, but this recording has no truth_* header (it is \
-                     not a sinscal simulation); without --hours the recording's own static dwell is navigated",
-                )
-            })?;
-            if !(hours > 0.0 && hours <= 48.0) {
-                return Err(InputError::file(source, format!("--hours {hours}: must be in (0, 48]")));
-            }
-            let scenario = Scenario {
-                latitude_deg: header.latitude_deg,
-                height_m: header.height_m,
-                gravity_mps2,
-                rate_hz,
-                gyro_bias_b_radps: truth.gyro_bias_b_radps,
-                accel_bias_b_mps2: truth.accel_bias_b_mps2,
-                gyro_noise_radps: truth.gyro_noise_radps,
-                accel_noise_mps2: truth.accel_noise_mps2,
-                // The static run happens on a fixture whose attitude is known exactly.
-                reference_offset_n_rad: [0.0; 3],
-                ..Scenario::table1_exact()
-            };
-            let (w, f) = scenario.exact_sample(attitude_deg);
-            let mut rng = ChaCha8Rng::seed_from_u64(options.seed.unwrap_or(truth.seed.wrapping_add(1)));
-            let unit = Normal::new(0.0, 1.0).expect("unit normal");
-            let samples = (hours * 3600.0 * rate_hz).round() as usize;
-            navigate_runs(
-                &setup,
-                samples,
-                |_| {
-                    let mut wn = w;
-                    let mut fnoisy = f;
-                    for i in 0..3 {
-                        wn[i] += scenario.gyro_noise_radps * unit.sample(&mut rng);
-                        fnoisy[i] += scenario.accel_noise_mps2 * unit.sample(&mut rng);
-                    }
-                    (wn, fnoisy)
-                },
-                &mut runs,
-                &mut progress,
-            );
-            (true, samples)
+            let run = SimulatedRun { source, header, options, gravity_mps2, rate_hz, attitude_deg, hours };
+            (true, run.navigate(&setup, &mut runs, &mut progress)?)
         }
         None => {
             let rows = &dwell.rows;
-            navigate_runs(
-                &setup,
-                rows.len(),
-                |k| (rows[k].rate_b_radps, rows[k].force_b_mps2),
-                &mut runs,
-                &mut progress,
-            );
+            let at = |k: usize| (rows[k].rate_b_radps, rows[k].force_b_mps2);
+            navigate_runs(&setup, rows.len(), at, &mut runs, &mut progress);
             (false, rows.len())
         }
     };
@@ -274,6 +183,132 @@ pub fn navigate(
         predicted_from_std_errors: predicted,
         histories: runs.into_iter().map(|r| (r.name, r.history)).collect(),
     })
+}
+
+/// The dwell to navigate: `--position`, else the first dwell for a simulated run, else the longest.
+fn chosen_dwell<'a>(source: &str, dwells: &'a [Dwell<'a>], options: &NavOptions) -> Result<&'a Dwell<'a>, InputError> {
+    if dwells.is_empty() {
+        return Err(InputError::file(source, "no dwell (every row has pos = 0): nothing static to navigate"));
+    }
+    Ok(match options.position {
+        Some(p) => dwells
+            .iter()
+            .find(|d| d.pos == p)
+            .ok_or_else(|| InputError::file(source, format!("no dwell with pos = {p}")))?,
+        None if options.hours.is_some() => &dwells[0],
+        None => dwells.iter().max_by_key(|d| d.rows.len()).expect("non-empty"),
+    })
+}
+
+/// The header's rate, or the rate measured over the dwell when the header has none.
+fn sample_rate_hz(source: &str, header_rate_hz: Option<f64>, dwell: &Dwell) -> Result<f64, InputError> {
+    Ok(match header_rate_hz {
+        Some(r) if r > 0.0 => r,
+        _ => {
+            let span = dwell.rows.last().unwrap().t_s - dwell.rows[0].t_s;
+            if dwell.rows.len() < 2 || span <= 0.0 {
+                return Err(InputError::file(source, "no rate_hz in the header and a dwell too short to measure it"));
+            }
+            (dwell.rows.len() - 1) as f64 / span
+        }
+    })
+}
+
+/// The runs: uncompensated, calibrated, the second calibration if any, and the truth removed when the
+/// recording is a simulation that states it.
+fn runs_to_compare(
+    calibration: &CalibrationBiases,
+    second: Option<&CalibrationBiases>,
+    truth: Option<&SimulationTruth>,
+) -> Vec<Run> {
+    let mut runs = vec![
+        Run { name: "uncompensated".into(), gyro_bias_radps: [0.0; 3], accel_bias_mps2: [0.0; 3], history: vec![] },
+        Run {
+            name: format!("calibrated ({})", calibration.source),
+            gyro_bias_radps: calibration.gyro_bias_radps,
+            accel_bias_mps2: calibration.accel_bias_mps2,
+            history: vec![],
+        },
+    ];
+    if let Some(second) = second {
+        runs.push(Run {
+            name: format!("calibrated ({})", second.source),
+            gyro_bias_radps: second.gyro_bias_radps,
+            accel_bias_mps2: second.accel_bias_mps2,
+            history: vec![],
+        });
+    }
+    if let Some(t) = truth {
+        runs.push(Run {
+            name: "true errors removed".into(),
+            gyro_bias_radps: t.gyro_bias_b_radps,
+            accel_bias_mps2: t.accel_bias_b_mps2,
+            history: vec![],
+        });
+    }
+    runs
+}
+
+/// A SIMULATED static run of `hours` of the IMU of a recording written by sinscal's simulator (its truth
+/// header: biases and white noise), with a new noise seed.
+struct SimulatedRun<'a> {
+    source: &'a str,
+    header: &'a Header,
+    options: &'a NavOptions,
+    gravity_mps2: f64,
+    rate_hz: f64,
+    attitude_deg: [f64; 3],
+    hours: f64,
+}
+
+impl SimulatedRun<'_> {
+    /// Navigates the runs over the simulated samples; the number of samples.
+    fn navigate(
+        &self,
+        setup: &StaticSetup,
+        runs: &mut [Run],
+        progress: &mut impl FnMut(usize, usize),
+    ) -> Result<usize, InputError> {
+        let (source, header, hours) = (self.source, self.header, self.hours);
+        let truth = header.truth.as_ref().ok_or_else(|| {
+            InputError::file(
+                source,
+                "--hours simulates the recording's IMU, but this recording has no truth_* header (it is \
+                 not a sinscal simulation); without --hours the recording's own static dwell is navigated",
+            )
+        })?;
+        if !(hours > 0.0 && hours <= 48.0) {
+            return Err(InputError::file(source, format!("--hours {hours}: must be in (0, 48]")));
+        }
+        let scenario = Scenario {
+            latitude_deg: header.latitude_deg,
+            height_m: header.height_m,
+            gravity_mps2: self.gravity_mps2,
+            rate_hz: self.rate_hz,
+            gyro_bias_b_radps: truth.gyro_bias_b_radps,
+            accel_bias_b_mps2: truth.accel_bias_b_mps2,
+            gyro_noise_radps: truth.gyro_noise_radps,
+            accel_noise_mps2: truth.accel_noise_mps2,
+            // The static run happens on a fixture whose attitude is known exactly.
+            reference_offset_n_rad: [0.0; 3],
+            ..Scenario::table1_exact()
+        };
+        let (w, f) = scenario.exact_sample(self.attitude_deg);
+        let mut rng = ChaCha8Rng::seed_from_u64(self.options.seed.unwrap_or(truth.seed.wrapping_add(1)));
+        let unit = Normal::new(0.0, 1.0).expect("unit normal");
+        let samples = (hours * 3600.0 * self.rate_hz).round() as usize;
+        let noisy = |_| {
+            let mut wn = w;
+            let mut fnoisy = f;
+            for i in 0..3 {
+                wn[i] += scenario.gyro_noise_radps * unit.sample(&mut rng);
+                fnoisy[i] += scenario.accel_noise_mps2 * unit.sample(&mut rng);
+            }
+            (wn, fnoisy)
+        };
+        navigate_runs(setup, samples, noisy, runs, progress);
+        Ok(samples)
+    }
 }
 
 /// The RMS errors that the calibration's standard errors predict for the calibrated run: the closed-form
