@@ -1,4 +1,4 @@
-//! `sinscal analyze`: the JSON contract (SPEC.md section 6), the report, angles files, and bad input.
+//! `sinscal analyze`: the JSON contract (docs/formats.md#effect-catalogue), the report, angles files, and bad input.
 //! Recordings here are SIMULATIONS (`sinscal simulate` scenarios) with known truth.
 
 use assert_cmd::Command;

@@ -1,4 +1,4 @@
-//! The `sinscal` command line: exit statuses, messages and the JSON contract (SPEC.md sections 4, 5).
+//! The `sinscal` command line: exit statuses, messages and the JSON contract (docs/cli.md, docs/formats.md#calibration-json).
 
 use assert_cmd::Command;
 use serde_json::Value;

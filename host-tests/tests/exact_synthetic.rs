@@ -1,6 +1,6 @@
 //! Exact synthetic six-position data (no noise) with known biases of both signs on every axis, through
 //! the recording format and the whole calibration path. The signs of the estimates are the proof that
-//! the conventions of METHOD.md and SPEC.md are implemented right: a flipped phi convention flips every
+//! the conventions of docs/method.md and docs/conventions.md are implemented right: a flipped phi convention flips every
 //! estimate, a wrong sign of f_n breaks the level angles.
 
 use sinscal::calib::align::DwellValue;

@@ -35,7 +35,7 @@ fn assert_close3(what: &str, got: [f64; 3], want: [f64; 3], tol: f64) {
     }
 }
 
-/// SPEC.md section 1 written out: C_b^n = Rz(-psi) Rx(theta) Ry(gamma), Ra(t) right-handed about axis a.
+/// docs/conventions.md written out: C_b^n = Rz(-psi) Rx(theta) Ry(gamma), Ra(t) right-handed about axis a.
 fn c_b_n(pitch_deg: f64, roll_deg: f64, heading_deg: f64) -> [[f64; 3]; 3] {
     let (st, ct) = pitch_deg.to_radians().sin_cos();
     let (sg, cg) = roll_deg.to_radians().sin_cos();
@@ -168,7 +168,7 @@ fn psins_bad_lines_name_file_line_and_reason() {
 
 #[test]
 fn ferraris_labels_follow_the_spec_rotation() {
-    // SPEC.md's check value: (pitch 0, roll 90, heading 0) has body x pointing down.
+    // The check value of docs/conventions.md#attitude: (pitch 0, roll 90, heading 0) has body x pointing down.
     let c = c_b_n(0.0, 90.0, 0.0);
     assert!(close(c[2][0], -1.0, 1e-15), "{c:?}");
     let g_mps2 = 9.8;
@@ -592,7 +592,7 @@ fn real_psins_lasergyro_matches_provenance() {
         s.mean_force_b_mps2[1],
         s.mean_force_b_mps2[2]
     );
-    // PROVENANCE: mean rate [-5.95e-05, 2.12e-06, 4.05e-05] rad/s, mean force [-0.061, 0.158, 9.794] m/s^2.
+    // docs/data.md#psins-lasergyro: mean rate [-5.95e-05, 2.12e-06, 4.05e-05] rad/s, mean force [-0.061, 0.158, 9.794] m/s^2.
     assert_close3("mean rate", s.mean_rate_b_radps, [-5.95e-05, 2.12e-06, 4.05e-05], 0.01 * 5.95e-5);
     assert_close3("mean force", s.mean_force_b_mps2, [-0.061, 0.158, 9.794], 0.01 * 9.794);
     assert_close3("mean force (3 decimals)", s.mean_force_b_mps2, [-0.061, 0.158, 9.794], 0.001);
@@ -611,7 +611,7 @@ fn real_imucal_ferraris_session_matches_provenance_and_reaches_calibrate() {
     let rec = Recording::read(&out).unwrap();
     assert_eq!(rec.rows.len(), 10_376);
     print_stats("imucal", &rec);
-    // PROVENANCE table: label, n, acc mean [m/s^2], gyr mean [deg/s] (printed to 3 decimals).
+    // docs/data.md#imucal-ferraris, the per-pose table: label, n, acc mean [m/s^2], gyr mean [deg/s] (printed to 3 decimals).
     let table: [(&str, usize, [f64; 3], [f64; 3]); 6] = [
         ("x_p", 731, [10.314, -0.547, 0.508], [-0.593, -0.367, 0.059]),
         ("x_a", 741, [-9.240, -0.715, 0.240], [-0.601, -0.375, 0.057]),
@@ -700,7 +700,7 @@ fn real_imutk_xsens_static_detection_finds_the_poses() {
         first.samples
     );
     assert!((35..=45).contains(&stats.len()), "{} static poses", stats.len());
-    // PROVENANCE: about 50 s static at the start (the first 51.7 s are z up).
+    // docs/data.md#imu-tk-xsens: about 50 s static at the start (the first 51.7 s are z up).
     assert!(first.first_t_s < 0.1 && (48.0..=53.0).contains(&first_s), "first pose {first_s} s");
     let f = first.mean_force_b_mps2;
     assert!(f[2] > 8.0 && f[2].abs() > 5.0 * f[0].abs().max(f[1].abs()), "first pose force {f:?}");

@@ -52,7 +52,7 @@ fn shipped_scenarios_parse_and_are_reproducible_from_the_seed() {
     }
 }
 
-/// The model of SPEC.md section 6 written out here, independently of the simulator's loop, on noise-free
+/// The model of docs/formats.md#effect-catalogue written out here, independently of the simulator's loop, on noise-free
 /// data: scale factors, misalignments, g-sensitivity, biases, the reference offset and a position error.
 #[test]
 fn noise_free_dwells_follow_the_sensor_model_written_out() {
@@ -111,7 +111,7 @@ fn noise_free_dwells_follow_the_sensor_model_written_out() {
     assert_eq!(checked, 600);
 }
 
-/// A move of +90 deg in heading (clockwise from north) is a rotation of -90 deg about body z (SPEC.md:
+/// A move of +90 deg in heading (clockwise from north) is a rotation of -90 deg about body z (docs/conventions.md#attitude:
 /// C_b^n = Rz(-psi) ...): the gyro's z integral over the move and the settling is -pi/2 plus Earth's
 /// vertical rate over that time.
 #[test]

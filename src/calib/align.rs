@@ -1,4 +1,4 @@
-//! Analytic coarse alignment at one position (METHOD.md step 2), its misalignment against the turntable
+//! Analytic coarse alignment at one position (docs/method.md#step-2-alignment), its misalignment against the turntable
 //! (step 3), and the covariance of those angles from the dwell statistics.
 
 use crate::calib::dwell::DwellSummary;
@@ -39,7 +39,7 @@ pub const MIN_FORCE_RATE_SINE: f32 = 1e-3;
 /// gravity) and `w_n = [0, W cos L, W sin L]`, form in each frame
 ///     v1 = f,   v2 = f x w,   v3 = (f x w) x f
 /// and with `M = [v1 v2 v3]` the matrix whose COLUMNS are these vectors, `M_n = C_b^n M_b`, so
-///     C_hat_b^n = M_n M_b^-1   ( = [v^n]^-T [v^b]^T of METHOD.md when the brackets hold the vectors as columns).
+///     C_hat_b^n = M_n M_b^-1   ( = [v^n]^-T [v^b]^T of docs/method.md#step-2-alignment when the brackets hold the vectors as columns).
 /// The result is not exactly orthogonal for noisy input; [`misalignment_n_rad`] reads the first-order
 /// angles from its skew-symmetric part.
 pub fn coarse_align(force_b_mps2: Vec3, rate_b_radps: Vec3, site: &Site) -> Result<Mat3, AlignError> {
@@ -80,7 +80,7 @@ pub enum DwellValue {
 pub struct PositionAngles {
     /// The computed attitude `C_hat_b^n`.
     pub c_hat_b_n: Mat3,
-    /// Misalignment against the reference, `(phi_e, phi_n, phi_u)`, rad (SPEC.md section 1).
+    /// Misalignment against the reference, `(phi_e, phi_n, phi_u)`, rad (docs/conventions.md).
     pub phi_n_rad: Vec3,
     /// Covariance of `phi_n_rad` from the dwell's noise (white-noise model), rad^2.
     pub covariance_rad2: Mat3,
@@ -119,7 +119,7 @@ pub fn position_angles(
 /// Covariance of the misalignment angles, rad^2, from the variances of the dwell values of the body-frame
 /// channels (`force_var_b_mps2sq`, (m/s^2)^2; `rate_var_b_radps2`, (rad/s)^2; channels independent).
 ///
-/// First order (METHOD.md step 4 with the errors `df`, `dw` in place of the biases):
+/// First order (docs/method.md#step-4-angles-and-biases with the errors `df`, `dw` in place of the biases):
 ///     phi_e = -df_n / g,   phi_n = df_e / g,   phi_u = -dw_e / (W cos L) + tan L df_e / g
 /// with `df_n = C_b^n df_b` and `dw_n = C_b^n dw_b`. Note the correlation of `phi_n` and `phi_u` through
 /// `df_e`.

@@ -1,7 +1,7 @@
 //! The whole calibration over a set of dwells: alignment of every position, the bias solution, and its
 //! refinement by iteration.
 //!
-//! The relations of METHOD.md step 4 are first order. Their neglected terms are products of the
+//! The relations of docs/method.md#step-4-angles-and-biases are first order. Their neglected terms are products of the
 //! misalignment angles, e.g. the heading angle `phi_u = -eps_e / (W cos L)` is really
 //! `-eps_e / (W cos L + eps_n)` to leading order, an error of `eps_e eps_n / (W cos L)`: 2.4e-4 deg/h at
 //! 0.05 deg/h per axis, 0.024 deg/h at 0.5 deg/h. The refinement removes them: subtract the current bias

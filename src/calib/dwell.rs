@@ -16,7 +16,7 @@ use crate::sensor::sample::ImuSample;
 pub enum Prefilter {
     /// No prefilter: the dwell value is the plain mean of the raw samples.
     None,
-    /// The HMM/KF of METHOD.md step 1 with one setting for the three gyros and one for the accelerometers.
+    /// The HMM/KF of docs/method.md#step-1-prefilter with one setting for the three gyros and one for the accelerometers.
     HmmKf {
         /// Gyro channels, (rad/s)^2.
         gyro: PrefilterSettings,

@@ -1,4 +1,4 @@
-//! The two-state HMM/KF prefilter of METHOD.md step 1, one instance per channel.
+//! The two-state HMM/KF prefilter of docs/method.md#step-1-prefilter, one instance per channel.
 //!
 //! State `X_k = [x_k, x_{k-1}]`, measurement `Z_k = [z_k, z_{k-1}]` (the raw channel now and one sample ago):
 //!     X_{k+1} = F X_k + xi,   F = [[a, 1-a], [1, 0]],   Q = diag(q, q)

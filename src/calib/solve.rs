@@ -1,4 +1,4 @@
-//! The bias solution of METHOD.md steps 4 and 5: weighted least squares over any set of positions.
+//! The bias solution of docs/method.md (steps 4 and 5): weighted least squares over any set of positions.
 //!
 //! Per position, with `C = C_b^n` of the reference, `nabla_n = C nabla_b`, `eps_n = C eps_b`, and the
 //! optional constant reference offset `phi0` (turntable base not level or not pointing north):
@@ -48,7 +48,7 @@ impl Parameter {
         Parameter::ReferenceOffset(2),
     ];
 
-    /// The name used in reports (SPEC.md section 5, `unobservable`): `gyro_bias_x`, `accel_bias_z`,
+    /// The name used in reports (docs/formats.md#calibration-json, `unobservable`): `gyro_bias_x`, `accel_bias_z`,
     /// `reference_offset_e`, ...
     pub fn name(&self) -> &'static str {
         const GYRO: [&str; 3] = ["gyro_bias_x", "gyro_bias_y", "gyro_bias_z"];
@@ -540,7 +540,7 @@ struct PseudoInverse {
 pub const TABLE1_POSITIONS_DEG: [[f32; 3]; 6] =
     [[0.0, 0.0, 0.0], [0.0, 0.0, 180.0], [0.0, 0.0, 90.0], [0.0, 0.0, 270.0], [0.0, 90.0, 0.0], [0.0, 270.0, 0.0]];
 
-/// The paper's pair formulas (METHOD.md step 5, consistent signs) for the six Table 1 positions in table
+/// The paper's pair formulas (docs/method.md#step-5-schedule-and-solution, consistent signs) for the six Table 1 positions in table
 /// order: returns `(gyro_bias_b_radps, accel_bias_b_mps2)`. For axis i with pair (t_a, t_b):
 ///     nabla_i = g (phi_n(t_a) - phi_n(t_b)) / 2
 ///     eps_i   = Omega_n (phi_u(t_b) - phi_u(t_a)) / 2 + Omega_n tan L (phi_n(t_a) - phi_n(t_b)) / 2

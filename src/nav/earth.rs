@@ -1,9 +1,9 @@
 //! Earth model: rotation rate, WGS-84 normal gravity, and the navigation-frame reference vectors of a
-//! body at rest (SPEC.md section 1: ENU navigation frame).
+//! body at rest (docs/conventions.md: ENU navigation frame).
 
 use crate::math::linalg::Vec3;
 
-/// Earth rotation rate relative to inertial space, rad/s (WGS-84, SPEC.md section 1).
+/// Earth rotation rate relative to inertial space, rad/s (WGS-84, docs/conventions.md).
 pub const EARTH_RATE_RADPS: f32 = 7.292115e-5;
 
 /// Standard gravity, m/s^2: the unit behind "g" and "ug" in human-facing text (1 ug = 9.80665e-6 m/s^2).

@@ -1,4 +1,4 @@
-//! Attitude conventions of SPEC.md section 1 and the misalignment angles of METHOD.md step 3.
+//! Attitude conventions of docs/conventions.md and the misalignment angles of docs/method.md#step-3-misalignment-angles.
 //!
 //! Navigation frame n: East-North-Up. Body frame b: x right, y forward, z up. The turntable reports
 //! pitch (nose up positive, about body x), roll (right wing down positive, about body y) and heading
@@ -73,7 +73,7 @@ fn rot_z(t: f32) -> Mat3 {
 }
 
 /// Misalignment `phi = (phi_e, phi_n, phi_u)`, rad, of a computed attitude against the true one
-/// (SPEC.md section 1, METHOD.md step 3):
+/// (docs/conventions.md, docs/method.md#step-3-misalignment-angles):
 ///     C_hat_b^n = (I - [phi x]) C_b^n,   i.e.   [phi x] = I - C_hat_b^n (C_b^n)^T
 /// read off the skew-symmetric part of `I - C_hat (C)^T`, so that a computed matrix that is not exactly
 /// orthogonal (the analytic alignment of noisy vectors) still gives the first-order angles.
@@ -95,7 +95,7 @@ mod tests {
 
     #[test]
     fn spec_check_values() {
-        // SPEC.md section 1: (0,0,90) has body y pointing east.
+        // docs/conventions.md: (0,0,90) has body y pointing east.
         let c = Attitude::from_degrees(0.0, 0.0, 90.0).c_b_n();
         assert_vec(c.mul_vec([0.0, 1.0, 0.0]), [1.0, 0.0, 0.0]);
         // (0,90,0) has body x pointing down and body z pointing east.

@@ -1,6 +1,6 @@
 //! The IMU sample source abstraction: what the sampling code needs from any sensor driver.
 //!
-//! A driver turns the sensor's frames into [`ImuReading`]s in SI units, body frame (SPEC.md: x right,
+//! A driver turns the sensor's frames into [`ImuReading`]s in SI units, body frame (docs/conventions.md: x right,
 //! y forward, z up; the sensor's axes must be mounted or remapped to it). Faults are classified into
 //! [`ReadFault`] so that the sampling layer can count and report them without knowing the driver.
 

@@ -122,7 +122,7 @@ fn to_f32(v: [f64; 3]) -> [f32; 3] {
 }
 
 /// The site of a recording: gravity from the header, otherwise WGS-84 normal gravity at its latitude and
-/// height (SPEC.md section 1), and which of the two it is.
+/// height (docs/conventions.md), and which of the two it is.
 pub fn site_of(header: &Header) -> (Site, GravitySource) {
     let latitude_rad = (header.latitude_deg as f32).to_radians();
     match header.gravity_mps2 {
@@ -203,7 +203,7 @@ pub fn calibrate(recording: &Recording, options: &Options) -> Result<Calibration
         if level > MAX_LEVEL_MISALIGNMENT_RAD || phi_u.abs() > MAX_HEADING_MISALIGNMENT_RAD {
             return Err(at(format!(
                 "alignment differs from the reference attitude by {:.2} deg in level and {:.2} deg in heading: \
-                 the reference or the axes do not match the data (SPEC.md conventions: ENU, body x right, \
+                 the reference or the axes do not match the data (docs/conventions.md: ENU, body x right, \
                  y forward, z up)",
                 level.to_degrees(),
                 phi_u.to_degrees()

@@ -1,4 +1,4 @@
-//! The calibration result as JSON (SPEC.md section 5) and as a human summary.
+//! The calibration result as JSON (docs/formats.md#calibration-json) and as a human summary.
 
 use std::fmt::Write as _;
 
@@ -34,7 +34,7 @@ pub struct PositionJson {
     pub residual_rad: [f64; 3],
 }
 
-/// The calibration JSON of SPEC.md section 5, with extra fields after the contract's.
+/// The calibration JSON of docs/formats.md#calibration-json, with extra fields after the contract's.
 #[derive(Debug, Serialize)]
 pub struct CalibrationJson {
     /// "sinscal-calibration/1".

@@ -1,4 +1,4 @@
-//! The recording file of SPEC.md section 2 (CSV, version 1): reading with line-accurate errors, writing,
+//! The recording file of docs/formats.md#recording (CSV, version 1): reading with line-accurate errors, writing,
 //! and grouping rows into dwells.
 
 use std::fmt::Write as _;
@@ -24,7 +24,7 @@ pub struct Header {
 }
 
 /// The true errors of a simulated IMU, as written by sinscal into the header of a simulated recording
-/// (extra `# truth_*: x,y,z` keys; other tools ignore them, as SPEC.md allows for unknown keys).
+/// (extra `# truth_*: x,y,z` keys; other tools ignore them, as docs/formats.md#recording allows for unknown keys).
 #[derive(Clone, Debug, PartialEq)]
 pub struct SimulationTruth {
     /// Noise seed of the simulation.
@@ -121,7 +121,7 @@ impl Recording {
                 comments.push(rest.trim().to_string());
                 continue;
             };
-            // A value may carry a trailing comment after whitespace, as in SPEC.md's example.
+            // A value may carry a trailing comment after whitespace, as in the example of docs/formats.md#recording.
             let value = value.split_whitespace().next().unwrap_or("");
             let number = |what: &str| -> Result<f64, InputError> {
                 parse_finite(value).ok_or_else(|| bad(n, format!("header {what}: '{value}' is not a finite number")))
@@ -213,7 +213,7 @@ impl Recording {
         })
     }
 
-    /// Writes the recording in the SPEC.md section 2 format. Numbers are written in Rust's shortest
+    /// Writes the recording in the docs/formats.md#recording format. Numbers are written in Rust's shortest
     /// round-trip form, so reading the file back gives the same f64 values.
     pub fn to_csv(&self) -> String {
         let h = &self.header;
@@ -265,7 +265,7 @@ impl Recording {
     }
 
     /// The dwells, in order of first appearance of their label. Rows with the same non-zero label form
-    /// one dwell (SPEC.md); label 0 rows are skipped.
+    /// one dwell (docs/formats.md#recording); label 0 rows are skipped.
     pub fn dwells(&self) -> Vec<Dwell<'_>> {
         let mut dwells: Vec<Dwell<'_>> = Vec::new();
         for row in self.rows.iter().filter(|r| r.pos != 0) {

@@ -1,7 +1,7 @@
 //! SIMULATION of a turntable session from a scenario file (TOML): `sinscal simulate SCENARIO --seed N
-//! --out RECORDING`. Every effect of the catalogue of SPEC.md section 6 can be switched on.
+//! --out RECORDING`. Every effect of the catalogue of docs/formats.md#effect-catalogue can be switched on.
 //!
-//! The model (SPEC.md section 6, row vectors, per sensor):
+//! The model (docs/formats.md#effect-catalogue, row vectors, per sensor):
 //!
 //! ```text
 //! w_meas = (I + S_g + M_g) w + G f + b_g + b_g(t) + n_g

@@ -1,6 +1,6 @@
 //! SIMULATION: multi-position turntable data with known biases, for the built-in example, the tests and
-//! the Monte Carlo. The truth is computed in f64 with its own rotation code, written from SPEC.md
-//! section 1 independently of the core's f32 implementation, so that a test of the core against it is a
+//! the Monte Carlo. The truth is computed in f64 with its own rotation code, written from docs/conventions.md
+//! independently of the core's f32 implementation, so that a test of the core against it is a
 //! test of the conventions, not of the code against itself.
 
 use rand::SeedableRng;
@@ -9,7 +9,7 @@ use rand_distr::{Distribution, Normal};
 
 use crate::io::recording::{Header, Recording, Row, SimulationTruth};
 
-/// Earth rotation rate, rad/s (SPEC.md section 1).
+/// Earth rotation rate, rad/s (docs/conventions.md).
 pub const EARTH_RATE_RADPS: f64 = 7.292115e-5;
 
 /// Earth rate in the navigation frame (East-North-Up) at latitude `latitude_rad`, rad/s:
@@ -19,7 +19,7 @@ pub fn earth_rate_n_radps(latitude_rad: f64) -> [f64; 3] {
 }
 /// 1 deg/h in rad/s.
 pub const DEG_PER_HOUR: f64 = std::f64::consts::PI / 180.0 / 3600.0;
-/// 1 ug in m/s^2 (SPEC.md: 1 ug = 9.80665e-6 m/s^2).
+/// 1 ug in m/s^2 (docs/conventions.md#units: 1 ug = 9.80665e-6 m/s^2).
 pub const MICRO_G: f64 = 9.80665e-6;
 
 /// A 3x3 matrix, row-major, f64.
@@ -71,7 +71,7 @@ pub fn rotation(v: [f64; 3]) -> M3 {
 }
 
 /// `C_b^n` from turntable angles in degrees: heading clockwise from north is a rotation by -heading about
-/// up, pitch a rotation about body x, roll about body y (SPEC.md section 1).
+/// up, pitch a rotation about body x, roll about body y (docs/conventions.md).
 pub fn c_b_n(pitch_deg: f64, roll_deg: f64, heading_deg: f64) -> M3 {
     let about = |axis: usize, deg: f64| {
         let mut v = [0.0; 3];

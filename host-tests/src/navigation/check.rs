@@ -13,7 +13,7 @@ use crate::io::recording::{Dwell, Header, Recording, SimulationTruth};
 use crate::model::synth::{c_b_n, mul_vec, Scenario};
 use crate::navigation::strapdown::{linear_error_model, navigate_runs, NavError, Run, RunSummary, StaticSetup};
 
-/// The biases (and their standard errors) of a calibration JSON file (SPEC.md section 5).
+/// The biases (and their standard errors) of a calibration JSON file (docs/formats.md#calibration-json).
 #[derive(Clone, Debug, PartialEq)]
 pub struct CalibrationBiases {
     /// File name.

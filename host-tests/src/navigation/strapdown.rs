@@ -26,7 +26,7 @@ fn cross(a: [f64; 3], b: [f64; 3]) -> [f64; 3] {
     [a[1] * b[2] - a[2] * b[1], a[2] * b[0] - a[0] * b[2], a[0] * b[1] - a[1] * b[0]]
 }
 
-/// Misalignment `phi` (e, n, u), rad, of `c_hat` against `c`: `c_hat = (I - [phi x]) c` (SPEC.md).
+/// Misalignment `phi` (e, n, u), rad, of `c_hat` against `c`: `c_hat = (I - [phi x]) c` (docs/conventions.md#misalignment).
 pub fn misalignment_rad(c_hat: &M3, c: &M3) -> [f64; 3] {
     let p = mul(c_hat, &transpose(c));
     [0.5 * (p[1][2] - p[2][1]), 0.5 * (p[2][0] - p[0][2]), 0.5 * (p[0][1] - p[1][0])]
@@ -53,7 +53,7 @@ pub struct NavError {
     pub position_en_m: [f64; 2],
     /// Velocity error east, north, m/s.
     pub velocity_en_mps: [f64; 2],
-    /// Attitude error phi (e, n, u), rad (SPEC.md convention; phi_u is the heading error).
+    /// Attitude error phi (e, n, u), rad (docs/conventions.md#misalignment; phi_u is the heading error).
     pub attitude_n_rad: [f64; 3],
 }
 

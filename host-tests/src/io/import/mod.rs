@@ -1,4 +1,4 @@
-//! Importers of measured data sets into the recording format of SPEC.md section 2 (`sinscal import`).
+//! Importers of measured data sets into the recording format of docs/formats.md#recording (`sinscal import`).
 //!
 //! Three formats are read, each into a [`Recording`] plus a short human summary ([`Imported`]):
 //! - [`Format::Psins`]: a PSINS `.imu` file (angle and velocity increment counts, one static pose),
@@ -74,18 +74,18 @@ pub struct FerrarisPose {
     pub label: &'static str,
     /// Position label in the recording.
     pub pos: u32,
-    /// Pitch, degrees (SPEC.md section 1).
+    /// Pitch, degrees (docs/conventions.md).
     pub pitch_deg: f64,
-    /// Roll, degrees (SPEC.md section 1).
+    /// Roll, degrees (docs/conventions.md).
     pub roll_deg: f64,
     /// The body axis that points up, for messages ("+x", "-z", ...).
     pub up_axis: &'static str,
 }
 
-/// The six static poses of a Ferraris session, positions 1..6, with pitch and roll from SPEC.md's
+/// The six static poses of a Ferraris session, positions 1..6, with pitch and roll from the conventions'
 /// C_b^n = Rz(-psi) Rx(theta) Ry(gamma): the up direction seen in the body is Ry(-gamma) Rx(-theta) [0, 0, 1]
 /// = [-sin(gamma) cos(theta), sin(theta), cos(gamma) cos(theta)], so roll -90 puts body x up, roll +90 body x
-/// down (SPEC.md's check value), pitch +90 body y up, roll 180 body z down. Heading is unknown.
+/// down (the check value of docs/conventions.md#attitude), pitch +90 body y up, roll 180 body z down. Heading is unknown.
 pub const FERRARIS_POSES: [FerrarisPose; 6] = [
     FerrarisPose { label: "x_p", pos: 1, pitch_deg: 0.0, roll_deg: -90.0, up_axis: "+x" },
     FerrarisPose { label: "x_a", pos: 2, pitch_deg: 0.0, roll_deg: 90.0, up_axis: "-x" },
@@ -125,7 +125,7 @@ pub struct ImportArgs {
     /// Input file(s): one for psins, imucal and imucal-raw; two (accelerometer, then gyro) for imutk.
     #[arg(required = true, num_args = 1..)]
     pub inputs: Vec<PathBuf>,
-    /// The recording to write (SPEC.md section 2).
+    /// The recording to write (docs/formats.md#recording).
     #[arg(long)]
     pub out: PathBuf,
     /// Latitude, degrees north. Default: the file's (psins), 49.6 (imucal, inferred: Erlangen), 45 (imutk, unknown).
@@ -193,7 +193,7 @@ pub fn run(args: &ImportArgs) -> Result<String, InputError> {
 /// mean gyro and accelerometer outputs, and where the numbers came from).
 #[derive(Clone, Debug)]
 pub struct Imported {
-    /// The recording (SPEC.md section 2 semantics).
+    /// The recording (docs/formats.md#recording semantics).
     pub recording: Recording,
     /// Human summary, several lines, ending with a newline.
     pub summary: String,
@@ -263,7 +263,7 @@ pub fn default_labels_path(csv: &Path) -> PathBuf {
 
 /// Pitch and roll, degrees, of a body whose accelerometer measures `force_b_mps2` at rest (levelling): the up
 /// direction u = f / |f| equals Ry(-gamma) Rx(-theta) [0, 0, 1] = [-sin(gamma) cos(theta), sin(theta),
-/// cos(gamma) cos(theta)] (SPEC.md section 1), so pitch = atan2(u_y, hypot(u_x, u_z)) in [-90, 90] and
+/// cos(gamma) cos(theta)] (docs/conventions.md), so pitch = atan2(u_y, hypot(u_x, u_z)) in [-90, 90] and
 /// roll = atan2(-u_x, u_z) in (-180, 180]. `None` for a zero or non-finite vector.
 pub fn level_attitude_deg(force_b_mps2: [f64; 3]) -> Option<(f64, f64)> {
     let [x, y, z] = force_b_mps2;

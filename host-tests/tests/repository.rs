@@ -1,0 +1,176 @@
+//! The repository's own rules, checked on its files: the core's layers use only the layers below them,
+//! nothing cites a file outside the repository, and every citation of `docs/` names a page and a heading
+//! that exist. These read the source tree; they run no code of the project.
+
+use std::collections::BTreeSet;
+use std::fs;
+use std::path::{Path, PathBuf};
+
+/// The workspace root.
+fn root() -> PathBuf {
+    Path::new(env!("CARGO_MANIFEST_DIR")).parent().expect("host-tests is inside the workspace").to_path_buf()
+}
+
+/// Every file under `dir` (recursively) whose name ends with one of `exts`, skipping build output.
+fn files(dir: &Path, exts: &[&str], out: &mut Vec<PathBuf>) {
+    let Ok(entries) = fs::read_dir(dir) else { return };
+    for e in entries.flatten() {
+        let p = e.path();
+        let name = p.file_name().and_then(|n| n.to_str()).unwrap_or("");
+        if p.is_dir() {
+            if name != "target" && !name.starts_with('.') {
+                files(&p, exts, out);
+            }
+        } else if exts.iter().any(|x| name.ends_with(x)) {
+            out.push(p);
+        }
+    }
+}
+
+/// The core's layers, lowest first: a module may use only layers listed before it (and itself).
+const LAYERS: [&str; 7] = ["math", "nav", "sensor", "calib", "run", "rig", "board"];
+
+#[test]
+fn core_layers_use_only_the_layers_below_them() {
+    let src = root().join("src");
+    let mut violations = Vec::new();
+    let mut checked = 0;
+    for (rank, layer) in LAYERS.iter().enumerate() {
+        let mut rs = Vec::new();
+        files(&src.join(layer), &[".rs"], &mut rs);
+        assert!(!rs.is_empty(), "layer {layer} has no files under src/{layer}");
+        for file in rs {
+            let text = fs::read_to_string(&file).unwrap();
+            for (n, line) in text.lines().enumerate() {
+                for (i, _) in line.match_indices("crate::") {
+                    let used = line[i + "crate::".len()..].split(|c: char| !c.is_alphanumeric() && c != '_').next();
+                    let Some(used_rank) = used.and_then(|u| LAYERS.iter().position(|l| *l == u)) else { continue };
+                    checked += 1;
+                    if used_rank > rank {
+                        violations.push(format!("{}:{}: {layer} uses {}", file.display(), n + 1, LAYERS[used_rank]));
+                    }
+                }
+            }
+        }
+    }
+    assert!(checked > 20, "only {checked} cross-module paths found: the scan is not reading the layers");
+    assert!(violations.is_empty(), "a layer uses a layer above it:\n{}", violations.join("\n"));
+    // Nothing of the core lives outside the layers but the crate root and the firmware entry points.
+    let top: BTreeSet<String> = fs::read_dir(&src)
+        .unwrap()
+        .flatten()
+        .map(|e| e.file_name().to_string_lossy().into_owned())
+        .filter(|n| !LAYERS.contains(&n.as_str()))
+        .collect();
+    assert_eq!(top, BTreeSet::from(["bin".to_string(), "lib.rs".to_string()]), "files beside the layers in src/");
+}
+
+/// The files whose text users and developers read: code, scripts, manifests, README and docs. (`.ci/run`, the
+/// CI wiring, is left out: it names where CI puts the measured data, beside the clone.)
+fn project_texts() -> Vec<PathBuf> {
+    let r = root();
+    let mut out = Vec::new();
+    for dir in ["src", "host-tests", "scripts", "docs", ".cargo"] {
+        files(&r.join(dir), &[".rs", ".md", ".toml", ""], &mut out);
+    }
+    for f in ["README.md", "Cargo.toml", "build.rs", "memory.x"] {
+        out.push(r.join(f));
+    }
+    out.retain(|p| p.is_file() && fs::read_to_string(p).is_ok());
+    out
+}
+
+#[test]
+fn nothing_cites_a_file_outside_the_repository() {
+    // Written in pieces so that this file does not match itself.
+    let outside =
+        [["SPEC", ".md"].concat(), ["METHOD", ".md"].concat(), ["PROVEN", "ANCE"].concat(), ["shared", "/"].concat()];
+    let mut hits = Vec::new();
+    let texts = project_texts();
+    assert!(texts.len() > 50, "only {} files read", texts.len());
+    for file in texts {
+        let text = fs::read_to_string(&file).unwrap();
+        for (n, line) in text.lines().enumerate() {
+            for o in &outside {
+                if line.contains(o.as_str()) {
+                    hits.push(format!("{}:{}: {}", file.display(), n + 1, line.trim()));
+                }
+            }
+        }
+    }
+    assert!(hits.is_empty(), "citations of files outside the repository:\n{}", hits.join("\n"));
+}
+
+/// GitHub's anchor of a Markdown heading: lower case, punctuation dropped, spaces to hyphens.
+fn anchor(heading: &str) -> String {
+    heading
+        .trim()
+        .to_lowercase()
+        .chars()
+        .filter_map(|c| match c {
+            ' ' => Some('-'),
+            c if c.is_alphanumeric() || c == '-' || c == '_' => Some(c),
+            _ => None,
+        })
+        .collect()
+}
+
+#[test]
+fn every_docs_citation_names_an_existing_page_and_heading() {
+    let docs = root().join("docs");
+    let mut cited = 0;
+    let mut broken = Vec::new();
+    for file in project_texts() {
+        let text = fs::read_to_string(&file).unwrap();
+        let in_docs = file.parent() == Some(docs.as_path());
+        for (n, line) in text.lines().enumerate() {
+            // `docs/<page>.md#<anchor>` anywhere, and `(<page>.md#<anchor>)` links inside docs/.
+            let mut targets: Vec<String> = line
+                .match_indices("docs/")
+                .map(|(i, _)| {
+                    line[i + 5..]
+                        .split(|c: char| !(c.is_alphanumeric() || "-_.#".contains(c)))
+                        .next()
+                        .unwrap_or("")
+                        .to_string()
+                })
+                .collect();
+            if in_docs {
+                targets.extend(
+                    line.match_indices("](")
+                        .map(|(i, _)| line[i + 2..].split(')').next().unwrap_or("").to_string())
+                        .filter(|t| !t.contains("://") && !t.starts_with('#') && t.contains(".md")),
+                );
+            }
+            for t in targets {
+                let t = t.trim_end_matches('.');
+                let (page, frag) = t.split_once('#').unwrap_or((t, ""));
+                if !page.ends_with(".md") {
+                    continue;
+                }
+                cited += 1;
+                let Ok(page_text) = fs::read_to_string(docs.join(page)) else {
+                    broken.push(format!("{}:{}: no page docs/{page}", file.display(), n + 1));
+                    continue;
+                };
+                let anchors: BTreeSet<String> = page_text
+                    .lines()
+                    .filter(|l| l.starts_with('#'))
+                    .map(|l| anchor(l.trim_start_matches('#')))
+                    .collect();
+                if !frag.is_empty() && !anchors.contains(frag) {
+                    broken.push(format!("{}:{}: docs/{page} has no heading #{frag}", file.display(), n + 1));
+                }
+            }
+        }
+    }
+    assert!(cited > 30, "only {cited} citations of docs/ found: the scan is not reading them");
+    assert!(broken.is_empty(), "broken citations:\n{}", broken.join("\n"));
+}
+
+#[test]
+fn anchors_follow_the_heading_rule() {
+    assert_eq!(anchor(" Step 4: angles and biases"), "step-4-angles-and-biases");
+    assert_eq!(anchor(" Replay file (\"SSRP\", version 1)"), "replay-file-ssrp-version-1");
+    assert_eq!(anchor(" `psins`"), "psins");
+}
