@@ -98,119 +98,22 @@ impl Recording {
 
     /// Parses the text of a recording; `source` names it in errors.
     pub fn parse(text: &str, source: &str) -> Result<Recording, InputError> {
-        let bad = |line: usize, reason: String| InputError::at(source, line, reason);
         let mut lines = text.lines().enumerate().map(|(i, l)| (i + 1, l.trim_end_matches('\r')));
-        let mut version = None;
-        let mut latitude = None;
-        let mut height_m = 0.0;
-        let mut rate_hz = None;
-        let mut gravity = None;
-        let mut comments = Vec::new();
-        let mut truth_keys: Vec<(usize, String, String)> = Vec::new();
-        let (header_line, column_line) = loop {
-            let Some((n, line)) = lines.next() else {
-                return Err(bad(text.lines().count().max(1), "no column line after the header".into()));
-            };
-            if line.trim().is_empty() {
-                continue;
-            }
-            let Some(rest) = line.strip_prefix('#') else {
-                break (n, line);
-            };
-            let Some((key, value)) = rest.split_once(':') else {
-                comments.push(rest.trim().to_string());
-                continue;
-            };
-            // A value may carry a trailing comment after whitespace, as in the example of docs/formats.md#recording.
-            let value = value.split_whitespace().next().unwrap_or("");
-            let number = |what: &str| -> Result<f64, InputError> {
-                parse_finite(value).ok_or_else(|| bad(n, format!("header {what}: '{value}' is not a finite number")))
-            };
-            match key.trim() {
-                "sinscal-recording" => version = Some((n, value.to_string())),
-                "latitude_deg" => latitude = Some(number("latitude_deg")?),
-                "height_m" => height_m = number("height_m")?,
-                "rate_hz" => rate_hz = Some(number("rate_hz")?),
-                "gravity_mps2" => gravity = Some(number("gravity_mps2")?),
-                k if k.starts_with("truth_") => truth_keys.push((n, k.to_string(), value.to_string())),
-                _ => comments.push(rest.trim().to_string()),
-            }
-        };
-        match version {
-            Some((_, v)) if v == "1" => {}
-            Some((n, v)) => return Err(bad(n, format!("unsupported recording version '{v}' (this sinscal reads 1)"))),
-            None => return Err(bad(1, "not a sinscal recording: no '# sinscal-recording: 1' header line".into())),
-        }
-        let latitude_deg = latitude.ok_or_else(|| bad(header_line, "header has no 'latitude_deg'".into()))?;
-        if !(-90.0..=90.0).contains(&latitude_deg) {
-            return Err(bad(header_line, format!("latitude_deg {latitude_deg} outside [-90, 90]")));
-        }
-        if let Some(g) = gravity {
-            if !(9.7..=9.9).contains(&g) {
-                return Err(bad(header_line, format!("gravity_mps2 {g} is not a gravity on Earth (9.7..9.9)")));
-            }
-        }
-
-        let truth = parse_truth(&truth_keys, source)?;
-
+        let (header, header_line, column_line) = parse_header(&mut lines, text, source)?;
         let names: Vec<&str> = column_line.split(',').map(str::trim).collect();
         let find = |name: &str| names.iter().position(|c| *c == name);
         let mut index = [0usize; 11];
         for (slot, name) in index.iter_mut().zip(COLUMNS) {
-            *slot = find(name).ok_or_else(|| bad(header_line, format!("missing column '{name}'")))?;
+            *slot =
+                find(name).ok_or_else(|| InputError::at(source, header_line, format!("missing column '{name}'")))?;
         }
-        let temp_index = find("temp_c");
-
-        let mut rows = Vec::new();
-        let mut previous_t: Option<f64> = None;
-        for (n, line) in lines {
-            if line.trim().is_empty() || line.starts_with('#') {
-                continue;
-            }
-            let cells: Vec<&str> = line.split(',').map(str::trim).collect();
-            if cells.len() != names.len() {
-                return Err(bad(n, format!("{} cells, the column line has {}", cells.len(), names.len())));
-            }
-            let num = |col: usize| -> Result<f64, InputError> {
-                parse_finite(cells[col])
-                    .ok_or_else(|| bad(n, format!("column '{}': '{}' is not a finite number", names[col], cells[col])))
-            };
-            let t_s = num(index[0])?;
-            if let Some(prev) = previous_t {
-                if t_s <= prev {
-                    return Err(bad(n, format!("time {t_s} s does not increase (previous row: {prev} s)")));
-                }
-            }
-            previous_t = Some(t_s);
-            let pos_cell = cells[index[1]];
-            let pos: u32 = pos_cell
-                .parse()
-                .map_err(|_| bad(n, format!("column 'pos': '{pos_cell}' is not a non-negative integer")))?;
-            let heading_deg = if cells[index[4]].is_empty() { None } else { Some(num(index[4])?) };
-            let temp_c = match temp_index {
-                Some(i) if !cells[i].is_empty() => Some(num(i)?),
-                _ => None,
-            };
-            rows.push(Row {
-                t_s,
-                pos,
-                pitch_deg: num(index[2])?,
-                roll_deg: num(index[3])?,
-                heading_deg,
-                rate_b_radps: [num(index[5])?, num(index[6])?, num(index[7])?],
-                force_b_mps2: [num(index[8])?, num(index[9])?, num(index[10])?],
-                temp_c,
-                line: n,
-            });
-        }
+        let temp = find("temp_c");
+        let columns = Columns { names, index, temp };
+        let rows = parse_rows(lines, &columns, source)?;
         if rows.is_empty() {
-            return Err(bad(header_line, "no data rows".into()));
+            return Err(InputError::at(source, header_line, "no data rows"));
         }
-        Ok(Recording {
-            source: source.to_string(),
-            header: Header { latitude_deg, height_m, rate_hz, gravity_mps2: gravity, comments, truth },
-            rows,
-        })
+        Ok(Recording { source: source.to_string(), header, rows })
     }
 
     /// Writes the recording in the docs/formats.md#recording format. Numbers are written in Rust's shortest
@@ -400,6 +303,128 @@ impl Dwell<'_> {
 
 fn parse_finite(cell: &str) -> Option<f64> {
     cell.parse::<f64>().ok().filter(|v| v.is_finite())
+}
+
+/// Where the columns of a recording are: their names, the indices of [`COLUMNS`], and `temp_c` if present.
+struct Columns<'a> {
+    names: Vec<&'a str>,
+    index: [usize; 11],
+    temp: Option<usize>,
+}
+
+/// The header lines up to the column line: the header, the line number of the column line and its text.
+fn parse_header<'t>(
+    lines: &mut impl Iterator<Item = (usize, &'t str)>,
+    text: &str,
+    source: &str,
+) -> Result<(Header, usize, &'t str), InputError> {
+    let bad = |line: usize, reason: String| InputError::at(source, line, reason);
+    let mut version = None;
+    let mut latitude = None;
+    let mut height_m = 0.0;
+    let mut rate_hz = None;
+    let mut gravity = None;
+    let mut comments = Vec::new();
+    let mut truth_keys: Vec<(usize, String, String)> = Vec::new();
+    let (header_line, column_line) = loop {
+        let Some((n, line)) = lines.next() else {
+            return Err(bad(text.lines().count().max(1), "no column line after the header".into()));
+        };
+        if line.trim().is_empty() {
+            continue;
+        }
+        let Some(rest) = line.strip_prefix('#') else {
+            break (n, line);
+        };
+        let Some((key, value)) = rest.split_once(':') else {
+            comments.push(rest.trim().to_string());
+            continue;
+        };
+        // A value may carry a trailing comment after whitespace, as in the example of docs/formats.md#recording.
+        let value = value.split_whitespace().next().unwrap_or("");
+        let number = |what: &str| -> Result<f64, InputError> {
+            parse_finite(value).ok_or_else(|| bad(n, format!("header {what}: '{value}' is not a finite number")))
+        };
+        match key.trim() {
+            "sinscal-recording" => version = Some((n, value.to_string())),
+            "latitude_deg" => latitude = Some(number("latitude_deg")?),
+            "height_m" => height_m = number("height_m")?,
+            "rate_hz" => rate_hz = Some(number("rate_hz")?),
+            "gravity_mps2" => gravity = Some(number("gravity_mps2")?),
+            k if k.starts_with("truth_") => truth_keys.push((n, k.to_string(), value.to_string())),
+            _ => comments.push(rest.trim().to_string()),
+        }
+    };
+    match version {
+        Some((_, v)) if v == "1" => {}
+        Some((n, v)) => return Err(bad(n, format!("unsupported recording version '{v}' (this sinscal reads 1)"))),
+        None => return Err(bad(1, "not a sinscal recording: no '# sinscal-recording: 1' header line".into())),
+    }
+    let latitude_deg = latitude.ok_or_else(|| bad(header_line, "header has no 'latitude_deg'".into()))?;
+    if !(-90.0..=90.0).contains(&latitude_deg) {
+        return Err(bad(header_line, format!("latitude_deg {latitude_deg} outside [-90, 90]")));
+    }
+    if let Some(g) = gravity {
+        if !(9.7..=9.9).contains(&g) {
+            return Err(bad(header_line, format!("gravity_mps2 {g} is not a gravity on Earth (9.7..9.9)")));
+        }
+    }
+    let truth = parse_truth(&truth_keys, source)?;
+    let header = Header { latitude_deg, height_m, rate_hz, gravity_mps2: gravity, comments, truth };
+    Ok((header, header_line, column_line))
+}
+
+/// The data rows after the column line.
+fn parse_rows<'t>(
+    lines: impl Iterator<Item = (usize, &'t str)>,
+    columns: &Columns,
+    source: &str,
+) -> Result<Vec<Row>, InputError> {
+    let bad = |line: usize, reason: String| InputError::at(source, line, reason);
+    let (names, index) = (&columns.names, &columns.index);
+    let mut rows = Vec::new();
+    let mut previous_t: Option<f64> = None;
+    for (n, line) in lines {
+        if line.trim().is_empty() || line.starts_with('#') {
+            continue;
+        }
+        let cells: Vec<&str> = line.split(',').map(str::trim).collect();
+        if cells.len() != names.len() {
+            return Err(bad(n, format!("{} cells, the column line has {}", cells.len(), names.len())));
+        }
+        let num = |col: usize| -> Result<f64, InputError> {
+            parse_finite(cells[col])
+                .ok_or_else(|| bad(n, format!("column '{}': '{}' is not a finite number", names[col], cells[col])))
+        };
+        let t_s = num(index[0])?;
+        if let Some(prev) = previous_t {
+            if t_s <= prev {
+                return Err(bad(n, format!("time {t_s} s does not increase (previous row: {prev} s)")));
+            }
+        }
+        previous_t = Some(t_s);
+        let pos_cell = cells[index[1]];
+        let pos: u32 = pos_cell
+            .parse()
+            .map_err(|_| bad(n, format!("column 'pos': '{pos_cell}' is not a non-negative integer")))?;
+        let heading_deg = if cells[index[4]].is_empty() { None } else { Some(num(index[4])?) };
+        let temp_c = match columns.temp {
+            Some(i) if !cells[i].is_empty() => Some(num(i)?),
+            _ => None,
+        };
+        rows.push(Row {
+            t_s,
+            pos,
+            pitch_deg: num(index[2])?,
+            roll_deg: num(index[3])?,
+            heading_deg,
+            rate_b_radps: [num(index[5])?, num(index[6])?, num(index[7])?],
+            force_b_mps2: [num(index[8])?, num(index[9])?, num(index[10])?],
+            temp_c,
+            line: n,
+        });
+    }
+    Ok(rows)
 }
 
 #[cfg(test)]
