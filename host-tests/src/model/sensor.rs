@@ -1,0 +1,177 @@
+//! The static sensor-error model, written once (docs/conventions.md#sensor-model):
+//!
+//! ```text
+//! w_meas = T_g w + b_g + G f        f_meas = T_a f + b_a        T = I + S + M
+//! ```
+//!
+//! with `S` diagonal (scale factors), `M` off-diagonal (misalignments: row i, column j is axis i's
+//! sensitivity along j) and `G` the gyro g-sensitivity. [`Triad`] is one triad's static terms and what it
+//! measures; [`Term`] is one proportional parameter of the model (a scale factor, a misalignment or a
+//! g-sensitivity) with the column it adds to a linear fit: the measurement's derivative by the parameter.
+//! The simulator measures through [`Triad`]; the analysis fits the columns of [`Term`].
+
+use crate::model::synth::M3;
+
+/// One triad's static error terms: `meas = gain own + bias + cross other`, where `own` is the true
+/// quantity the triad senses (rate for gyros, specific force for accelerometers) and `other` is the other
+/// triad's (specific force for the gyros' g-sensitivity; unused, zero, for accelerometers).
+#[derive(Clone, Debug, PartialEq)]
+pub struct Triad {
+    /// `b`, in the unit of the measurement.
+    pub bias: [f64; 3],
+    /// `T = I + S + M`, dimensionless.
+    pub gain: M3,
+    /// `G`, measurement unit per unit of `other`.
+    pub cross: M3,
+}
+
+impl Triad {
+    /// The triad with biases `bias`, scale factors `scale_factor` (the diagonal of `S`), misalignments
+    /// `misalignment` (its diagonal is ignored: scale factors live in `scale_factor`) and cross-coupling
+    /// `cross`.
+    pub fn new(bias: [f64; 3], scale_factor: [f64; 3], misalignment: &M3, cross: M3) -> Triad {
+        let mut gain = *misalignment;
+        for i in 0..3 {
+            gain[i][i] = 1.0 + scale_factor[i];
+        }
+        Triad { bias, gain, cross }
+    }
+
+    /// Axis `i` of the measurement: `b_i + sum_j (T_ij own_j + G_ij other_j)`, summed in that order.
+    pub fn measure_axis(&self, i: usize, own: [f64; 3], other: [f64; 3]) -> f64 {
+        let mut y = self.bias[i];
+        for j in 0..3 {
+            y += self.gain[i][j] * own[j] + self.cross[i][j] * other[j];
+        }
+        y
+    }
+
+    /// The measurement of all three axes.
+    pub fn measure(&self, own: [f64; 3], other: [f64; 3]) -> [f64; 3] {
+        [0, 1, 2].map(|i| self.measure_axis(i, own, other))
+    }
+}
+
+/// The triad a term belongs to.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Sensor {
+    /// Gyros: output channels 0..2 (x, y, z), rad/s.
+    Gyro,
+    /// Accelerometers: output channels 3..5, m/s^2.
+    Accel,
+}
+
+/// Which part of the model a [`Term`] is.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum TermKind {
+    /// A diagonal element of `S`.
+    ScaleFactor,
+    /// An off-diagonal element of `M`.
+    Misalignment,
+    /// An element of the gyros' `G`.
+    GSensitivity,
+}
+
+/// One proportional parameter of the model: axis `axis` of `sensor` sees `parameter * source[along]`, where
+/// `source` is the true body rate (the gyros' scale factors and misalignments) or the true specific force
+/// (accelerometer terms and the gyros' g-sensitivity).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct Term {
+    /// The triad whose output the parameter enters.
+    pub sensor: Sensor,
+    /// The part of the model.
+    pub kind: TermKind,
+    /// The output axis, 0..2.
+    pub axis: usize,
+    /// The axis of the source quantity, 0..2 (equal to `axis` for a scale factor).
+    pub along: usize,
+}
+
+impl Term {
+    /// Every proportional term: the accelerometer scale factors and misalignments, and, with `gyros`, the
+    /// gyro scale factors, misalignments and g-sensitivity, in that order (axis by axis, `along` inner).
+    pub fn all(gyros: bool) -> Vec<Term> {
+        let mut terms = Vec::new();
+        let mut family = |sensor, kind, pairs: &mut dyn Iterator<Item = (usize, usize)>| {
+            terms.extend(pairs.map(|(axis, along)| Term { sensor, kind, axis, along }));
+        };
+        let diagonal = || (0..3).map(|i| (i, i));
+        let off_diagonal = || (0..3).flat_map(|i| (0..3).filter(move |&j| j != i).map(move |j| (i, j)));
+        family(Sensor::Accel, TermKind::ScaleFactor, &mut diagonal());
+        family(Sensor::Accel, TermKind::Misalignment, &mut off_diagonal());
+        if gyros {
+            family(Sensor::Gyro, TermKind::ScaleFactor, &mut diagonal());
+            family(Sensor::Gyro, TermKind::Misalignment, &mut off_diagonal());
+            family(Sensor::Gyro, TermKind::GSensitivity, &mut (0..3).flat_map(|i| (0..3).map(move |j| (i, j))));
+        }
+        terms
+    }
+
+    /// The output channel the term enters: gyros 0..2, accelerometers 3..5.
+    pub fn channel(&self) -> usize {
+        match self.sensor {
+            Sensor::Gyro => self.axis,
+            Sensor::Accel => 3 + self.axis,
+        }
+    }
+
+    /// Whether the source quantity is the specific force (else the rate).
+    pub fn from_force(&self) -> bool {
+        self.sensor == Sensor::Accel || self.kind == TermKind::GSensitivity
+    }
+
+    /// The output error per unit parameter at true body rate `rate_b_radps` and specific force
+    /// `force_b_mps2`: the term's column in a linear fit.
+    pub fn per_unit(&self, rate_b_radps: [f64; 3], force_b_mps2: [f64; 3]) -> f64 {
+        if self.from_force() {
+            force_b_mps2[self.along]
+        } else {
+            rate_b_radps[self.along]
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// The columns of the terms are the derivatives of the triads' measurements, with the gain and cross
+    /// matrices written out independently of [`Term`].
+    #[test]
+    fn term_columns_are_the_derivatives_of_the_measurement() {
+        let (rate, force) = ([0.3, -1.2, 2.5], [-4.0, 1.5, 9.0]);
+        for term in Term::all(true) {
+            let h = 1e-3;
+            let mut m = [[0.0; 3]; 3];
+            let (mut scale, mut cross) = ([0.0; 3], [[0.0; 3]; 3]);
+            match term.kind {
+                TermKind::ScaleFactor => scale[term.axis] = h,
+                TermKind::Misalignment => m[term.axis][term.along] = h,
+                TermKind::GSensitivity => cross[term.axis][term.along] = h,
+            }
+            let triad = Triad::new([0.0; 3], scale, &m, cross);
+            let (own, other) = if term.sensor == Sensor::Gyro { (rate, force) } else { (force, [0.0; 3]) };
+            let base = Triad::new([0.0; 3], [0.0; 3], &[[0.0; 3]; 3], [[0.0; 3]; 3]).measure(own, other);
+            let moved = triad.measure(own, other);
+            for i in 0..3 {
+                let expected = if i == term.axis { term.per_unit(rate, force) * h } else { 0.0 };
+                assert!((moved[i] - base[i] - expected).abs() < 1e-12, "{term:?} axis {i}");
+            }
+        }
+        assert_eq!(Term::all(false).len(), 9);
+        assert_eq!(Term::all(true).len(), 9 + 9 + 9);
+    }
+
+    #[test]
+    fn measurement_is_gain_times_truth_plus_bias_plus_cross() {
+        let mut m = [[0.0; 3]; 3];
+        m[0][1] = 2e-3; // x senses 0.002 of y
+        let mut g = [[0.0; 3]; 3];
+        g[2][2] = 1e-4;
+        let t = Triad::new([0.1, -0.2, 0.3], [1e-3, 0.0, -2e-3], &m, g);
+        let y = t.measure([1.0, 2.0, 3.0], [0.0, 0.0, 10.0]);
+        assert!((y[0] - (0.1 + 1.001 * 1.0 + 0.002 * 2.0)).abs() < 1e-15);
+        assert!((y[1] - (-0.2 + 2.0)).abs() < 1e-15);
+        assert!((y[2] - (0.3 + 0.998 * 3.0 + 1e-4 * 10.0)).abs() < 1e-15);
+    }
+}
