@@ -1,14 +1,9 @@
 //! SIMULATION of a turntable session from a scenario file (TOML): `sinscal simulate SCENARIO --seed N
 //! --out RECORDING`. Every effect of the catalogue of docs/formats.md#effect-catalogue can be switched on.
 //!
-//! The model (docs/formats.md#effect-catalogue, row vectors, per sensor):
-//!
-//! ```text
-//! w_meas = (I + S_g + M_g) w + G f + b_g + b_g(t) + n_g
-//! f_meas = (I + S_a + M_a) f       + b_a + b_a(t) + n_a
-//! ```
-//!
-//! with the time-varying bias `b(t)`: drift `d t`, plus warm-up `A exp(-t/tau)`, plus temperature
+//! The model: the static sensor model of [`crate::model::sensor`] (docs/conventions.md#sensor-model,
+//! `w_meas = T_g w + b_g + G f`, `f_meas = T_a f + b_a`) plus, per sensor, a time-varying bias `b(t)` and
+//! white noise `n`, with the time-varying bias `b(t)`: drift `d t`, plus warm-up `A exp(-t/tau)`, plus temperature
 //! `k (T(t) - T_ref)`, plus vibration `A sin(2 pi f t + phase)`, plus Gauss-Markov `x(t)`, plus rate random
 //! walk; `n` is white noise; then the output is quantised.
 //!
@@ -46,6 +41,7 @@ use serde::Deserialize;
 
 use crate::io::error::InputError;
 use crate::io::recording::{Header, Recording, Row, SimulationTruth};
+use crate::model::sensor::Triad;
 use crate::model::synth::{c_b_n, earth_rate_n_radps, mul, mul_t_vec, rotation, transpose, M3, TABLE1_DEG};
 
 /// A scenario file.
@@ -243,14 +239,11 @@ impl TemperatureSpec {
 }
 
 /// The error model of one sensor triad in SI, whatever the sensor.
-#[derive(Clone, Debug, Default, PartialEq)]
+#[derive(Clone, Debug, PartialEq)]
 pub struct TriadModel {
-    /// Constant bias.
-    pub bias: [f64; 3],
-    /// `I + S + M`.
-    pub gain: M3,
-    /// Cross-coupling to the other sensor's true quantity (the gyros' g-sensitivity; zero for accels).
-    pub cross: M3,
+    /// The static terms: constant bias, `T = I + S + M`, and the cross-coupling to the other sensor's true
+    /// quantity (the gyros' g-sensitivity; zero for accelerometers).
+    pub statics: Triad,
     /// White noise density, unit * sqrt(s).
     pub white_density: f64,
     /// Random walk of the bias, unit / sqrt(s).
@@ -267,14 +260,6 @@ pub struct TriadModel {
     pub warmup: Option<([f64; 3], f64)>,
     /// Bias per kelvin.
     pub temperature_coefficient_per_k: [f64; 3],
-}
-
-fn identity_plus(scale: [f64; 3], misalignment: &M3) -> M3 {
-    let mut g = *misalignment;
-    for i in 0..3 {
-        g[i][i] = 1.0 + scale[i];
-    }
-    g
 }
 
 fn check_offdiagonal(m: &M3, what: &str) -> Result<(), String> {
@@ -367,9 +352,7 @@ impl ScenarioFile {
     pub fn gyro_model(&self) -> TriadModel {
         let g = &self.gyro;
         TriadModel {
-            bias: g.bias_radps,
-            gain: identity_plus(g.scale_factor, &g.misalignment),
-            cross: g.g_sensitivity_radps_per_mps2,
+            statics: Triad::new(g.bias_radps, g.scale_factor, &g.misalignment, g.g_sensitivity_radps_per_mps2),
             white_density: g.angle_random_walk_rad_per_sqrt_s,
             random_walk: g.rate_random_walk_radps_per_sqrt_s,
             gauss_markov: g.bias_instability.as_ref().map(|b| (b.sigma, b.tau_s)),
@@ -385,9 +368,7 @@ impl ScenarioFile {
     pub fn accel_model(&self) -> TriadModel {
         let a = &self.accel;
         TriadModel {
-            bias: a.bias_mps2,
-            gain: identity_plus(a.scale_factor, &a.misalignment),
-            cross: [[0.0; 3]; 3],
+            statics: Triad::new(a.bias_mps2, a.scale_factor, &a.misalignment, [[0.0; 3]; 3]),
             white_density: a.velocity_random_walk_mps_per_sqrt_s,
             random_walk: a.acceleration_random_walk_mps2_per_sqrt_s,
             gauss_markov: a.bias_instability.as_ref().map(|b| (b.sigma, b.tau_s)),
@@ -455,10 +436,7 @@ impl TriadState {
         let mut out = [0.0; 3];
         let t_mid = t0 + 0.5 * dt;
         for i in 0..3 {
-            let mut y = m.bias[i];
-            for j in 0..3 {
-                y += m.gain[i][j] * own[j] + m.cross[i][j] * other[j];
-            }
+            let mut y = m.statics.measure_axis(i, own, other);
             y += m.drift_per_s[i] * t_mid;
             if let Some((a, tau)) = m.warmup {
                 // Exact interval average of A exp(-t/tau).

@@ -8,6 +8,7 @@ use rand_chacha::ChaCha8Rng;
 use rand_distr::{Distribution, Normal};
 
 use crate::io::recording::{Header, Recording, Row, SimulationTruth};
+use crate::model::sensor::Triad;
 
 /// Earth rotation rate, rad/s (docs/conventions.md).
 pub const EARTH_RATE_RADPS: f64 = 7.292115e-5;
@@ -167,7 +168,11 @@ impl Scenario {
         let f_n = [0.0, 0.0, self.gravity_mps2];
         let w_b = mul_t_vec(&c_true, w_n);
         let f_b = mul_t_vec(&c_true, f_n);
-        ([0, 1, 2].map(|i| w_b[i] + self.gyro_bias_b_radps[i]), [0, 1, 2].map(|i| f_b[i] + self.accel_bias_b_mps2[i]))
+        // Biases only: T = I, no g-sensitivity (the sensor model of crate::model::sensor).
+        let zero = [[0.0; 3]; 3];
+        let gyro = Triad::new(self.gyro_bias_b_radps, [0.0; 3], &zero, zero);
+        let accel = Triad::new(self.accel_bias_b_mps2, [0.0; 3], &zero, zero);
+        (gyro.measure(w_b, f_b), accel.measure(f_b, [0.0; 3]))
     }
 
     /// Calls `sink(position_index, rate_b_radps, force_b_mps2)` for every sample of every dwell, with
