@@ -12,9 +12,10 @@ use rand::SeedableRng;
 use rand_chacha::ChaCha8Rng;
 use rand_distr::{Distribution, StandardNormal};
 use sinscal_host::io::recording::{Header, Recording, Row};
-use sinscal_host::study::{
-    lower_triangular_form, study_dataset, study_multi_pose, study_single_pose, Dataset, PoseKind, Study,
-};
+use sinscal_host::study::factory::lower_triangular_form;
+use sinscal_host::study::multi_pose::{study_multi_pose, PoseKind};
+use sinscal_host::study::psins::study_single_pose;
+use sinscal_host::study::{study_dataset, Dataset, Study};
 
 fn sinscal() -> Command {
     Command::cargo_bin("sinscal").unwrap()

@@ -7,3 +7,4 @@ pub mod error;
 pub mod import;
 pub mod plot;
 pub mod recording;
+pub mod study_report;

@@ -1,0 +1,142 @@
+//! The multi-pose studies (the imucal Ferraris session, the imu_tk Xsens session): the static poses, the six
+//! channels' noise (pooled white std, Allan deviation on the longest pose), the accelerometer models and the
+//! gyro pose means against the base model and its SIMULATION, the extensions and their gain on held-out poses,
+//! the Ferraris turns and the imu_tk factory comparison.
+
+use super::accel::{fit_models, held_out_norms, simulate_pose_norms};
+use super::causes::name_causes;
+use super::factory::factory_comparison;
+use super::gyro::{gyro_models, gyro_spread, integrate_turns};
+use super::noise::{channel_noise, white_std};
+use super::{channel_value, rms, ChannelNoise, LabelledTurn, Pose, PoseStudy, Study, CHANNELS};
+use crate::io::error::InputError;
+use crate::io::import::{position_stats, FERRARIS_POSES};
+use crate::io::recording::{Dwell, Recording};
+
+/// How the poses' orientations are known.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum PoseKind {
+    /// imucal labels: each pose has a known up axis; the turns are labelled too.
+    Labelled,
+    /// No labels: only |f| = g is known (imu_tk).
+    Unlabelled,
+}
+
+/// Study of a multi-pose recording: the six channels' noise on the longest pose, the per-pose accelerometer
+/// norms and gyro means against the base model and its SIMULATION, the extended accelerometer model and its gain
+/// on held-out poses, the gyro per-pose models; `turns` are the Ferraris turns as (label, axis, sample range).
+pub fn study_multi_pose(
+    rec: &Recording,
+    kind: PoseKind,
+    gravity_mps2: f64,
+    dataset: &str,
+    sources: Vec<String>,
+    seed: u64,
+    turns: &[LabelledTurn],
+) -> Result<Study, InputError> {
+    let g = gravity_mps2;
+    let rate_hz = rec.header.rate_hz.unwrap_or(100.0);
+    let dwells = rec.dwells();
+    if dwells.len() < 6 {
+        return Err(InputError::file(&rec.source, format!("{} static poses: a study needs at least 6", dwells.len())));
+    }
+    let (noise, sigma) = pose_noise(&dwells, rate_hz, seed);
+    let mut poses = static_poses(rec, kind);
+    let means: Vec<[f64; 3]> = poses.iter().map(|p| p.mean_force_mps2).collect();
+    let ups: Vec<[f64; 3]> = poses.iter().map(|p| p.up_b.unwrap_or([0.0, 0.0, 1.0])).collect();
+    let (base, extended, method) = fit_models(kind, &means, &ups, g, &rec.source)?;
+    let (held_out_rule, base_res, ext_res) = held_out_norms(kind, &mut poses, &means, &ups, g, &rec.source)?;
+    simulate_pose_norms(&mut poses, &base, &extended, g, [sigma[3], sigma[4], sigma[5]], seed);
+    let (spread, spread_noise) = gyro_spread(&poses, [sigma[0], sigma[1], sigma[2]]);
+    let (gyro_models_held_out_radps, gyro_g_sensitivity) =
+        if kind == PoseKind::Unlabelled { gyro_models(&poses) } else { (Vec::new(), None) };
+    let turns = integrate_turns(rec, &poses, turns);
+    let factory = (dataset == "imutk").then(|| factory_comparison(&extended));
+    let pose_study = PoseStudy {
+        gravity_mps2: g,
+        method,
+        norm_rms_data_mps2: rms(poses.iter().map(|p| p.norm_minus_g_data_mps2)),
+        norm_rms_noise_mps2: rms(poses.iter().map(|p| p.norm_noise_std_mps2)),
+        held_out_norm_rms_base_mps2: rms(base_res),
+        held_out_norm_rms_extended_mps2: rms(ext_res),
+        held_out_rule,
+        gyro_spread_rms_radps: spread,
+        gyro_spread_noise_radps: spread_noise,
+        gyro_models_held_out_radps,
+        gyro_g_sensitivity,
+        turns,
+        factory,
+        poses,
+        base_accel: base,
+        extended_accel: extended,
+    };
+    let mut study = Study {
+        dataset: dataset.to_string(),
+        sources,
+        seed,
+        rate_hz,
+        noise,
+        sway: Vec::new(),
+        poses: Some(pose_study),
+        causes: Vec::new(),
+    };
+    study.causes = name_causes(&study);
+    Ok(study)
+}
+
+/// The six channels' noise of a multi-pose record: the white std pooled over the static poses (returned beside,
+/// SI) and the Allan deviation of the longest pose against its base SIMULATION (no extension: poses are short).
+fn pose_noise(dwells: &[Dwell<'_>], rate_hz: f64, seed: u64) -> (Vec<ChannelNoise>, [f64; 6]) {
+    let seg = |d: &Dwell<'_>, c: usize| -> Vec<f64> { d.rows.iter().map(|r| channel_value(r, c)).collect() };
+    let longest = dwells.iter().max_by_key(|d| d.rows.len()).expect("non-empty");
+    let mut noise = Vec::new();
+    let mut sigma = [0.0; 6];
+    for c in 0..6 {
+        let segs: Vec<Vec<f64>> = dwells.iter().map(|d| seg(d, c)).collect();
+        let refs: Vec<&[f64]> = segs.iter().map(|s| s.as_slice()).collect();
+        sigma[c] = white_std(&refs);
+        let mut ch = channel_noise(CHANNELS[c], &seg(longest, c), rate_hz, seed, c as u64 * 1000);
+        ch.extended = None;
+        ch.white_std = sigma[c];
+        noise.push(ch);
+    }
+    (noise, sigma)
+}
+
+/// The static poses of `rec` with their means, named and (Ferraris) given their labelled up axes; the norms are
+/// filled in later; the odd poses (1, 3, ... in record order) are marked held out.
+fn static_poses(rec: &Recording, kind: PoseKind) -> Vec<Pose> {
+    position_stats(rec)
+        .iter()
+        .enumerate()
+        .map(|(k, s)| Pose {
+            pos: s.pos,
+            name: match kind {
+                PoseKind::Labelled => FERRARIS_POSES
+                    .iter()
+                    .find(|p| p.pos == s.pos)
+                    .map_or(format!("pose {}", s.pos), |p| p.label.to_string()),
+                PoseKind::Unlabelled => format!("pose {}", s.pos),
+            },
+            samples: s.samples,
+            t_mid_s: 0.5 * (s.first_t_s + s.last_t_s),
+            mean_rate_radps: s.mean_rate_b_radps,
+            mean_force_mps2: s.mean_force_b_mps2,
+            up_b: if kind == PoseKind::Labelled { labelled_up(s.pos) } else { None },
+            norm_minus_g_data_mps2: 0.0,
+            norm_minus_g_base_sim_mps2: 0.0,
+            norm_minus_g_extended_sim_mps2: 0.0,
+            norm_minus_g_extended_mps2: 0.0,
+            norm_noise_std_mps2: 0.0,
+            held_out: k % 2 == 1,
+        })
+        .collect()
+}
+
+/// The up direction in the body of Ferraris pose `pos` from its labelled pitch and roll (exact zeros kept).
+fn labelled_up(pos: u32) -> Option<[f64; 3]> {
+    let p = FERRARIS_POSES.iter().find(|p| p.pos == pos)?;
+    let (st, ct) = p.pitch_deg.to_radians().sin_cos();
+    let (sg, cg) = p.roll_deg.to_radians().sin_cos();
+    Some([-sg * ct, st, cg * ct].map(|v: f64| if v.abs() < 1e-12 { 0.0 } else { v }))
+}
