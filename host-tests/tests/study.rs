@@ -290,7 +290,7 @@ fn real_ferraris_accel_scale_misalignment_and_gyro_scale() {
     assert_eq!(s.causes[0].name, "accel scale factors and misalignments");
     // The z accelerometer reads about 2 % high.
     assert!(p.extended_accel.scale_factors()[2] > 0.01);
-    // Turns: PROVENANCE's raw integrals -371.9, -354.8, -359.2 deg; x and y far from 360 deg.
+    // Turns: the raw integrals of docs/data.md#imucal-ferraris, -371.9, -354.8, -359.2 deg; x and y far from 360 deg.
     let raw: Vec<f64> = p.turns.iter().map(|t| t.raw_angle_rad.to_degrees()).collect();
     for (got, want) in raw.iter().zip([-371.9, -354.8, -359.2]) {
         assert!((got - want).abs() < 0.2, "{raw:?}");
@@ -320,7 +320,7 @@ fn real_imutk_accel_matches_factory_and_gyro_g_sensitivity() {
     assert!(dist(f.factory_misalignment) < dist(f.factory_misalignment_inverse), "{f:?}");
     assert!((f.fitted_misalignment[1] - f.factory_misalignment[1]).abs() < 0.005, "{f:?}");
     assert!((f.fitted_misalignment[2] - f.factory_misalignment[2]).abs() < 0.005, "{f:?}");
-    // Gyro per-pose means scatter by several times the noise (PROVENANCE: about +-7 counts); g-sensitivity
+    // Gyro per-pose means scatter by several times the noise (docs/data.md#imu-tk-xsens: about +-7 counts); g-sensitivity
     // explains most of it on the odd poses.
     assert!(p.gyro_spread_rms_radps / p.gyro_spread_noise_radps > 3.0);
     let held = |name: &str| p.gyro_models_held_out_radps.iter().find(|m| m.0 == name).unwrap().1;

@@ -28,8 +28,8 @@ fn high_pass(x: &[f64], h: usize) -> Vec<f64> {
 }
 
 /// The sway test of one pair: 1-s means of the accelerometer channel against `sign` g times the tilt integrated
-/// from the gyro channel, both high-passed over 61 s.
-pub fn sway_test(pair: &'static str, accel: &[f64], gyro: &[f64], rate_hz: f64, gravity_mps2: f64, sign: f64) -> Sway {
+/// from the gyro channel, both high-passed over 61 s. `sign` is `+g` or `-g` in m/s^2.
+pub fn sway_test(pair: &'static str, accel: &[f64], gyro: &[f64], rate_hz: f64, sign: f64) -> Sway {
     let block = rate_hz.round().max(1.0) as usize;
     let dt = 1.0 / rate_hz;
     let gmean = mean(gyro);
@@ -48,7 +48,6 @@ pub fn sway_test(pair: &'static str, accel: &[f64], gyro: &[f64], rate_hz: f64, 
     let t: Vec<f64> = high_pass(&tilt, 30).iter().map(|v| sign * v).collect();
     let (sa, st) = (rms(a.iter().copied()), rms(t.iter().copied()));
     let cov: f64 = a.iter().zip(&t).map(|(x, y)| x * y).sum::<f64>() / a.len().max(1) as f64;
-    let _ = gravity_mps2;
     Sway {
         pair,
         correlation: cov / (sa * st),
@@ -74,8 +73,8 @@ pub fn study_single_pose(rec: &Recording, dataset: &str, sources: Vec<String>, s
         })
         .collect();
     let sway = vec![
-        sway_test("ay vs +g*theta_x", &cols[4], &cols[0], rate_hz, g, g),
-        sway_test("ax vs -g*theta_y", &cols[3], &cols[1], rate_hz, g, -g),
+        sway_test("ay vs +g*theta_x", &cols[4], &cols[0], rate_hz, g),
+        sway_test("ax vs -g*theta_y", &cols[3], &cols[1], rate_hz, -g),
     ];
     let mut study =
         Study { dataset: dataset.to_string(), sources, seed, rate_hz, noise, sway, poses: None, causes: Vec::new() };
