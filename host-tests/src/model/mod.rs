@@ -2,5 +2,6 @@
 //! docs/formats.md), the scenario simulator of `sinscal simulate`, and the synthetic sessions with known
 //! truth of the built-in example, the tests and the Monte Carlo.
 
+pub mod catalogue;
 pub mod simulator;
 pub mod synth;
