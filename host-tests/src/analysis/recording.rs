@@ -12,7 +12,7 @@ use super::observations::{Blocks, Session};
 use super::result::{assemble, effects_of, residuals_by_group, Findings, RECORDING};
 use super::sample_tests::{test_samples, SampleFindings, SAMPLE_TESTS};
 use super::selection::{select, Problem, Selection};
-use super::{Analysis, CHANNELS, CHANNEL_UNITS};
+use super::{Analysis, ChannelDiagnostics, CHANNELS, CHANNEL_UNITS};
 
 /// Analyses a recording.
 pub fn analyze_recording(recording: &Recording) -> Result<Analysis, InputError> {
@@ -54,7 +54,7 @@ fn problem(session: &Session, blocks: &Blocks) -> Problem {
 fn residual_rms(
     blocks: &Blocks,
     selection: &Selection,
-    diagnostics: &[super::ChannelDiagnostics],
+    diagnostics: &[ChannelDiagnostics],
 ) -> (BTreeMap<String, f64>, BTreeMap<String, f64>) {
     let mut residual_rms = BTreeMap::new();
     let mut block_rms = BTreeMap::new();
