@@ -14,6 +14,7 @@ use rand_chacha::ChaCha8Rng;
 
 use crate::analysis::{analyze_recording, Analysis};
 use crate::io::recording::Recording;
+use crate::model::catalogue::{EffectKind, Sensor};
 use crate::model::simulator::{
     simulate, GaussMarkovSpec, PositionError, ScenarioFile, TemperatureSpec, VibrationSpec, WarmupSpec,
 };
@@ -21,36 +22,42 @@ use crate::model::simulator::{
 /// The clean scenario every trial starts from (constant biases and white noise only).
 pub const CLEAN_SCENARIO: &str = include_str!("../../scenarios/table1-clean.toml");
 
-/// Effects the trials hide, with the axes each may take in the Table 1 schedule. Entries that this
-/// schedule cannot see (body y is horizontal in every position, so nothing proportional to the force
-/// along y) or cannot tell apart (the gyro's response to rate about z and to force along z have the same
-/// pattern over the six positions: gyro_misalignment xz/yz, gyro_scale_factor z and gyro_g_sensitivity
+/// Per-channel axes as the trials name them (the sensor, then the axis).
+const CHANNEL_AXES: &[&str] = &["gx", "gy", "gz", "ax", "ay", "az"];
+
+/// See [`catalogue`].
+const TRIALS: [(EffectKind, &[&str]); 13] = [
+    (EffectKind::AccelScaleFactor, &["x", "z"]),
+    (EffectKind::AccelMisalignment, &["xz", "yx", "yz", "zx"]),
+    (EffectKind::GyroScaleFactor, &["x", "y"]),
+    (EffectKind::GyroMisalignment, &["xy", "yx", "zx", "zy"]),
+    (EffectKind::GyroGSensitivity, &["xx", "yx", "zx"]),
+    (EffectKind::ReferenceOffset, &["e", "n", "u"]),
+    (EffectKind::PositionError, &["e", "n", "u"]),
+    (EffectKind::BiasDrift, CHANNEL_AXES),
+    (EffectKind::BiasWarmup, CHANNEL_AXES),
+    (EffectKind::TemperatureBias, CHANNEL_AXES),
+    (EffectKind::CorrelatedNoise, CHANNEL_AXES),
+    (EffectKind::Vibration, CHANNEL_AXES),
+    (EffectKind::Quantization, CHANNEL_AXES),
+];
+
+/// Effects the trials hide (by catalogue name), with the axes each may take in the Table 1 schedule. Entries
+/// that this schedule cannot see (body y is horizontal in every position, so nothing proportional to the
+/// force along y) or cannot tell apart (the gyro's response to rate about z and to force along z have the
+/// same pattern over the six positions: gyro_misalignment xz/yz, gyro_scale_factor z and gyro_g_sensitivity
 /// xz/yz/zz) are left out; `sinscal analyze` lists them as unobservable or as aliases.
 pub fn catalogue() -> Vec<(&'static str, Vec<&'static str>)> {
-    vec![
-        ("accel_scale_factor", vec!["x", "z"]),
-        ("accel_misalignment", vec!["xz", "yx", "yz", "zx"]),
-        ("gyro_scale_factor", vec!["x", "y"]),
-        ("gyro_misalignment", vec!["xy", "yx", "zx", "zy"]),
-        ("gyro_g_sensitivity", vec!["xx", "yx", "zx"]),
-        ("reference_offset", vec!["e", "n", "u"]),
-        ("position_error", vec!["e", "n", "u"]),
-        ("bias_drift", vec!["gx", "gy", "gz", "ax", "ay", "az"]),
-        ("bias_warmup", vec!["gx", "gy", "gz", "ax", "ay", "az"]),
-        ("temperature_bias", vec!["gx", "gy", "gz", "ax", "ay", "az"]),
-        ("correlated_noise", vec!["gx", "gy", "gz", "ax", "ay", "az"]),
-        ("vibration", vec!["gx", "gy", "gz", "ax", "ay", "az"]),
-        ("quantization", vec!["gx", "gy", "gz", "ax", "ay", "az"]),
-    ]
+    TRIALS.iter().map(|(effect, axes)| (effect.name(), axes.to_vec())).collect()
 }
 
 /// The truth of one trial.
 #[derive(Clone, Debug, PartialEq)]
 pub struct Hidden {
-    /// Catalogue name.
-    pub effect: &'static str,
-    /// "gyro", "accel" or "reference".
-    pub sensor: &'static str,
+    /// The catalogue entry.
+    pub effect: EffectKind,
+    /// Its sensor (for the per-channel effects, the channel's).
+    pub sensor: Sensor,
     /// Axes as the analysis names them.
     pub axes: String,
     /// Position (position errors).
@@ -103,151 +110,210 @@ fn axis(c: char) -> usize {
 }
 
 /// Draws the trial `seed` of `effect` (one of [`catalogue`]) and returns its scenario and truth.
-pub fn draw(effect: &'static str, seed: u64, reference: &ReferenceErrors) -> (ScenarioFile, Hidden) {
-    let mut rng = ChaCha8Rng::seed_from_u64(seed.wrapping_mul(0x9E37_79B9_7F4A_7C15) ^ effect.len() as u64);
-    let axes_list =
-        catalogue().into_iter().find(|(e, _)| *e == effect).map(|(_, a)| a).expect("effect in the catalogue");
-    let axes = axes_list[rng.random_range(0..axes_list.len())];
-    let sign = if rng.random::<bool>() { 1.0 } else { -1.0 };
-    let snr = rng.random_range(10.0..20.0);
-    let mut s = clean_scenario();
-    let positions = s.schedule.positions_deg.len() as u32;
-    let mut hidden =
-        Hidden { effect, sensor: "", axes: axes.to_string(), pos: None, value: 0.0, tau_s: None, frequency_hz: None };
-    let se = |name: String| -> f64 {
-        *reference.std_error.get(&name).unwrap_or_else(|| panic!("no reference standard error for {name}"))
-    };
-    // Sensor-channel effects: axes "gx".."az".
-    let (gyro, ax) = (axes.starts_with('g'), axes.chars().last().map_or(0, axis));
-    let noise = if gyro { reference.noise[0] } else { reference.noise[1] };
+pub fn draw(effect: EffectKind, seed: u64, reference: &ReferenceErrors) -> (ScenarioFile, Hidden) {
+    let mut d = Draw::new(effect, seed, reference);
     match effect {
-        "accel_scale_factor" | "accel_misalignment" => {
-            let (i, j) = (axis(axes.as_bytes()[0] as char), axis(axes.chars().last().unwrap_or('x')));
-            hidden.sensor = "accel";
-            hidden.value = sign * snr * se(format!("{effect}:{axes}"));
-            s.accel.misalignment[i][j] = if i == j { 0.0 } else { hidden.value };
-            if i == j {
-                s.accel.scale_factor[i] = hidden.value;
-            }
-        }
-        "gyro_scale_factor" | "gyro_misalignment" => {
-            let (i, j) = (axis(axes.as_bytes()[0] as char), axis(axes.chars().last().unwrap_or('x')));
-            hidden.sensor = "gyro";
-            hidden.value = sign * snr * se(format!("{effect}:{axes}"));
-            if i == j {
-                s.gyro.scale_factor[i] = hidden.value;
-            } else {
-                s.gyro.misalignment[i][j] = hidden.value;
-            }
-        }
-        "gyro_g_sensitivity" => {
-            let (i, j) = (axis(axes.as_bytes()[0] as char), axis(axes.as_bytes()[1] as char));
-            hidden.sensor = "gyro";
-            hidden.value = sign * snr * se(format!("{effect}:{axes}"));
-            s.gyro.g_sensitivity_radps_per_mps2[i][j] = hidden.value;
-        }
-        "reference_offset" => {
-            hidden.sensor = "reference";
-            hidden.value = sign * snr * se(format!("{effect}:{axes}"));
-            s.schedule.reference_offset_enu_rad[axis(axes.as_bytes()[0] as char)] = hidden.value;
-        }
-        "position_error" => {
-            let pos = rng.random_range(1..=positions);
-            hidden.sensor = "reference";
-            hidden.pos = Some(pos);
-            hidden.value = sign * snr * se(format!("{effect}:{axes}:pos{pos}"));
-            let mut enu = [0.0; 3];
-            enu[axis(axes.as_bytes()[0] as char)] = hidden.value;
-            s.schedule.position_error.push(PositionError { pos, enu_rad: enu });
-        }
-        _ => {
-            hidden.sensor = if gyro { "gyro" } else { "accel" };
-            hidden.axes = ["x", "y", "z"][ax].to_string();
-            let mut v = [0.0; 3];
-            match effect {
-                "bias_drift" => {
-                    hidden.value = sign * snr * se(format!("bias_drift:{}", hidden.axes_of(gyro)));
-                    v[ax] = hidden.value;
-                    if gyro {
-                        s.gyro.drift_radps_per_s = v;
-                    } else {
-                        s.accel.drift_mps2_per_s = v;
-                    }
-                }
-                "bias_warmup" => {
-                    // Time constants 20..100 s: curved within the session of about 390 s (a longer one is a
-                    // drift to this session), and long against a block.
-                    let tau = rng.random_range(20.0..100.0);
-                    // Amplitude: 10..20 times its standard error from the block means (the shape's energy
-                    // after the constant bias is removed), times 1.5 for the time constant being estimated.
-                    let shape: Vec<f64> = block_times(&s).iter().map(|t| (-t / tau).exp()).collect();
-                    hidden.value = sign * snr * 1.5 * block_noise(&s, noise) / centred_norm(&shape);
-                    hidden.tau_s = Some(tau);
-                    v[ax] = hidden.value;
-                    let w = Some(WarmupSpec { amplitude: v, tau_s: tau });
-                    if gyro {
-                        s.gyro.warmup = w;
-                    } else {
-                        s.accel.warmup = w;
-                    }
-                }
-                "temperature_bias" => {
-                    // The sensor warms from 20 to 35 deg C with a 200 s time constant; the coefficient is
-                    // 10..20 times its standard error from the block means.
-                    let t = TemperatureSpec { start_c: 20.0, end_c: 35.0, tau_s: 200.0, reference_c: 20.0 };
-                    let shape: Vec<f64> = block_times(&s).iter().map(|&x| t.at(x)).collect();
-                    hidden.value = sign * snr * block_noise(&s, noise) / centred_norm(&shape);
-                    hidden.tau_s = Some(200.0);
-                    s.temperature = Some(t);
-                    v[ax] = hidden.value;
-                    if gyro {
-                        s.gyro.temperature_coefficient_radps_per_k = v;
-                    } else {
-                        s.accel.temperature_coefficient_mps2_per_k = v;
-                    }
-                }
-                "correlated_noise" => {
-                    // Gauss-Markov of 0.2..2 s time constant and 1..3 times the white noise per sample.
-                    let tau = rng.random_range(0.2..2.0);
-                    hidden.value = rng.random_range(1.0..3.0) * noise;
-                    hidden.tau_s = Some(tau);
-                    v[ax] = hidden.value;
-                    let gm = Some(GaussMarkovSpec { sigma: v, tau_s: tau });
-                    if gyro {
-                        s.gyro.bias_instability = gm;
-                    } else {
-                        s.accel.bias_instability = gm;
-                    }
-                }
-                "vibration" => {
-                    // 0.3..30 Hz, amplitude 10..20 standard errors of a sinusoid's amplitude in white noise.
-                    let f = rng.random_range(0.3..30.0);
-                    let samples = 6.0 * s.schedule.dwell_s * s.schedule.rate_hz;
-                    hidden.value = snr * noise * (2.0 / samples).sqrt();
-                    hidden.frequency_hz = Some(f);
-                    v[ax] = hidden.value;
-                    let vib = Some(VibrationSpec { amplitude: v, frequency_hz: f });
-                    if gyro {
-                        s.gyro.vibration = vib;
-                    } else {
-                        s.accel.vibration = vib;
-                    }
-                }
-                "quantization" => {
-                    // Output step 0.3..3 times the white noise per sample.
-                    hidden.value = rng.random_range(0.3..3.0) * noise;
-                    v[ax] = hidden.value;
-                    if gyro {
-                        s.gyro.quantization_radps = v;
-                    } else {
-                        s.accel.quantization_mps2 = v;
-                    }
-                }
-                other => panic!("unknown effect {other}"),
-            }
+        EffectKind::AccelScaleFactor | EffectKind::AccelMisalignment => d.accel_term(),
+        EffectKind::GyroScaleFactor | EffectKind::GyroMisalignment => d.gyro_term(),
+        EffectKind::GyroGSensitivity => d.g_sensitivity(),
+        EffectKind::ReferenceOffset => d.reference_offset(),
+        EffectKind::PositionError => d.position_error(),
+        EffectKind::BiasDrift => d.drift(),
+        EffectKind::BiasWarmup => d.warmup(),
+        EffectKind::TemperatureBias => d.temperature(),
+        EffectKind::CorrelatedNoise => d.correlated_noise(),
+        EffectKind::Vibration => d.vibration(),
+        EffectKind::Quantization => d.quantization(),
+    }
+    (d.s, d.hidden)
+}
+
+/// One trial being drawn: the random stream, what is drawn first for every effect (axes, sign, signal to
+/// noise), the scenario and the truth so far.
+struct Draw<'a> {
+    rng: ChaCha8Rng,
+    reference: &'a ReferenceErrors,
+    /// The axes drawn, as [`catalogue`] names them ("xz", "e", "gy").
+    axes: &'static str,
+    sign: f64,
+    /// Magnitude in standard errors of the clean session.
+    snr: f64,
+    s: ScenarioFile,
+    hidden: Hidden,
+    /// Per-channel effects: a gyro channel, and its axis.
+    gyro: bool,
+    ax: usize,
+    /// White noise per sample of the channel's sensor.
+    noise: f64,
+}
+
+impl<'a> Draw<'a> {
+    fn new(effect: EffectKind, seed: u64, reference: &'a ReferenceErrors) -> Draw<'a> {
+        let mut rng = ChaCha8Rng::seed_from_u64(seed.wrapping_mul(0x9E37_79B9_7F4A_7C15) ^ effect.name().len() as u64);
+        let axes_list = TRIALS.iter().find(|(e, _)| *e == effect).map(|(_, a)| *a).expect("effect in the catalogue");
+        let axes = axes_list[rng.random_range(0..axes_list.len())];
+        let sign = if rng.random::<bool>() { 1.0 } else { -1.0 };
+        let snr = rng.random_range(10.0..20.0);
+        // Sensor-channel effects: axes "gx".."az".
+        let (gyro, ax) = (axes.starts_with('g'), axes.chars().last().map_or(0, axis));
+        let sensor = effect.sensor().unwrap_or(if gyro { Sensor::Gyro } else { Sensor::Accel });
+        let hidden_axes = if effect.sensor().is_none() { ["x", "y", "z"][ax] } else { axes };
+        let hidden = Hidden {
+            effect,
+            sensor,
+            axes: hidden_axes.to_string(),
+            pos: None,
+            value: 0.0,
+            tau_s: None,
+            frequency_hz: None,
+        };
+        let noise = if gyro { reference.noise[0] } else { reference.noise[1] };
+        Draw { rng, reference, axes, sign, snr, s: clean_scenario(), hidden, gyro, ax, noise }
+    }
+
+    /// The clean session's standard error of the candidate `name`.
+    fn se(&self, name: String) -> f64 {
+        *self.reference.std_error.get(&name).unwrap_or_else(|| panic!("no reference standard error for {name}"))
+    }
+
+    /// `sign * snr` standard errors of the candidate named by the effect and the axes drawn.
+    fn linear_value(&self) -> f64 {
+        self.sign * self.snr * self.se(format!("{}:{}", self.hidden.effect, self.axes))
+    }
+
+    /// The (i, j) of an axis pair ("xz") or axis ("x" = (0, 0)).
+    fn pair(&self) -> (usize, usize) {
+        (axis(self.axes.as_bytes()[0] as char), axis(self.axes.chars().last().unwrap_or('x')))
+    }
+
+    fn accel_term(&mut self) {
+        let (i, j) = self.pair();
+        self.hidden.value = self.linear_value();
+        self.s.accel.misalignment[i][j] = if i == j { 0.0 } else { self.hidden.value };
+        if i == j {
+            self.s.accel.scale_factor[i] = self.hidden.value;
         }
     }
-    (s, hidden)
+
+    fn gyro_term(&mut self) {
+        let (i, j) = self.pair();
+        self.hidden.value = self.linear_value();
+        if i == j {
+            self.s.gyro.scale_factor[i] = self.hidden.value;
+        } else {
+            self.s.gyro.misalignment[i][j] = self.hidden.value;
+        }
+    }
+
+    fn g_sensitivity(&mut self) {
+        let (i, j) = (axis(self.axes.as_bytes()[0] as char), axis(self.axes.as_bytes()[1] as char));
+        self.hidden.value = self.linear_value();
+        self.s.gyro.g_sensitivity_radps_per_mps2[i][j] = self.hidden.value;
+    }
+
+    fn reference_offset(&mut self) {
+        self.hidden.value = self.linear_value();
+        self.s.schedule.reference_offset_enu_rad[axis(self.axes.as_bytes()[0] as char)] = self.hidden.value;
+    }
+
+    fn position_error(&mut self) {
+        let positions = self.s.schedule.positions_deg.len() as u32;
+        let pos = self.rng.random_range(1..=positions);
+        self.hidden.pos = Some(pos);
+        self.hidden.value = self.sign * self.snr * self.se(format!("{}:{}:pos{pos}", self.hidden.effect, self.axes));
+        let mut enu = [0.0; 3];
+        enu[axis(self.axes.as_bytes()[0] as char)] = self.hidden.value;
+        self.s.schedule.position_error.push(PositionError { pos, enu_rad: enu });
+    }
+
+    /// `[0, 0, 0]` with the hidden value on the channel's axis.
+    fn on_axis(&self) -> [f64; 3] {
+        let mut v = [0.0; 3];
+        v[self.ax] = self.hidden.value;
+        v
+    }
+
+    fn drift(&mut self) {
+        let name = format!("{}:{} ({})", self.hidden.effect, self.hidden.axes, self.hidden.sensor);
+        self.hidden.value = self.sign * self.snr * self.se(name);
+        let v = self.on_axis();
+        if self.gyro {
+            self.s.gyro.drift_radps_per_s = v;
+        } else {
+            self.s.accel.drift_mps2_per_s = v;
+        }
+    }
+
+    fn warmup(&mut self) {
+        // Time constants 20..100 s: curved within the session of about 390 s (a longer one is a drift to
+        // this session), and long against a block.
+        let tau = self.rng.random_range(20.0..100.0);
+        // Amplitude: 10..20 times its standard error from the block means (the shape's energy after the
+        // constant bias is removed), times 1.5 for the time constant being estimated.
+        let shape: Vec<f64> = block_times(&self.s).iter().map(|t| (-t / tau).exp()).collect();
+        self.hidden.value = self.sign * self.snr * 1.5 * block_noise(&self.s, self.noise) / centred_norm(&shape);
+        self.hidden.tau_s = Some(tau);
+        let w = Some(WarmupSpec { amplitude: self.on_axis(), tau_s: tau });
+        if self.gyro {
+            self.s.gyro.warmup = w;
+        } else {
+            self.s.accel.warmup = w;
+        }
+    }
+
+    fn temperature(&mut self) {
+        // The sensor warms from 20 to 35 deg C with a 200 s time constant; the coefficient is 10..20 times
+        // its standard error from the block means.
+        let t = TemperatureSpec { start_c: 20.0, end_c: 35.0, tau_s: 200.0, reference_c: 20.0 };
+        let shape: Vec<f64> = block_times(&self.s).iter().map(|&x| t.at(x)).collect();
+        self.hidden.value = self.sign * self.snr * block_noise(&self.s, self.noise) / centred_norm(&shape);
+        self.hidden.tau_s = Some(200.0);
+        self.s.temperature = Some(t);
+        let v = self.on_axis();
+        if self.gyro {
+            self.s.gyro.temperature_coefficient_radps_per_k = v;
+        } else {
+            self.s.accel.temperature_coefficient_mps2_per_k = v;
+        }
+    }
+
+    fn correlated_noise(&mut self) {
+        // Gauss-Markov of 0.2..2 s time constant and 1..3 times the white noise per sample.
+        let tau = self.rng.random_range(0.2..2.0);
+        self.hidden.value = self.rng.random_range(1.0..3.0) * self.noise;
+        self.hidden.tau_s = Some(tau);
+        let gm = Some(GaussMarkovSpec { sigma: self.on_axis(), tau_s: tau });
+        if self.gyro {
+            self.s.gyro.bias_instability = gm;
+        } else {
+            self.s.accel.bias_instability = gm;
+        }
+    }
+
+    fn vibration(&mut self) {
+        // 0.3..30 Hz, amplitude 10..20 standard errors of a sinusoid's amplitude in white noise.
+        let f = self.rng.random_range(0.3..30.0);
+        let samples = 6.0 * self.s.schedule.dwell_s * self.s.schedule.rate_hz;
+        self.hidden.value = self.snr * self.noise * (2.0 / samples).sqrt();
+        self.hidden.frequency_hz = Some(f);
+        let vib = Some(VibrationSpec { amplitude: self.on_axis(), frequency_hz: f });
+        if self.gyro {
+            self.s.gyro.vibration = vib;
+        } else {
+            self.s.accel.vibration = vib;
+        }
+    }
+
+    fn quantization(&mut self) {
+        // Output step 0.3..3 times the white noise per sample.
+        self.hidden.value = self.rng.random_range(0.3..3.0) * self.noise;
+        let v = self.on_axis();
+        if self.gyro {
+            self.s.gyro.quantization_radps = v;
+        } else {
+            self.s.accel.quantization_mps2 = v;
+        }
+    }
 }
 
 /// Mid times of the analysis's blocks (6 s, ten per one-minute dwell) in the scenario's schedule, s.
@@ -277,12 +343,6 @@ fn centred_norm(v: &[f64]) -> f64 {
     v.iter().map(|x| (x - m) * (x - m)).sum::<f64>().sqrt()
 }
 
-impl Hidden {
-    fn axes_of(&self, gyro: bool) -> String {
-        format!("{} ({})", self.axes, if gyro { "gyro" } else { "accel" })
-    }
-}
-
 /// How one trial came out.
 #[derive(Clone, Debug, PartialEq)]
 pub struct Outcome {
@@ -305,7 +365,7 @@ pub fn judge(analysis: &Analysis, hidden: &Hidden) -> Outcome {
     let first = analysis.effects.first();
     let correct = first.is_some_and(|e| {
         e.effect == hidden.effect
-            && e.sensor == hidden.sensor
+            && e.sensor == hidden.sensor.name()
             && e.axes == hidden.axes
             && e.pos == hidden.pos
             && e.estimate.signum() == hidden.value.signum()
@@ -321,8 +381,9 @@ pub fn judge(analysis: &Analysis, hidden: &Hidden) -> Outcome {
     }
 }
 
-/// One trial: simulate, analyse, judge.
-pub fn trial(effect: &'static str, seed: u64, reference: &ReferenceErrors) -> Outcome {
+/// One trial of the effect named `effect` (a name of [`catalogue`]): simulate, analyse, judge.
+pub fn trial(effect: &str, seed: u64, reference: &ReferenceErrors) -> Outcome {
+    let effect: EffectKind = effect.parse().unwrap_or_else(|e| panic!("{e}"));
     let (scenario, hidden) = draw(effect, seed, reference);
     let rec: Recording = simulate(&scenario, seed, "hidden-effect trial");
     let analysis = analyze_recording(&rec).expect("a simulated recording analyses");

@@ -24,6 +24,16 @@ pub fn write_report(a: &Analysis, dir: &Path) -> anyhow::Result<Vec<String>> {
         files.push("psd.png".into());
     }
     let mut md = String::new();
+    base_model_md(&mut md, a);
+    effects_md(&mut md, a);
+    diagnostics_md(&mut md, a);
+    figures_md(&mut md, a, files.len() > 2);
+    std::fs::write(dir.join("summary.md"), md).map_err(|e| anyhow::anyhow!("{}: {e}", dir.display()))?;
+    Ok(files)
+}
+
+/// `summary.md`: the title, the verdict, the criterion and the base model.
+fn base_model_md(md: &mut String, a: &Analysis) {
     let _ = writeln!(md, "# sinscal analysis of `{}`\n", a.source);
     let _ = writeln!(md, "Input: {}. Schema `{}`.\n", a.input, a.schema);
     let _ = writeln!(md, "## Verdict: {}\n", a.verdict);
@@ -41,52 +51,65 @@ pub fn write_report(a: &Analysis, dir: &Path) -> anyhow::Result<Vec<String>> {
     for (k, v) in &a.base_model.residual_rms {
         let _ = writeln!(md, "| residual RMS {k} | {v:.4e} |");
     }
+}
+
+/// `summary.md`: the effects found, strongest first.
+fn effects_md(md: &mut String, a: &Analysis) {
     let _ = writeln!(md, "\n## Effects found (strongest first)\n");
     if a.effects.is_empty() {
         let _ = writeln!(md, "None: no candidate passes the criterion.\n");
-    } else {
+        return;
+    }
+    let _ = writeln!(
+        md,
+        "| effect | sensor | axes | estimate | std error | unit | delta BIC | residual RMS before -> after | extra | aliases |\n|---|---|---|---|---|---|---|---|---|---|"
+    );
+    for e in &a.effects {
         let _ = writeln!(
             md,
-            "| effect | sensor | axes | estimate | std error | unit | delta BIC | residual RMS before -> after | extra | aliases |\n|---|---|---|---|---|---|---|---|---|---|"
+            "| {} | {} | {} | {:+.4e} | {:.2e} | {} | {:.1} | {:.3e} -> {:.3e} {} ({}) | {} | {} |",
+            e.effect,
+            e.sensor,
+            e.axes,
+            e.estimate,
+            e.std_error,
+            e.unit,
+            e.delta_bic,
+            e.residual_rms_before,
+            e.residual_rms_after,
+            e.residual_unit,
+            e.residual_of,
+            e.extras(),
+            e.aliases.join(", ")
         );
-        for e in &a.effects {
-            let _ = writeln!(
-                md,
-                "| {} | {} | {} | {:+.4e} | {:.2e} | {} | {:.1} | {:.3e} -> {:.3e} {} ({}) | {} | {} |",
-                e.effect,
-                e.sensor,
-                e.axes,
-                e.estimate,
-                e.std_error,
-                e.unit,
-                e.delta_bic,
-                e.residual_rms_before,
-                e.residual_rms_after,
-                e.residual_unit,
-                e.residual_of,
-                e.extras(),
-                e.aliases.join(", ")
-            );
-        }
     }
-    if !a.diagnostics.is_empty() {
-        let _ = writeln!(md, "\n## Diagnostics per channel\n");
+}
+
+/// `summary.md`: the per-channel diagnostics (recordings).
+fn diagnostics_md(md: &mut String, a: &Analysis) {
+    if a.diagnostics.is_empty() {
+        return;
+    }
+    let _ = writeln!(md, "\n## Diagnostics per channel\n");
+    let _ = writeln!(
+        md,
+        "| channel | detrended RMS | Ljung-Box p (20 lags, longest dwell) | largest within-dwell trend (z) | quantisation step |\n|---|---|---|---|---|"
+    );
+    for d in &a.diagnostics {
         let _ = writeln!(
             md,
-            "| channel | detrended RMS | Ljung-Box p (20 lags, longest dwell) | largest within-dwell trend (z) | quantisation step |\n|---|---|---|---|---|"
+            "| {} | {:.4e} | {:.3} | {:.1} | {} |",
+            d.channel,
+            d.detrended_rms,
+            d.whiteness_p_value,
+            d.max_trend_z,
+            d.quantization_step.map_or("-".to_string(), |q| format!("{q:.4e}"))
         );
-        for d in &a.diagnostics {
-            let _ = writeln!(
-                md,
-                "| {} | {:.4e} | {:.3} | {:.1} | {} |",
-                d.channel,
-                d.detrended_rms,
-                d.whiteness_p_value,
-                d.max_trend_z,
-                d.quantization_step.map_or("-".to_string(), |q| format!("{q:.4e}"))
-            );
-        }
     }
+}
+
+/// `summary.md`: what this data cannot see, and the figures (`noise_figures`: the Allan and PSD plots too).
+fn figures_md(md: &mut String, a: &Analysis, noise_figures: bool) {
     let _ = writeln!(
         md,
         "\n## Unobservable with this data\n\n{}\n",
@@ -94,16 +117,14 @@ pub fn write_report(a: &Analysis, dir: &Path) -> anyhow::Result<Vec<String>> {
     );
     let _ = writeln!(md, "## Figures\n");
     let _ = writeln!(md, "- `residuals.png`: residual of every observation (block means, or angles) by position, for the base model (grey) and the final model (colour).");
-    if files.len() > 2 {
+    if noise_figures {
         let _ = writeln!(md, "- `allan.png`: overlapping Allan deviation of the longest dwell (each dwell's mean and trend removed), data against the base model's white noise and the model with the noise effects found.");
         let _ = writeln!(md, "- `psd.png`: Welch power spectral density (Hann, 1024-sample segments) of the same samples, with the base model's white level.");
     }
     let _ = writeln!(md, "\n![residuals](residuals.png)");
-    if files.len() > 2 {
+    if noise_figures {
         let _ = writeln!(md, "\n![allan](allan.png)\n\n![psd](psd.png)");
     }
-    std::fs::write(dir.join("summary.md"), md).map_err(|e| anyhow::anyhow!("{}: {e}", dir.display()))?;
-    Ok(files)
 }
 
 fn residuals_plot(a: &Analysis, path: &Path) -> anyhow::Result<()> {

@@ -1,0 +1,351 @@
+//! The catalogue's columns: every effect that is linear in its parameter, as a column over the block
+//! observations of a recording (sensor terms, table attitude errors, drift, warm-up, temperature). The
+//! angles front end maps the same sensor terms through the alignment equations (`angles`).
+
+use crate::model::catalogue::{EffectKind, Sensor};
+use crate::model::synth::mul_t_vec;
+
+use super::observations::{BlockObs, Blocks, Session};
+use super::{AXES, ENU};
+
+/// A candidate column (or family of columns, one per time constant).
+#[derive(Clone, Debug)]
+pub(super) struct Candidate {
+    /// The catalogue entry.
+    pub effect: EffectKind,
+    /// Its sensor (for the per-channel effects, the channel's).
+    pub sensor: Sensor,
+    /// Axis or axis pair.
+    pub axes: String,
+    /// Position (position errors).
+    pub pos: Option<u32>,
+    /// Per variant: the time constant it stands for (warm-up) and its column.
+    pub variants: Vec<(Option<f64>, Vec<f64>)>,
+    /// Observation groups (channels, angle groups) the effect acts on.
+    pub groups: Vec<usize>,
+}
+
+impl Candidate {
+    /// A candidate of one column, not tied to a position.
+    pub fn single(effect: EffectKind, sensor: Sensor, axes: String, col: Vec<f64>, groups: Vec<usize>) -> Candidate {
+        Candidate { effect, sensor, axes, pos: None, variants: vec![(None, col)], groups }
+    }
+
+    /// "effect:axes", with the position of a position error ("position_error:e:pos3") and the sensor of
+    /// the effects both sensors have ("bias_drift:x (gyro)").
+    pub fn name(&self) -> String {
+        match self.pos {
+            Some(p) => format!("{}:{}:pos{}", self.effect, self.axes, p),
+            None if self.effect.sensor().is_none() => format!("{}:{} ({})", self.effect, self.axes, self.sensor),
+            None => format!("{}:{}", self.effect, self.axes),
+        }
+    }
+
+    /// Parameters the candidate adds: 2 for a family over time constants, else 1.
+    pub fn parameters(&self) -> usize {
+        if self.variants.len() > 1 {
+            2
+        } else {
+            1
+        }
+    }
+
+    /// SI unit of the estimate.
+    pub fn unit(&self) -> &'static str {
+        self.effect.unit(self.sensor)
+    }
+}
+
+/// A sensor error proportional to the true rate or force: the output `channel` (gx..az = 0..5) sees
+/// `parameter * source[axis]`, with `source` the body rate (rad/s) or specific force (m/s^2) of the sensor
+/// model (docs/conventions.md: scale factors, misalignments, gyro g-sensitivity).
+pub(super) struct SensorTerm {
+    /// The catalogue entry.
+    pub effect: EffectKind,
+    /// Axis ("x") or axis pair ("xy").
+    pub axes: String,
+    /// Output channel, 0..5.
+    pub channel: usize,
+    /// The source is the specific force (else the rate).
+    from_force: bool,
+    /// Source axis.
+    axis: usize,
+}
+
+impl SensorTerm {
+    /// The sensor of the term's effect.
+    pub fn sensor(&self) -> Sensor {
+        Sensor::of_channel(self.channel)
+    }
+
+    /// The output error per unit parameter at true body rate `rate_b_radps` and force `force_b_mps2`.
+    pub fn per_unit(&self, rate_b_radps: [f64; 3], force_b_mps2: [f64; 3]) -> f64 {
+        if self.from_force {
+            force_b_mps2[self.axis]
+        } else {
+            rate_b_radps[self.axis]
+        }
+    }
+}
+
+/// The terms of the catalogue's sensor model: accelerometer scale factors and misalignments, and, with
+/// `gyros`, the gyro scale factors, misalignments and g-sensitivity.
+pub(super) fn sensor_terms(gyros: bool) -> Vec<SensorTerm> {
+    let mut terms = Vec::new();
+    let mut add = |effect: EffectKind, channel: usize, from_force, i: usize, j: usize| {
+        let axes = match effect {
+            EffectKind::AccelScaleFactor | EffectKind::GyroScaleFactor => AXES[i].to_string(),
+            _ => format!("{}{}", AXES[i], AXES[j]),
+        };
+        terms.push(SensorTerm { effect, axes, channel, from_force, axis: j });
+    };
+    let pairs = || (0..3).flat_map(|i| (0..3).filter(move |&j| j != i).map(move |j| (i, j)));
+    (0..3).for_each(|i| add(EffectKind::AccelScaleFactor, 3 + i, true, i, i));
+    pairs().for_each(|(i, j)| add(EffectKind::AccelMisalignment, 3 + i, true, i, j));
+    if gyros {
+        (0..3).for_each(|i| add(EffectKind::GyroScaleFactor, i, false, i, i));
+        pairs().for_each(|(i, j)| add(EffectKind::GyroMisalignment, i, false, i, j));
+        for i in 0..3 {
+            (0..3).for_each(|j| add(EffectKind::GyroGSensitivity, i, true, i, j));
+        }
+    }
+    terms
+}
+
+/// `a x b`.
+pub(super) fn cross(a: [f64; 3], b: [f64; 3]) -> [f64; 3] {
+    [a[1] * b[2] - a[2] * b[1], a[2] * b[0] - a[0] * b[2], a[0] * b[1] - a[1] * b[0]]
+}
+
+/// Unit vector along axis `k`.
+pub(super) fn unit(k: usize) -> [f64; 3] {
+    let mut e = [0.0; 3];
+    e[k] = 1.0;
+    e
+}
+
+/// Observation groups a table attitude error about navigation axis `k` acts on: the heading error on the
+/// gyros, the level errors on the accelerometers.
+pub(super) fn attitude_groups(k: usize) -> Vec<usize> {
+    if k == 2 {
+        vec![0, 1, 2]
+    } else {
+        vec![3, 4, 5]
+    }
+}
+
+/// The candidate columns of a recording's block observations.
+pub(super) struct RecordingColumns<'a> {
+    session: &'a Session,
+    blocks: &'a Blocks,
+}
+
+impl<'a> RecordingColumns<'a> {
+    /// The columns over `blocks` of `session`.
+    pub fn new(session: &'a Session, blocks: &'a Blocks) -> RecordingColumns<'a> {
+        RecordingColumns { session, blocks }
+    }
+
+    /// Every candidate the recording can show, in the catalogue's test order; what it cannot show goes to
+    /// `unobservable` ("gyro_scale_factor: heading unknown", "temperature_bias:x (gyro)").
+    pub fn candidates(&self, unobservable: &mut Vec<String>) -> Vec<Candidate> {
+        let mut candidates = self.sensor_term_candidates();
+        if self.session.all_heading() {
+            candidates.extend(self.table_errors());
+        } else {
+            use EffectKind::*;
+            for effect in [GyroScaleFactor, GyroMisalignment, GyroGSensitivity, ReferenceOffset, PositionError] {
+                unobservable.push(format!("{effect}: heading unknown"));
+            }
+        }
+        let tau_grid = self.tau_grid();
+        for c in (0..6).filter(|&c| self.blocks.present[c]) {
+            candidates.push(self.drift(c));
+            candidates.push(self.warmup(c, &tau_grid));
+            if self.session.has_temp() {
+                candidates.push(self.temperature(c));
+            } else {
+                unobservable.push(format!(
+                    "{}:{} ({})",
+                    EffectKind::TemperatureBias,
+                    axis_of(c),
+                    Sensor::of_channel(c)
+                ));
+            }
+        }
+        candidates
+    }
+
+    /// The true body rate (`v_n` = Earth rate, needs the heading) or force (tilt suffices) at a block.
+    fn body(&self, b: &BlockObs, v_n: [f64; 3], gyro_needs_heading: bool) -> Option<[f64; 3]> {
+        let d = &self.session.dwells[b.dwell];
+        match d.c_b_n {
+            Some(c) => Some(mul_t_vec(&c, v_n)),
+            None if !gyro_needs_heading => Some(mul_t_vec(&d.c_tilt, v_n)),
+            None => None,
+        }
+    }
+
+    /// Scale factors, misalignments, g-sensitivity: the predicted rate or force on the sensed axis.
+    fn sensor_term_candidates(&self) -> Vec<Candidate> {
+        let (w_n, f_n) = (self.session.w_n, self.session.f_n);
+        let force_b = |b: &BlockObs| self.body(b, f_n, false).unwrap_or([0.0; 3]);
+        let rate_b = |b: &BlockObs| self.body(b, w_n, true).unwrap_or([0.0; 3]);
+        sensor_terms(self.session.all_heading())
+            .into_iter()
+            .map(|t| {
+                let col =
+                    self.blocks
+                        .column(|b| if b.channel == t.channel { t.per_unit(rate_b(b), force_b(b)) } else { 0.0 });
+                let sensor = t.sensor();
+                Candidate::single(t.effect, sensor, t.axes, col, vec![t.channel])
+            })
+            .collect()
+    }
+
+    /// Table attitude errors: d(measurement)/d(err_k) = C^T (e_k x v), on every dwell (reference offset) or
+    /// on dwell `only` (position error).
+    fn attitude_column(&self, k: usize, only: Option<usize>) -> Vec<f64> {
+        let (w_n, f_n, dwells) = (self.session.w_n, self.session.f_n, &self.session.dwells);
+        self.blocks.column(|b| {
+            if only.is_some_and(|d| d != b.dwell) {
+                return 0.0;
+            }
+            let c = dwells[b.dwell].c_b_n.unwrap_or(dwells[b.dwell].c_tilt);
+            if b.channel < 3 {
+                mul_t_vec(&c, cross(unit(k), w_n))[b.channel]
+            } else {
+                mul_t_vec(&c, cross(unit(k), f_n))[b.channel - 3]
+            }
+        })
+    }
+
+    /// The reference offset (e, n, u) and, with more than one dwell, a position error per dwell and axis.
+    fn table_errors(&self) -> Vec<Candidate> {
+        let mut candidates = Vec::new();
+        for k in 0..3 {
+            let col = self.attitude_column(k, None);
+            candidates.push(Candidate::single(
+                EffectKind::ReferenceOffset,
+                Sensor::Reference,
+                ENU[k].into(),
+                col,
+                attitude_groups(k),
+            ));
+        }
+        if self.session.dwells.len() > 1 {
+            for (di, d) in self.session.dwells.iter().enumerate() {
+                for k in 0..3 {
+                    let col = self.attitude_column(k, Some(di));
+                    candidates.push(Candidate {
+                        pos: Some(d.pos),
+                        ..Candidate::single(
+                            EffectKind::PositionError,
+                            Sensor::Reference,
+                            ENU[k].into(),
+                            col,
+                            attitude_groups(k),
+                        )
+                    });
+                }
+            }
+        }
+        candidates
+    }
+
+    /// The warm-up's time constants: 48 values from 5 s to the session length, logarithmically spaced.
+    fn tau_grid(&self) -> Vec<f64> {
+        let t0 = self.session.t0;
+        let span =
+            self.session.dwells.iter().flat_map(|d| d.t.iter()).fold(0.0f64, |m, t| m.max(t - t0)).max(self.session.dt);
+        (0..48).map(|i| 5.0 * (span / 5.0f64).powf(i as f64 / 47.0)).collect()
+    }
+
+    /// The column of channel `c`: `f` of the block's times on its rows, zero elsewhere.
+    fn channel_column(&self, c: usize, f: impl Fn(&BlockObs, &[f64]) -> f64) -> Vec<f64> {
+        self.blocks.column(|b| {
+            if b.channel != c {
+                0.0
+            } else {
+                f(b, &self.session.dwells[b.dwell].t[b.range.0..b.range.1])
+            }
+        })
+    }
+
+    /// Bias drift of channel `c`: block mean time minus the middle of the session.
+    fn drift(&self, c: usize) -> Candidate {
+        let dwells = &self.session.dwells;
+        let t_mid = {
+            let (lo, hi) = (dwells[0].t[0], dwells[dwells.len() - 1].t.last().copied().unwrap_or(0.0));
+            0.5 * (lo + hi)
+        };
+        let col = self.channel_column(c, |_, t| t.iter().sum::<f64>() / t.len() as f64 - t_mid);
+        Candidate::single(EffectKind::BiasDrift, Sensor::of_channel(c), axis_of(c).into(), col, vec![c])
+    }
+
+    /// Bias warm-up of channel `c`: the block mean of `exp(-(t - t0)/tau)`, one variant per time constant.
+    fn warmup(&self, c: usize, tau_grid: &[f64]) -> Candidate {
+        let t0 = self.session.t0;
+        let variants = tau_grid
+            .iter()
+            .map(|&tau| {
+                let col = self
+                    .channel_column(c, |_, t| t.iter().map(|t| (-(t - t0) / tau).exp()).sum::<f64>() / t.len() as f64);
+                (Some(tau), col)
+            })
+            .collect();
+        Candidate {
+            effect: EffectKind::BiasWarmup,
+            sensor: Sensor::of_channel(c),
+            axes: axis_of(c).into(),
+            pos: None,
+            variants,
+            groups: vec![c],
+        }
+    }
+
+    /// Temperature bias of channel `c`: the block mean temperature.
+    fn temperature(&self, c: usize) -> Candidate {
+        let col = self.channel_column(c, |b, _| {
+            let temp = self.session.dwells[b.dwell].temp.as_ref().map_or(&[][..], |v| &v[b.range.0..b.range.1]);
+            temp.iter().sum::<f64>() / temp.len().max(1) as f64
+        });
+        Candidate::single(EffectKind::TemperatureBias, Sensor::of_channel(c), axis_of(c).into(), col, vec![c])
+    }
+}
+
+/// The body axis of channel `c` (gx..az = 0..5).
+pub(super) fn axis_of(c: usize) -> &'static str {
+    AXES[c % 3]
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::model::synth::{c_b_n, earth_rate_n_radps};
+
+    #[test]
+    fn attitude_columns_map_to_the_angles_they_are() {
+        // The alignment equations (the core's design rows) applied to the sensor signature of a table
+        // attitude error err, C^T (e_k x v), give err back: the sign convention of the recording analysis
+        // (C_true = (I - [err x]) C_ref) is the one of the angles and of phi0 in docs/method.md.
+        let lat = 45.7796f64.to_radians();
+        let site = sinscal::nav::earth::Site::with_normal_gravity(lat as f32, 0.0);
+        let g = site.gravity_mps2 as f64;
+        let w_n = earth_rate_n_radps(lat);
+        for att in crate::model::synth::TABLE1_DEG {
+            let c = c_b_n(att[0], att[1], att[2]);
+            let c32 = sinscal::math::linalg::Mat3(std::array::from_fn(|i| std::array::from_fn(|j| c[i][j] as f32)));
+            let rows = sinscal::calib::solve::design_rows_si(&c32, &site);
+            for k in 0..3 {
+                let dw = mul_t_vec(&c, cross(unit(k), w_n));
+                let df = mul_t_vec(&c, cross(unit(k), [0.0, 0.0, g]));
+                for (r, row) in rows.iter().enumerate() {
+                    let phi: f64 = (0..3).map(|j| row[j] as f64 * dw[j] + row[3 + j] as f64 * df[j]).sum();
+                    let want = if r == k { 1.0 } else { 0.0 };
+                    assert!((phi - want).abs() < 1e-5, "att {att:?} k {k} row {r}: {phi}");
+                }
+            }
+        }
+    }
+}

@@ -1,0 +1,199 @@
+//! A recording as the analysis sees it: its dwells with their reference attitude, cut into blocks whose
+//! means, minus what the reference attitude predicts, are the observations; and the base model's columns
+//! (one bias per channel).
+
+use crate::calibration::site_of;
+use crate::io::error::InputError;
+use crate::io::recording::{Dwell, Recording};
+use crate::model::synth::{c_b_n, earth_rate_n_radps, mul_t_vec, M3};
+
+use super::{AXES, BLOCK_SAMPLES, MAX_BLOCKS_PER_DWELL, MIN_DWELL_SAMPLES};
+
+/// One dwell's samples and reference attitude.
+pub(super) struct DwellData {
+    /// Position label.
+    pub pos: u32,
+    /// Reference C_b^n, when the heading is known.
+    pub c_b_n: Option<M3>,
+    /// Reference C_b^n with heading 0 (tilt only), for the gravity prediction.
+    pub c_tilt: M3,
+    /// Times, s.
+    pub t: Vec<f64>,
+    /// The six channels (gx..az), SI.
+    pub y: [Vec<f64>; 6],
+    /// Temperature, deg C, when every row has one.
+    pub temp: Option<Vec<f64>>,
+}
+
+impl DwellData {
+    /// The samples and attitude of dwell `d` of `source`.
+    fn read(d: &Dwell<'_>, source: &str) -> Result<DwellData, InputError> {
+        let att = d.attitude(source)?;
+        if d.rows.len() < MIN_DWELL_SAMPLES {
+            return Err(InputError::at(
+                source,
+                d.first_line(),
+                format!("dwell {}: {} rows, the analysis needs at least {MIN_DWELL_SAMPLES}", d.pos, d.rows.len()),
+            ));
+        }
+        let temp = if d.rows.iter().all(|r| r.temp_c.is_some()) {
+            Some(d.rows.iter().map(|r| r.temp_c.unwrap_or(0.0)).collect())
+        } else {
+            None
+        };
+        Ok(DwellData {
+            pos: d.pos,
+            c_b_n: att.heading_deg.map(|h| c_b_n(att.pitch_deg, att.roll_deg, h)),
+            c_tilt: c_b_n(att.pitch_deg, att.roll_deg, 0.0),
+            t: d.rows.iter().map(|r| r.t_s).collect(),
+            y: std::array::from_fn(|c| {
+                d.rows.iter().map(|r| if c < 3 { r.rate_b_radps[c] } else { r.force_b_mps2[c - 3] }).collect()
+            }),
+            temp,
+        })
+    }
+
+    /// What the reference attitude predicts for `channel` (the Earth rate or gravity in the body); `None`
+    /// for a gyro when the heading is unknown.
+    fn predicted(&self, channel: usize, w_n: [f64; 3], f_n: [f64; 3]) -> Option<f64> {
+        if channel < 3 {
+            self.c_b_n.map(|c| mul_t_vec(&c, w_n)[channel])
+        } else {
+            Some(mul_t_vec(&self.c_tilt, f_n)[channel - 3])
+        }
+    }
+}
+
+/// A recording's dwells and the navigation-frame quantities the reference predicts from.
+pub(super) struct Session {
+    /// Earth rate in the navigation frame (e, n, u), rad/s.
+    pub w_n: [f64; 3],
+    /// Specific force at rest in the navigation frame, m/s^2.
+    pub f_n: [f64; 3],
+    /// Time of the first row, s.
+    pub t0: f64,
+    /// Sample rate, Hz (the header's, else measured).
+    pub rate_hz: f64,
+    /// Sample interval, s.
+    pub dt: f64,
+    /// The dwells, in order of first appearance.
+    pub dwells: Vec<DwellData>,
+}
+
+impl Session {
+    /// Reads the dwells of `recording`; an error if a dwell is too short or there is none.
+    pub fn read(recording: &Recording) -> Result<Session, InputError> {
+        let source = recording.source.as_str();
+        let (site, _) = site_of(&recording.header);
+        let g = site.gravity_mps2 as f64;
+        let lat = recording.header.latitude_deg.to_radians();
+        let t0 = recording.rows.first().map_or(0.0, |r| r.t_s);
+        let rate_hz = sample_rate(recording, t0);
+        let dwells = recording.dwells().iter().map(|d| DwellData::read(d, source)).collect::<Result<Vec<_>, _>>()?;
+        if dwells.is_empty() {
+            return Err(InputError::file(source, "no dwell: every row has pos = 0"));
+        }
+        Ok(Session { w_n: earth_rate_n_radps(lat), f_n: [0.0, 0.0, g], t0, rate_hz, dt: 1.0 / rate_hz, dwells })
+    }
+
+    /// Every dwell has a temperature.
+    pub fn has_temp(&self) -> bool {
+        self.dwells.iter().all(|d| d.temp.is_some())
+    }
+
+    /// Every dwell has a heading (the Earth rate in the body is known).
+    pub fn all_heading(&self) -> bool {
+        self.dwells.iter().all(|d| d.c_b_n.is_some())
+    }
+
+    /// Index of the longest dwell.
+    pub fn longest(&self) -> usize {
+        (0..self.dwells.len()).max_by_key(|&i| self.dwells[i].t.len()).unwrap_or(0)
+    }
+}
+
+/// The header's rate, else measured from the time column, else 100 Hz.
+fn sample_rate(recording: &Recording, t0: f64) -> f64 {
+    match recording.header.rate_hz {
+        Some(r) => r,
+        None if recording.rows.len() > 1 => {
+            (recording.rows.len() - 1) as f64 / (recording.rows[recording.rows.len() - 1].t_s - t0)
+        }
+        None => 100.0,
+    }
+}
+
+/// One block: rows `range` of dwell `dwell`, channel `channel`.
+pub(super) struct BlockObs {
+    /// Dwell index.
+    pub dwell: usize,
+    /// Channel, 0..5.
+    pub channel: usize,
+    /// Rows of the dwell, half-open.
+    pub range: (usize, usize),
+}
+
+/// The block observations of a recording.
+pub(super) struct Blocks {
+    /// The blocks, dwell by dwell, channel by channel.
+    pub list: Vec<BlockObs>,
+    /// Block mean minus the reference prediction, SI.
+    pub y: Vec<f64>,
+    /// Channel of each observation.
+    pub group: Vec<usize>,
+    /// Position label of each observation.
+    pub obs_pos: Vec<u32>,
+    /// Channels with observations (the gyros need the heading).
+    pub present: [bool; 6],
+}
+
+impl Blocks {
+    /// Cuts every dwell of `session` into blocks, on every channel the reference predicts.
+    pub fn cut(session: &Session) -> Blocks {
+        let mut blocks =
+            Blocks { list: Vec::new(), y: Vec::new(), group: Vec::new(), obs_pos: Vec::new(), present: [false; 6] };
+        for (di, d) in session.dwells.iter().enumerate() {
+            for channel in 0..6 {
+                // Heading unknown: the Earth rate in the body is unknown.
+                let Some(predicted) = d.predicted(channel, session.w_n, session.f_n) else { continue };
+                for range in block_ranges(d.t.len()) {
+                    let s = &d.y[channel][range.0..range.1];
+                    blocks.y.push(s.iter().sum::<f64>() / s.len() as f64 - predicted);
+                    blocks.group.push(channel);
+                    blocks.obs_pos.push(d.pos);
+                    blocks.list.push(BlockObs { dwell: di, channel, range });
+                }
+            }
+        }
+        blocks.present = std::array::from_fn(|c| blocks.group.contains(&c));
+        blocks
+    }
+
+    /// `f` of every block.
+    pub fn column(&self, f: impl Fn(&BlockObs) -> f64) -> Vec<f64> {
+        self.list.iter().map(f).collect()
+    }
+
+    /// The base model: one bias column per channel present, with its name ("gyro_bias_x"); the biases of
+    /// the channels absent go to `unobservable`.
+    pub fn base_columns(&self, unobservable: &mut Vec<String>) -> (Vec<Vec<f64>>, Vec<String>) {
+        let (mut base, mut names) = (Vec::new(), Vec::new());
+        for c in 0..6 {
+            let name = if c < 3 { format!("gyro_bias_{}", AXES[c]) } else { format!("accel_bias_{}", AXES[c - 3]) };
+            if self.present[c] {
+                base.push(self.column(|b| if b.channel == c { 1.0 } else { 0.0 }));
+                names.push(name);
+            } else {
+                unobservable.push(name);
+            }
+        }
+        (base, names)
+    }
+}
+
+/// The blocks of a dwell of `n` samples: about [`BLOCK_SAMPLES`] long, 4 to [`MAX_BLOCKS_PER_DWELL`] of them,
+/// at least 16 samples each.
+fn block_ranges(n: usize) -> Vec<(usize, usize)> {
+    let blocks = (n / BLOCK_SAMPLES).clamp(4, MAX_BLOCKS_PER_DWELL).min(n / 16).max(1);
+    (0..blocks).map(|b| (b * n / blocks, (b + 1) * n / blocks)).collect()
+}

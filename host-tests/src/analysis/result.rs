@@ -1,0 +1,147 @@
+//! The [`Analysis`] assembled from a front end's selection and findings: the effects chosen as public
+//! [`Effect`]s, strongest first, the base model, the verdict, the criterion in words and the residuals of the
+//! report's figure.
+
+use std::collections::BTreeMap;
+
+use crate::model::catalogue::EffectKind;
+
+use super::selection::{Problem, Selection};
+use super::{Analysis, BaseModel, ChannelDiagnostics, Effect, FigureData, ALPHA};
+
+/// The input kinds (the `input` field).
+pub(super) const RECORDING: &str = "recording";
+/// See [`RECORDING`].
+pub(super) const ANGLES: &str = "angles";
+
+/// What a front end hands over besides the problem and its selection.
+pub(super) struct Findings {
+    /// Every effect found (the selection's and the sample tests'), in any order.
+    pub effects: Vec<Effect>,
+    /// RMS residual of the base model per channel or angle group.
+    pub residual_rms: BTreeMap<String, f64>,
+    /// RMS residual of the block means per channel (recordings).
+    pub block_residual_rms: BTreeMap<String, f64>,
+    /// Candidates tested in all (the Bonferroni `m`).
+    pub m: f64,
+    /// Per-channel diagnostics (recordings).
+    pub diagnostics: Vec<ChannelDiagnostics>,
+    /// Figure data.
+    pub figures: FigureData,
+}
+
+/// The effects the selection chose, in the order it chose them.
+pub(super) fn effects_of(problem: &Problem, selection: &Selection) -> Vec<Effect> {
+    (0..selection.chosen.len()).map(|i| effect_of(problem, selection, i)).collect()
+}
+
+/// The `index`-th chosen candidate as an [`Effect`], with the final fit's estimate.
+fn effect_of(problem: &Problem, selection: &Selection, index: usize) -> Effect {
+    let c = &selection.chosen[index];
+    let cand = &problem.candidates[c.candidate];
+    let j = problem.base.len() + index;
+    let units: Vec<&str> = cand.groups.iter().map(|&g| problem.group_units[g]).collect();
+    Effect {
+        effect: cand.effect.name().to_string(),
+        sensor: cand.sensor.name().to_string(),
+        axes: cand.axes.clone(),
+        pos: cand.pos,
+        estimate: selection.final_fit.beta[j],
+        std_error: selection.final_fit.std_error(j),
+        unit: cand.unit().to_string(),
+        delta_bic: c.delta_bic,
+        residual_rms_before: c.rms_before,
+        residual_rms_after: c.rms_after,
+        residual_unit: units.first().copied().unwrap_or("").to_string(),
+        residual_of: problem.residual_of.to_string(),
+        tau_s: cand.variants[c.variant].0,
+        frequency_hz: None,
+        likelihood_ratio: c.lr,
+        parameters: cand.parameters(),
+        p_value: c.p_value,
+        aliases: selection.aliases[index].clone(),
+    }
+}
+
+/// Per observation group: (position, base residual, final residual) of each observation.
+pub(super) fn residuals_by_group(problem: &Problem, selection: &Selection) -> Vec<Vec<(u32, f64, f64)>> {
+    let mut out = vec![Vec::new(); problem.obs.groups];
+    for i in 0..problem.obs.y.len() {
+        out[problem.obs.group[i]].push((
+            problem.obs_pos[i],
+            selection.base_fit.residual[i],
+            selection.final_fit.residual[i],
+        ));
+    }
+    out
+}
+
+/// The effects an angles file cannot show: the time-dependent and noise effects.
+const NOT_IN_ANGLES: [EffectKind; 6] = [
+    EffectKind::BiasDrift,
+    EffectKind::BiasWarmup,
+    EffectKind::CorrelatedNoise,
+    EffectKind::Vibration,
+    EffectKind::Quantization,
+    EffectKind::TemperatureBias,
+];
+
+/// The analysis of `source` (`input` = [`RECORDING`] or [`ANGLES`]).
+pub(super) fn assemble(
+    problem: Problem,
+    selection: Selection,
+    mut findings: Findings,
+    input: &str,
+    source: &str,
+) -> Analysis {
+    findings.effects.sort_by(|a, b| a.delta_bic.total_cmp(&b.delta_bic));
+    let verdict = findings.effects.first().map_or("none".to_string(), |e| e.effect.clone());
+    let mut unobservable = problem.unobservable.clone();
+    if input == ANGLES {
+        unobservable.extend(NOT_IN_ANGLES.iter().map(|e| format!("{e}: angles only")));
+    }
+    let m = findings.m;
+    Analysis {
+        schema: "sinscal-analysis/1".into(),
+        source: source.into(),
+        input: input.into(),
+        base_model: base_model(&problem, &selection, findings.residual_rms, findings.block_residual_rms),
+        effects: findings.effects,
+        unobservable,
+        verdict,
+        criterion: format!(
+            "forward selection; an effect is added when its likelihood-ratio p-value is below alpha/m = {:.3e} \
+             (alpha = {ALPHA}, Bonferroni over m = {} candidates) and its delta BIC is negative",
+            ALPHA / m,
+            m as usize
+        ),
+        alpha: ALPHA,
+        candidates_tested: m as usize,
+        tested: selection.tested,
+        diagnostics: findings.diagnostics,
+        figures: findings.figures,
+    }
+}
+
+/// The base model's likelihood, BIC (biases and one variance per group) and biases.
+fn base_model(
+    problem: &Problem,
+    selection: &Selection,
+    residual_rms: BTreeMap<String, f64>,
+    block_residual_rms: BTreeMap<String, f64>,
+) -> BaseModel {
+    let nobs = problem.obs.y.len();
+    let k = problem.base.len() as f64;
+    let ll = selection.base_fit.log_likelihood;
+    let biases =
+        problem.base_names.iter().enumerate().map(|(j, name)| (name.clone(), selection.base_fit.beta[j])).collect();
+    BaseModel {
+        name: "bias-only".into(),
+        residual_rms,
+        block_residual_rms,
+        log_likelihood: ll,
+        bic: -2.0 * ll + (k + problem.obs.groups as f64) * (nobs as f64).ln(),
+        observations: nobs,
+        biases,
+    }
+}

@@ -1,0 +1,238 @@
+//! The tests on the samples of a recording, per channel, after each dwell's mean and trend are removed:
+//! quantisation (a binomial likelihood ratio on the lattice of the sample differences), vibration
+//! (`vibration`) and correlated noise (`correlated_noise`); and the channel diagnostics (detrended RMS,
+//! whiteness, trends) with the data of the report's noise figures.
+
+use crate::model::catalogue::{EffectKind, Sensor};
+use crate::stats::linfit::{chi_square_quantile_upper, chi_square_upper};
+use crate::stats::noise::{detect_quantization, ljung_box, GRID_TOLERANCE};
+
+use super::candidates::axis_of;
+use super::correlated_noise::gauss_markov_test;
+use super::observations::Session;
+use super::vibration::{remove_line, sinc, vibration_test};
+use super::{ChannelDiagnostics, Effect, FigureData, ALPHA, CHANNELS, CHANNEL_UNITS};
+
+/// Tests on the samples, counted in the Bonferroni `m`: quantisation, vibration, correlated noise on every
+/// channel.
+pub(super) const SAMPLE_TESTS: usize = 3 * 6;
+
+/// What the sample tests found.
+pub(super) struct SampleFindings {
+    /// Effects, channel by channel (quantisation, vibration, correlated noise).
+    pub effects: Vec<Effect>,
+    /// Per channel.
+    pub diagnostics: Vec<ChannelDiagnostics>,
+    /// The rate and the per-channel figure data (longest dwell, noise found).
+    pub figures: FigureData,
+}
+
+/// A dwell's straight-line fit `y = a + b (t - t_mean)`.
+struct Trend {
+    /// Slope `b`, channel unit per second.
+    slope_per_s: f64,
+    /// Its standard error for white residuals, same unit.
+    slope_std_error_per_s: f64,
+    /// `y` minus the line.
+    residual: Vec<f64>,
+}
+
+fn detrend(t: &[f64], y: &[f64]) -> Trend {
+    let n = t.len() as f64;
+    let tm = t.iter().sum::<f64>() / n;
+    let ym = y.iter().sum::<f64>() / n;
+    let stt: f64 = t.iter().map(|t| (t - tm) * (t - tm)).sum();
+    let sty: f64 = t.iter().zip(y).map(|(t, y)| (t - tm) * (y - ym)).sum();
+    let b = if stt > 0.0 { sty / stt } else { 0.0 };
+    let residual: Vec<f64> = t.iter().zip(y).map(|(t, y)| y - ym - b * (t - tm)).collect();
+    let s2 = residual.iter().map(|v| v * v).sum::<f64>() / (n - 2.0).max(1.0);
+    Trend { slope_per_s: b, slope_std_error_per_s: (s2 / stt).sqrt(), residual }
+}
+
+/// Runs the sample tests on every channel of `session`, each against `alpha / m`.
+pub(super) fn test_samples(session: &Session, m: f64) -> SampleFindings {
+    let mut out = SampleFindings {
+        effects: Vec::new(),
+        diagnostics: Vec::new(),
+        figures: FigureData { rate_hz: session.rate_hz, ..FigureData::default() },
+    };
+    let longest = session.longest();
+    for c in 0..6 {
+        let trends: Vec<Trend> = session.dwells.iter().map(|d| detrend(&d.t, &d.y[c])).collect();
+        ChannelTests::new(session, c, &trends, m).run(&trends[longest], &mut out);
+    }
+    out
+}
+
+/// One channel's detrended samples and what its tests share.
+struct ChannelTests<'a> {
+    session: &'a Session,
+    c: usize,
+    m: f64,
+    /// Per dwell: the detrended samples (a vibration found is removed before the correlated-noise test).
+    series: Vec<Vec<f64>>,
+    /// Samples in all.
+    n_all: usize,
+    /// RMS of the detrended samples.
+    rms: f64,
+    /// Largest within-dwell slope over its standard error.
+    max_trend_z: f64,
+}
+
+impl<'a> ChannelTests<'a> {
+    fn new(session: &'a Session, c: usize, trends: &[Trend], m: f64) -> ChannelTests<'a> {
+        let series: Vec<Vec<f64>> = trends.iter().map(|t| t.residual.clone()).collect();
+        let all: Vec<f64> = series.iter().flatten().copied().collect();
+        let rms = (all.iter().map(|v| v * v).sum::<f64>() / all.len() as f64).sqrt();
+        let max_trend_z = trends.iter().map(|t| (t.slope_per_s / t.slope_std_error_per_s).abs()).fold(0.0, f64::max);
+        ChannelTests { session, c, m, series, n_all: all.len(), rms, max_trend_z }
+    }
+
+    /// Quantisation, vibration, correlated noise, in that order; the diagnostics and figure data with the
+    /// detrended samples of the longest dwell `long`.
+    fn run(mut self, long: &Trend, out: &mut SampleFindings) {
+        let q_step = self.quantization(&mut out.effects);
+        let vib = self.vibration(&mut out.effects);
+        let corr_found = self.correlated_noise(&mut out.effects);
+        let long = &long.residual;
+        out.diagnostics.push(ChannelDiagnostics {
+            channel: CHANNELS[self.c].into(),
+            detrended_rms: self.rms,
+            whiteness_p_value: ljung_box(long, 20).map(|l| l.p_value).unwrap_or(f64::NAN),
+            max_trend_z: self.max_trend_z,
+            quantization_step: q_step,
+        });
+        let figures = &mut out.figures;
+        figures.longest_dwell.push(long.clone());
+        figures.base_sigma.push(self.rms);
+        figures.correlated.push(corr_found);
+        figures.quantization.push(q_step);
+        figures.vibration.push(vib);
+    }
+
+    /// An effect of this channel found on its samples, before its numbers are set.
+    fn effect(&self, effect: EffectKind, residual_of: &str) -> Effect {
+        let sensor = Sensor::of_channel(self.c);
+        Effect {
+            effect: effect.name().into(),
+            sensor: sensor.name().into(),
+            axes: axis_of(self.c).into(),
+            pos: None,
+            estimate: 0.0,
+            std_error: 0.0,
+            unit: effect.unit(sensor).into(),
+            delta_bic: 0.0,
+            residual_rms_before: self.rms,
+            residual_rms_after: 0.0,
+            residual_unit: CHANNEL_UNITS[self.c].into(),
+            residual_of: residual_of.into(),
+            tau_s: None,
+            frequency_hz: None,
+            likelihood_ratio: 0.0,
+            parameters: 0,
+            p_value: 0.0,
+            aliases: Vec::new(),
+        }
+    }
+
+    /// The lattice of the raw samples' differences against the fraction on it that continuous data give
+    /// (binomial likelihood ratio); the step if found.
+    fn quantization(&self, effects: &mut Vec<Effect>) -> Option<f64> {
+        let raw: Vec<f64> = self.session.dwells.iter().flat_map(|d| d.y[self.c].iter().copied()).collect();
+        let q = detect_quantization(&raw).ok()?;
+        let n = q.nonzero_differences as f64;
+        let k = (q.fraction_on_grid * n).round();
+        let p0 = 2.0 * GRID_TOLERANCE;
+        let p1 = (k / n).clamp(1e-12, 1.0);
+        let lr = if p1 > p0 {
+            2.0 * (k * (p1 / p0).ln() + if n > k { (n - k) * ((1.0 - p1) / (1.0 - p0)).ln() } else { 0.0 })
+        } else {
+            0.0
+        };
+        let delta_bic = -lr + n.ln();
+        if !(q.quantized && lr > chi_square_quantile_upper(ALPHA / self.m, 1.0) && delta_bic < 0.0) {
+            return None;
+        }
+        let rms = self.rms;
+        effects.push(Effect {
+            estimate: q.step,
+            std_error: quantization_std_error(&raw, q.step),
+            delta_bic,
+            residual_rms_after: (rms * rms - q.step * q.step / 12.0).max(0.0).sqrt(),
+            likelihood_ratio: lr,
+            parameters: 1,
+            p_value: chi_square_upper(lr, 1.0),
+            ..self.effect(EffectKind::Quantization, "samples")
+        });
+        Some(q.step)
+    }
+
+    /// The strongest spectral line; if found, removed from the series. Returns (amplitude seen, frequency).
+    fn vibration(&mut self, effects: &mut Vec<Effect>) -> Option<(f64, f64)> {
+        let dt = self.session.dt;
+        let v = vibration_test(&self.series, dt)?;
+        // Parameters: amplitude, frequency, a phase per dwell. The statistic is tested as chi-square
+        // with one degree per phase and one for the amplitude, Bonferroni over the frequencies searched.
+        let dof = self.series.len() as f64 + 1.0;
+        let threshold = chi_square_quantile_upper(ALPHA / (self.m * v.independent_frequencies), dof);
+        let delta_bic = -v.lr + (dof + 1.0) * (self.n_all as f64).ln();
+        if !(v.lr > threshold && delta_bic < 0.0) {
+            return None;
+        }
+        let corr = sinc(v.frequency_hz * dt);
+        let rms = self.rms;
+        effects.push(Effect {
+            estimate: v.amplitude_seen / corr,
+            std_error: v.amplitude_std / corr,
+            delta_bic,
+            residual_rms_after: (rms * rms - 0.5 * v.amplitude_seen * v.amplitude_seen).max(0.0).sqrt(),
+            frequency_hz: Some(v.frequency_hz),
+            likelihood_ratio: v.lr,
+            parameters: dof as usize + 1,
+            p_value: chi_square_upper(v.lr, dof),
+            ..self.effect(EffectKind::Vibration, "samples")
+        });
+        remove_line(&mut self.series, &v, dt);
+        Some((v.amplitude_seen, v.frequency_hz))
+    }
+
+    /// Gauss-Markov plus white noise against white noise alone; returns (sigma, tau) if found.
+    fn correlated_noise(&self, effects: &mut Vec<Effect>) -> Option<(f64, f64)> {
+        let gm = gauss_markov_test(&self.series, self.session.dt)?;
+        let delta_bic = -gm.lr + 2.0 * (self.n_all as f64).ln();
+        if !(gm.lr > chi_square_quantile_upper(ALPHA / self.m, 2.0) && delta_bic < 0.0) {
+            return None;
+        }
+        effects.push(Effect {
+            estimate: gm.sigma,
+            std_error: gm.sigma_std,
+            delta_bic,
+            residual_rms_before: gm.rms_white,
+            residual_rms_after: gm.rms_innovation,
+            tau_s: Some(gm.tau_s),
+            likelihood_ratio: gm.lr,
+            parameters: 2,
+            p_value: chi_square_upper(gm.lr, 2.0),
+            ..self.effect(EffectKind::CorrelatedNoise, "innovations")
+        });
+        Some((gm.sigma, gm.tau_s))
+    }
+}
+
+/// Standard error of a quantisation step: least squares of the on-grid differences `d_i = n_i q`.
+fn quantization_std_error(raw: &[f64], step: f64) -> f64 {
+    let (mut snn, mut see, mut k) = (0.0, 0.0, 0.0);
+    for w in raw.windows(2) {
+        let d = (w[1] - w[0]).abs();
+        let n = (d / step).round();
+        if n >= 1.0 && (d / step - n).abs() <= GRID_TOLERANCE {
+            snn += n * n;
+            see += (d - n * step).powi(2);
+            k += 1.0;
+        }
+    }
+    if k < 2.0 || snn == 0.0 {
+        return f64::NAN;
+    }
+    (see / (k - 1.0) / snn).sqrt()
+}

@@ -1,0 +1,287 @@
+//! The linear problem (observations, the base model's columns, the candidates) and its forward selection
+//! by likelihood ratio and BIC: which candidates the data can see at all (the others are `unobservable`),
+//! which ones are added, and which others the data cannot tell from them (`aliases`).
+
+use crate::stats::linfit::{chi_square_quantile_upper, chi_square_upper, fit, solve_spd, LinearFit, Observations};
+
+use super::candidates::Candidate;
+use super::{Tested, ALIAS_CORRELATION, ALPHA, MAX_EFFECTS};
+
+/// A linear problem: observations, the base columns, the candidates.
+pub(super) struct Problem {
+    /// The observations and their groups (channels, angle groups).
+    pub obs: Observations,
+    /// The base model's columns.
+    pub base: Vec<Vec<f64>>,
+    /// Their names ("gyro_bias_x", ...).
+    pub base_names: Vec<String>,
+    /// Names of the observation groups.
+    pub group_names: Vec<String>,
+    /// Units of the observation groups.
+    pub group_units: Vec<&'static str>,
+    /// Position label of each observation.
+    pub obs_pos: Vec<u32>,
+    /// The candidates, in test order.
+    pub candidates: Vec<Candidate>,
+    /// What this data cannot see (the selection adds the candidates the base model explains).
+    pub unobservable: Vec<String>,
+    /// What the observations are ("block means", "angles").
+    pub residual_of: &'static str,
+}
+
+/// A candidate the selection added.
+pub(super) struct Chosen {
+    /// Index in the problem's candidates.
+    pub candidate: usize,
+    /// Its variant (time constant) chosen.
+    pub variant: usize,
+    /// Likelihood-ratio statistic when it was added.
+    pub lr: f64,
+    /// BIC change.
+    pub delta_bic: f64,
+    /// p-value of `lr`.
+    pub p_value: f64,
+    /// RMS residual of its groups before it was added.
+    pub rms_before: f64,
+    /// The same after.
+    pub rms_after: f64,
+}
+
+/// The outcome of the forward selection.
+pub(super) struct Selection {
+    /// The base model alone.
+    pub base_fit: LinearFit,
+    /// The base model and the chosen candidates.
+    pub final_fit: LinearFit,
+    /// The candidates added, in order.
+    pub chosen: Vec<Chosen>,
+    /// Every observable candidate against the base model alone.
+    pub tested: Vec<Tested>,
+    /// Per chosen candidate: the names it cannot be told from.
+    pub aliases: Vec<Vec<String>>,
+    /// Observable candidates.
+    pub observable: usize,
+}
+
+/// Forward selection over the problem's candidates; the Bonferroni `m` counts the observable candidates and
+/// `extra_tests` more (the sample tests). Adds the unobservable candidates to `problem.unobservable`.
+pub(super) fn select(problem: &mut Problem, extra_tests: usize) -> Result<Selection, String> {
+    let base_cols: Vec<&[f64]> = problem.base.iter().map(|c| c.as_slice()).collect();
+    let base_fit =
+        fit(&problem.obs, &base_cols).ok_or("the base model's biases cannot be fitted (dependent columns)")?;
+    let weights = weights(&problem.obs, &base_fit);
+    let screen = Screen::new(&problem.candidates, &base_cols, &weights, &mut problem.unobservable);
+    let m = (screen.observable.len() + extra_tests).max(1) as f64;
+    let forward = Forward::run(problem, &screen.observable, base_fit.clone(), m);
+    let aliases = forward.chosen.iter().map(|c| screen.aliases(problem, &weights, c)).collect();
+    Ok(Selection {
+        base_fit,
+        final_fit: forward.current,
+        chosen: forward.chosen,
+        tested: forward.tested,
+        aliases,
+        observable: screen.observable.len(),
+    })
+}
+
+/// Observation weights: the given standard deviations, else the base model's variance of the group.
+fn weights(obs: &Observations, base_fit: &LinearFit) -> Vec<f64> {
+    (0..obs.y.len())
+        .map(|i| match &obs.sigma {
+            Some(s) => 1.0 / (s[i] * s[i]),
+            None => 1.0 / base_fit.variance[obs.group[i]],
+        })
+        .collect()
+}
+
+/// What the base model leaves of every candidate's columns.
+struct Screen {
+    /// Candidates with a variant the base model does not explain.
+    observable: Vec<usize>,
+    /// Per candidate, per variant: the column minus its base-model fit.
+    remainders: Vec<Vec<Vec<f64>>>,
+}
+
+impl Screen {
+    /// Observability: a candidate whose every variant the base model explains is unobservable (its name goes
+    /// to `unobservable`).
+    fn new(candidates: &[Candidate], base_cols: &[&[f64]], weights: &[f64], unobservable: &mut Vec<String>) -> Screen {
+        let mut screen = Screen { observable: Vec::new(), remainders: Vec::new() };
+        for (ci, c) in candidates.iter().enumerate() {
+            let rems: Vec<Vec<f64>> = c.variants.iter().map(|(_, col)| remainder(base_cols, weights, col)).collect();
+            let seen = c.variants.iter().zip(&rems).any(|((_, col), rem)| {
+                let full = weighted_norm(weights, col);
+                full > 0.0 && weighted_norm(weights, rem) > 1e-6 * full
+            });
+            if seen {
+                screen.observable.push(ci);
+            } else {
+                unobservable.push(c.name());
+            }
+            screen.remainders.push(rems);
+        }
+        screen
+    }
+
+    /// Aliases of a chosen effect: other observable candidates with (nearly) the same base-free column.
+    fn aliases(&self, problem: &Problem, weights: &[f64], c: &Chosen) -> Vec<String> {
+        let own = &self.remainders[c.candidate][c.variant];
+        let own_norm = weighted_norm(weights, own);
+        let mut names = Vec::new();
+        for &oi in self.observable.iter().filter(|&&oi| oi != c.candidate) {
+            let similar = self.remainders[oi].iter().any(|rem| {
+                let nrm = weighted_norm(weights, rem);
+                nrm > 0.0 && (weighted_dot(weights, own, rem) / (own_norm * nrm)).abs() > ALIAS_CORRELATION
+            });
+            if similar {
+                names.push(problem.candidates[oi].name());
+            }
+        }
+        names
+    }
+}
+
+/// The best addition at one step: (candidate, variant, fit with it, likelihood ratio).
+type Addition = (usize, usize, LinearFit, f64);
+
+/// The state of the forward selection.
+struct Forward<'a> {
+    problem: &'a Problem,
+    /// ln of the number of observations (the BIC's penalty per parameter).
+    ln_n: f64,
+    /// Columns of the current model: the base and the chosen candidates.
+    columns: Vec<Vec<f64>>,
+    /// The current model's fit.
+    current: LinearFit,
+    chosen: Vec<Chosen>,
+    tested: Vec<Tested>,
+}
+
+impl<'a> Forward<'a> {
+    /// Adds candidates of `observable` while the best passes the criterion (at most [`MAX_EFFECTS`]); the
+    /// first step also records every candidate against the base model alone.
+    fn run(problem: &'a Problem, observable: &[usize], base_fit: LinearFit, m: f64) -> Forward<'a> {
+        let ln_n = (problem.obs.y.len() as f64).ln();
+        let mut f = Forward {
+            problem,
+            ln_n,
+            columns: problem.base.clone(),
+            current: base_fit,
+            chosen: Vec::new(),
+            tested: Vec::new(),
+        };
+        for step in 0..=MAX_EFFECTS {
+            let best = f.best_addition(observable, step == 0);
+            if step == MAX_EFFECTS {
+                break;
+            }
+            let Some(best) = best else { break };
+            if !f.add(best, m) {
+                break;
+            }
+        }
+        f
+    }
+
+    /// Every candidate not yet chosen, fitted with the current model; the one of the best BIC gain. Ranked
+    /// by the BIC gain: of two candidates that explain the data equally well, the one with fewer parameters
+    /// (a temperature coefficient rather than a warm-up of free time constant).
+    fn best_addition(&mut self, observable: &[usize], record: bool) -> Option<Addition> {
+        let problem = self.problem;
+        let mut best: Option<Addition> = None;
+        for &ci in observable.iter().filter(|&&ci| !self.chosen.iter().any(|c| c.candidate == ci)) {
+            let c = &problem.candidates[ci];
+            let Some((vi, f)) = self.best_variant(c) else { continue };
+            let lr = 2.0 * (f.log_likelihood - self.current.log_likelihood);
+            if record {
+                let j = f.beta.len() - 1;
+                self.tested.push(Tested {
+                    name: c.name(),
+                    estimate: f.beta[j],
+                    std_error: f.std_error(j),
+                    likelihood_ratio: lr,
+                });
+            }
+            let gain = lr - c.parameters() as f64 * self.ln_n;
+            if best
+                .as_ref()
+                .is_none_or(|(bi, _, _, b)| gain > *b - problem.candidates[*bi].parameters() as f64 * self.ln_n)
+            {
+                best = Some((ci, vi, f, lr));
+            }
+        }
+        best
+    }
+
+    /// The variant of `c` of the highest likelihood together with the current columns.
+    fn best_variant(&self, c: &Candidate) -> Option<(usize, LinearFit)> {
+        let mut best_variant: Option<(usize, LinearFit)> = None;
+        for (vi, (_, col)) in c.variants.iter().enumerate() {
+            let mut cols: Vec<&[f64]> = self.columns.iter().map(|c| c.as_slice()).collect();
+            cols.push(col);
+            if let Some(f) = fit(&self.problem.obs, &cols) {
+                if best_variant.as_ref().is_none_or(|(_, b)| f.log_likelihood > b.log_likelihood) {
+                    best_variant = Some((vi, f));
+                }
+            }
+        }
+        best_variant
+    }
+
+    /// Adds `best` if its likelihood ratio passes `alpha / m` and its BIC change is negative.
+    fn add(&mut self, (ci, vi, f, lr): Addition, m: f64) -> bool {
+        let candidate = &self.problem.candidates[ci];
+        let k = candidate.parameters() as f64;
+        let p_value = chi_square_upper(lr, k);
+        let delta_bic = -lr + k * self.ln_n;
+        if !(lr > chi_square_quantile_upper(ALPHA / m, k) && delta_bic < 0.0) {
+            return false;
+        }
+        self.chosen.push(Chosen {
+            candidate: ci,
+            variant: vi,
+            lr,
+            delta_bic,
+            p_value,
+            rms_before: group_rms(&self.current, &candidate.groups),
+            rms_after: group_rms(&f, &candidate.groups),
+        });
+        self.columns.push(candidate.variants[vi].1.clone());
+        self.current = f;
+        true
+    }
+}
+
+/// RMS residual over the observation groups `groups`.
+fn group_rms(fit: &LinearFit, groups: &[usize]) -> f64 {
+    (groups.iter().map(|&g| fit.rms[g] * fit.rms[g]).sum::<f64>() / groups.len().max(1) as f64).sqrt()
+}
+
+/// Removes the base columns from `column` (weighted least squares with `weights`), for alias and
+/// observability checks; returns the remainder.
+fn remainder(base: &[&[f64]], weights: &[f64], column: &[f64]) -> Vec<f64> {
+    let k = base.len();
+    let mut a = vec![vec![0.0; k]; k];
+    let mut b = vec![0.0; k];
+    for i in 0..column.len() {
+        let w = weights[i];
+        for p in 0..k {
+            b[p] += w * base[p][i] * column[i];
+            for q in 0..k {
+                a[p][q] += w * base[p][i] * base[q][i];
+            }
+        }
+    }
+    let coef = solve_spd(&a, &b).map(|(x, _)| x).unwrap_or_else(|| vec![0.0; k]);
+    (0..column.len()).map(|i| column[i] - (0..k).map(|p| coef[p] * base[p][i]).sum::<f64>()).collect()
+}
+
+/// `sqrt(sum w v^2)`.
+fn weighted_norm(weights: &[f64], v: &[f64]) -> f64 {
+    v.iter().zip(weights).map(|(v, w)| w * v * v).sum::<f64>().sqrt()
+}
+
+/// `sum w a b`.
+fn weighted_dot(weights: &[f64], a: &[f64], b: &[f64]) -> f64 {
+    a.iter().zip(b).zip(weights).map(|((a, b), w)| w * a * b).sum()
+}

@@ -1,0 +1,59 @@
+//! The human summary of an analysis (what `sinscal analyze` prints; units stated).
+
+use std::fmt::Write as _;
+
+use super::{Analysis, Effect};
+
+/// Human summary of an analysis (units stated).
+pub fn summary(a: &Analysis) -> String {
+    let mut s = String::new();
+    let _ = writeln!(s, "analysis of {} ({})", a.source, a.input);
+    let _ = writeln!(
+        s,
+        "base model: constant biases + white noise, {} observations, ln L = {:.2}, BIC = {:.2}",
+        a.base_model.observations, a.base_model.log_likelihood, a.base_model.bic
+    );
+    for (k, v) in &a.base_model.residual_rms {
+        let _ = writeln!(s, "  residual RMS {k}: {v:.4e}");
+    }
+    let _ = writeln!(s, "criterion: {}", a.criterion);
+    if a.effects.is_empty() {
+        let _ = writeln!(s, "verdict: none (the base model is adequate)");
+    } else {
+        let _ = writeln!(s, "verdict: {}", a.verdict);
+        for e in &a.effects {
+            effect_line(&mut s, e);
+        }
+    }
+    if !a.unobservable.is_empty() {
+        let _ = writeln!(s, "unobservable with this data: {}", a.unobservable.join(", "));
+    }
+    s
+}
+
+/// One effect: estimate, BIC change, residuals before and after, extras and aliases.
+fn effect_line(s: &mut String, e: &Effect) {
+    let _ = write!(
+        s,
+        "  {:<20} {:<9} {:<4} estimate {:+.4e} +- {:.2e} {}  delta BIC {:.1}  residual RMS {:.3e} -> {:.3e} {} ({})",
+        e.effect,
+        e.sensor,
+        e.axes,
+        e.estimate,
+        e.std_error,
+        e.unit,
+        e.delta_bic,
+        e.residual_rms_before,
+        e.residual_rms_after,
+        e.residual_unit,
+        e.residual_of
+    );
+    let extras = e.extras();
+    if !extras.is_empty() {
+        let _ = write!(s, "  {extras}");
+    }
+    if !e.aliases.is_empty() {
+        let _ = write!(s, "  (indistinguishable here from: {})", e.aliases.join(", "));
+    }
+    let _ = writeln!(s);
+}

@@ -1,0 +1,185 @@
+//! Vibration on the samples: the strongest line of the periodogram summed over dwells (each dwell's mean and
+//! trend removed), against the median of its neighbourhood (a line, not a coloured background), its
+//! frequency refined within a bin, one amplitude and a phase per dwell.
+
+use crate::stats::noise::fft_in_place;
+
+use super::MIN_DWELL_SAMPLES;
+
+/// A spectral line found.
+pub(super) struct VibrationResult {
+    /// Its frequency, Hz.
+    pub frequency_hz: f64,
+    /// Amplitude as the samples show it (before the interval-averaging correction).
+    pub amplitude_seen: f64,
+    /// Its standard error.
+    pub amplitude_std: f64,
+    /// Likelihood-ratio statistic, in units of the background variance.
+    pub lr: f64,
+    /// Independent frequencies searched (the Bonferroni factor of the search).
+    pub independent_frequencies: f64,
+    /// Per dwell: complex amplitude (re, im) of the line, `x_i ~ re cos(w i) - im sin(w i)`.
+    pub per_dwell: Vec<(f64, f64)>,
+}
+
+/// `sin(pi x) / (pi x)`: the response of an integrating sensor's interval average at `x = f dt`.
+pub(super) fn sinc(x: f64) -> f64 {
+    if x.abs() < 1e-12 {
+        1.0
+    } else {
+        (std::f64::consts::PI * x).sin() / (std::f64::consts::PI * x)
+    }
+}
+
+/// Direct DFT of `x` at `cycles_per_sample`: sum x_i e^{-i w i}.
+fn dft_at(x: &[f64], cycles_per_sample: f64) -> (f64, f64) {
+    let w = std::f64::consts::TAU * cycles_per_sample;
+    let (c, s) = (w.cos(), w.sin());
+    let (mut cr, mut ci) = (1.0f64, 0.0f64);
+    let (mut re, mut im) = (0.0, 0.0);
+    for (i, v) in x.iter().enumerate() {
+        if i % 256 == 0 {
+            let ph = w * i as f64;
+            cr = ph.cos();
+            ci = -ph.sin();
+        }
+        re += v * cr;
+        im += v * ci;
+        let nr = cr * c + ci * s;
+        let ni = ci * c - cr * s;
+        cr = nr;
+        ci = ni;
+    }
+    (re, im)
+}
+
+/// The strongest spectral line of the dwells' detrended samples against the local background.
+pub(super) fn vibration_test(dwells: &[Vec<f64>], dt: f64) -> Option<VibrationResult> {
+    let n_max = dwells.iter().map(|d| d.len()).max()?;
+    let n_min = dwells.iter().map(|d| d.len()).min()?;
+    if n_min < MIN_DWELL_SAMPLES {
+        return None;
+    }
+    let len = (n_max.next_power_of_two() * 4).min(1 << 20);
+    let power = summed_periodogram(dwells, len)?;
+    let (k_hat, background) = strongest_line(&power, len, n_min, dwells.len() as f64)?;
+    let f = refine_frequency(dwells, k_hat, len);
+    Some(fit_line(dwells, f, background, n_min, dt))
+}
+
+/// The periodograms of the dwells (zero-padded to `len`, each over its length), summed; bins 0..len/2.
+fn summed_periodogram(dwells: &[Vec<f64>], len: usize) -> Option<Vec<f64>> {
+    let mut power = vec![0.0; len / 2];
+    for d in dwells {
+        let (mut re, mut im) = (vec![0.0; len], vec![0.0; len]);
+        let step = if d.len() > len { d.len() / len + 1 } else { 1 };
+        for (i, v) in d.iter().step_by(step).enumerate().take(len) {
+            re[i] = *v;
+        }
+        fft_in_place(&mut re, &mut im).ok()?;
+        for k in 0..len / 2 {
+            power[k] += (re[k] * re[k] + im[k] * im[k]) / d.len() as f64;
+        }
+    }
+    Some(power)
+}
+
+/// The largest bin (above three cycles per shortest dwell) and the background level at it: the median of
+/// its neighbourhood, scaled to the mean of `p` dwells' periodograms.
+fn strongest_line(power: &[f64], len: usize, n_min: usize, p: f64) -> Option<(usize, f64)> {
+    // Lines below three cycles per shortest dwell are too close to the removed trend.
+    let k_min = ((3.0 * len as f64 / n_min as f64).ceil() as usize).max(2);
+    if k_min + 20 >= len / 2 {
+        return None;
+    }
+    let k_hat = (k_min..len / 2 - 1).max_by(|&a, &b| power[a].total_cmp(&power[b]))?;
+    let half_window = 150.min(len / 4);
+    let mut neighbours: Vec<f64> = (k_hat.saturating_sub(half_window).max(k_min)..(k_hat + half_window).min(len / 2))
+        .filter(|&k| k.abs_diff(k_hat) > 12)
+        .map(|k| power[k])
+        .collect();
+    if neighbours.len() < 20 {
+        return None;
+    }
+    neighbours.sort_by(f64::total_cmp);
+    // Median of Gamma(P, 1): P (1 - 1/(9P))^3 (Wilson-Hilferty).
+    Some((k_hat, neighbours[neighbours.len() / 2] / (p * (1.0 - 1.0 / (9.0 * p)).powi(3))))
+}
+
+/// Refines the frequency (cycles per sample) by golden section on the summed periodogram, within one bin of
+/// `k_hat`.
+fn refine_frequency(dwells: &[Vec<f64>], k_hat: usize, len: usize) -> f64 {
+    let score = |f: f64| -> f64 {
+        dwells
+            .iter()
+            .map(|d| {
+                let (re, im) = dft_at(d, f);
+                (re * re + im * im) / d.len() as f64
+            })
+            .sum()
+    };
+    let (mut a, mut b) = ((k_hat as f64 - 1.0) / len as f64, (k_hat as f64 + 1.0) / len as f64);
+    let gr = 0.5 * (5f64.sqrt() - 1.0);
+    let (mut c, mut d) = (b - gr * (b - a), a + gr * (b - a));
+    let (mut sc, mut sd) = (score(c), score(d));
+    for _ in 0..40 {
+        if sc > sd {
+            b = d;
+            d = c;
+            sd = sc;
+            c = b - gr * (b - a);
+            sc = score(c);
+        } else {
+            a = c;
+            c = d;
+            sc = sd;
+            d = a + gr * (b - a);
+            sd = score(d);
+        }
+    }
+    0.5 * (a + b)
+}
+
+/// One amplitude, a phase per dwell, at `f` cycles per sample: RSS(A) = RSS0 - 2 A sum|X_p| + A^2 N / 2, so
+/// A = 2 sum|X_p| / N and the reduction is 2 (sum|X_p|)^2 / N, in units of the background variance.
+fn fit_line(dwells: &[Vec<f64>], f: f64, background: f64, n_min: usize, dt: f64) -> VibrationResult {
+    let mut per_dwell = Vec::new();
+    let mut sum_abs = 0.0;
+    let mut total = 0.0;
+    for dw in dwells {
+        let n = dw.len() as f64;
+        let (re, im) = dft_at(dw, f);
+        sum_abs += re.hypot(im);
+        total += n;
+        per_dwell.push((re, im, n));
+    }
+    let amplitude = 2.0 * sum_abs / total;
+    let lr = 2.0 * sum_abs * sum_abs / total / background;
+    // The line removed from each dwell: the common amplitude at the dwell's own phase.
+    let per_dwell = per_dwell
+        .into_iter()
+        .map(|(re, im, _)| {
+            let m = re.hypot(im).max(1e-300);
+            (amplitude * re / m, amplitude * im / m)
+        })
+        .collect();
+    VibrationResult {
+        frequency_hz: f / dt,
+        amplitude_seen: amplitude,
+        amplitude_std: (2.0 * background / total).sqrt(),
+        lr,
+        independent_frequencies: (n_min as f64 / 2.0).max(1.0),
+        per_dwell,
+    }
+}
+
+/// Removes the line of `v` from every dwell of `series` (sample interval `dt`).
+pub(super) fn remove_line(series: &mut [Vec<f64>], v: &VibrationResult, dt: f64) {
+    for (s, (re, im)) in series.iter_mut().zip(&v.per_dwell) {
+        let w = std::f64::consts::TAU * v.frequency_hz * dt;
+        for (i, x) in s.iter_mut().enumerate() {
+            let ph = w * i as f64;
+            *x -= re * ph.cos() - im * ph.sin();
+        }
+    }
+}

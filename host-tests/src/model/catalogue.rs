@@ -1,0 +1,205 @@
+//! The effect catalogue (docs/formats.md#effect-catalogue): the thirteen effects `sinscal analyze` tests and
+//! `sinscal simulate` can switch on, each with its fixed name, its sensor and the SI unit of its estimate.
+//! The names are part of the analysis JSON (docs/formats.md#analysis-json): [`EffectKind::name`] is what is
+//! written, [`str::parse`] reads it back.
+
+use std::fmt;
+use std::str::FromStr;
+
+/// What an effect belongs to: the reference (the table's attitude) or one of the two sensors.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, PartialOrd, Ord)]
+pub enum Sensor {
+    /// The table attitude the recording states.
+    Reference,
+    /// The accelerometers.
+    Accel,
+    /// The gyros.
+    Gyro,
+}
+
+impl Sensor {
+    /// "reference", "accel" or "gyro", as the analysis JSON writes it.
+    pub fn name(self) -> &'static str {
+        match self {
+            Sensor::Reference => "reference",
+            Sensor::Accel => "accel",
+            Sensor::Gyro => "gyro",
+        }
+    }
+
+    /// The sensor of channel `c` of a recording (gx, gy, gz, ax, ay, az = 0..5).
+    pub fn of_channel(c: usize) -> Sensor {
+        if c < 3 {
+            Sensor::Gyro
+        } else {
+            Sensor::Accel
+        }
+    }
+}
+
+impl fmt::Display for Sensor {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        f.write_str(self.name())
+    }
+}
+
+/// One entry of the effect catalogue.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, PartialOrd, Ord)]
+pub enum EffectKind {
+    /// Constant table attitude error `phi0` (e, n, u), rad.
+    ReferenceOffset,
+    /// Table attitude error at one position (e, n, u), rad.
+    PositionError,
+    /// Accelerometer relative scale-factor error.
+    AccelScaleFactor,
+    /// Accelerometer axis i's sensitivity to force along j.
+    AccelMisalignment,
+    /// Gyro relative scale-factor error.
+    GyroScaleFactor,
+    /// Gyro axis i's sensitivity to rate about j.
+    GyroMisalignment,
+    /// Gyro i error per specific force along j.
+    GyroGSensitivity,
+    /// Bias slope.
+    BiasDrift,
+    /// Amplitude of an exponential warm-up of the bias.
+    BiasWarmup,
+    /// First-order Gauss-Markov noise.
+    CorrelatedNoise,
+    /// A sinusoid.
+    Vibration,
+    /// An output step.
+    Quantization,
+    /// Bias per kelvin.
+    TemperatureBias,
+}
+
+impl EffectKind {
+    /// The catalogue, in the order of docs/formats.md#effect-catalogue.
+    pub const ALL: [EffectKind; 13] = [
+        EffectKind::ReferenceOffset,
+        EffectKind::PositionError,
+        EffectKind::AccelScaleFactor,
+        EffectKind::AccelMisalignment,
+        EffectKind::GyroScaleFactor,
+        EffectKind::GyroMisalignment,
+        EffectKind::GyroGSensitivity,
+        EffectKind::BiasDrift,
+        EffectKind::BiasWarmup,
+        EffectKind::CorrelatedNoise,
+        EffectKind::Vibration,
+        EffectKind::Quantization,
+        EffectKind::TemperatureBias,
+    ];
+
+    /// The fixed catalogue name ("reference_offset", ...).
+    pub fn name(self) -> &'static str {
+        match self {
+            EffectKind::ReferenceOffset => "reference_offset",
+            EffectKind::PositionError => "position_error",
+            EffectKind::AccelScaleFactor => "accel_scale_factor",
+            EffectKind::AccelMisalignment => "accel_misalignment",
+            EffectKind::GyroScaleFactor => "gyro_scale_factor",
+            EffectKind::GyroMisalignment => "gyro_misalignment",
+            EffectKind::GyroGSensitivity => "gyro_g_sensitivity",
+            EffectKind::BiasDrift => "bias_drift",
+            EffectKind::BiasWarmup => "bias_warmup",
+            EffectKind::CorrelatedNoise => "correlated_noise",
+            EffectKind::Vibration => "vibration",
+            EffectKind::Quantization => "quantization",
+            EffectKind::TemperatureBias => "temperature_bias",
+        }
+    }
+
+    /// The sensor the effect belongs to; `None` for the effects either sensor can have, one per channel
+    /// (drift, warm-up, correlated noise, vibration, quantisation, temperature).
+    pub fn sensor(self) -> Option<Sensor> {
+        match self {
+            EffectKind::ReferenceOffset | EffectKind::PositionError => Some(Sensor::Reference),
+            EffectKind::AccelScaleFactor | EffectKind::AccelMisalignment => Some(Sensor::Accel),
+            EffectKind::GyroScaleFactor | EffectKind::GyroMisalignment | EffectKind::GyroGSensitivity => {
+                Some(Sensor::Gyro)
+            }
+            _ => None,
+        }
+    }
+
+    /// SI unit of the estimate, as the analysis JSON writes it. `sensor` picks the unit of the per-channel
+    /// effects (gyro: rad/s based, accel: m/s^2 based); the others have one unit whatever it says.
+    pub fn unit(self, sensor: Sensor) -> &'static str {
+        let gyro = sensor == Sensor::Gyro;
+        match self {
+            EffectKind::ReferenceOffset | EffectKind::PositionError => "rad",
+            EffectKind::AccelScaleFactor
+            | EffectKind::AccelMisalignment
+            | EffectKind::GyroScaleFactor
+            | EffectKind::GyroMisalignment => "1",
+            EffectKind::GyroGSensitivity => "(rad/s)/(m/s^2)",
+            EffectKind::BiasDrift if gyro => "(rad/s)/s",
+            EffectKind::BiasDrift => "(m/s^2)/s",
+            EffectKind::TemperatureBias if gyro => "(rad/s)/K",
+            EffectKind::TemperatureBias => "(m/s^2)/K",
+            EffectKind::BiasWarmup | EffectKind::CorrelatedNoise | EffectKind::Vibration | EffectKind::Quantization => {
+                if gyro {
+                    "rad/s"
+                } else {
+                    "m/s^2"
+                }
+            }
+        }
+    }
+}
+
+impl fmt::Display for EffectKind {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        f.write_str(self.name())
+    }
+}
+
+/// A name that is not in the catalogue.
+#[derive(Clone, Debug, PartialEq, Eq)]
+pub struct UnknownEffect(pub String);
+
+impl fmt::Display for UnknownEffect {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        write!(f, "unknown effect '{}' (not in the catalogue)", self.0)
+    }
+}
+
+impl std::error::Error for UnknownEffect {}
+
+impl FromStr for EffectKind {
+    type Err = UnknownEffect;
+
+    fn from_str(s: &str) -> Result<EffectKind, UnknownEffect> {
+        EffectKind::ALL.into_iter().find(|k| k.name() == s).ok_or_else(|| UnknownEffect(s.to_string()))
+    }
+}
+
+/// A name (an analysis verdict, an effect's `effect` field) against a catalogue entry.
+impl PartialEq<EffectKind> for String {
+    fn eq(&self, other: &EffectKind) -> bool {
+        self == other.name()
+    }
+}
+
+/// A name against a catalogue entry.
+impl PartialEq<EffectKind> for str {
+    fn eq(&self, other: &EffectKind) -> bool {
+        self == other.name()
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn names_read_back_and_are_distinct() {
+        for k in EffectKind::ALL {
+            assert_eq!(k.name().parse::<EffectKind>(), Ok(k));
+            assert_eq!(EffectKind::ALL.iter().filter(|o| o.name() == k.name()).count(), 1);
+        }
+        assert!("bias".parse::<EffectKind>().is_err());
+    }
+}
