@@ -3,6 +3,7 @@
 //! angles front end maps the same sensor terms through the alignment equations (`angles`).
 
 use crate::model::catalogue::{EffectKind, Sensor};
+use crate::model::sensor::{self as model, Term, TermKind};
 use crate::model::synth::mul_t_vec;
 
 use super::observations::{BlockObs, Blocks, Session};
@@ -56,9 +57,8 @@ impl Candidate {
     }
 }
 
-/// A sensor error proportional to the true rate or force: the output `channel` (gx..az = 0..5) sees
-/// `parameter * source[axis]`, with `source` the body rate (rad/s) or specific force (m/s^2) of the sensor
-/// model (docs/conventions.md: scale factors, misalignments, gyro g-sensitivity).
+/// A term of the sensor model ([`crate::model::sensor::Term`]: a scale factor, a misalignment or a gyro
+/// g-sensitivity) with its catalogue entry and axes.
 pub(super) struct SensorTerm {
     /// The catalogue entry.
     pub effect: EffectKind,
@@ -66,10 +66,8 @@ pub(super) struct SensorTerm {
     pub axes: String,
     /// Output channel, 0..5.
     pub channel: usize,
-    /// The source is the specific force (else the rate).
-    from_force: bool,
-    /// Source axis.
-    axis: usize,
+    /// The term of the sensor model.
+    term: Term,
 }
 
 impl SensorTerm {
@@ -80,36 +78,30 @@ impl SensorTerm {
 
     /// The output error per unit parameter at true body rate `rate_b_radps` and force `force_b_mps2`.
     pub fn per_unit(&self, rate_b_radps: [f64; 3], force_b_mps2: [f64; 3]) -> f64 {
-        if self.from_force {
-            force_b_mps2[self.axis]
-        } else {
-            rate_b_radps[self.axis]
-        }
+        self.term.per_unit(rate_b_radps, force_b_mps2)
     }
 }
 
 /// The terms of the catalogue's sensor model: accelerometer scale factors and misalignments, and, with
-/// `gyros`, the gyro scale factors, misalignments and g-sensitivity.
+/// `gyros`, the gyro scale factors, misalignments and g-sensitivity ([`Term::all`], in its order).
 pub(super) fn sensor_terms(gyros: bool) -> Vec<SensorTerm> {
-    let mut terms = Vec::new();
-    let mut add = |effect: EffectKind, channel: usize, from_force, i: usize, j: usize| {
-        let axes = match effect {
-            EffectKind::AccelScaleFactor | EffectKind::GyroScaleFactor => AXES[i].to_string(),
-            _ => format!("{}{}", AXES[i], AXES[j]),
-        };
-        terms.push(SensorTerm { effect, axes, channel, from_force, axis: j });
-    };
-    let pairs = || (0..3).flat_map(|i| (0..3).filter(move |&j| j != i).map(move |j| (i, j)));
-    (0..3).for_each(|i| add(EffectKind::AccelScaleFactor, 3 + i, true, i, i));
-    pairs().for_each(|(i, j)| add(EffectKind::AccelMisalignment, 3 + i, true, i, j));
-    if gyros {
-        (0..3).for_each(|i| add(EffectKind::GyroScaleFactor, i, false, i, i));
-        pairs().for_each(|(i, j)| add(EffectKind::GyroMisalignment, i, false, i, j));
-        for i in 0..3 {
-            (0..3).for_each(|j| add(EffectKind::GyroGSensitivity, i, true, i, j));
-        }
-    }
-    terms
+    Term::all(gyros)
+        .into_iter()
+        .map(|term| {
+            let effect = match (term.sensor, term.kind) {
+                (model::Sensor::Accel, TermKind::ScaleFactor) => EffectKind::AccelScaleFactor,
+                (model::Sensor::Accel, _) => EffectKind::AccelMisalignment,
+                (model::Sensor::Gyro, TermKind::ScaleFactor) => EffectKind::GyroScaleFactor,
+                (model::Sensor::Gyro, TermKind::Misalignment) => EffectKind::GyroMisalignment,
+                (model::Sensor::Gyro, TermKind::GSensitivity) => EffectKind::GyroGSensitivity,
+            };
+            let axes = match term.kind {
+                TermKind::ScaleFactor => AXES[term.axis].to_string(),
+                _ => format!("{}{}", AXES[term.axis], AXES[term.along]),
+            };
+            SensorTerm { effect, axes, channel: term.channel(), term }
+        })
+        .collect()
 }
 
 /// `a x b`.
