@@ -1,6 +1,6 @@
 //! What only emulation and tests use: the replay of a recording through the firmware path ([`replay`]:
 //! the replay file, the emulated ADIS, the run) and, in the emulated Cortex-M4F, host files through
-//! semihosting ([`semihost`], target only).
+//! semihosting (`semihost`, target only).
 
 pub mod replay;
 #[cfg(target_os = "none")]

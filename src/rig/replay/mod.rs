@@ -13,7 +13,7 @@
 //! frames x (table u8: 0 = moving, k = in position k of the list (1-based); burst bytes of the model)
 //! ```
 //!
-//! Three parts: [`file`] (the replay file and the outcome file: header, frames, encoding), [`device`] (the
+//! Three parts: [`file`](mod@file) (the replay file and the outcome file: header, frames, encoding), [`device`] (the
 //! emulated ADIS on the SPI bus that serves the recorded frames to the real driver) and [`run`] (the whole
 //! firmware path over a replay file).
 
