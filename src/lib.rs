@@ -22,7 +22,7 @@
 //! | [`calib`] | prefilter, dwell statistics, alignment, the bias solution, the calibration |
 //! | [`run`] | the data-ready handler and its queue, the calibration sequence |
 //! | [`rig`] | replay of a recording through the firmware path, semihosting (emulation and tests) |
-//! | `board` | register-level code of each board, the panic handler and exit (target only) |
+//! | `board` | register-level code of the board, the panic handler and exit (target only, feature `mps2-an386`, on by default) |
 //!
 //! ## Data flow
 //! On the firmware, at 100 Hz:
@@ -43,7 +43,7 @@
 #![deny(missing_docs)]
 #![deny(unsafe_code)]
 
-#[cfg(target_os = "none")]
+#[cfg(all(target_os = "none", feature = "mps2-an386"))]
 #[allow(unsafe_code)] // memory-mapped registers
 pub mod board;
 pub mod calib;
