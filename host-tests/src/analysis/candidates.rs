@@ -3,7 +3,7 @@
 //! angles front end maps the same sensor terms through the alignment equations (`angles`).
 
 use crate::model::catalogue::{EffectKind, Sensor};
-use crate::model::sensor::{self as model, Term, TermKind};
+use crate::model::sensor::Term;
 use crate::model::synth::mul_t_vec;
 
 use super::observations::{BlockObs, Blocks, Session};
@@ -88,18 +88,11 @@ pub(super) fn sensor_terms(gyros: bool) -> Vec<SensorTerm> {
     Term::all(gyros)
         .into_iter()
         .map(|term| {
-            let effect = match (term.sensor, term.kind) {
-                (model::Sensor::Accel, TermKind::ScaleFactor) => EffectKind::AccelScaleFactor,
-                (model::Sensor::Accel, _) => EffectKind::AccelMisalignment,
-                (model::Sensor::Gyro, TermKind::ScaleFactor) => EffectKind::GyroScaleFactor,
-                (model::Sensor::Gyro, TermKind::Misalignment) => EffectKind::GyroMisalignment,
-                (model::Sensor::Gyro, TermKind::GSensitivity) => EffectKind::GyroGSensitivity,
-            };
-            let axes = match term.kind {
-                TermKind::ScaleFactor => AXES[term.axis].to_string(),
+            let axes = match term.effect {
+                EffectKind::AccelScaleFactor | EffectKind::GyroScaleFactor => AXES[term.axis].to_string(),
                 _ => format!("{}{}", AXES[term.axis], AXES[term.along]),
             };
-            SensorTerm { effect, axes, channel: term.channel(), term }
+            SensorTerm { effect: term.effect, axes, channel: term.channel(), term }
         })
         .collect()
 }

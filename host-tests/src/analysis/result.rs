@@ -76,16 +76,6 @@ pub(super) fn residuals_by_group(problem: &Problem, selection: &Selection) -> Ve
     out
 }
 
-/// The effects an angles file cannot show: the time-dependent and noise effects.
-const NOT_IN_ANGLES: [EffectKind; 6] = [
-    EffectKind::BiasDrift,
-    EffectKind::BiasWarmup,
-    EffectKind::CorrelatedNoise,
-    EffectKind::Vibration,
-    EffectKind::Quantization,
-    EffectKind::TemperatureBias,
-];
-
 /// The analysis of `source` (`input` = [`RECORDING`] or [`ANGLES`]).
 pub(super) fn assemble(
     problem: Problem,
@@ -98,7 +88,9 @@ pub(super) fn assemble(
     let verdict = findings.effects.first().map_or("none".to_string(), |e| e.effect.clone());
     let mut unobservable = problem.unobservable.clone();
     if input == ANGLES {
-        unobservable.extend(NOT_IN_ANGLES.iter().map(|e| format!("{e}: angles only")));
+        // The per-channel time and noise effects (no single sensor in the catalogue) need samples.
+        let not_in_angles = EffectKind::ALL.into_iter().filter(|e| e.sensor().is_none());
+        unobservable.extend(not_in_angles.map(|e| format!("{e}: angles only")));
     }
     let m = findings.m;
     Analysis {

@@ -10,6 +10,7 @@
 //! g-sensitivity) with the column it adds to a linear fit: the measurement's derivative by the parameter.
 //! The simulator measures through [`Triad`]; the analysis fits the columns of [`Term`].
 
+use crate::model::catalogue::{EffectKind, Sensor};
 use crate::model::synth::M3;
 
 /// One triad's static error terms: `meas = gain own + bias + cross other`, where `own` is the true
@@ -52,35 +53,14 @@ impl Triad {
     }
 }
 
-/// The triad a term belongs to.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
-pub enum Sensor {
-    /// Gyros: output channels 0..2 (x, y, z), rad/s.
-    Gyro,
-    /// Accelerometers: output channels 3..5, m/s^2.
-    Accel,
-}
-
-/// Which part of the model a [`Term`] is.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
-pub enum TermKind {
-    /// A diagonal element of `S`.
-    ScaleFactor,
-    /// An off-diagonal element of `M`.
-    Misalignment,
-    /// An element of the gyros' `G`.
-    GSensitivity,
-}
-
-/// One proportional parameter of the model: axis `axis` of `sensor` sees `parameter * source[along]`, where
-/// `source` is the true body rate (the gyros' scale factors and misalignments) or the true specific force
-/// (accelerometer terms and the gyros' g-sensitivity).
+/// One proportional parameter of the model: an entry of the catalogue (a scale factor, a misalignment or a
+/// gyro g-sensitivity) at output axis `axis`, which sees `parameter * source[along]`, where `source` is the true
+/// body rate (the gyros' scale factors and misalignments) or the true specific force (accelerometer terms and
+/// the gyros' g-sensitivity).
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub struct Term {
-    /// The triad whose output the parameter enters.
-    pub sensor: Sensor,
-    /// The part of the model.
-    pub kind: TermKind,
+    /// The catalogue entry: one of [`Term::EFFECTS`].
+    pub effect: EffectKind,
     /// The output axis, 0..2.
     pub axis: usize,
     /// The axis of the source quantity, 0..2 (equal to `axis` for a scale factor).
@@ -88,36 +68,51 @@ pub struct Term {
 }
 
 impl Term {
+    /// The catalogue entries that are proportional terms of the sensor model, in the order of [`Term::all`].
+    pub const EFFECTS: [EffectKind; 5] = [
+        EffectKind::AccelScaleFactor,
+        EffectKind::AccelMisalignment,
+        EffectKind::GyroScaleFactor,
+        EffectKind::GyroMisalignment,
+        EffectKind::GyroGSensitivity,
+    ];
+
     /// Every proportional term: the accelerometer scale factors and misalignments, and, with `gyros`, the
     /// gyro scale factors, misalignments and g-sensitivity, in that order (axis by axis, `along` inner).
     pub fn all(gyros: bool) -> Vec<Term> {
+        let effects = if gyros { &Term::EFFECTS[..] } else { &Term::EFFECTS[..2] };
         let mut terms = Vec::new();
-        let mut family = |sensor, kind, pairs: &mut dyn Iterator<Item = (usize, usize)>| {
-            terms.extend(pairs.map(|(axis, along)| Term { sensor, kind, axis, along }));
-        };
-        let diagonal = || (0..3).map(|i| (i, i));
-        let off_diagonal = || (0..3).flat_map(|i| (0..3).filter(move |&j| j != i).map(move |j| (i, j)));
-        family(Sensor::Accel, TermKind::ScaleFactor, &mut diagonal());
-        family(Sensor::Accel, TermKind::Misalignment, &mut off_diagonal());
-        if gyros {
-            family(Sensor::Gyro, TermKind::ScaleFactor, &mut diagonal());
-            family(Sensor::Gyro, TermKind::Misalignment, &mut off_diagonal());
-            family(Sensor::Gyro, TermKind::GSensitivity, &mut (0..3).flat_map(|i| (0..3).map(move |j| (i, j))));
+        for &effect in effects {
+            for (axis, along) in (0..3).flat_map(|i| (0..3).map(move |j| (i, j))) {
+                let present = match effect {
+                    EffectKind::AccelScaleFactor | EffectKind::GyroScaleFactor => along == axis,
+                    EffectKind::GyroGSensitivity => true,
+                    _ => along != axis,
+                };
+                if present {
+                    terms.push(Term { effect, axis, along });
+                }
+            }
         }
         terms
     }
 
+    /// The triad whose output the term enters.
+    pub fn sensor(&self) -> Sensor {
+        self.effect.sensor().unwrap_or(Sensor::Accel)
+    }
+
     /// The output channel the term enters: gyros 0..2, accelerometers 3..5.
     pub fn channel(&self) -> usize {
-        match self.sensor {
+        match self.sensor() {
             Sensor::Gyro => self.axis,
-            Sensor::Accel => 3 + self.axis,
+            _ => 3 + self.axis,
         }
     }
 
     /// Whether the source quantity is the specific force (else the rate).
     pub fn from_force(&self) -> bool {
-        self.sensor == Sensor::Accel || self.kind == TermKind::GSensitivity
+        self.sensor() != Sensor::Gyro || self.effect == EffectKind::GyroGSensitivity
     }
 
     /// The output error per unit parameter at true body rate `rate_b_radps` and specific force
@@ -144,13 +139,13 @@ mod tests {
             let h = 1e-3;
             let mut m = [[0.0; 3]; 3];
             let (mut scale, mut cross) = ([0.0; 3], [[0.0; 3]; 3]);
-            match term.kind {
-                TermKind::ScaleFactor => scale[term.axis] = h,
-                TermKind::Misalignment => m[term.axis][term.along] = h,
-                TermKind::GSensitivity => cross[term.axis][term.along] = h,
+            match term.effect {
+                EffectKind::AccelScaleFactor | EffectKind::GyroScaleFactor => scale[term.axis] = h,
+                EffectKind::GyroGSensitivity => cross[term.axis][term.along] = h,
+                _ => m[term.axis][term.along] = h,
             }
             let triad = Triad::new([0.0; 3], scale, &m, cross);
-            let (own, other) = if term.sensor == Sensor::Gyro { (rate, force) } else { (force, [0.0; 3]) };
+            let (own, other) = if term.sensor() == Sensor::Gyro { (rate, force) } else { (force, [0.0; 3]) };
             let base = Triad::new([0.0; 3], [0.0; 3], &[[0.0; 3]; 3], [[0.0; 3]; 3]).measure(own, other);
             let moved = triad.measure(own, other);
             for i in 0..3 {
