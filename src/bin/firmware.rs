@@ -27,7 +27,7 @@ mod firmware {
     use sinscal::nav::frames::Attitude;
     use sinscal::run::sampling::{on_data_ready, process_next, QueueItem, SamplingStats, QUEUE_SLOTS};
     use sinscal::run::sequence::{CalibrationSequence, Event, SequenceSettings};
-    use sinscal::sensor::adis::{Adis, Model};
+    use sinscal::sensor::adis::{Adis, Model, OUTPUT_RATE_HZ};
 
     /// What the data-ready interrupt owns.
     struct Sampler {
@@ -101,8 +101,8 @@ mod firmware {
         let schedule = TABLE1_POSITIONS_DEG.map(|p| Attitude::from_degrees(p[0], p[1], p[2]));
         let site = Site::with_normal_gravity(45.7796f32.to_radians(), 0.0);
         let Ok(mut sequence) = CalibrationSequence::new(&schedule, site, SequenceSettings::default()) else { exit(3) };
-        // 100 Hz data-ready timer.
-        board::start_sample_timer(100);
+        // The data-ready timer at the IMU's output rate (100 Hz).
+        board::start_sample_timer(OUTPUT_RATE_HZ as u32);
         loop {
             while let Some(event) = process_next(&mut consumer, |item| sequence.on_sample(board::in_position(), item)) {
                 if let Some(event) = event {
