@@ -46,7 +46,7 @@ fn check_at(
     let text = scenario.recording(0, "exact.csv").to_csv();
     let rec = Recording::parse(&text, "exact.csv").unwrap();
     let cal = calibrate(&rec, &options).unwrap();
-    let s = &cal.solution;
+    let s = &cal.solution.unwrap();
     assert!(cal.converged);
     println!("  ({} pass(es), converged)", cal.passes);
     let mut worst = (0.0f64, 0.0f64);
@@ -87,10 +87,10 @@ fn check_at(
 #[test]
 fn both_signs_on_every_axis_with_and_without_prefilter() {
     let mut report = Vec::new();
-    for max_passes in [1, Options::default().max_passes] {
+    for max_passes in [1, Options::angles().max_passes] {
         for prefilter in [PrefilterKind::None, PrefilterKind::HmmKf] {
             for signs in [[1.0, -1.0, 1.0], [-1.0, 1.0, -1.0]] {
-                let options = Options { prefilter, max_passes, ..Options::default() };
+                let options = Options { prefilter, max_passes, ..Options::angles() };
                 // Gyro and accelerometer signs crossed, so no pair of axes shares a sign pattern.
                 let accel_signs = [signs[1], signs[0], signs[0]];
                 let worst = check(signs, accel_signs, [0.0; 3], options);
@@ -109,8 +109,8 @@ fn both_signs_on_every_axis_with_and_without_prefilter() {
 fn reference_offset_is_separated_from_the_biases() {
     let arcsec = 1.0 / 206_264.806;
     let offset = [20.0 * arcsec, -15.0 * arcsec, 60.0 * arcsec];
-    for max_passes in [1, Options::default().max_passes] {
-        let options = Options { max_passes, ..Options::default() };
+    for max_passes in [1, Options::angles().max_passes] {
+        let options = Options { max_passes, ..Options::angles() };
         let worst = check([1.0, 1.0, -1.0], [-1.0, 1.0, 1.0], offset, options);
         println!("with offset, passes {max_passes}: worst {:.2e} deg/h, {:.4} ug", worst.0, worst.1);
     }
@@ -121,8 +121,8 @@ fn refinement_removes_the_second_order_error_of_large_biases() {
     // 0.5 deg/h and 1000 ug: the first-order solution is off by about eps_e eps_n / (W cos L).
     let (signs_g, signs_a) = ([1.0, -1.0, 1.0], [-1.0, 1.0, 1.0]);
     let loose = Tolerance { gyro_deg_h: 0.1, accel_ug: 30.0, offset_rad: 1.0 };
-    let one = check_at(0.5, 1000.0, signs_g, signs_a, [0.0; 3], Options { max_passes: 1, ..Options::default() }, loose);
-    let refined = check_at(0.5, 1000.0, signs_g, signs_a, [0.0; 3], Options::default(), REFINED);
+    let one = check_at(0.5, 1000.0, signs_g, signs_a, [0.0; 3], Options { max_passes: 1, ..Options::angles() }, loose);
+    let refined = check_at(0.5, 1000.0, signs_g, signs_a, [0.0; 3], Options::angles(), REFINED);
     println!(
         "0.5 deg/h, 1000 ug: one pass worst {:.2e} deg/h {:.3} ug; refined {:.2e} deg/h {:.4} ug",
         one.0, one.1, refined.0, refined.1
@@ -133,8 +133,8 @@ fn refinement_removes_the_second_order_error_of_large_biases() {
 
 #[test]
 fn without_the_offset_parameter_an_exact_table_still_gives_the_biases() {
-    for max_passes in [1, Options::default().max_passes] {
-        let options = Options { estimate_reference_offset: false, max_passes, ..Options::default() };
+    for max_passes in [1, Options::angles().max_passes] {
+        let options = Options { estimate_reference_offset: false, max_passes, ..Options::angles() };
         check([1.0, -1.0, -1.0], [1.0, 1.0, -1.0], [0.0; 3], options);
     }
 }
@@ -142,12 +142,12 @@ fn without_the_offset_parameter_an_exact_table_still_gives_the_biases() {
 #[test]
 fn settled_output_and_identified_coefficient_on_exact_data() {
     // On exact data every variant sees the same constants (the filter passes DC exactly).
-    let options = Options { dwell_value: DwellValue::Settled, ..Options::default() };
+    let options = Options { dwell_value: DwellValue::Settled, ..Options::angles() };
     check([1.0, -1.0, 1.0], [1.0, -1.0, 1.0], [0.0; 3], options);
     // Coefficient identification needs a non-constant window: with exact data it must refuse, clearly.
     let scenario = Scenario::table1_exact();
     let rec = scenario.recording(0, "exact.csv");
-    let options = Options { coefficient: Coefficient::Identify, ..Options::default() };
+    let options = Options { coefficient: Coefficient::Identify, ..Options::angles() };
     let err = calibrate(&rec, &options).unwrap_err().to_string();
     assert!(err.contains("cannot identify the coefficient a"), "{err}");
 }
@@ -165,12 +165,12 @@ fn a_flipped_phi_convention_would_be_caught() {
         ..Scenario::table1_exact()
     };
     let rec = scenario.recording(0, "exact.csv");
-    let cal = calibrate(&rec, &Options { max_passes: 1, ..Options::default() }).unwrap();
+    let cal = calibrate(&rec, &Options { max_passes: 1, ..Options::angles() }).unwrap();
     let site = cal.site;
     let mut flipped = BiasSolver::new(site, SolverSettings::default());
     for (p, deg) in cal.positions.iter().zip(TABLE1_POSITIONS_DEG) {
         let c = Attitude::from_degrees(deg[0], deg[1], deg[2]).c_b_n();
-        flipped.add(&c, p.angles.phi_n_rad.map(|x| -x), &p.angles.covariance_rad2).unwrap();
+        flipped.add(&c, p.angles.unwrap().phi_n_rad.map(|x| -x), &p.angles.unwrap().covariance_rad2).unwrap();
     }
     let f = flipped.solve().unwrap();
     for i in 0..3 {

@@ -24,8 +24,8 @@ fn frame_offset(file: &[u8], k: usize) -> usize {
 #[test]
 fn replay_matches_the_direct_calibration_to_the_device_quantisation() {
     let rec = example(60.0);
-    let direct = calibrate(&rec, &Options::default()).unwrap();
-    let replayed = calibrate_on_host(&rec, &Options::default()).unwrap();
+    let direct = calibrate(&rec, &Options::angles()).unwrap();
+    let replayed = calibrate_on_host(&rec, &Options::angles()).unwrap();
     let s = replayed.sampling.unwrap();
     assert_eq!((s.events as usize, s.readings as usize), (rec.rows.len(), rec.rows.len()));
     assert_eq!(s.faults() + s.queue_full + s.missed_samples, 0);
@@ -35,10 +35,16 @@ fn replay_matches_the_direct_calibration_to_the_device_quantisation() {
     // The ADIS16505-2's 32-bit LSB is 6.7e-9 rad/s and 3.7e-8 m/s^2; averaged over a dwell the difference
     // is far below the standard errors.
     for i in 0..3 {
-        let (d, r) = (direct.solution.gyro_bias_b_radps[i].unwrap(), replayed.solution.gyro_bias_b_radps[i].unwrap());
+        let (d, r) = (
+            direct.solution.unwrap().gyro_bias_b_radps[i].unwrap(),
+            replayed.solution.unwrap().gyro_bias_b_radps[i].unwrap(),
+        );
         assert!((d.value - r.value).abs() < 0.02 * d.std_error, "gyro {i}");
         assert!((d.value - r.value).abs() < 1e-4 * DEG_PER_HOUR as f32);
-        let (d, r) = (direct.solution.accel_bias_b_mps2[i].unwrap(), replayed.solution.accel_bias_b_mps2[i].unwrap());
+        let (d, r) = (
+            direct.solution.unwrap().accel_bias_b_mps2[i].unwrap(),
+            replayed.solution.unwrap().accel_bias_b_mps2[i].unwrap(),
+        );
         assert!((d.value - r.value).abs() < 0.02 * d.std_error, "accel {i}");
         assert!((d.value - r.value).abs() < 0.05 * MICRO_G as f32);
     }
@@ -47,7 +53,7 @@ fn replay_matches_the_direct_calibration_to_the_device_quantisation() {
 #[test]
 fn corrupted_frames_are_counted_and_the_dwell_survives_a_few() {
     let rec = example(20.0);
-    let (mut file, _) = replay_file(&rec, &Options::default()).unwrap();
+    let (mut file, _) = replay_file(&rec, &Options::angles()).unwrap();
     // Row 300 is in dwell 1 (after 200 settle rows): flip a byte (checksum error); row 310: repeat the
     // previous counter (stalled); row 320: set DIAG_STAT bit 1 (data path overrun) with a valid checksum.
     let at = frame_offset(&file, 300) + 1 + 6;
@@ -76,7 +82,7 @@ fn corrupted_frames_are_counted_and_the_dwell_survives_a_few() {
 #[test]
 fn motion_and_a_wrong_position_abort_the_dwell_with_a_reason() {
     let rec = example(20.0);
-    let (clean, _) = replay_file(&rec, &Options::default()).unwrap();
+    let (clean, _) = replay_file(&rec, &Options::angles()).unwrap();
 
     // A bump: 5 deg/s about x for one sample in the middle of dwell 2.
     let mut file = clean.clone();
@@ -105,9 +111,9 @@ fn motion_and_a_wrong_position_abort_the_dwell_with_a_reason() {
     for row in rec_wrong.rows.iter_mut().filter(|r| r.pos == 5) {
         row.roll_deg = 0.0;
     }
-    let err = calibrate_on_host(&rec_wrong, &Options::default()).unwrap_err().to_string();
+    let err = calibrate_on_host(&rec_wrong, &Options::angles()).unwrap_err().to_string();
     assert!(err.contains("position 5 (dwell 5) aborted: GravityContradictsPosition"), "{err}");
-    let (file, _) = replay_file(&rec_wrong, &Options::default()).unwrap();
+    let (file, _) = replay_file(&rec_wrong, &Options::angles()).unwrap();
     let outcome = run_replay(&file[..], |_| {}).unwrap();
     assert!(matches!(
         outcome.failure,

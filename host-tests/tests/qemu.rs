@@ -35,8 +35,8 @@ fn firmware_in_qemu_and_the_host_replay_agree_to_the_bit() {
     let elf = firmware_elf().expect("firmware builds");
     let rec = Scenario { dwell_s: 30.0, ..Scenario::example() }.recording(11, "example.csv");
     for options in [
-        Options::default(),
-        Options { prefilter: sinscal_host::calibration::PrefilterKind::None, max_passes: 1, ..Options::default() },
+        Options::angles(),
+        Options { prefilter: sinscal_host::calibration::PrefilterKind::None, max_passes: 1, ..Options::angles() },
     ] {
         let (mut file, _) = replay_file(&rec, &options).unwrap();
         // Also a corrupted frame (a gyro byte of row 1000, inside dwell 1), so the fault path runs on both.
@@ -52,8 +52,8 @@ fn firmware_in_qemu_and_the_host_replay_agree_to_the_bit() {
         assert!(host.result.is_some());
         assert_eq!(host.sampling.faults(), 1);
     }
-    let on_host = calibrate_on_host(&rec, &Options::default()).unwrap();
-    let on_qemu = calibrate_on_qemu(&rec, &Options::default()).unwrap();
+    let on_host = calibrate_on_host(&rec, &Options::angles()).unwrap();
+    let on_qemu = calibrate_on_qemu(&rec, &Options::angles()).unwrap();
     assert_eq!(on_qemu.on, "qemu");
     assert_eq!(json_without_on(&on_host), json_without_on(&on_qemu));
 }

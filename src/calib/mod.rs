@@ -5,6 +5,7 @@
 
 pub mod align;
 pub mod calibration;
+pub mod channels;
 pub mod dwell;
 pub mod prefilter;
 pub mod solve;

@@ -112,9 +112,37 @@ pub fn skew(v: Vec3) -> Mat3 {
     Mat3([[0.0, -v[2], v[1]], [v[2], 0.0, -v[0]], [-v[1], v[0], 0.0]])
 }
 
+/// Right-handed rotation by the angle `|v|` about `v` (Rodrigues), f32.
+pub fn rotation(v: Vec3) -> Mat3 {
+    let t2 = v[0] * v[0] + v[1] * v[1] + v[2] * v[2];
+    if t2 == 0.0 {
+        return Mat3::IDENTITY;
+    }
+    let t = libm::sqrtf(t2);
+    let k = [v[0] / t, v[1] / t, v[2] / t];
+    let (s, c) = (libm::sinf(t), libm::cosf(t));
+    let mut m = [[0.0f32; 3]; 3];
+    let kx = [[0.0, -k[2], k[1]], [k[2], 0.0, -k[0]], [-k[1], k[0], 0.0]];
+    for i in 0..3 {
+        for j in 0..3 {
+            let id = if i == j { 1.0 } else { 0.0 };
+            m[i][j] = id * c + s * kx[i][j] + (1.0 - c) * k[i] * k[j];
+        }
+    }
+    Mat3(m)
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn rotation_is_rodrigues() {
+        let r = rotation([0.0, 0.0, core::f32::consts::FRAC_PI_2]);
+        let x = r.mul_vec([1.0, 0.0, 0.0]);
+        assert!((x[1] - 1.0).abs() < 1e-6 && x[0].abs() < 1e-6);
+        assert_eq!(rotation([0.0; 3]), Mat3::IDENTITY);
+    }
 
     #[test]
     fn inverse_times_matrix_is_identity() {

@@ -3,3 +3,4 @@
 
 pub mod accumulate;
 pub mod linalg;
+pub mod lsq;

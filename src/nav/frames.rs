@@ -33,8 +33,19 @@ impl Attitude {
 
     /// The body-to-navigation direction cosine matrix `C_b^n = Rz(-psi) Rx(theta) Ry(gamma)`.
     pub fn c_b_n(&self) -> Mat3 {
-        rot_z(-self.heading_rad).mul(&rot_x(self.pitch_rad)).mul(&rot_y(self.roll_rad))
+        heading_rotation(self.heading_rad).mul(&self.tilt())
     }
+
+    /// The attitude without its heading, `Rx(theta) Ry(gamma)`: `C_b^n = heading_rotation(psi) * tilt`. The
+    /// direction of gravity in the body depends on it alone.
+    pub fn tilt(&self) -> Mat3 {
+        rot_x(self.pitch_rad).mul(&rot_y(self.roll_rad))
+    }
+}
+
+/// The heading part of `C_b^n`: `Rz(-psi)` for the heading `psi` (clockwise from north).
+pub fn heading_rotation(heading_rad: f32) -> Mat3 {
+    rot_z(-heading_rad)
 }
 
 /// sin and cos of an angle, with exact values at multiples of 90 degrees, where turntable positions

@@ -10,7 +10,9 @@ use sinscal::rig::replay::{
 use sinscal::run::sequence::SequenceFailure;
 use sinscal::sensor::adis::{encode_burst, Burst, Model, BURST32_LEN, I16F16};
 
-use crate::calibration::{calibration_dwells, prefilter_of, site_of, Calibration, Options, PositionResult};
+use crate::calibration::{
+    calibration_dwells, prefilter_of, site_of, Calibration, Estimates, Method, Options, PositionResult,
+};
 use crate::io::error::InputError;
 use crate::io::recording::{DwellAttitude, Recording};
 
@@ -20,7 +22,7 @@ pub const REPLAY_MODEL: Model = Model::Adis16505_2;
 /// Writes the replay file of a recording for the given calibration options.
 pub fn replay_file(rec: &Recording, options: &Options) -> Result<(Vec<u8>, Vec<DwellAttitude>), InputError> {
     let source = rec.source.as_str();
-    let dwells = calibration_dwells(rec)?;
+    let dwells = calibration_dwells(rec, sinscal::calib::solve::MAX_POSITIONS)?;
     // The firmware path needs each dwell as one contiguous stretch of rows (one turntable stop).
     let mut seen = Vec::new();
     let mut previous = 0;
@@ -141,7 +143,7 @@ pub fn calibration_from_outcome(
             first_line: dwells[k].first_line(),
             attitude: attitudes[k],
             summary: p.summary,
-            angles,
+            angles: Some(angles),
         });
     }
     Ok(Calibration {
@@ -150,9 +152,12 @@ pub fn calibration_from_outcome(
         site,
         gravity_source: site_of(&rec.header).1,
         prefilter: outcome.header.settings.prefilter,
-        options: *options,
+        options: Options { method: Method::Angles, ..*options },
         positions,
-        solution: result.solution,
+        estimates: Estimates::from_angles(&result.solution),
+        solution: Some(result.solution),
+        channels: None,
+        has_gyro: true,
         passes: result.passes,
         converged: result.converged,
         sampling: Some(outcome.sampling),

@@ -1,12 +1,16 @@
 //! `sinscal calibrate`: a recording through the no_std core (dwell collection, alignment, solution).
 //! Every formula is the core's; this module only reads, converts to f32 at the edge, and checks input.
 
+pub mod estimates;
 pub mod firmware_path;
 pub mod montecarlo;
 pub mod qemu;
 
 use sinscal::calib::align::{position_angles, DwellValue, PositionAngles};
 use sinscal::calib::calibration::{calibrate_positions, CalibrationResult, CalibrationSettings, PositionInput};
+use sinscal::calib::channels::{
+    ChannelDwell, ChannelError, ChannelEstimator, ChannelSettings, ChannelSolution, Model, MAX_DWELLS,
+};
 use sinscal::calib::dwell::{DwellCollector, DwellSummary, Prefilter};
 use sinscal::calib::prefilter::{CoefficientIdentifier, PrefilterSettings};
 use sinscal::calib::solve::{BiasSolution, SolverSettings, MAX_POSITIONS};
@@ -14,6 +18,7 @@ use sinscal::nav::earth::{normal_gravity_mps2, Site};
 use sinscal::nav::frames::Attitude;
 use sinscal::sensor::sample::ImuSample;
 
+pub use crate::calibration::estimates::{Estimates, Method};
 use crate::io::error::InputError;
 use crate::io::recording::{Dwell, DwellAttitude, Header, Recording};
 
@@ -49,7 +54,23 @@ pub struct Options {
     /// Passes of the solution at most (1 = the paper's single linear pass; more remove its second-order
     /// error).
     pub max_passes: u32,
+    /// The estimator.
+    pub method: Method,
+    /// The terms of the general estimator (the angle method estimates the biases and the offset).
+    pub model: Model,
 }
+
+impl Options {
+    /// The default options with the paper's estimator (`--method angles`).
+    pub fn angles() -> Options {
+        Options { method: Method::Angles, ..Options::default() }
+    }
+}
+
+/// The estimator `calibrate` uses unless told otherwise, chosen by measurement (docs/method.md#default-estimator).
+pub const DEFAULT_METHOD: Method = Method::Channels;
+/// The general estimator's default terms (docs/method.md#default-estimator).
+pub const DEFAULT_MODEL: Model = Model::BIASES;
 
 impl Default for Options {
     fn default() -> Options {
@@ -59,6 +80,8 @@ impl Default for Options {
             dwell_value: DwellValue::Mean,
             estimate_reference_offset: true,
             max_passes: CalibrationSettings::default().max_passes,
+            method: DEFAULT_METHOD,
+            model: DEFAULT_MODEL,
         }
     }
 }
@@ -83,8 +106,9 @@ pub struct PositionResult {
     pub attitude: DwellAttitude,
     /// Dwell statistics (core).
     pub summary: DwellSummary,
-    /// Alignment of the dwell as measured, against the turntable's attitude (first pass, core).
-    pub angles: PositionAngles,
+    /// Alignment of the dwell as measured, against the turntable's attitude (first pass, core); `None` without
+    /// a reference heading or gyro data.
+    pub angles: Option<PositionAngles>,
 }
 
 /// The result of a calibration.
@@ -104,8 +128,14 @@ pub struct Calibration {
     pub options: Options,
     /// Positions in order.
     pub positions: Vec<PositionResult>,
-    /// The solution (core).
-    pub solution: BiasSolution,
+    /// The parameters, whichever estimator made them.
+    pub estimates: Estimates,
+    /// The angle method's solution (core), with `--method angles`.
+    pub solution: Option<BiasSolution>,
+    /// The general estimator's solution (core), with `--method channels`.
+    pub channels: Option<ChannelSolution>,
+    /// Whether the recording has gyro data.
+    pub has_gyro: bool,
     /// Passes made and convergence of the refinement (core).
     pub passes: u32,
     /// Whether the refinement converged.
@@ -134,16 +164,16 @@ pub fn site_of(header: &Header) -> (Site, GravitySource) {
     }
 }
 
-/// The dwells of a recording, at least one and at most the core's limit.
-pub fn calibration_dwells(recording: &Recording) -> Result<Vec<Dwell<'_>>, InputError> {
+/// The dwells of a recording, at least one and at most `limit` (the estimator's).
+pub fn calibration_dwells(recording: &Recording, limit: usize) -> Result<Vec<Dwell<'_>>, InputError> {
     let source = recording.source.as_str();
     let dwells = recording.dwells();
     if dwells.is_empty() {
         return Err(InputError::file(source, "no dwell: every row has pos = 0"));
     }
-    if dwells.len() > MAX_POSITIONS {
-        let line = dwells[MAX_POSITIONS].first_line();
-        return Err(InputError::at(source, line, format!("more than {MAX_POSITIONS} positions (the core's limit)")));
+    if dwells.len() > limit {
+        let line = dwells[limit].first_line();
+        return Err(InputError::at(source, line, format!("more than {limit} positions (the core's limit)")));
     }
     Ok(dwells)
 }
@@ -165,12 +195,148 @@ pub fn prefilter_of(options: &Options, first: &Dwell<'_>, source: &str) -> Resul
     })
 }
 
-/// Runs a calibration of a recording.
+/// Runs a calibration of a recording with the estimator the options name.
 pub fn calibrate(recording: &Recording, options: &Options) -> Result<Calibration, InputError> {
+    match options.method {
+        Method::Angles => calibrate_angles(recording, options),
+        Method::Channels => calibrate_channels(recording, options),
+    }
+}
+
+fn has_gyro_columns(_recording: &Recording) -> bool {
+    true
+}
+
+/// The dwell statistics of one dwell through the core's collector.
+fn collect(collector: &mut DwellCollector, dwell: &Dwell<'_>, source: &str) -> Result<DwellSummary, InputError> {
+    collector.reset();
+    for row in &dwell.rows {
+        let sample = ImuSample { rate_b_radps: to_f32(row.rate_b_radps), force_b_mps2: to_f32(row.force_b_mps2) };
+        collector
+            .update(&sample)
+            .map_err(|e| InputError::at(source, row.line, format!("{e} (after conversion to f32)")))?;
+    }
+    collector
+        .summary()
+        .map_err(|e| InputError::at(source, dwell.first_line(), format!("dwell {}: {e}: too short to use", dwell.pos)))
+}
+
+/// The general estimator (docs/method.md#general-estimator) on a recording: headings and gyro columns optional.
+pub fn calibrate_channels(recording: &Recording, options: &Options) -> Result<Calibration, InputError> {
     let source = recording.source.as_str();
     let header = &recording.header;
+    let has_gyro = has_gyro_columns(recording);
     let (site, gravity_source) = site_of(header);
-    let dwells = calibration_dwells(recording)?;
+    let dwells = calibration_dwells(recording, MAX_DWELLS)?;
+    let prefilter = prefilter_of(options, &dwells[0], source)?;
+    let mut collector =
+        DwellCollector::new(&prefilter).map_err(|e| InputError::file(source, format!("prefilter: {e}")))?;
+    let mut positions = Vec::with_capacity(dwells.len());
+    for dwell in &dwells {
+        let attitude = dwell.attitude(source)?;
+        let summary = collect(&mut collector, dwell, source)?;
+        let angles = match (has_gyro, attitude.heading_deg) {
+            (true, Some(h)) => {
+                let c = Attitude::from_degrees(attitude.pitch_deg as f32, attitude.roll_deg as f32, h as f32).c_b_n();
+                position_angles(&summary, options.dwell_value, &c, &site).ok()
+            }
+            _ => None,
+        };
+        positions.push(PositionResult { pos: dwell.pos, first_line: dwell.first_line(), attitude, summary, angles });
+    }
+    let settings = ChannelSettings { model: options.model, use_gyro: has_gyro, ..ChannelSettings::default() };
+    let mut estimator = ChannelEstimator::new(site, settings);
+    let noise = mean_noise(&positions);
+    for p in &positions {
+        let a = Attitude::from_degrees(
+            p.attitude.pitch_deg as f32,
+            p.attitude.roll_deg as f32,
+            p.attitude.heading_deg.unwrap_or(0.0) as f32,
+        );
+        let s = &p.summary;
+        let (rate, force) = match options.dwell_value {
+            DwellValue::Mean => (s.rate_mean_b_radps, s.force_mean_b_mps2),
+            DwellValue::Settled => (s.rate_settled_b_radps, s.force_settled_b_mps2),
+        };
+        let n = s.samples.max(1) as f32;
+        // A floor at the f32 resolution of a mean (2^-23 of the Earth rate, of g) keeps the weights finite on
+        // noise-free data.
+        let floor = |scale: f32| (1.2e-7 * scale) * (1.2e-7 * scale);
+        let (rate_floor, force_floor) = (floor(sinscal::nav::earth::EARTH_RATE_RADPS), floor(site.gravity_mps2));
+        let dwell = ChannelDwell {
+            tilt: a.tilt(),
+            heading_rad: p.attitude.heading_deg.map(|_| a.heading_rad),
+            rate_mean_b_radps: rate,
+            force_mean_b_mps2: force,
+            rate_mean_var_b_radps2: [0, 1, 2].map(|i| (noise[i] / n).max(rate_floor)),
+            force_mean_var_b_mps2sq: [0, 1, 2].map(|i| (noise[3 + i] / n).max(force_floor)),
+        };
+        estimator.add(dwell).map_err(|e| channel_error(e, &positions, source))?;
+    }
+    let solution = estimator.solve().map_err(|e| channel_error(e, &positions, source))?;
+    Ok(Calibration {
+        source: source.to_string(),
+        latitude_deg: header.latitude_deg,
+        site,
+        gravity_source,
+        prefilter,
+        options: *options,
+        positions,
+        estimates: Estimates::from_channels(&solution),
+        solution: None,
+        passes: solution.iterations,
+        converged: solution.converged,
+        channels: Some(solution),
+        has_gyro,
+        sampling: None,
+        on: "recording",
+    })
+}
+
+/// White-equivalent sample variance of each channel (gyro x, y, z, accelerometer x, y, z), pooled over the
+/// session's dwells: a dwell mean of N samples has variance q / N.
+fn mean_noise(positions: &[PositionResult]) -> [f32; 6] {
+    let mut sum = [0.0f64; 6];
+    let mut weight = 0.0f64;
+    for p in positions {
+        let s = &p.summary;
+        let dof = s.samples.saturating_sub(1) as f64;
+        for i in 0..3 {
+            sum[i] += dof * (s.rate_sample_std_b_radps[i] as f64).powi(2);
+            sum[3 + i] += dof * (s.force_sample_std_b_mps2[i] as f64).powi(2);
+        }
+        weight += dof;
+    }
+    [0, 1, 2, 3, 4, 5].map(|i| (sum[i] / weight.max(1.0)) as f32)
+}
+
+/// A core error with the dwell's label and line.
+fn channel_error(e: ChannelError, positions: &[PositionResult], source: &str) -> InputError {
+    let dwell = match e {
+        ChannelError::BadInput { dwell }
+        | ChannelError::ForceMagnitude { dwell, .. }
+        | ChannelError::GravityDirection { dwell, .. }
+        | ChannelError::HeadingMismatch { dwell, .. } => positions.get(dwell),
+        _ => None,
+    };
+    match dwell {
+        Some(p) => InputError::at(source, p.first_line, format!("position {}: {e}", p.pos)),
+        None => InputError::file(source, e.to_string()),
+    }
+}
+
+/// The paper's estimator (docs/method.md#step-5-six-positions) on a recording: headings and gyros needed.
+pub fn calibrate_angles(recording: &Recording, options: &Options) -> Result<Calibration, InputError> {
+    let source = recording.source.as_str();
+    let header = &recording.header;
+    if !has_gyro_columns(recording) {
+        return Err(InputError::file(
+            source,
+            "no gyro columns: the angle method needs them (--method channels calibrates the accelerometers alone)",
+        ));
+    }
+    let (site, gravity_source) = site_of(header);
+    let dwells = calibration_dwells(recording, MAX_POSITIONS)?;
     let prefilter = prefilter_of(options, &dwells[0], source)?;
     let mut collector =
         DwellCollector::new(&prefilter).map_err(|e| InputError::file(source, format!("prefilter: {e}")))?;
@@ -187,14 +353,7 @@ pub fn calibrate(recording: &Recording, options: &Options) -> Result<Calibration
     for dwell in &dwells {
         let at = |reason: String| InputError::at(source, dwell.first_line(), format!("dwell {}: {reason}", dwell.pos));
         let (attitude, heading_deg) = dwell.attitude_with_heading(source, "the calibration")?;
-        collector.reset();
-        for row in &dwell.rows {
-            let sample = ImuSample { rate_b_radps: to_f32(row.rate_b_radps), force_b_mps2: to_f32(row.force_b_mps2) };
-            collector
-                .update(&sample)
-                .map_err(|e| InputError::at(source, row.line, format!("{e} (after conversion to f32)")))?;
-        }
-        let summary = collector.summary().map_err(|e| at(format!("{e}: too short to use")))?;
+        let summary = collect(&mut collector, dwell, source)?;
         let c_b_n =
             Attitude::from_degrees(attitude.pitch_deg as f32, attitude.roll_deg as f32, heading_deg as f32).c_b_n();
         let angles = position_angles(&summary, options.dwell_value, &c_b_n, &site).map_err(|e| at(e.to_string()))?;
@@ -210,6 +369,7 @@ pub fn calibrate(recording: &Recording, options: &Options) -> Result<Calibration
             )));
         }
         inputs.push(PositionInput { c_b_n, summary });
+        let angles = Some(angles);
         positions.push(PositionResult { pos: dwell.pos, first_line: dwell.first_line(), attitude, summary, angles });
     }
     let CalibrationResult { solution, passes, converged, .. } =
@@ -222,7 +382,10 @@ pub fn calibrate(recording: &Recording, options: &Options) -> Result<Calibration
         prefilter,
         options: *options,
         positions,
-        solution,
+        estimates: Estimates::from_angles(&solution),
+        solution: Some(solution),
+        channels: None,
+        has_gyro: true,
         passes,
         converged,
         sampling: None,

@@ -1,4 +1,4 @@
-//! `sinscal calibrate RECORDING`: gyro and accelerometer biases from a recording, through the core directly
+//! `sinscal calibrate RECORDING`: the sensor-model terms of a recording (the general estimator or the paper's), through the core directly
 //! or through the firmware path (`--on host`, `--on qemu`).
 
 use std::path::{Path, PathBuf};
@@ -6,9 +6,12 @@ use std::path::{Path, PathBuf};
 use clap::ValueEnum;
 use sinscal::calib::align::DwellValue;
 
+use crate::calibration::estimates::parse_model;
 use crate::calibration::firmware_path::calibrate_on_host;
 use crate::calibration::qemu::calibrate_on_qemu;
-use crate::calibration::{calibrate, Calibration, Coefficient, Options, PrefilterKind};
+use crate::calibration::{
+    calibrate, Calibration, Coefficient, Method, Options, PrefilterKind, DEFAULT_METHOD, DEFAULT_MODEL,
+};
 use crate::cmd::write_json;
 use crate::io::calibration_result::{summary, CalibrationJson};
 use crate::io::recording::Recording;
@@ -31,6 +34,15 @@ pub enum DwellValueArg {
     Settled,
 }
 
+/// The estimator.
+#[derive(Clone, Copy, ValueEnum)]
+pub enum MethodArg {
+    /// The general estimator: every channel of every dwell against the reference.
+    Channels,
+    /// The paper's: alignment angles per position.
+    Angles,
+}
+
 /// Where the firmware path runs.
 #[derive(Clone, Copy, ValueEnum)]
 pub enum OnArg {
@@ -45,9 +57,17 @@ pub enum OnArg {
 pub struct Args {
     /// The recording (CSV).
     recording: PathBuf,
-    /// Write the result as JSON (docs/formats.md#calibration-json) to this file ('-' = stdout).
+    /// Write the result as JSON (docs/formats.md#calibration-json-version-2) to this file ('-' = stdout).
     #[arg(long)]
     json: Option<PathBuf>,
+    /// The estimator (default: channels, chosen by measurement: docs/method.md#default-estimator).
+    #[arg(long, value_enum)]
+    method: Option<MethodArg>,
+    /// The general estimator's terms: 'biases', 'full', or a comma list of gyro_bias, accel_bias,
+    /// accel_scale_factor, accel_misalignment, gyro_scale_factor, gyro_misalignment, gyro_g_sensitivity,
+    /// reference_offset (default: biases).
+    #[arg(long)]
+    model: Option<String>,
     /// Prefilter in front of the dwell statistics.
     #[arg(long, value_enum, default_value = "hmmkf")]
     prefilter: PrefilterArg,
@@ -81,7 +101,24 @@ impl Args {
                 _ => anyhow::bail!("--prefilter-a: '{}' is neither 'auto' nor a number in [0, 1]", self.prefilter_a),
             }
         };
+        let method = match (self.method, self.on) {
+            (Some(MethodArg::Channels), Some(_)) => {
+                anyhow::bail!("--on: the firmware path solves with the angle method in this version (--method angles)")
+            }
+            (Some(MethodArg::Angles), _) | (None, Some(_)) => Method::Angles,
+            (Some(MethodArg::Channels), None) => Method::Channels,
+            (None, None) => DEFAULT_METHOD,
+        };
+        let model = match &self.model {
+            Some(text) if method == Method::Angles => {
+                anyhow::bail!("--model '{text}': the angle method estimates the biases (and the offset) only")
+            }
+            Some(text) => parse_model(text).map_err(|e| anyhow::anyhow!("--model: {e}"))?,
+            None => DEFAULT_MODEL,
+        };
         Ok(Options {
+            method,
+            model,
             prefilter: match self.prefilter {
                 PrefilterArg::Hmmkf => PrefilterKind::HmmKf,
                 PrefilterArg::None => PrefilterKind::None,

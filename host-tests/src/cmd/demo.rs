@@ -46,27 +46,30 @@ pub fn run(args: Args) -> anyhow::Result<()> {
 /// The truth of the simulation beside each estimate, and the error in standard errors.
 fn print_truth(scenario: &Scenario, cal: &Calibration) {
     println!("\nTruth of the simulation, and (estimate - truth) / standard error:");
-    let s = &cal.solution;
-    let rows: [(&str, Option<sinscal::calib::solve::Estimate>, f64, f64, &str); 9] = [
-        ("gyro x", s.gyro_bias_b_radps[0], scenario.gyro_bias_b_radps[0], DEG_PER_HOUR, "deg/h"),
-        ("gyro y", s.gyro_bias_b_radps[1], scenario.gyro_bias_b_radps[1], DEG_PER_HOUR, "deg/h"),
-        ("gyro z", s.gyro_bias_b_radps[2], scenario.gyro_bias_b_radps[2], DEG_PER_HOUR, "deg/h"),
-        ("accel x", s.accel_bias_b_mps2[0], scenario.accel_bias_b_mps2[0], MICRO_G, "ug"),
-        ("accel y", s.accel_bias_b_mps2[1], scenario.accel_bias_b_mps2[1], MICRO_G, "ug"),
-        ("accel z", s.accel_bias_b_mps2[2], scenario.accel_bias_b_mps2[2], MICRO_G, "ug"),
-        ("offset e", s.reference_offset_n_rad[0], scenario.reference_offset_n_rad[0], 1.0 / ARCSEC_PER_RAD, "arcsec"),
-        ("offset n", s.reference_offset_n_rad[1], scenario.reference_offset_n_rad[1], 1.0 / ARCSEC_PER_RAD, "arcsec"),
-        ("offset u", s.reference_offset_n_rad[2], scenario.reference_offset_n_rad[2], 1.0 / ARCSEC_PER_RAD, "arcsec"),
+    let e = &cal.estimates;
+    let rows: [(&str, usize, f64, f64, &str); 9] = [
+        ("gyro x", 0, scenario.gyro_bias_b_radps[0], DEG_PER_HOUR, "deg/h"),
+        ("gyro y", 1, scenario.gyro_bias_b_radps[1], DEG_PER_HOUR, "deg/h"),
+        ("gyro z", 2, scenario.gyro_bias_b_radps[2], DEG_PER_HOUR, "deg/h"),
+        ("accel x", 3, scenario.accel_bias_b_mps2[0], MICRO_G, "ug"),
+        ("accel y", 4, scenario.accel_bias_b_mps2[1], MICRO_G, "ug"),
+        ("accel z", 5, scenario.accel_bias_b_mps2[2], MICRO_G, "ug"),
+        ("offset e", 33, scenario.reference_offset_n_rad[0], 1.0 / ARCSEC_PER_RAD, "arcsec"),
+        ("offset n", 34, scenario.reference_offset_n_rad[1], 1.0 / ARCSEC_PER_RAD, "arcsec"),
+        ("offset u", 35, scenario.reference_offset_n_rad[2], 1.0 / ARCSEC_PER_RAD, "arcsec"),
     ];
-    for (name, est, truth, unit, unit_name) in rows {
-        match est {
-            Some(e) => println!(
+    for (name, index, truth, unit, unit_name) in rows {
+        match (e.value[index], e.std[index]) {
+            (Some(v), Some(sd)) => println!(
                 "  {name:<8} truth {:>+10.5} {unit_name:<6} estimate {:>+10.5}  ({:+.2} sigma)",
                 truth / unit,
-                e.value as f64 / unit,
-                (e.value as f64 - truth) / e.std_error as f64
+                v / unit,
+                (v - truth) / sd
             ),
-            None => println!("  {name:<8} truth {:>+10.5} {unit_name:<6} unobservable", truth / unit),
+            _ if e.unobservable.contains(&index) => {
+                println!("  {name:<8} truth {:>+10.5} {unit_name:<6} unobservable", truth / unit)
+            }
+            _ => println!("  {name:<8} truth {:>+10.5} {unit_name:<6} not in the model", truth / unit),
         }
     }
 }

@@ -4,10 +4,10 @@ use std::fmt::Write as _;
 
 use serde::Serialize;
 use sinscal::calib::align::DwellValue;
+use sinscal::calib::channels::{misalignment_index, Term};
 use sinscal::calib::dwell::Prefilter;
-use sinscal::calib::solve::{Estimate, Parameter};
 
-use crate::calibration::{Calibration, GravitySource};
+use crate::calibration::{Calibration, Estimates, GravitySource};
 use crate::model::synth::{DEG_PER_HOUR, MICRO_G};
 
 /// Arcseconds per radian.
@@ -22,23 +22,48 @@ pub struct PositionJson {
     pub pitch_deg: f64,
     /// Reference roll, degrees.
     pub roll_deg: f64,
-    /// Reference heading, degrees.
-    pub heading_deg: f64,
+    /// Reference heading, degrees; the estimate where the reference gives none (`heading_known` false),
+    /// null when neither exists (accelerometer-only data).
+    pub heading_deg: Option<f64>,
+    /// Whether the heading is the reference's.
+    pub heading_known: bool,
+    /// Standard error of an estimated heading, degrees (extra field; absent for a known heading).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub heading_std_deg: Option<f64>,
     /// Samples used.
     pub samples: u32,
-    /// Misalignment (e, n, u), rad.
-    pub phi_rad: [f64; 3],
+    /// Misalignment (e, n, u) of the dwell's analytic alignment against the reference, rad; null without a
+    /// reference heading or gyro data.
+    pub phi_rad: Option<[f64; 3]>,
     /// Standard deviation of each angle from the dwell noise, rad (extra field).
-    pub phi_std_rad: [f64; 3],
-    /// Residual of the bias model at this position, rad (extra field).
-    pub residual_rad: [f64; 3],
+    pub phi_std_rad: Option<[f64; 3]>,
+    /// Residual of the angle method at this position, rad (extra field; `--method angles`).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub residual_rad: Option<[f64; 3]>,
+    /// Measured minus predicted gyro mean, rad/s (`--method channels`; null without gyros).
+    pub residual_gyro_radps: Option<[f64; 3]>,
+    /// Measured minus predicted accelerometer mean, m/s^2 (`--method channels`).
+    pub residual_accel_mps2: Option<[f64; 3]>,
+    /// Residuals inconsistent with the model at the 0.1 % level.
+    pub suspect: bool,
+    /// The dwell's residual statistic (chi-square with the dwell's channel count of degrees of freedom when
+    /// the model holds; extra field, `--method channels`).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub statistic: Option<f64>,
 }
+
+/// A 3x3 term in the JSON (null entries where undetermined).
+type Matrix = [[Option<f64>; 3]; 3];
 
 /// The calibration JSON of docs/formats.md#calibration-json, with extra fields after the contract's.
 #[derive(Debug, Serialize)]
 pub struct CalibrationJson {
-    /// "sinscal-calibration/1".
+    /// "sinscal-calibration/2".
     pub schema: &'static str,
+    /// "channels" or "angles".
+    pub method: &'static str,
+    /// The terms estimated.
+    pub model: Vec<&'static str>,
     /// Latitude, degrees.
     pub latitude_deg: f64,
     /// Gravity used, m/s^2.
@@ -53,17 +78,39 @@ pub struct CalibrationJson {
     pub accel_bias_mps2: [Option<f64>; 3],
     /// Its standard error, m/s^2.
     pub accel_bias_std_mps2: [Option<f64>; 3],
-    /// Parameters the schedule cannot determine.
-    pub unobservable: Vec<&'static str>,
-    /// Extra: reference offset phi0 (e, n, u), rad; absent when not estimated.
-    #[serde(skip_serializing_if = "Option::is_none")]
+    /// Accelerometer scale factors x, y, z, 1 (null when not in the model).
+    pub accel_scale_factor: Option<[Option<f64>; 3]>,
+    /// Their standard errors.
+    pub accel_scale_factor_std: Option<[Option<f64>; 3]>,
+    /// Accelerometer misalignments `[[0, xy, xz], [yx, 0, yz], [zx, zy, 0]]`, 1.
+    pub accel_misalignment: Option<Matrix>,
+    /// Their standard errors.
+    pub accel_misalignment_std: Option<Matrix>,
+    /// Gyro scale factors, 1.
+    pub gyro_scale_factor: Option<[Option<f64>; 3]>,
+    /// Their standard errors.
+    pub gyro_scale_factor_std: Option<[Option<f64>; 3]>,
+    /// Gyro misalignments, 1.
+    pub gyro_misalignment: Option<Matrix>,
+    /// Their standard errors.
+    pub gyro_misalignment_std: Option<Matrix>,
+    /// Gyro g-sensitivity, (rad/s)/(m/s^2).
+    pub gyro_g_sensitivity_radps_per_mps2: Option<Matrix>,
+    /// Its standard errors.
+    pub gyro_g_sensitivity_std_radps_per_mps2: Option<Matrix>,
+    /// Reference offset phi0 (e, n, u), rad.
     pub reference_offset_rad: Option<[Option<f64>; 3]>,
-    /// Extra: its standard error, rad.
-    #[serde(skip_serializing_if = "Option::is_none")]
+    /// Its standard error, rad.
     pub reference_offset_std_rad: Option<[Option<f64>; 3]>,
-    /// Extra: weighted residual sum of squares.
+    /// Names of the determined parameters, in the order of `covariance`.
+    pub parameters: Vec<&'static str>,
+    /// Their covariance, SI units.
+    pub covariance: Vec<Vec<f64>>,
+    /// Parameters the schedule cannot determine (structural rank).
+    pub unobservable: Vec<&'static str>,
+    /// Weighted residual sum of squares.
     pub chi_square: f64,
-    /// Extra: its degrees of freedom.
+    /// Its degrees of freedom.
     pub degrees_of_freedom: u32,
     /// Extra: where gravity came from: "header" or "normal_gravity".
     pub gravity_source: &'static str,
@@ -117,12 +164,26 @@ pub struct PrefilterJson {
     pub r: Option<[f64; 2]>,
 }
 
-fn value(e: Option<Estimate>) -> Option<f64> {
-    e.map(|e| e.value as f64)
+/// A three-parameter term's values (or standard errors), null when the term is not in the model.
+fn triple(e: &Estimates, term: Term, of: &[Option<f64>; 36]) -> Option<[Option<f64>; 3]> {
+    let (first, _) = term.parameters();
+    e.model.contains(term).then(|| [of[first], of[first + 1], of[first + 2]])
 }
 
-fn std(e: Option<Estimate>) -> Option<f64> {
-    e.map(|e| e.std_error as f64)
+/// A misalignment term as a matrix with zeros on the diagonal.
+fn misalignment(e: &Estimates, term: Term, of: &[Option<f64>; 36]) -> Option<Matrix> {
+    let (first, _) = term.parameters();
+    e.model.contains(term).then(|| {
+        core::array::from_fn(|i| {
+            core::array::from_fn(|j| if i == j { Some(0.0) } else { of[first + misalignment_index(i, j)] })
+        })
+    })
+}
+
+/// A full 3x3 term (the g-sensitivity), row by row.
+fn full_matrix(e: &Estimates, term: Term, of: &[Option<f64>; 36]) -> Option<Matrix> {
+    let (first, _) = term.parameters();
+    e.model.contains(term).then(|| core::array::from_fn(|i| core::array::from_fn(|j| of[first + 3 * i + j])))
 }
 
 fn f64s(v: [f32; 3]) -> [f64; 3] {
@@ -133,26 +194,34 @@ impl CalibrationJson {
     /// Builds the JSON document of a calibration. f32 values are widened to f64 exactly, and serde_json
     /// writes the shortest decimal that reads back to the same f64, hence to the same f32.
     pub fn new(c: &Calibration) -> CalibrationJson {
-        let s = &c.solution;
+        let e = &c.estimates;
         let positions = c
             .positions
             .iter()
             .enumerate()
             .map(|(k, p)| {
-                let cov = p.angles.covariance_rad2.0;
+                let channels = c.channels.as_ref();
+                let estimated_heading = channels.filter(|_| c.has_gyro).map(|s| (s.heading_rad[k] as f64).to_degrees());
                 PositionJson {
                     pos: p.pos,
                     pitch_deg: p.attitude.pitch_deg,
                     roll_deg: p.attitude.roll_deg,
-                    heading_deg: p.attitude.heading_deg.unwrap_or(f64::NAN),
+                    heading_deg: p.attitude.heading_deg.or(estimated_heading.map(|h| h.rem_euclid(360.0))),
+                    heading_known: p.attitude.heading_deg.is_some(),
+                    heading_std_deg: channels
+                        .filter(|_| p.attitude.heading_deg.is_none() && c.has_gyro)
+                        .map(|s| (s.heading_std_rad[k] as f64).to_degrees()),
                     samples: p.summary.samples,
-                    phi_rad: f64s(p.angles.phi_n_rad),
-                    phi_std_rad: [0, 1, 2].map(|i| (cov[i][i] as f64).sqrt()),
-                    residual_rad: f64s(s.residual_n_rad[k]),
+                    phi_rad: p.angles.map(|a| f64s(a.phi_n_rad)),
+                    phi_std_rad: p.angles.map(|a| [0, 1, 2].map(|i| (a.covariance_rad2.0[i][i] as f64).sqrt())),
+                    residual_rad: c.solution.as_ref().map(|s| f64s(s.residual_n_rad[k])),
+                    residual_gyro_radps: channels.filter(|_| c.has_gyro).map(|s| f64s(s.residual_rate_b_radps[k])),
+                    residual_accel_mps2: channels.map(|s| f64s(s.residual_force_b_mps2[k])),
+                    suspect: channels.is_some_and(|s| s.suspect & (1 << k) != 0),
+                    statistic: channels.map(|s| s.dwell_statistic[k] as f64).filter(|x| *x >= 0.0),
                 }
             })
             .collect();
-        let offset = s.reference_offset_estimated.then_some(s.reference_offset_n_rad);
         let prefilter = match c.prefilter {
             Prefilter::None => PrefilterJson { kind: "none", a: None, q: None, r: None },
             Prefilter::HmmKf { gyro, accel } => PrefilterJson {
@@ -162,20 +231,35 @@ impl CalibrationJson {
                 r: Some([gyro.r as f64, accel.r as f64]),
             },
         };
+        let (value, std) = (&e.value, &e.std);
         CalibrationJson {
-            schema: "sinscal-calibration/1",
+            schema: "sinscal-calibration/2",
+            method: e.method.name(),
+            model: e.model_names(),
             latitude_deg: c.latitude_deg,
             gravity_mps2: c.site.gravity_mps2 as f64,
             positions,
-            gyro_bias_radps: s.gyro_bias_b_radps.map(value),
-            gyro_bias_std_radps: s.gyro_bias_b_radps.map(std),
-            accel_bias_mps2: s.accel_bias_b_mps2.map(value),
-            accel_bias_std_mps2: s.accel_bias_b_mps2.map(std),
-            unobservable: Parameter::ALL.iter().filter(|p| s.is_unobservable(**p)).map(|p| p.name()).collect(),
-            reference_offset_rad: offset.map(|o| o.map(value)),
-            reference_offset_std_rad: offset.map(|o| o.map(std)),
-            chi_square: s.chi_square as f64,
-            degrees_of_freedom: s.degrees_of_freedom,
+            gyro_bias_radps: [value[0], value[1], value[2]],
+            gyro_bias_std_radps: [std[0], std[1], std[2]],
+            accel_bias_mps2: [value[3], value[4], value[5]],
+            accel_bias_std_mps2: [std[3], std[4], std[5]],
+            accel_scale_factor: triple(e, Term::AccelScaleFactor, value),
+            accel_scale_factor_std: triple(e, Term::AccelScaleFactor, std),
+            accel_misalignment: misalignment(e, Term::AccelMisalignment, value),
+            accel_misalignment_std: misalignment(e, Term::AccelMisalignment, std),
+            gyro_scale_factor: triple(e, Term::GyroScaleFactor, value),
+            gyro_scale_factor_std: triple(e, Term::GyroScaleFactor, std),
+            gyro_misalignment: misalignment(e, Term::GyroMisalignment, value),
+            gyro_misalignment_std: misalignment(e, Term::GyroMisalignment, std),
+            gyro_g_sensitivity_radps_per_mps2: full_matrix(e, Term::GyroGSensitivity, value),
+            gyro_g_sensitivity_std_radps_per_mps2: full_matrix(e, Term::GyroGSensitivity, std),
+            reference_offset_rad: triple(e, Term::ReferenceOffset, value),
+            reference_offset_std_rad: triple(e, Term::ReferenceOffset, std),
+            parameters: e.determined_names(),
+            covariance: e.covariance.clone(),
+            unobservable: e.unobservable_names(),
+            chi_square: e.chi_square,
+            degrees_of_freedom: e.degrees_of_freedom,
             gravity_source: match c.gravity_source {
                 GravitySource::Header => "header",
                 GravitySource::NormalGravity => "normal_gravity",
@@ -201,19 +285,32 @@ impl CalibrationJson {
     }
 }
 
-/// Formats an estimate in a display unit: `+0.05012 ± 0.00041`, or `unobservable`.
-fn show(e: Option<Estimate>, per_unit: f64, decimals: usize) -> String {
-    match e {
-        Some(e) => {
-            format!("{:+.*} ± {:.*}", decimals, e.value as f64 / per_unit, decimals, e.std_error as f64 / per_unit)
-        }
-        None => "unobservable".to_string(),
+/// Formats an estimate in a display unit: `+0.05012 ± 0.00041`, `unobservable`, or `-`.
+fn show(e: &Estimates, index: usize, per_unit: f64, decimals: usize) -> String {
+    match (e.value[index], e.std[index]) {
+        (Some(v), Some(sd)) => format!("{:+.*} ± {:.*}", decimals, v / per_unit, decimals, sd / per_unit),
+        _ if e.unobservable.contains(&index) => "unobservable".to_string(),
+        _ => "-".to_string(),
+    }
+}
+
+/// One term's lines in the summary.
+fn show_term(out: &mut String, e: &Estimates, term: Term, title: &str, per_unit: f64, decimals: usize) {
+    if !e.model.contains(term) {
+        return;
+    }
+    let (first, count) = term.parameters();
+    let _ = writeln!(out, "{title}:");
+    for i in first..first + count {
+        let name = sinscal::calib::channels::parameter_name(i);
+        let axes = name.rsplit('_').next().unwrap_or("");
+        let _ = writeln!(out, "  {axes:<2} {}", show(e, i, per_unit, decimals));
     }
 }
 
 /// The human summary of a calibration.
 pub fn summary(c: &Calibration) -> String {
-    let s = &c.solution;
+    let e = &c.estimates;
     let mut out = String::new();
     let gravity_from = match c.gravity_source {
         GravitySource::Header => "from the header",
@@ -221,11 +318,12 @@ pub fn summary(c: &Calibration) -> String {
     };
     let _ = writeln!(
         out,
-        "sinscal calibrate: {} ({} positions, latitude {} deg, g = {:.6} m/s^2 {gravity_from})",
+        "sinscal calibrate: {} ({} positions, latitude {} deg, g = {:.6} m/s^2 {gravity_from}{})",
         c.source,
         c.positions.len(),
         c.latitude_deg,
-        c.site.gravity_mps2
+        c.site.gravity_mps2,
+        if c.has_gyro { "" } else { "; no gyro data" }
     );
     let prefilter = match c.prefilter {
         Prefilter::None => "none (plain dwell means)".to_string(),
@@ -237,75 +335,170 @@ pub fn summary(c: &Calibration) -> String {
         DwellValue::Mean => "dwell mean",
         DwellValue::Settled => "settled filter output",
     };
-    let passes = if c.passes == 1 {
-        "1 pass (the paper's linear solution)".to_string()
-    } else {
-        format!(
-            "{} passes (first-order solution refined{})",
+    let method = match e.method {
+        crate::calibration::Method::Angles if c.passes == 1 => {
+            "angles (the paper's alignment-angle method, 1 pass: its linear solution)".to_string()
+        }
+        crate::calibration::Method::Angles => format!(
+            "angles (the paper's alignment-angle method, {} passes{})",
             c.passes,
             if c.converged { ", converged" } else { ", NOT converged: the second-order terms are large" }
-        )
+        ),
+        crate::calibration::Method::Channels => format!(
+            "channels (every channel of every dwell; model {}; {} Gauss-Newton passes{})",
+            e.model_names().join(", "),
+            c.passes,
+            if c.converged { ", converged" } else { ", NOT converged" }
+        ),
     };
-    let _ = writeln!(out, "prefilter: {prefilter}; alignment uses the {value}; {passes}\n");
-    let _ = writeln!(
-        out,
-        " pos   pitch    roll  heading  samples |  misalignment phi [arcsec]     e          n          u   | residual [arcsec] e, n, u"
-    );
-    for (k, p) in c.positions.iter().enumerate() {
-        let phi = p.angles.phi_n_rad.map(|x| x as f64 * ARCSEC_PER_RAD);
-        let sd = [0, 1, 2].map(|i| (p.angles.covariance_rad2.0[i][i] as f64).sqrt() * ARCSEC_PER_RAD);
-        let res = s.residual_n_rad[k].map(|x| x as f64 * ARCSEC_PER_RAD);
-        let _ = writeln!(
-            out,
-            "{:>4} {:>7.2} {:>7.2} {:>8.2} {:>8} |  {:>+9.2}±{:<6.2} {:>+9.2}±{:<6.2} {:>+9.1}±{:<6.1} | {:>+7.2} {:>+7.2} {:>+7.1}",
-            p.pos,
-            p.attitude.pitch_deg,
-            p.attitude.roll_deg,
-            p.attitude.heading_deg.unwrap_or(f64::NAN),
-            p.summary.samples,
-            phi[0],
-            sd[0],
-            phi[1],
-            sd[1],
-            phi[2],
-            sd[2],
-            res[0],
-            res[1],
-            res[2]
-        );
-    }
-    let axes = ["x", "y", "z"];
-    let _ = writeln!(out, "\nGyro bias, body frame [deg/h] (estimate ± standard error):");
-    for (i, axis) in axes.iter().enumerate() {
-        let _ = writeln!(out, "  {axis}: {}", show(s.gyro_bias_b_radps[i], DEG_PER_HOUR, 5));
-    }
-    let _ = writeln!(out, "Accelerometer bias, body frame [ug] (1 ug = 9.80665e-6 m/s^2):");
-    for (i, axis) in axes.iter().enumerate() {
-        let _ = writeln!(out, "  {axis}: {}", show(s.accel_bias_b_mps2[i], MICRO_G, 2));
-    }
-    if s.reference_offset_estimated {
-        let _ = writeln!(out, "Reference (turntable) offset phi0 [arcsec]:");
-        for (i, axis) in ["e", "n", "u"].iter().enumerate() {
-            let _ = writeln!(out, "  {axis}: {}", show(s.reference_offset_n_rad[i], 1.0 / ARCSEC_PER_RAD, 2));
+    let _ = writeln!(out, "method: {method}\nprefilter: {prefilter}; the {value} of each dwell\n");
+    match &c.channels {
+        Some(s) => {
+            let _ = writeln!(
+                out,
+                " pos   pitch    roll  heading  samples | residual gyro [deg/h]  x       y       z   | residual accel [ug]  x        y        z    | statistic"
+            );
+            for (k, p) in c.positions.iter().enumerate() {
+                let heading = match p.attitude.heading_deg {
+                    Some(h) => format!("{h:>8.2}"),
+                    None if c.has_gyro => format!("{:>7.1}?", (s.heading_rad[k] as f64).to_degrees().rem_euclid(360.0)),
+                    None => "       ?".to_string(),
+                };
+                let rg = s.residual_rate_b_radps[k].map(|x| x as f64 / DEG_PER_HOUR);
+                let ra = s.residual_force_b_mps2[k].map(|x| x as f64 / MICRO_G);
+                let stat = s.dwell_statistic[k];
+                let _ = writeln!(
+                    out,
+                    "{:>4} {:>7.2} {:>7.2} {heading} {:>8} |  {:>+9.4} {:>+9.4} {:>+9.4} |  {:>+9.2} {:>+9.2} {:>+9.2} | {}{}",
+                    p.pos,
+                    p.attitude.pitch_deg,
+                    p.attitude.roll_deg,
+                    p.summary.samples,
+                    rg[0],
+                    rg[1],
+                    rg[2],
+                    ra[0],
+                    ra[1],
+                    ra[2],
+                    if stat >= 0.0 { format!("{stat:.1}") } else { "-".to_string() },
+                    if s.suspect & (1 << k) != 0 { "  SUSPECT" } else { "" }
+                );
+            }
+            if c.positions.iter().any(|p| p.attitude.heading_deg.is_none()) && c.has_gyro {
+                let _ = writeln!(out, "(? = heading unknown in the recording: estimated from the Earth rate)");
+            }
+        }
+        None => {
+            let _ = writeln!(
+                out,
+                " pos   pitch    roll  heading  samples |  misalignment phi [arcsec]     e          n          u   | residual [arcsec] e, n, u"
+            );
+            let residuals = c.solution.as_ref().map(|s| s.residual_n_rad);
+            for (k, p) in c.positions.iter().enumerate() {
+                let Some(angles) = p.angles else { continue };
+                let phi = angles.phi_n_rad.map(|x| x as f64 * ARCSEC_PER_RAD);
+                let sd = [0, 1, 2].map(|i| (angles.covariance_rad2.0[i][i] as f64).sqrt() * ARCSEC_PER_RAD);
+                let res = residuals.map_or([0.0; 3], |r| r[k].map(|x| x as f64 * ARCSEC_PER_RAD));
+                let _ = writeln!(
+                    out,
+                    "{:>4} {:>7.2} {:>7.2} {:>8.2} {:>8} |  {:>+9.2}±{:<6.2} {:>+9.2}±{:<6.2} {:>+9.1}±{:<6.1} | {:>+7.2} {:>+7.2} {:>+7.1}",
+                    p.pos,
+                    p.attitude.pitch_deg,
+                    p.attitude.roll_deg,
+                    p.attitude.heading_deg.unwrap_or(f64::NAN),
+                    p.summary.samples,
+                    phi[0],
+                    sd[0],
+                    phi[1],
+                    sd[1],
+                    phi[2],
+                    sd[2],
+                    res[0],
+                    res[1],
+                    res[2]
+                );
+            }
         }
     }
-    let unobservable: Vec<&str> = Parameter::ALL.iter().filter(|p| s.is_unobservable(**p)).map(|p| p.name()).collect();
+    let _ = writeln!(out);
+    show_term(
+        &mut out,
+        e,
+        Term::GyroBias,
+        "Gyro bias, body frame [deg/h] (estimate ± standard error)",
+        DEG_PER_HOUR,
+        5,
+    );
+    show_term(
+        &mut out,
+        e,
+        Term::AccelBias,
+        "Accelerometer bias, body frame [ug] (1 ug = 9.80665e-6 m/s^2)",
+        MICRO_G,
+        2,
+    );
+    show_term(&mut out, e, Term::AccelScaleFactor, "Accelerometer scale factor [ppm]", 1e-6, 2);
+    show_term(
+        &mut out,
+        e,
+        Term::AccelMisalignment,
+        "Accelerometer misalignment, axis i along j [arcsec]",
+        1.0 / ARCSEC_PER_RAD,
+        2,
+    );
+    show_term(&mut out, e, Term::GyroScaleFactor, "Gyro scale factor [ppm]", 1e-6, 1);
+    show_term(
+        &mut out,
+        e,
+        Term::GyroMisalignment,
+        "Gyro misalignment, axis i about j [arcsec]",
+        1.0 / ARCSEC_PER_RAD,
+        1,
+    );
+    show_term(&mut out, e, Term::GyroGSensitivity, "Gyro g-sensitivity [(deg/h)/g]", DEG_PER_HOUR / 9.80665, 4);
+    show_term(
+        &mut out,
+        e,
+        Term::ReferenceOffset,
+        "Reference (turntable) offset phi0, e n u [arcsec]",
+        1.0 / ARCSEC_PER_RAD,
+        2,
+    );
+    let unobservable = e.unobservable_names();
     if !unobservable.is_empty() {
         let _ = writeln!(out, "Not determined by this schedule: {}", unobservable.join(", "));
     }
-    let _ = writeln!(
-        out,
-        "Fit: chi-square {:.2} on {} degrees of freedom{}",
-        s.chi_square,
-        s.degrees_of_freedom,
-        if s.degrees_of_freedom > 0 {
-            format!(
-                " (ratio {:.2}; about 1 when the bias-only model and white noise explain the angles)",
-                s.chi_square as f64 / s.degrees_of_freedom as f64
-            )
-        } else {
-            String::new()
+    let dof = e.degrees_of_freedom;
+    let _ = write!(out, "Fit: chi-square {:.2} on {dof} degrees of freedom", e.chi_square);
+    if dof > 0 {
+        let ratio = e.chi_square / dof as f64;
+        let p_value = 1.0 - crate::stats::noise::chi_square_cdf(e.chi_square, dof as f64);
+        let _ = write!(out, " (ratio {ratio:.2}, p = {p_value:.3})");
+        if p_value < 1e-3 {
+            let _ = write!(
+                out,
+                "\n  The model misses something: the residuals are {:.1} times what the dwell noise explains. \
+                 Standard errors above are from the noise alone.",
+                ratio.sqrt()
+            );
         }
-    );
+    }
+    let _ = writeln!(out);
+    if let Some(s) = &c.channels {
+        let suspects: Vec<String> = c
+            .positions
+            .iter()
+            .enumerate()
+            .filter(|(k, _)| s.suspect & (1 << k) != 0)
+            .map(|(_, p)| p.pos.to_string())
+            .collect();
+        if !suspects.is_empty() {
+            let _ = writeln!(
+                out,
+                "Suspect positions (residuals beyond the 0.1 % level of the noise): {}",
+                suspects.join(", ")
+            );
+        }
+    }
     out
 }

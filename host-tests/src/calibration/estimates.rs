@@ -1,0 +1,156 @@
+//! One view of a calibration's parameters, whichever estimator made them: the core's parameter layout
+//! (docs/formats.md#calibration-json-version-2), values and standard errors in SI units, the full covariance of
+//! the determined parameters, and which parameters the schedule cannot determine.
+
+use sinscal::calib::channels::{parameter_name, ChannelSolution, Model, Term, PARAMETERS};
+use sinscal::calib::solve::{BiasSolution, Parameter};
+
+/// Which estimator made a calibration.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Method {
+    /// The paper's: alignment angles per position (docs/method.md#step-5-six-positions).
+    Angles,
+    /// The general estimator: every channel of every dwell (docs/method.md#general-estimator).
+    Channels,
+}
+
+impl Method {
+    /// The name on the command line and in the JSON.
+    pub fn name(self) -> &'static str {
+        match self {
+            Method::Angles => "angles",
+            Method::Channels => "channels",
+        }
+    }
+}
+
+/// Parameters of a calibration in the core's layout.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Estimates {
+    /// The estimator.
+    pub method: Method,
+    /// The terms estimated.
+    pub model: Model,
+    /// Value of each parameter, SI; `None` when not in the model or not determined.
+    pub value: [Option<f64>; PARAMETERS],
+    /// Standard error of each parameter, SI; `None` likewise.
+    pub std: [Option<f64>; PARAMETERS],
+    /// Parameters in the model that the schedule cannot determine.
+    pub unobservable: Vec<usize>,
+    /// The determined parameters, in layout order.
+    pub determined: Vec<usize>,
+    /// Their covariance, SI, in the order of `determined`.
+    pub covariance: Vec<Vec<f64>>,
+    /// Sum of squared whitened residuals and its degrees of freedom.
+    pub chi_square: f64,
+    /// Degrees of freedom.
+    pub degrees_of_freedom: u32,
+}
+
+impl Estimates {
+    /// From the general estimator's solution.
+    pub fn from_channels(s: &ChannelSolution) -> Estimates {
+        let mut e = Estimates::empty(Method::Channels, s.model, s.chi_square as f64, s.degrees_of_freedom);
+        for i in 0..PARAMETERS {
+            if let Some((v, sd)) = s.estimate(i) {
+                e.value[i] = Some(v as f64);
+                e.std[i] = Some(sd as f64);
+                e.determined.push(i);
+            } else if s.unobservable & (1 << i) != 0 {
+                e.unobservable.push(i);
+            }
+        }
+        e.covariance = e
+            .determined
+            .iter()
+            .map(|&i| e.determined.iter().map(|&j| s.covariance_si[i][j] as f64).collect())
+            .collect();
+        e
+    }
+
+    /// From the angle method's solution: gyro and accelerometer biases, and the reference offset when it was
+    /// estimated.
+    pub fn from_angles(s: &BiasSolution) -> Estimates {
+        let mut model = Model::BIASES;
+        if s.reference_offset_estimated {
+            model = model.with(Term::ReferenceOffset);
+        }
+        let mut e = Estimates::empty(Method::Angles, model, s.chi_square as f64, s.degrees_of_freedom);
+        // The angle solver's order (gyro 0-2, accelerometer 3-5, offset 6-8) in the core's layout.
+        let layout = |k: usize| if k < 6 { k } else { 33 + (k - 6) };
+        let mut solver_index = Vec::new();
+        for (k, p) in Parameter::ALL.iter().enumerate() {
+            let i = layout(k);
+            match s.get(*p) {
+                Some(est) => {
+                    e.value[i] = Some(est.value as f64);
+                    e.std[i] = Some(est.std_error as f64);
+                    e.determined.push(i);
+                    solver_index.push(k);
+                }
+                None if s.is_unobservable(*p) => e.unobservable.push(i),
+                None => {}
+            }
+        }
+        e.covariance = solver_index
+            .iter()
+            .map(|&a| solver_index.iter().map(|&b| s.covariance_si[a][b] as f64).collect())
+            .collect();
+        e
+    }
+
+    fn empty(method: Method, model: Model, chi_square: f64, degrees_of_freedom: u32) -> Estimates {
+        Estimates {
+            method,
+            model,
+            value: [None; PARAMETERS],
+            std: [None; PARAMETERS],
+            unobservable: Vec::new(),
+            determined: Vec::new(),
+            covariance: Vec::new(),
+            chi_square,
+            degrees_of_freedom,
+        }
+    }
+
+    /// Names of the unobservable parameters.
+    pub fn unobservable_names(&self) -> Vec<&'static str> {
+        self.unobservable.iter().map(|&i| parameter_name(i)).collect()
+    }
+
+    /// Names of the determined parameters.
+    pub fn determined_names(&self) -> Vec<&'static str> {
+        self.determined.iter().map(|&i| parameter_name(i)).collect()
+    }
+
+    /// The model's term names.
+    pub fn model_names(&self) -> Vec<&'static str> {
+        Term::ALL.iter().filter(|t| self.model.contains(**t)).map(|t| t.name()).collect()
+    }
+}
+
+/// Parses `--model`: `biases`, `full`, or a comma list of term names. `position_error` is analyze's.
+pub fn parse_model(text: &str) -> Result<Model, String> {
+    match text.trim() {
+        "biases" => return Ok(Model::BIASES),
+        "full" => return Ok(Model::FULL),
+        _ => {}
+    }
+    let mut model = Model::EMPTY;
+    for name in text.split(',').map(str::trim) {
+        if name == "position_error" {
+            return Err("position_error: per-position attitude errors are found by `sinscal analyze`; calibrate \
+                        estimates the constant reference_offset"
+                .to_string());
+        }
+        let term = Term::ALL.iter().find(|t| t.name() == name).ok_or_else(|| {
+            let known: Vec<&str> = Term::ALL.iter().map(|t| t.name()).collect();
+            format!("unknown model term '{name}' (known: {}, or the presets biases, full)", known.join(", "))
+        })?;
+        if model.contains(*term) {
+            return Err(format!("model term '{name}' is given twice"));
+        }
+        model = model.with(*term);
+    }
+    Ok(model)
+}

@@ -1,0 +1,1025 @@
+//! The general estimator of docs/method.md#general-estimator: every channel of every dwell against what the
+//! reference predicts, with the sensor-model terms of the catalogue selectable.
+//!
+//! Per dwell `k`, with the reference attitude `C_k` (corrected by the constant reference offset `delta` when it
+//! is in the model: `C_true = R(-delta) C_k`, to first order `(I - [delta x]) C_k`), the body vectors
+//! `f_b = C_true^T f_n` and `w_b = C_true^T w_n` predict the dwell means
+//!     f_meas = T_a f_b + b_a,        w_meas = T_g w_b + b_g + G f_b,        T = I + S + M
+//! (docs/conventions.md#sensor-model). The unknowns are the model's terms (up to [`PARAMETERS`]) and, for each
+//! dwell whose heading is unknown, that heading as a nuisance parameter: gravity does not depend on it, the Earth
+//! rate's horizontal part does.
+//!
+//! The solution is Gauss-Newton on the dwell means weighted by their noise (the variance of each mean, which
+//! the caller takes from the data's own Allan variance, docs/method.md#honest-errors). Each pass folds the
+//! whitened rows into a square-root information factor ([`crate::math::lsq`]); a dwell's heading column is
+//! removed by a Householder reflection of that dwell's rows before they are folded in, which is the Schur
+//! complement of the nuisance in square-root form. Unknown headings are profiled exactly at the start of every
+//! pass (a grid over the full circle, then one-dimensional Gauss-Newton), so the iteration cannot be caught on
+//! the wrong side of the circle.
+//!
+//! Observability is structural: a second factor is built from the same rows at the reference attitudes,
+//! unweighted, with gyro rows in units of the Earth rate and accelerometer rows in units of g, entries below
+//! 1e-6 of those units set to zero, and columns scaled to unit norm. Its singular values below
+//! [`ChannelSettings::rank_tolerance`] of the largest span the directions the schedule cannot see; a parameter
+//! with a share in them is unobservable and is not estimated. Noise never makes a parameter unobservable: a
+//! parameter that is determined but imprecise gets its (large) standard error.
+//!
+//! Memory: the problem holds [`MAX_DWELLS`] dwells (2.6 KB); a solution is 7.7 KB; solving uses about 27 KB of
+//! stack (three 36 x 36 factors and the SVD's workspace).
+
+use heapless::Vec;
+
+use crate::math::linalg::{cross, dot, norm, rotation, Mat3, Vec3};
+use crate::math::lsq::{inverse_gram, jacobi_svd, solve_upper, solve_upper_transposed, SqrtInfo};
+use crate::nav::earth::{Site, EARTH_RATE_RADPS};
+use crate::nav::frames::heading_rotation;
+
+/// Most dwells one solution takes (a bit mask of `u64` marks suspect dwells).
+pub const MAX_DWELLS: usize = 64;
+/// Parameters of the full model: gyro bias 3, accelerometer bias 3, accelerometer scale factor 3 and
+/// misalignment 6, gyro scale factor 3 and misalignment 6, gyro g-sensitivity 9, reference offset 3.
+pub const PARAMETERS: usize = 36;
+
+/// A term of the sensor model (docs/conventions.md#sensor-model), named as in the effect catalogue.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub enum Term {
+    /// Gyro bias `b_g`, rad/s (x, y, z).
+    GyroBias,
+    /// Accelerometer bias `b_a`, m/s^2.
+    AccelBias,
+    /// Accelerometer scale factors (diagonal of `S_a`), 1.
+    AccelScaleFactor,
+    /// Accelerometer misalignments (off-diagonal `M_a`: axis i's sensitivity to force along j), 1.
+    AccelMisalignment,
+    /// Gyro scale factors, 1.
+    GyroScaleFactor,
+    /// Gyro misalignments, 1.
+    GyroMisalignment,
+    /// Gyro g-sensitivity `G`, (rad/s)/(m/s^2), all nine entries.
+    GyroGSensitivity,
+    /// Constant reference (turntable base) offset `delta` about e, n, u, rad.
+    ReferenceOffset,
+}
+
+impl Term {
+    /// Every term in parameter order.
+    pub const ALL: [Term; 8] = [
+        Term::GyroBias,
+        Term::AccelBias,
+        Term::AccelScaleFactor,
+        Term::AccelMisalignment,
+        Term::GyroScaleFactor,
+        Term::GyroMisalignment,
+        Term::GyroGSensitivity,
+        Term::ReferenceOffset,
+    ];
+
+    /// The catalogue name (docs/formats.md#effect-catalogue).
+    pub fn name(self) -> &'static str {
+        match self {
+            Term::GyroBias => "gyro_bias",
+            Term::AccelBias => "accel_bias",
+            Term::AccelScaleFactor => "accel_scale_factor",
+            Term::AccelMisalignment => "accel_misalignment",
+            Term::GyroScaleFactor => "gyro_scale_factor",
+            Term::GyroMisalignment => "gyro_misalignment",
+            Term::GyroGSensitivity => "gyro_g_sensitivity",
+            Term::ReferenceOffset => "reference_offset",
+        }
+    }
+
+    /// First parameter index and number of parameters.
+    pub fn parameters(self) -> (usize, usize) {
+        match self {
+            Term::GyroBias => (0, 3),
+            Term::AccelBias => (3, 3),
+            Term::AccelScaleFactor => (6, 3),
+            Term::AccelMisalignment => (9, 6),
+            Term::GyroScaleFactor => (15, 3),
+            Term::GyroMisalignment => (18, 6),
+            Term::GyroGSensitivity => (24, 9),
+            Term::ReferenceOffset => (33, 3),
+        }
+    }
+
+    /// Whether the term describes the gyros (it cannot be estimated without gyro data).
+    pub fn is_gyro(self) -> bool {
+        matches!(self, Term::GyroBias | Term::GyroScaleFactor | Term::GyroMisalignment | Term::GyroGSensitivity)
+    }
+
+    fn bit(self) -> u16 {
+        1 << (self as u16)
+    }
+}
+
+/// A set of terms.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Default)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub struct Model(u16);
+
+impl Model {
+    /// No term.
+    pub const EMPTY: Model = Model(0);
+    /// Gyro and accelerometer biases.
+    pub const BIASES: Model = Model(0b11);
+    /// Every static term.
+    pub const FULL: Model = Model(0xff);
+
+    /// The model with `term` added.
+    #[must_use]
+    pub fn with(self, term: Term) -> Model {
+        Model(self.0 | term.bit())
+    }
+
+    /// The model with `term` removed.
+    #[must_use]
+    pub fn without(self, term: Term) -> Model {
+        Model(self.0 & !term.bit())
+    }
+
+    /// Whether `term` is in the model.
+    pub fn contains(self, term: Term) -> bool {
+        self.0 & term.bit() != 0
+    }
+
+    /// The model without its gyro terms.
+    #[must_use]
+    pub fn accelerometer_only(self) -> Model {
+        Term::ALL.iter().filter(|t| t.is_gyro()).fold(self, |m, t| m.without(*t))
+    }
+
+    /// Whether parameter `index` belongs to a term of the model.
+    pub fn has_parameter(self, index: usize) -> bool {
+        Term::ALL.iter().any(|t| {
+            let (first, count) = t.parameters();
+            self.contains(*t) && (first..first + count).contains(&index)
+        })
+    }
+}
+
+const NAMES: [&str; PARAMETERS] = [
+    "gyro_bias_x",
+    "gyro_bias_y",
+    "gyro_bias_z",
+    "accel_bias_x",
+    "accel_bias_y",
+    "accel_bias_z",
+    "accel_scale_factor_x",
+    "accel_scale_factor_y",
+    "accel_scale_factor_z",
+    "accel_misalignment_xy",
+    "accel_misalignment_xz",
+    "accel_misalignment_yx",
+    "accel_misalignment_yz",
+    "accel_misalignment_zx",
+    "accel_misalignment_zy",
+    "gyro_scale_factor_x",
+    "gyro_scale_factor_y",
+    "gyro_scale_factor_z",
+    "gyro_misalignment_xy",
+    "gyro_misalignment_xz",
+    "gyro_misalignment_yx",
+    "gyro_misalignment_yz",
+    "gyro_misalignment_zx",
+    "gyro_misalignment_zy",
+    "gyro_g_sensitivity_xx",
+    "gyro_g_sensitivity_xy",
+    "gyro_g_sensitivity_xz",
+    "gyro_g_sensitivity_yx",
+    "gyro_g_sensitivity_yy",
+    "gyro_g_sensitivity_yz",
+    "gyro_g_sensitivity_zx",
+    "gyro_g_sensitivity_zy",
+    "gyro_g_sensitivity_zz",
+    "reference_offset_e",
+    "reference_offset_n",
+    "reference_offset_u",
+];
+
+/// The report name of parameter `index` (docs/formats.md#calibration-json-version-2): `<term>_<axes>`.
+pub fn parameter_name(index: usize) -> &'static str {
+    NAMES.get(index).copied().unwrap_or("")
+}
+
+/// Index of the misalignment entry `(i, j)`, `i != j`, within its term (order xy, xz, yx, yz, zx, zy).
+pub fn misalignment_index(i: usize, j: usize) -> usize {
+    2 * i + if j < i { j } else { j.saturating_sub(1) }
+}
+
+/// One dwell as the estimator sees it.
+#[derive(Clone, Copy, Debug, PartialEq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub struct ChannelDwell {
+    /// The reference attitude without heading, `Rx(pitch) Ry(roll)` ([`crate::nav::frames::Attitude::tilt`]).
+    pub tilt: Mat3,
+    /// The reference heading, rad, clockwise from north; `None` when unknown.
+    pub heading_rad: Option<f32>,
+    /// Mean gyro output, body, rad/s (ignored without gyro data).
+    pub rate_mean_b_radps: Vec3,
+    /// Mean accelerometer output, body, m/s^2.
+    pub force_mean_b_mps2: Vec3,
+    /// Variance of each gyro mean, (rad/s)^2.
+    pub rate_mean_var_b_radps2: Vec3,
+    /// Variance of each accelerometer mean, (m/s^2)^2.
+    pub force_mean_var_b_mps2sq: Vec3,
+}
+
+/// Settings of the estimator.
+#[derive(Clone, Copy, Debug, PartialEq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub struct ChannelSettings {
+    /// The terms to estimate.
+    pub model: Model,
+    /// Whether the dwells carry gyro data; without, the gyro terms are dropped from the model.
+    pub use_gyro: bool,
+    /// Gauss-Newton passes at most.
+    pub max_iterations: u32,
+    /// Singular values of the structural design below this fraction of the largest are blind spots.
+    pub rank_tolerance: f32,
+    /// A parameter whose squared share in the blind spots exceeds this is unobservable.
+    pub share_tolerance: f32,
+    /// Largest relative difference between |f| and g accepted before the fit.
+    pub max_force_magnitude_error: f32,
+    /// Largest angle between measured gravity and the reference's accepted before the fit, rad.
+    pub max_gravity_angle_rad: f32,
+}
+
+impl Default for ChannelSettings {
+    fn default() -> ChannelSettings {
+        ChannelSettings {
+            model: Model::BIASES,
+            use_gyro: true,
+            max_iterations: 12,
+            rank_tolerance: 1e-4,
+            share_tolerance: 1e-3,
+            max_force_magnitude_error: 0.05,
+            max_gravity_angle_rad: 0.1745,
+        }
+    }
+}
+
+/// Why the estimator refused the data (dwell indices count from 0 in the order added).
+#[derive(Clone, Copy, Debug, PartialEq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+#[non_exhaustive]
+pub enum ChannelError {
+    /// No dwell was added.
+    NoDwells,
+    /// More than [`MAX_DWELLS`] dwells.
+    TooManyDwells,
+    /// A mean, variance or attitude is NaN or infinite, or a variance is not positive.
+    BadInput {
+        /// Which dwell.
+        dwell: usize,
+    },
+    /// |f| differs from g by more than the settings allow (an accelerometer scale error, or not at rest).
+    ForceMagnitude {
+        /// Which dwell.
+        dwell: usize,
+        /// |f| / g.
+        ratio: f32,
+    },
+    /// Measured gravity points elsewhere than the reference attitude says (a wrong face down, wrong axes).
+    GravityDirection {
+        /// Which dwell.
+        dwell: usize,
+        /// Angle between the two, rad.
+        angle_rad: f32,
+    },
+    /// The gyros see the Earth rate as if the heading were a quarter or half turn from the reference's.
+    HeadingMismatch {
+        /// Which dwell.
+        dwell: usize,
+        /// The reference heading, rad.
+        given_rad: f32,
+        /// The heading the Earth rate fits, rad.
+        fits_rad: f32,
+    },
+    /// The model has no term the data can inform.
+    NothingToEstimate,
+}
+
+impl core::fmt::Display for ChannelError {
+    fn fmt(&self, f: &mut core::fmt::Formatter<'_>) -> core::fmt::Result {
+        match *self {
+            ChannelError::NoDwells => f.write_str("no dwells to solve"),
+            ChannelError::TooManyDwells => write!(f, "more than {MAX_DWELLS} dwells"),
+            ChannelError::BadInput { dwell } => {
+                write!(f, "dwell {}: a mean, variance or attitude is not finite or a variance not positive", dwell + 1)
+            }
+            ChannelError::ForceMagnitude { dwell, ratio } => write!(
+                f,
+                "dwell {}: |f| is {ratio:.4} g: an accelerometer scale error or a body not at rest",
+                dwell + 1
+            ),
+            ChannelError::GravityDirection { dwell, angle_rad } => write!(
+                f,
+                "dwell {}: measured gravity is {:.1} deg from where the reference attitude puts it: a wrong face \
+                 down, a wrong pitch/roll, or axes that are not x right, y forward, z up",
+                dwell + 1,
+                angle_rad.to_degrees()
+            ),
+            ChannelError::HeadingMismatch { dwell, given_rad, fits_rad } => write!(
+                f,
+                "dwell {}: the gyros see the Earth rate of heading {:.0} deg, not of the reference's {:.0} deg",
+                dwell + 1,
+                degrees_0_360(fits_rad),
+                degrees_0_360(given_rad)
+            ),
+            ChannelError::NothingToEstimate => f.write_str("the model has no term these data can inform"),
+        }
+    }
+}
+
+impl core::error::Error for ChannelError {}
+
+/// An angle in degrees in [0, 360).
+fn degrees_0_360(angle_rad: f32) -> f32 {
+    let d = angle_rad.to_degrees() % 360.0;
+    if d < 0.0 {
+        d + 360.0
+    } else {
+        d
+    }
+}
+
+/// The solution.
+#[derive(Clone, Debug, PartialEq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub struct ChannelSolution {
+    /// The model estimated (without gyro terms when there were no gyro data).
+    pub model: Model,
+    /// Every parameter, SI units, in the order of [`parameter_name`]; 0 for those not estimated.
+    pub parameters_si: [f32; PARAMETERS],
+    /// Bit i: parameter i is in the model and determined by the schedule.
+    pub observable: u64,
+    /// Bit i: parameter i is in the model and the schedule cannot determine it.
+    pub unobservable: u64,
+    /// Covariance of the determined parameters, SI units; rows and columns of the others are zero.
+    pub covariance_si: [[f32; PARAMETERS]; PARAMETERS],
+    /// Number of dwells.
+    pub dwells: usize,
+    /// Heading of every dwell, rad: the reference's, or the estimate for unknown headings.
+    pub heading_rad: [f32; MAX_DWELLS],
+    /// Standard error of an estimated heading (given the sensor terms), rad; 0 for a given heading.
+    pub heading_std_rad: [f32; MAX_DWELLS],
+    /// Measured minus predicted gyro mean per dwell, rad/s.
+    pub residual_rate_b_radps: [Vec3; MAX_DWELLS],
+    /// Measured minus predicted accelerometer mean per dwell, m/s^2.
+    pub residual_force_b_mps2: [Vec3; MAX_DWELLS],
+    /// Per dwell: its whitened residual sum of squares scaled to the dwell's channel count by its degrees of
+    /// freedom left after the fit (a chi-square of that many degrees of freedom when the model holds), or a
+    /// negative value when the dwell has no freedom left to test.
+    pub dwell_statistic: [f32; MAX_DWELLS],
+    /// Bit k: dwell k's residuals exceed the 0.1 % level of that chi-square.
+    pub suspect: u64,
+    /// Sum of the squared whitened residuals.
+    pub chi_square: f32,
+    /// Residual degrees of freedom: channel means, less determined parameters, less estimated headings.
+    pub degrees_of_freedom: u32,
+    /// Gauss-Newton passes made.
+    pub iterations: u32,
+    /// Whether the last correction was below 1e-3 of every standard error, or stopped shrinking below 0.05 of
+    /// them (f32 rounding).
+    pub converged: bool,
+}
+
+impl ChannelSolution {
+    /// Value and standard error of parameter `index`, or `None` when it is not in the model or undetermined.
+    pub fn estimate(&self, index: usize) -> Option<(f32, f32)> {
+        if index < PARAMETERS && self.observable & (1 << index) != 0 {
+            Some((self.parameters_si[index], libm::sqrtf(self.covariance_si[index][index].max(0.0))))
+        } else {
+            None
+        }
+    }
+}
+
+/// Chi-square quantiles at 0.999 for 1 to 6 degrees of freedom.
+const CHI2_999: [f32; 6] = [10.828, 13.816, 16.266, 18.467, 20.515, 22.458];
+
+/// The estimator: dwells collected, solved on demand.
+#[derive(Clone, Debug)]
+pub struct ChannelEstimator {
+    site: Site,
+    settings: ChannelSettings,
+    dwells: Vec<ChannelDwell, MAX_DWELLS>,
+}
+
+/// The prediction of one dwell and its derivatives: rows 0-2 gyro x, y, z, rows 3-5 accelerometer x, y, z.
+struct Linearised {
+    pred: [f32; 6],
+    jac: [[f32; PARAMETERS]; 6],
+    d_heading: [f32; 6],
+}
+
+/// The model's parameter indices in order, and their count.
+fn columns(model: Model) -> ([usize; PARAMETERS], usize) {
+    let mut cols = [0usize; PARAMETERS];
+    let mut n = 0;
+    for (i, _) in NAMES.iter().enumerate() {
+        if model.has_parameter(i) {
+            cols[n] = i;
+            n += 1;
+        }
+    }
+    (cols, n)
+}
+
+fn sensor_matrix(theta: &[f32; PARAMETERS], scale_first: usize, misalignment_first: usize) -> Mat3 {
+    let mut t = Mat3::IDENTITY;
+    for i in 0..3 {
+        t.0[i][i] += theta[scale_first + i];
+        for j in 0..3 {
+            if i != j {
+                t.0[i][j] += theta[misalignment_first + misalignment_index(i, j)];
+            }
+        }
+    }
+    t
+}
+
+/// Prediction and Jacobian of one dwell at the parameters `theta` and heading `heading_rad`.
+fn linearise(theta: &[f32; PARAMETERS], tilt: &Mat3, heading_rad: f32, site: &Site, model: Model) -> Linearised {
+    let c_ref = heading_rotation(heading_rad).mul(tilt);
+    let offset = [theta[33], theta[34], theta[35]];
+    let c_true = if model.contains(Term::ReferenceOffset) {
+        rotation([-offset[0], -offset[1], -offset[2]]).mul(&c_ref)
+    } else {
+        c_ref
+    };
+    let f_n = site.force_at_rest_n_mps2();
+    let w_n = site.earth_rate_n_radps();
+    let ct = c_true.transpose();
+    let f_b = ct.mul_vec(f_n);
+    let w_b = ct.mul_vec(w_n);
+    let t_a = sensor_matrix(theta, 6, 9);
+    let t_g = sensor_matrix(theta, 15, 18);
+    let g_mat =
+        Mat3([[theta[24], theta[25], theta[26]], [theta[27], theta[28], theta[29]], [theta[30], theta[31], theta[32]]]);
+    let fa = t_a.mul_vec(f_b);
+    let wg = t_g.mul_vec(w_b);
+    let gf = g_mat.mul_vec(f_b);
+    let mut out = Linearised { pred: [0.0; 6], jac: [[0.0; PARAMETERS]; 6], d_heading: [0.0; 6] };
+    for i in 0..3 {
+        out.pred[i] = wg[i] + theta[i] + gf[i];
+        out.pred[3 + i] = fa[i] + theta[3 + i];
+        let (g, a) = (i, 3 + i);
+        out.jac[g][i] = 1.0;
+        out.jac[a][3 + i] = 1.0;
+        out.jac[a][6 + i] = f_b[i];
+        out.jac[g][15 + i] = w_b[i];
+        for j in 0..3 {
+            if i != j {
+                out.jac[a][9 + misalignment_index(i, j)] = f_b[j];
+                out.jac[g][18 + misalignment_index(i, j)] = w_b[j];
+            }
+            out.jac[g][24 + 3 * i + j] = f_b[j];
+        }
+    }
+    // Reference offset: d(C_true^T v)/d(delta_m) = C_true^T (e_m x v) to first order.
+    let axes = [[1.0, 0.0, 0.0], [0.0, 1.0, 0.0], [0.0, 0.0, 1.0]];
+    for (m, e) in axes.iter().enumerate() {
+        let dfb = ct.mul_vec(cross(*e, f_n));
+        let dwb = ct.mul_vec(cross(*e, w_n));
+        let (da, dg, dgf) = (t_a.mul_vec(dfb), t_g.mul_vec(dwb), g_mat.mul_vec(dfb));
+        for i in 0..3 {
+            out.jac[i][33 + m] = dg[i] + dgf[i];
+            out.jac[3 + i][33 + m] = da[i];
+        }
+    }
+    // Heading: d(C_true^T v)/d(psi) = C_ref^T (e_u x (C_ref v_b)) with v_b = C_true^T v (exact).
+    let up = [0.0, 0.0, 1.0];
+    let dfb = c_ref.transpose().mul_vec(cross(up, c_ref.mul_vec(f_b)));
+    let dwb = c_ref.transpose().mul_vec(cross(up, c_ref.mul_vec(w_b)));
+    let (da, dg, dgf) = (t_a.mul_vec(dfb), t_g.mul_vec(dwb), g_mat.mul_vec(dfb));
+    for i in 0..3 {
+        out.d_heading[i] = dg[i] + dgf[i];
+        out.d_heading[3 + i] = da[i];
+    }
+    out
+}
+
+/// Whitened rows of one dwell: channel rows (`rows` of them), their right-hand sides and heading column.
+struct DwellRows {
+    a: [[f32; PARAMETERS]; 6],
+    y: [f32; 6],
+    h: [f32; 6],
+    rows: usize,
+}
+
+/// Removes the heading column from a dwell's rows by a Householder reflection: row 0 then carries all the
+/// heading information and is dropped; the rest are orthogonal to the heading direction.
+fn eliminate_heading(d: &mut DwellRows, n: usize) -> usize {
+    let m = d.rows;
+    let h_norm = libm::sqrtf(d.h[..m].iter().map(|x| x * x).sum());
+    if h_norm == 0.0 {
+        return 0;
+    }
+    let alpha = if d.h[0] >= 0.0 { -h_norm } else { h_norm };
+    let mut u = d.h;
+    u[0] -= alpha;
+    let uu: f32 = u[..m].iter().map(|x| x * x).sum();
+    if uu == 0.0 {
+        return 0;
+    }
+    for c in 0..=n {
+        let mut s = 0.0f32;
+        for r in 0..m {
+            s += u[r] * if c < n { d.a[r][c] } else { d.y[r] };
+        }
+        let k = 2.0 * s / uu;
+        for r in 0..m {
+            if c < n {
+                d.a[r][c] -= k * u[r];
+            } else {
+                d.y[r] -= k * u[r];
+            }
+        }
+    }
+    1
+}
+
+impl ChannelEstimator {
+    /// An estimator for one site.
+    pub fn new(site: Site, settings: ChannelSettings) -> ChannelEstimator {
+        ChannelEstimator { site, settings, dwells: Vec::new() }
+    }
+
+    /// The settings.
+    pub fn settings(&self) -> &ChannelSettings {
+        &self.settings
+    }
+
+    /// Dwells added.
+    pub fn dwells(&self) -> &[ChannelDwell] {
+        &self.dwells
+    }
+
+    /// Adds a dwell.
+    pub fn add(&mut self, dwell: ChannelDwell) -> Result<(), ChannelError> {
+        let index = self.dwells.len();
+        let finite = |v: Vec3| v.iter().all(|x| x.is_finite());
+        let positive = |v: Vec3| v.iter().all(|x| x.is_finite() && *x > 0.0);
+        let gyro_ok =
+            !self.settings.use_gyro || (finite(dwell.rate_mean_b_radps) && positive(dwell.rate_mean_var_b_radps2));
+        let heading_ok = dwell.heading_rad.is_none_or(|h| h.is_finite());
+        if !(gyro_ok
+            && heading_ok
+            && finite(dwell.force_mean_b_mps2)
+            && positive(dwell.force_mean_var_b_mps2sq)
+            && dwell.tilt.is_finite())
+        {
+            return Err(ChannelError::BadInput { dwell: index });
+        }
+        self.dwells.push(dwell).map_err(|_| ChannelError::TooManyDwells)
+    }
+
+    fn model(&self) -> Model {
+        if self.settings.use_gyro {
+            self.settings.model
+        } else {
+            self.settings.model.accelerometer_only()
+        }
+    }
+
+    /// The checks before any fit: |f| against g, and the direction of measured gravity against the reference.
+    fn check_plausible(&self) -> Result<(), ChannelError> {
+        let g = self.site.gravity_mps2;
+        for (dwell, d) in self.dwells.iter().enumerate() {
+            let f = d.force_mean_b_mps2;
+            let ratio = norm(f) / g;
+            if !((ratio - 1.0).abs() <= self.settings.max_force_magnitude_error) {
+                return Err(ChannelError::ForceMagnitude { dwell, ratio });
+            }
+            let up_b = d.tilt.transpose().mul_vec([0.0, 0.0, 1.0]);
+            let cos = (dot(f, up_b) / norm(f)).clamp(-1.0, 1.0);
+            let angle_rad = libm::acosf(cos);
+            if !(angle_rad <= self.settings.max_gravity_angle_rad) {
+                return Err(ChannelError::GravityDirection { dwell, angle_rad });
+            }
+        }
+        Ok(())
+    }
+
+    /// Solves with every dwell, after the plausibility checks; a dwell whose residuals fit a heading a quarter
+    /// or half turn from its reference heading is refused.
+    pub fn solve(&self) -> Result<ChannelSolution, ChannelError> {
+        self.check_plausible()?;
+        let solution = self.solve_excluding(0)?;
+        self.check_headings(&solution)?;
+        Ok(solution)
+    }
+
+    /// Suspect dwells with a known heading: refit without the dwell and test whether its gyro means fit a
+    /// heading 90, 180 or 270 deg off far better than the reference's.
+    fn check_headings(&self, solution: &ChannelSolution) -> Result<(), ChannelError> {
+        if !self.settings.use_gyro || solution.suspect == 0 {
+            return Ok(());
+        }
+        for (k, d) in self.dwells.iter().enumerate() {
+            let Some(given) = d.heading_rad else { continue };
+            if solution.suspect & (1 << k) == 0 {
+                continue;
+            }
+            let without = self.solve_excluding(1 << k)?;
+            let cost = |heading: f32| {
+                let lin = linearise(&without.parameters_si, &d.tilt, heading, &self.site, without.model);
+                (0..3)
+                    .map(|i| {
+                        let r = d.rate_mean_b_radps[i] - lin.pred[i];
+                        r * r / d.rate_mean_var_b_radps2[i]
+                    })
+                    .sum::<f32>()
+            };
+            let at_given = cost(given);
+            for quarter in 1..4 {
+                let other = given + quarter as f32 * core::f32::consts::FRAC_PI_2;
+                let c = cost(other);
+                if c < CHI2_999[2] && at_given > CHI2_999[2] && c < 0.1 * at_given {
+                    return Err(ChannelError::HeadingMismatch { dwell: k, given_rad: given, fits_rad: other });
+                }
+            }
+        }
+        Ok(())
+    }
+
+    /// The weighted cost of one dwell at `heading` (gyro rows only: gravity does not see the heading).
+    fn heading_cost(&self, d: &ChannelDwell, theta: &[f32; PARAMETERS], heading: f32, model: Model) -> f32 {
+        let lin = linearise(theta, &d.tilt, heading, &self.site, model);
+        let mut c = 0.0;
+        for i in 0..3 {
+            let r = d.rate_mean_b_radps[i] - lin.pred[i];
+            c += r * r / d.rate_mean_var_b_radps2[i];
+        }
+        c
+    }
+
+    /// The heading that fits dwell `d` best given `theta`: a 5 deg grid, then Gauss-Newton in one dimension.
+    fn profile_heading(&self, d: &ChannelDwell, theta: &[f32; PARAMETERS], model: Model) -> f32 {
+        let step = core::f32::consts::PI / 36.0;
+        let mut best = (f32::INFINITY, 0.0f32);
+        for i in 0..72 {
+            let h = i as f32 * step;
+            let c = self.heading_cost(d, theta, h, model);
+            if c < best.0 {
+                best = (c, h);
+            }
+        }
+        let mut heading = best.1;
+        for _ in 0..6 {
+            let lin = linearise(theta, &d.tilt, heading, &self.site, model);
+            let (mut num, mut den) = (0.0f32, 0.0f32);
+            for i in 0..3 {
+                let r = d.rate_mean_b_radps[i] - lin.pred[i];
+                let w = 1.0 / d.rate_mean_var_b_radps2[i];
+                num += lin.d_heading[i] * r * w;
+                den += lin.d_heading[i] * lin.d_heading[i] * w;
+            }
+            if den <= 0.0 {
+                break;
+            }
+            let delta = (num / den).clamp(-step, step);
+            heading += delta;
+            if delta.abs() < 1e-7 {
+                break;
+            }
+        }
+        heading
+    }
+
+    /// Whitened rows of dwell `d` for the model's columns `cols` (`n` of them), scaled by `scale`.
+    #[allow(clippy::too_many_arguments, reason = "one call site; a struct would only rename the arguments")]
+    fn rows(
+        &self,
+        d: &ChannelDwell,
+        lin: &Linearised,
+        cols: &[usize; PARAMETERS],
+        n: usize,
+        scale: &[f32; PARAMETERS],
+        structural: bool,
+        unknown_heading: bool,
+    ) -> DwellRows {
+        let mut out = DwellRows { a: [[0.0; PARAMETERS]; 6], y: [0.0; 6], h: [0.0; 6], rows: 0 };
+        let first = if self.settings.use_gyro { 0 } else { 3 };
+        let g = self.site.gravity_mps2;
+        for ch in first..6 {
+            let (measured, var) = if ch < 3 {
+                (d.rate_mean_b_radps[ch], d.rate_mean_var_b_radps2[ch])
+            } else {
+                (d.force_mean_b_mps2[ch - 3], d.force_mean_var_b_mps2sq[ch - 3])
+            };
+            let weight = if structural {
+                if ch < 3 {
+                    1.0 / EARTH_RATE_RADPS
+                } else {
+                    1.0 / g
+                }
+            } else {
+                1.0 / libm::sqrtf(var)
+            };
+            let r = out.rows;
+            for (c, &p) in cols.iter().enumerate().take(n) {
+                let mut x = lin.jac[ch][p] * weight;
+                if structural && x.abs() < 1e-6 {
+                    x = 0.0;
+                }
+                out.a[r][c] = x * scale[c];
+            }
+            out.y[r] = (measured - lin.pred[ch]) * weight;
+            let mut h = if unknown_heading { lin.d_heading[ch] * weight } else { 0.0 };
+            if structural && h.abs() < 1e-6 {
+                h = 0.0;
+            }
+            out.h[r] = h;
+            out.rows += 1;
+        }
+        out
+    }
+
+    /// Solves without the dwells marked in `exclude` (bit k = dwell k); no plausibility checks.
+    pub fn solve_excluding(&self, exclude: u64) -> Result<ChannelSolution, ChannelError> {
+        if self.dwells.is_empty() {
+            return Err(ChannelError::NoDwells);
+        }
+        let model = self.model();
+        let (cols, n) = columns(model);
+        if n == 0 {
+            return Err(ChannelError::NothingToEstimate);
+        }
+        let used = |k: usize| exclude & (1u64 << k) == 0;
+        let mut theta = [0.0f32; PARAMETERS];
+        let mut heading = [0.0f32; MAX_DWELLS];
+        for (k, d) in self.dwells.iter().enumerate() {
+            heading[k] = d.heading_rad.unwrap_or(0.0);
+        }
+        let profiled = |k: usize| self.settings.use_gyro && self.dwells[k].heading_rad.is_none();
+        let mut pass = Pass::default();
+        let mut iterations = 0;
+        let mut converged = false;
+        let mut previous = f32::INFINITY;
+        while iterations < self.settings.max_iterations.max(1) {
+            iterations += 1;
+            for (k, d) in self.dwells.iter().enumerate() {
+                if used(k) && profiled(k) {
+                    heading[k] = self.profile_heading(d, &theta, model);
+                }
+            }
+            pass = self.pass(&theta, &heading, &cols, n, used, profiled);
+            let mut largest = 0.0f32;
+            for c in 0..n {
+                let p = cols[c];
+                let step = pass.step_si[c];
+                theta[p] += step;
+                let std = libm::sqrtf(pass.cov_scaled[c][c].max(0.0)) / pass.scale[c];
+                if std > 0.0 {
+                    largest = largest.max(step.abs() / std);
+                }
+            }
+            // Converged when the step is negligible against the standard errors, or when it has stopped
+            // shrinking at a small level (the rounding of f32 on data far more precise than its errors).
+            if largest < 1e-3 || (largest < 0.05 && largest > 0.5 * previous) {
+                converged = true;
+                break;
+            }
+            previous = largest;
+        }
+        Ok(self.finish(&theta, &heading, &cols, n, &pass, used, profiled, iterations, converged, model))
+    }
+
+    /// One Gauss-Newton pass at `theta`: structural rank, weighted solution of the determined parameters.
+    fn pass(
+        &self,
+        theta: &[f32; PARAMETERS],
+        heading: &[f32; MAX_DWELLS],
+        cols: &[usize; PARAMETERS],
+        n: usize,
+        used: impl Fn(usize) -> bool,
+        profiled: impl Fn(usize) -> bool,
+    ) -> Pass {
+        let model = self.model();
+        let zero = [0.0f32; PARAMETERS];
+        let ones = [1.0f32; PARAMETERS];
+        // Column norms of the weighted and the structural designs, for equilibration.
+        let mut norm_w = [0.0f32; PARAMETERS];
+        let mut norm_s = [0.0f32; PARAMETERS];
+        for (k, d) in self.dwells.iter().enumerate().filter(|(k, _)| used(*k)) {
+            let lin = linearise(theta, &d.tilt, heading[k], &self.site, model);
+            let lin_s = linearise(&zero, &d.tilt, heading[k], &self.site, model);
+            let w = self.rows(d, &lin, cols, n, &ones, false, false);
+            let s = self.rows(d, &lin_s, cols, n, &ones, true, false);
+            for c in 0..n {
+                for r in 0..w.rows {
+                    norm_w[c] += w.a[r][c] * w.a[r][c];
+                    norm_s[c] += s.a[r][c] * s.a[r][c];
+                }
+            }
+        }
+        let mut scale = [1.0f32; PARAMETERS];
+        let mut scale_s = [1.0f32; PARAMETERS];
+        for c in 0..n {
+            if norm_w[c] > 0.0 {
+                scale[c] = 1.0 / libm::sqrtf(norm_w[c]);
+            }
+            if norm_s[c] > 0.0 {
+                scale_s[c] = 1.0 / libm::sqrtf(norm_s[c]);
+            }
+        }
+        let mut weighted = SqrtInfo::<PARAMETERS>::new(n);
+        let mut structure = SqrtInfo::<PARAMETERS>::new(n);
+        for (k, d) in self.dwells.iter().enumerate().filter(|(k, _)| used(*k)) {
+            let lin = linearise(theta, &d.tilt, heading[k], &self.site, model);
+            let lin_s = linearise(&zero, &d.tilt, heading[k], &self.site, model);
+            let mut w = self.rows(d, &lin, cols, n, &scale, false, profiled(k));
+            let mut s = self.rows(d, &lin_s, cols, n, &scale_s, true, profiled(k));
+            let skip_w = if profiled(k) { eliminate_heading(&mut w, n) } else { 0 };
+            let skip_s = if profiled(k) { eliminate_heading(&mut s, n) } else { 0 };
+            for r in skip_w..w.rows {
+                weighted.add_row(&w.a[r], w.y[r]);
+            }
+            for r in skip_s..s.rows {
+                structure.add_row(&s.a[r], 0.0);
+            }
+        }
+        // Structural rank: SVD of the (unit-column) structural factor.
+        let mut a = structure.r;
+        let mut v = [[0.0f32; PARAMETERS]; PARAMETERS];
+        let sigma = jacobi_svd(&mut a, &mut v, n);
+        let largest = sigma.iter().take(n).fold(0.0f32, |m, s| m.max(*s));
+        let mut determined = [false; PARAMETERS];
+        for (c, slot) in determined.iter_mut().enumerate().take(n) {
+            let mut share = 0.0f32;
+            for j in 0..n {
+                if !(sigma[j] > self.settings.rank_tolerance * largest) {
+                    share += v[c][j] * v[c][j];
+                }
+            }
+            *slot = largest > 0.0 && share <= self.settings.share_tolerance;
+        }
+        // The determined columns of the weighted factor, triangularised again.
+        let mut kept = [0usize; PARAMETERS];
+        let mut m = 0;
+        for (c, &d) in determined.iter().enumerate().take(n) {
+            if d {
+                kept[m] = c;
+                m += 1;
+            }
+        }
+        let mut restricted = SqrtInfo::<PARAMETERS>::new(m);
+        for i in 0..n {
+            let mut row = [0.0f32; PARAMETERS];
+            for (slot, &c) in row.iter_mut().zip(kept.iter()).take(m) {
+                *slot = weighted.r[i][c];
+            }
+            restricted.add_row(&row, weighted.z[i]);
+        }
+        let x = solve_upper(&restricted.r, &restricted.z, m);
+        let mut cov_kept = [[0.0f32; PARAMETERS]; PARAMETERS];
+        inverse_gram(&restricted.r, m, &mut cov_kept);
+        let mut pass = Pass { scale, determined, ..Pass::default() };
+        for (i, &ci) in kept.iter().enumerate().take(m) {
+            pass.step_si[ci] = x[i] * scale[ci];
+            for (j, &cj) in kept.iter().enumerate().take(m) {
+                pass.cov_scaled[ci][cj] = cov_kept[i][j];
+            }
+        }
+        // cov_scaled is the covariance of the scaled parameters; scale[c] multiplies back to SI below.
+        for c in 0..n {
+            pass.scale[c] = if scale[c] != 0.0 { 1.0 / scale[c] } else { 0.0 };
+        }
+        pass.restricted = restricted.r;
+        pass.kept = kept;
+        pass.kept_count = m;
+        pass
+    }
+
+    #[allow(clippy::too_many_arguments, reason = "the state of one solve, passed once")]
+    fn finish(
+        &self,
+        theta: &[f32; PARAMETERS],
+        heading: &[f32; MAX_DWELLS],
+        cols: &[usize; PARAMETERS],
+        n: usize,
+        pass: &Pass,
+        used: impl Fn(usize) -> bool,
+        profiled: impl Fn(usize) -> bool,
+        iterations: u32,
+        converged: bool,
+        model: Model,
+    ) -> ChannelSolution {
+        let mut sol = ChannelSolution {
+            model,
+            parameters_si: [0.0; PARAMETERS],
+            observable: 0,
+            unobservable: 0,
+            covariance_si: [[0.0; PARAMETERS]; PARAMETERS],
+            dwells: self.dwells.len(),
+            heading_rad: *heading,
+            heading_std_rad: [0.0; MAX_DWELLS],
+            residual_rate_b_radps: [[0.0; 3]; MAX_DWELLS],
+            residual_force_b_mps2: [[0.0; 3]; MAX_DWELLS],
+            dwell_statistic: [-1.0; MAX_DWELLS],
+            suspect: 0,
+            chi_square: 0.0,
+            degrees_of_freedom: 0,
+            iterations,
+            converged,
+        };
+        for c in 0..n {
+            let p = cols[c];
+            if pass.determined[c] {
+                sol.observable |= 1 << p;
+                sol.parameters_si[p] = theta[p];
+                for d in 0..n {
+                    if pass.determined[d] {
+                        // pass.scale holds SI units per scaled unit (the inverse of the equilibration).
+                        sol.covariance_si[p][cols[d]] = pass.cov_scaled[c][d] / (pass.scale[c] * pass.scale[d]);
+                    }
+                }
+            } else {
+                sol.unobservable |= 1 << p;
+            }
+        }
+        let first = if self.settings.use_gyro { 0 } else { 3 };
+        let mut channels = 0u32;
+        let mut nuisances = 0u32;
+        let inv_scale: [f32; PARAMETERS] =
+            core::array::from_fn(|c| if pass.scale[c] != 0.0 { 1.0 / pass.scale[c] } else { 0.0 });
+        for (k, d) in self.dwells.iter().enumerate() {
+            let lin = linearise(theta, &d.tilt, heading[k], &self.site, model);
+            let rows = self.rows(d, &lin, cols, n, &inv_scale, false, profiled(k));
+            for i in 0..3 {
+                sol.residual_rate_b_radps[k][i] = if first == 0 { d.rate_mean_b_radps[i] - lin.pred[i] } else { 0.0 };
+                sol.residual_force_b_mps2[k][i] = d.force_mean_b_mps2[i] - lin.pred[3 + i];
+            }
+            if !used(k) {
+                continue;
+            }
+            // Leverage of the dwell's rows: h = |R^-T a|^2 over the determined columns.
+            let mut chi2 = 0.0f32;
+            let mut leverage = 0.0f32;
+            let mut h_norm2 = 0.0f32;
+            for r in 0..rows.rows {
+                chi2 += rows.y[r] * rows.y[r];
+                h_norm2 += rows.h[r] * rows.h[r];
+                let mut a = [0.0f32; PARAMETERS];
+                for (slot, &c) in a.iter_mut().zip(pass.kept.iter()).take(pass.kept_count) {
+                    *slot = rows.a[r][c];
+                }
+                let b = solve_upper_transposed(&pass.restricted, &a, pass.kept_count);
+                leverage += b.iter().take(pass.kept_count).map(|x| x * x).sum::<f32>();
+            }
+            if profiled(k) {
+                leverage += 1.0;
+                nuisances += 1;
+                if h_norm2 > 0.0 {
+                    sol.heading_std_rad[k] = 1.0 / libm::sqrtf(h_norm2);
+                }
+            }
+            channels += rows.rows as u32;
+            sol.chi_square += chi2;
+            let free = rows.rows as f32 - leverage;
+            if free >= 0.5 {
+                let statistic = chi2 * rows.rows as f32 / free;
+                sol.dwell_statistic[k] = statistic;
+                if statistic > CHI2_999[rows.rows - 1] {
+                    sol.suspect |= 1 << k;
+                }
+            }
+        }
+        sol.degrees_of_freedom = channels.saturating_sub(pass.kept_count as u32 + nuisances);
+        sol
+    }
+}
+
+/// What one Gauss-Newton pass leaves for the next and for the final statistics.
+struct Pass {
+    /// The step, SI units, by model column.
+    step_si: [f32; PARAMETERS],
+    /// Covariance of the equilibrated parameters, by model column.
+    cov_scaled: [[f32; PARAMETERS]; PARAMETERS],
+    /// SI units per equilibrated unit, by model column.
+    scale: [f32; PARAMETERS],
+    /// Whether each model column is determined by the schedule.
+    determined: [bool; PARAMETERS],
+    /// The weighted factor of the determined columns.
+    restricted: [[f32; PARAMETERS]; PARAMETERS],
+    /// Model columns of the determined parameters, and their number.
+    kept: [usize; PARAMETERS],
+    kept_count: usize,
+}
+
+impl Default for Pass {
+    fn default() -> Pass {
+        Pass {
+            step_si: [0.0; PARAMETERS],
+            cov_scaled: [[0.0; PARAMETERS]; PARAMETERS],
+            scale: [0.0; PARAMETERS],
+            determined: [false; PARAMETERS],
+            restricted: [[0.0; PARAMETERS]; PARAMETERS],
+            kept: [0; PARAMETERS],
+            kept_count: 0,
+        }
+    }
+}
