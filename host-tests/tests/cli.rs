@@ -24,10 +24,23 @@ fn calibrate_writes_the_spec_json_and_numbers_read_back_bit_exact() {
     let stdout = String::from_utf8(out.get_output().stdout.clone()).unwrap();
     assert!(stdout.contains("Gyro bias, body frame [deg/h]"), "{stdout}");
     assert!(stdout.contains("[ug]"));
-    assert!(stdout.contains("[arcsec]"));
+    assert!(stdout.contains("method: channels"), "{stdout}");
 
     let v: Value = serde_json::from_str(&std::fs::read_to_string(&json_path).unwrap()).unwrap();
-    assert_eq!(v["schema"], "sinscal-calibration/1");
+    assert_eq!(v["schema"], "sinscal-calibration/2");
+    assert_eq!(v["method"], "channels");
+    assert_eq!(v["model"], serde_json::json!(["gyro_bias", "accel_bias"]));
+    // Terms not in the model are null; the covariance is square over the determined parameters.
+    assert!(v["accel_scale_factor"].is_null() && v["reference_offset_rad"].is_null());
+    let parameters = v["parameters"].as_array().unwrap();
+    assert_eq!(parameters.len(), 6);
+    let covariance = v["covariance"].as_array().unwrap();
+    assert_eq!(covariance.len(), 6);
+    assert!(covariance.iter().all(|row| row.as_array().unwrap().len() == 6));
+    let sd = v["gyro_bias_std_radps"][0].as_f64().unwrap();
+    assert_eq!(covariance[0][0].as_f64().unwrap().sqrt() as f32, sd as f32);
+    assert_eq!(v["positions"][0]["heading_known"], true);
+    assert!(v["positions"][0]["residual_accel_mps2"].as_array().is_some());
     assert_eq!(v["latitude_deg"], 45.7796);
     assert_eq!(v["positions"].as_array().unwrap().len(), 6);
     let p = &v["positions"][4];
@@ -63,12 +76,26 @@ fn schedule_blind_spots_are_listed_as_unobservable_with_null_values() {
     let scenario =
         Scenario { dwell_s: 5.0, positions_deg: vec![[0.0, 0.0, 0.0], [0.0, 0.0, 180.0]], ..Scenario::example() };
     scenario.recording(1, "two.csv").write(&path).unwrap();
-    let out = sinscal().arg("calibrate").arg(&path).args(["--json", "-"]).assert().success();
+    let names = |v: &Value| -> Vec<String> {
+        v["unobservable"].as_array().unwrap().iter().map(|x| x.as_str().unwrap().to_string()).collect()
+    };
+    // The angle method sees only the east gyro and the horizontal accelerometers of each pose.
+    let out = sinscal().arg("calibrate").arg(&path).args(["--method", "angles", "--json", "-"]).assert().success();
     let v: Value = serde_json::from_slice(&out.get_output().stdout).unwrap();
-    let unobservable: Vec<&str> = v["unobservable"].as_array().unwrap().iter().map(|x| x.as_str().unwrap()).collect();
-    assert_eq!(unobservable, ["gyro_bias_y", "gyro_bias_z", "accel_bias_z"]);
+    assert_eq!(names(&v), ["gyro_bias_y", "gyro_bias_z", "accel_bias_z"]);
     assert!(v["gyro_bias_radps"][1].is_null() && v["gyro_bias_std_radps"][2].is_null());
     assert!(v["gyro_bias_radps"][0].as_f64().is_some());
+    // Every channel against a known reference sees every bias in one pose; scale factors need the axis
+    // seen at two different values, which two level poses give only for the horizontal axes.
+    let out = sinscal()
+        .arg("calibrate")
+        .arg(&path)
+        .args(["--model", "biases,accel_scale_factor", "--json", "-"])
+        .assert()
+        .success();
+    let v: Value = serde_json::from_slice(&out.get_output().stdout).unwrap();
+    assert_eq!(names(&v), ["accel_bias_z", "accel_scale_factor_x", "accel_scale_factor_y", "accel_scale_factor_z"]);
+    assert!(v["accel_scale_factor"][2].is_null() && v["gyro_bias_radps"][2].as_f64().is_some());
 }
 
 /// The text with cell `col` of the first row of dwell `pos` replaced.
@@ -137,13 +164,28 @@ fn bad_input_exits_1_with_file_line_and_reason() {
     .unwrap();
     assert!(stderr.contains("/nonexistent/x.csv"), "{stderr}");
 
-    // Unknown heading: the calibration needs it, and says so.
+    // Unknown heading: the angle method needs it, and says so; the general estimator estimates it.
     let unknown = dir.path().join("unknown.csv");
     std::fs::write(&unknown, text.replace(",2,0,0,180,", ",2,0,0,,")).unwrap();
-    let stderr =
-        String::from_utf8(sinscal().arg("calibrate").arg(&unknown).assert().code(1).get_output().stderr.clone())
-            .unwrap();
+    let stderr = String::from_utf8(
+        sinscal()
+            .arg("calibrate")
+            .arg(&unknown)
+            .args(["--method", "angles"])
+            .assert()
+            .code(1)
+            .get_output()
+            .stderr
+            .clone(),
+    )
+    .unwrap();
     assert!(stderr.contains("dwell 2: heading is unknown"), "{stderr}");
+    let out = sinscal().arg("calibrate").arg(&unknown).args(["--json", "-"]).assert().success();
+    let v: Value = serde_json::from_slice(&out.get_output().stdout).unwrap();
+    assert_eq!(v["positions"][1]["heading_known"], false);
+    let heading = v["positions"][1]["heading_deg"].as_f64().unwrap();
+    let heading_std = v["positions"][1]["heading_std_deg"].as_f64().unwrap();
+    assert!((heading - 180.0).abs() < 4.0 * heading_std + 0.5, "estimated heading {heading} ± {heading_std}");
 
     // A reference that does not match the data (axes or attitude wrong).
     let wrong = dir.path().join("wrong.csv");
@@ -151,6 +193,19 @@ fn bad_input_exits_1_with_file_line_and_reason() {
     std::fs::write(&wrong, text.replace(",3,0,0,90,", ",3,0,90,90,")).unwrap();
     let stderr =
         String::from_utf8(sinscal().arg("calibrate").arg(&wrong).assert().code(1).get_output().stderr.clone()).unwrap();
+    assert!(stderr.contains("dwell 3") && stderr.contains("from where the reference attitude puts it"), "{stderr}");
+    let stderr = String::from_utf8(
+        sinscal()
+            .arg("calibrate")
+            .arg(&wrong)
+            .args(["--method", "angles"])
+            .assert()
+            .code(1)
+            .get_output()
+            .stderr
+            .clone(),
+    )
+    .unwrap();
     assert!(stderr.contains("dwell 3") && stderr.contains("differs from the reference attitude"), "{stderr}");
 }
 

@@ -138,6 +138,11 @@ pub fn parse_model(text: &str) -> Result<Model, String> {
     }
     let mut model = Model::EMPTY;
     for name in text.split(',').map(str::trim) {
+        if name == "biases" || name == "full" {
+            let preset = if name == "biases" { Model::BIASES } else { Model::FULL };
+            model = Term::ALL.iter().filter(|t| preset.contains(**t)).fold(model, |m, t| m.with(*t));
+            continue;
+        }
         if name == "position_error" {
             return Err("position_error: per-position attitude errors are found by `sinscal analyze`; calibrate \
                         estimates the constant reference_offset"

@@ -320,7 +320,12 @@ fn channel_error(e: ChannelError, positions: &[PositionResult], source: &str) ->
         _ => None,
     };
     match dwell {
-        Some(p) => InputError::at(source, p.first_line, format!("position {}: {e}", p.pos)),
+        Some(p) => {
+            // The core counts dwells from 1 in the order given; the recording names them by label.
+            let text = e.to_string();
+            let reason = text.split_once(": ").map_or(text.as_str(), |(_, r)| r);
+            InputError::at(source, p.first_line, format!("dwell {}: {reason}", p.pos))
+        }
         None => InputError::file(source, e.to_string()),
     }
 }

@@ -5,6 +5,7 @@ use std::path::{Path, PathBuf};
 
 use clap::ValueEnum;
 use sinscal::calib::align::DwellValue;
+use sinscal::calib::channels::Model;
 
 use crate::calibration::estimates::parse_model;
 use crate::calibration::firmware_path::calibrate_on_host;
@@ -66,8 +67,8 @@ pub struct Args {
     /// The general estimator's terms: 'biases', 'full', or a comma list of gyro_bias, accel_bias,
     /// accel_scale_factor, accel_misalignment, gyro_scale_factor, gyro_misalignment, gyro_g_sensitivity,
     /// reference_offset (default: biases).
-    #[arg(long)]
-    model: Option<String>,
+    #[arg(long, value_parser = parse_model)]
+    model: Option<Model>,
     /// Prefilter in front of the dwell statistics.
     #[arg(long, value_enum, default_value = "hmmkf")]
     prefilter: PrefilterArg,
@@ -101,19 +102,22 @@ impl Args {
                 _ => anyhow::bail!("--prefilter-a: '{}' is neither 'auto' nor a number in [0, 1]", self.prefilter_a),
             }
         };
+        let usage = |text: &str| -> ! {
+            clap::Error::raw(clap::error::ErrorKind::ArgumentConflict, format!("{text}\n")).exit()
+        };
         let method = match (self.method, self.on) {
             (Some(MethodArg::Channels), Some(_)) => {
-                anyhow::bail!("--on: the firmware path solves with the angle method in this version (--method angles)")
+                usage("--on: the firmware path solves with the angle method in this version (--method angles)")
             }
             (Some(MethodArg::Angles), _) | (None, Some(_)) => Method::Angles,
             (Some(MethodArg::Channels), None) => Method::Channels,
             (None, None) => DEFAULT_METHOD,
         };
-        let model = match &self.model {
-            Some(text) if method == Method::Angles => {
-                anyhow::bail!("--model '{text}': the angle method estimates the biases (and the offset) only")
+        let model = match self.model {
+            Some(_) if method == Method::Angles => {
+                usage("--model: the angle method estimates the biases (and the reference offset) only")
             }
-            Some(text) => parse_model(text).map_err(|e| anyhow::anyhow!("--model: {e}"))?,
+            Some(model) => model,
             None => DEFAULT_MODEL,
         };
         Ok(Options {
