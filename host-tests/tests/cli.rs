@@ -29,14 +29,16 @@ fn calibrate_writes_the_spec_json_and_numbers_read_back_bit_exact() {
     let v: Value = serde_json::from_str(&std::fs::read_to_string(&json_path).unwrap()).unwrap();
     assert_eq!(v["schema"], "sinscal-calibration/2");
     assert_eq!(v["method"], "channels");
-    assert_eq!(v["model"], serde_json::json!(["gyro_bias", "accel_bias"]));
-    // Terms not in the model are null; the covariance is square over the determined parameters.
-    assert!(v["accel_scale_factor"].is_null() && v["reference_offset_rad"].is_null());
+    assert_eq!(v["model"], serde_json::json!(["gyro_bias", "accel_bias", "accel_scale_factor"]));
+    // Terms not in the model are null; the covariance is square over the determined parameters. Table 1
+    // never turns y off the horizontal: its scale factor is unobservable, its value and std null.
+    assert!(v["accel_misalignment"].is_null() && v["reference_offset_rad"].is_null());
+    assert!(v["accel_scale_factor"][1].is_null() && v["accel_scale_factor"][2].as_f64().is_some());
     let parameters = v["parameters"].as_array().unwrap();
-    assert_eq!(parameters.len(), 6);
+    assert_eq!(parameters.len(), 8);
     let covariance = v["covariance"].as_array().unwrap();
-    assert_eq!(covariance.len(), 6);
-    assert!(covariance.iter().all(|row| row.as_array().unwrap().len() == 6));
+    assert_eq!(covariance.len(), 8);
+    assert!(covariance.iter().all(|row| row.as_array().unwrap().len() == 8));
     let sd = v["gyro_bias_std_radps"][0].as_f64().unwrap();
     assert_eq!(covariance[0][0].as_f64().unwrap().sqrt() as f32, sd as f32);
     assert_eq!(v["positions"][0]["heading_known"], true);
@@ -55,7 +57,7 @@ fn calibrate_writes_the_spec_json_and_numbers_read_back_bit_exact() {
             assert_eq!(x as f32 as f64, x, "{key}: {x}");
         }
     }
-    assert_eq!(v["unobservable"].as_array().unwrap().len(), 0);
+    assert_eq!(v["unobservable"], serde_json::json!(["accel_scale_factor_y"]));
 
     // The same run as a library call gives the same bits.
     let recording = sinscal_host::io::recording::Recording::read(&rec).unwrap();

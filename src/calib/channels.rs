@@ -108,7 +108,7 @@ impl Term {
         matches!(self, Term::GyroBias | Term::GyroScaleFactor | Term::GyroMisalignment | Term::GyroGSensitivity)
     }
 
-    fn bit(self) -> u16 {
+    const fn bit(self) -> u16 {
         1 << (self as u16)
     }
 }
@@ -128,18 +128,18 @@ impl Model {
 
     /// The model with `term` added.
     #[must_use]
-    pub fn with(self, term: Term) -> Model {
+    pub const fn with(self, term: Term) -> Model {
         Model(self.0 | term.bit())
     }
 
     /// The model with `term` removed.
     #[must_use]
-    pub fn without(self, term: Term) -> Model {
+    pub const fn without(self, term: Term) -> Model {
         Model(self.0 & !term.bit())
     }
 
     /// Whether `term` is in the model.
-    pub fn contains(self, term: Term) -> bool {
+    pub const fn contains(self, term: Term) -> bool {
         self.0 & term.bit() != 0
     }
 

@@ -345,7 +345,9 @@ impl BiasSolver {
         }
         let params = if self.settings.estimate_reference_offset { MAX_PARAMETERS } else { 6 };
         let system = self.normal_equations(params)?;
-        let inverse = self.pseudo_inverse(&system.normal, params);
+        // Observability from the unweighted design: the schedule's property, never the noise's.
+        let structure = self.pseudo_inverse(&system.structural, params, None);
+        let inverse = self.pseudo_inverse(&system.normal, params, Some(&structure.observable));
         let (theta_scaled, covariance_si) = self.parameters(&system, &inverse, params);
         let mut estimates = [None; MAX_PARAMETERS];
         for i in 0..params {
@@ -394,6 +396,7 @@ impl BiasSolver {
         }
         let mut system = NormalEquations {
             normal: [[0.0f32; MAX_PARAMETERS]; MAX_PARAMETERS],
+            structural: [[0.0f32; MAX_PARAMETERS]; MAX_PARAMETERS],
             rhs: [0.0f32; MAX_PARAMETERS],
             factors: [Mat3::IDENTITY; MAX_POSITIONS],
             var_ref,
@@ -404,6 +407,11 @@ impl BiasSolver {
             let l = cholesky3(&cov).ok_or(SolveError::BadInput)?;
             system.factors[k] = l;
             let rows = design_rows_scaled(&r.c_b_n, &self.site);
+            for i in 0..params {
+                for j in 0..params {
+                    system.structural[i][j] += (0..3).map(|m| rows[m][i] * rows[m][j]).sum::<f32>();
+                }
+            }
             let mut white = [[0.0f32; MAX_PARAMETERS]; 3];
             for j in 0..params {
                 let col = forward_substitute(&l, [rows[0][j], rows[1][j], rows[2][j]]);
@@ -428,11 +436,24 @@ impl BiasSolver {
     /// amount per unit, so a parameter whose diagonal is far below the largest hardly enters the data (a
     /// position that is a few arcsec off an axis, a reference corrected by a small offset): it is a blind
     /// spot, excluded before equilibration would blow its column up to full size.
-    fn pseudo_inverse(&self, normal: &[[f32; MAX_PARAMETERS]; MAX_PARAMETERS], params: usize) -> PseudoInverse {
+    ///
+    /// With `allowed` (the structurally observable parameters), the others are excluded instead, and every
+    /// eigen-direction of the equilibrated weighted matrix above f32 resolution is kept: a parameter the
+    /// schedule determines is estimated however imprecisely.
+    fn pseudo_inverse(
+        &self,
+        normal: &[[f32; MAX_PARAMETERS]; MAX_PARAMETERS],
+        params: usize,
+        allowed: Option<&[bool; MAX_PARAMETERS]>,
+    ) -> PseudoInverse {
         let largest = (0..params).map(|i| normal[i][i]).fold(0.0f32, f32::max);
         let mut d = [0.0f32; MAX_PARAMETERS];
         for i in 0..params {
-            if normal[i][i] > self.settings.rank_tolerance * largest {
+            let take = match allowed {
+                Some(allowed) => allowed[i] && normal[i][i] > 0.0,
+                None => normal[i][i] > self.settings.rank_tolerance * largest,
+            };
+            if take {
                 d[i] = libm::sqrtf(normal[i][i]);
             }
         }
@@ -447,7 +468,8 @@ impl BiasSolver {
         let mut v = [[0.0f32; MAX_PARAMETERS]; MAX_PARAMETERS];
         jacobi_eigen(&mut a, &mut v, params);
         let lambda_max = (0..params).map(|i| a[i][i]).fold(0.0f32, f32::max);
-        let kept = |k: usize| a[k][k] > self.settings.rank_tolerance * lambda_max;
+        let tolerance = if allowed.is_some() { 1e-7 } else { self.settings.rank_tolerance };
+        let kept = |k: usize| a[k][k] > tolerance * lambda_max;
         let rank = (0..params).filter(|&k| kept(k)).count();
         let mut observable = [false; MAX_PARAMETERS];
         for i in 0..params {
@@ -518,6 +540,8 @@ impl BiasSolver {
 /// The whitened normal equations of [`BiasSolver::solve`], in scaled units.
 struct NormalEquations {
     normal: [[f32; MAX_PARAMETERS]; MAX_PARAMETERS],
+    /// The same design unweighted (scaled units): what the schedule can see, whatever the noise.
+    structural: [[f32; MAX_PARAMETERS]; MAX_PARAMETERS],
     rhs: [f32; MAX_PARAMETERS],
     /// Cholesky factor of each position's scaled angle covariance.
     factors: [Mat3; MAX_POSITIONS],

@@ -1,6 +1,7 @@
 //! `sinscal calibrate`: a recording through the no_std core (dwell collection, alignment, solution).
 //! Every formula is the core's; this module only reads, converts to f32 at the edge, and checks input.
 
+pub mod compare;
 pub mod estimates;
 pub mod firmware_path;
 pub mod montecarlo;
@@ -9,7 +10,7 @@ pub mod qemu;
 use sinscal::calib::align::{position_angles, DwellValue, PositionAngles};
 use sinscal::calib::calibration::{calibrate_positions, CalibrationResult, CalibrationSettings, PositionInput};
 use sinscal::calib::channels::{
-    ChannelDwell, ChannelError, ChannelEstimator, ChannelSettings, ChannelSolution, Model, MAX_DWELLS,
+    ChannelDwell, ChannelError, ChannelEstimator, ChannelSettings, ChannelSolution, Model, Term, MAX_DWELLS,
 };
 use sinscal::calib::dwell::{DwellCollector, DwellSummary, Prefilter};
 use sinscal::calib::prefilter::{CoefficientIdentifier, PrefilterSettings};
@@ -70,7 +71,9 @@ impl Options {
 /// The estimator `calibrate` uses unless told otherwise, chosen by measurement (docs/method.md#default-estimator).
 pub const DEFAULT_METHOD: Method = Method::Channels;
 /// The general estimator's default terms (docs/method.md#default-estimator).
-pub const DEFAULT_MODEL: Model = Model::BIASES;
+/// Gyro and accelerometer biases and the accelerometer scale factors: under a real laboratory's errors the
+/// scale factor keeps the gravity model's error and the vertical scale factor out of the vertical bias.
+pub const DEFAULT_MODEL: Model = Model::BIASES.with(Term::AccelScaleFactor);
 
 impl Default for Options {
     fn default() -> Options {
