@@ -253,7 +253,7 @@ impl Default for ChannelSettings {
             max_iterations: 12,
             rank_tolerance: 1e-4,
             share_tolerance: 1e-3,
-            max_force_magnitude_error: 0.05,
+            max_force_magnitude_error: 0.2,
             max_gravity_angle_rad: 0.1745,
         }
     }
