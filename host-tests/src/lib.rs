@@ -12,8 +12,10 @@
 //! | [`analysis`] | `sinscal analyze`: the base model, the catalogue's candidates, the verdict; hidden-effect trials |
 //! | [`study`] | `sinscal study`: a measured data set against a simulation of it |
 //! | [`navigation`] | `sinscal navigate`: the strapdown engine and the static navigation check |
+//! | [`alignment`] | `sinscal align`: the coarse alignment of every dwell with standard errors |
 #![deny(missing_docs)]
 
+pub mod alignment;
 pub mod analysis;
 pub mod calibration;
 pub mod cmd;
