@@ -4,14 +4,16 @@
 
 use std::path::Path;
 
+mod common;
+
 use assert_cmd::Command;
 use rand::SeedableRng;
 use rand_chacha::ChaCha8Rng;
 use rand_distr::{Distribution, StandardNormal};
 use serde_json::Value;
-use sinscal_host::alignment::align;
 use sinscal_host::io::recording::{Header, Recording, Row};
 use sinscal_host::model::synth::{c_b_n, earth_rate_n_radps, mul_t_vec, mul_vec};
+use sinscal_host::navigation::alignment::align;
 
 fn sinscal() -> Command {
     Command::cargo_bin("sinscal").unwrap()
@@ -279,4 +281,25 @@ fn stderr_of_failure(path: &Path) -> String {
     let e = String::from_utf8(o.get_output().stderr.clone()).unwrap();
     assert_eq!(e.lines().count(), 1, "{e}");
     e
+}
+
+#[test]
+fn real_imutk_poses_levelled_by_the_importer_agree_with_align() {
+    // The imu_tk importer gives each detected pose the pitch and roll of its mean specific force
+    // (docs/data.md#imu-tk-xsens); align computes them through the core's alignment: the two must agree.
+    let Some(dir) = common::data_dir() else { return };
+    let acc = common::data_file(&dir, "imu-tk-xsens/xsens_acc.mat");
+    let gyro = common::data_file(&dir, "imu-tk-xsens/xsens_gyro.mat");
+    let detection = sinscal_host::io::import::StaticDetection::default();
+    let rec = sinscal_host::io::import::import_imutk(&acc, &gyro, None, &detection).unwrap().recording;
+    let r = align(&rec).unwrap();
+    let mut worst = 0.0f64;
+    for p in &r.positions {
+        assert!(p.heading_difference_deg.is_none(), "the headings of imu_tk poses are unknown");
+        if let Some(roll) = p.roll_difference_deg {
+            worst = worst.max(p.pitch_difference_deg.abs()).max(roll.abs());
+        }
+    }
+    println!("imutk: {} poses, largest level difference {worst:e} deg", r.positions.len());
+    assert!(r.positions.len() >= 35 && worst < 1e-3, "{worst}");
 }

@@ -15,6 +15,11 @@ fn sinscal() -> Command {
 }
 
 type M3 = [[f64; 3]; 3];
+type V3 = [f64; 3];
+/// (pos, pose, ideal w, ideal f) of one row.
+type IdealRow = (u32, V3, V3, V3);
+/// (ideal w, ideal f) per row.
+type Ideal = Vec<(V3, V3)>;
 
 fn mul_vec(a: &M3, v: [f64; 3]) -> [f64; 3] {
     [0, 1, 2].map(|i| (0..3).map(|k| a[i][k] * v[k]).sum())
@@ -119,7 +124,7 @@ const POSES: [[f64; 3]; 8] = [
 ];
 
 /// Ideal (w, f) per row: each pose at rest (Earth rate and +g up), then a rotating row between poses.
-fn ideal_rows() -> Vec<(u32, [f64; 3], [f64; 3], [f64; 3])> {
+fn ideal_rows() -> Vec<IdealRow> {
     let g = 9.8063;
     let w_ie = earth_rate_n_radps(45.7796f64.to_radians());
     let mut out = Vec::new();
@@ -137,7 +142,7 @@ fn ideal_rows() -> Vec<(u32, [f64; 3], [f64; 3], [f64; 3])> {
     out
 }
 
-fn recording(model: &Model, has_gyro: bool) -> (Recording, Vec<([f64; 3], [f64; 3])>) {
+fn recording(model: &Model, has_gyro: bool) -> (Recording, Ideal) {
     let mut rows = Vec::new();
     let mut ideal = Vec::new();
     for (k, (pos, p, w, f)) in ideal_rows().into_iter().enumerate() {

@@ -3,9 +3,9 @@
 
 use std::path::PathBuf;
 
-use crate::alignment::{align, summary};
 use crate::cmd::{json_to_stdout, write_json};
 use crate::io::recording::Recording;
+use crate::navigation::alignment::{align, summary};
 
 /// Arguments of `sinscal align`.
 #[derive(clap::Args)]
