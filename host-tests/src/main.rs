@@ -31,6 +31,11 @@ enum Command {
     Simulate(cmd::simulate::Args),
     /// Write the built-in example and calibrate it, showing the truth beside the estimates.
     Demo(cmd::demo::Args),
+    /// Compensate a recording with a calibration result (JSON version 1 or 2): f = T_a^-1 (f_meas - b_a),
+    /// w = T_g^-1 (w_meas - b_g - G f).
+    Apply(cmd::apply::Args),
+    /// Per dwell, the attitude of the analytic coarse alignment with standard errors, against the reference.
+    Align(cmd::align::Args),
     /// Static pure-inertial navigation with and without the calibration's biases removed.
     Navigate(cmd::navigate::Args),
     /// Convert a measured data set (PSINS .imu, imucal Ferraris session, imu_tk counts) into a recording.
@@ -50,6 +55,8 @@ fn main() -> ExitCode {
         Command::Analyze(args) => cmd::analyze::run(args),
         Command::Simulate(args) => cmd::simulate::run(args),
         Command::Demo(args) => cmd::demo::run(args),
+        Command::Apply(args) => cmd::apply::run(args),
+        Command::Align(args) => cmd::align::run(args),
         Command::Navigate(args) => cmd::navigate::run(args),
         Command::Import(args) => cmd::import::run(args),
         Command::Study(args) => cmd::study::run(args),

@@ -291,3 +291,48 @@ fn navigate_runs_both_ways_and_writes_json_and_a_figure() {
         sinscal().arg("navigate").arg(&measured).arg("--calibration").arg(&cal).args(["--hours", "1"]).assert().code(1);
     assert!(String::from_utf8_lossy(&e.get_output().stderr).contains("no truth_* header"));
 }
+
+#[test]
+fn accelerometer_only_recordings_are_refused_where_gyros_are_needed() {
+    let dir = tempfile::tempdir().unwrap();
+    let rec = example_file(&dir, 1.0);
+    let mut recording = sinscal_host::io::recording::Recording::read(&rec).unwrap();
+    recording.has_gyro = false;
+    let accel = dir.path().join("accel.csv");
+    recording.write(&accel).unwrap();
+    let cal = dir.path().join("cal.json");
+    std::fs::write(
+        &cal,
+        r#"{"schema": "sinscal-calibration/1", "gyro_bias_radps": [0, 0, 0], "gyro_bias_std_radps": [0, 0, 0],
+            "accel_bias_mps2": [0, 0, 0], "accel_bias_std_mps2": [0, 0, 0]}"#,
+    )
+    .unwrap();
+    for (command, extra) in
+        [("analyze", vec![]), ("navigate", vec!["--calibration".to_string(), cal.display().to_string()])]
+    {
+        let out = sinscal().arg(command).arg(&accel).args(&extra).assert().code(1);
+        let stderr = String::from_utf8(out.get_output().stderr.clone()).unwrap();
+        let line = stderr.lines().find(|l| l.starts_with("sinscal:")).unwrap_or_default();
+        assert_eq!(line, format!("sinscal: {}: no gyro columns: {command} needs gyros", accel.display()), "{stderr}");
+    }
+}
+
+#[test]
+fn navigate_reads_the_biases_of_a_version_2_calibration() {
+    let dir = tempfile::tempdir().unwrap();
+    let rec = example_file(&dir, 2.0);
+    let v2 = dir.path().join("cal2.json");
+    std::fs::write(
+        &v2,
+        r#"{"schema": "sinscal-calibration/2", "method": "channels", "model": ["gyro_bias", "accel_bias"],
+            "gyro_bias_radps": [2.4e-7, -1.4e-7, null], "gyro_bias_std_radps": [1e-8, 1e-8, null],
+            "accel_bias_mps2": [1e-3, -8e-4, 5e-4], "accel_bias_std_mps2": [1e-5, 1e-5, 1e-5],
+            "accel_scale_factor": null, "unobservable": ["gyro_bias_z"]}"#,
+    )
+    .unwrap();
+    let out =
+        sinscal().arg("navigate").arg(&rec).arg("--calibration").arg(&v2).args(["--json", "-"]).assert().success();
+    let v: Value = serde_json::from_slice(&out.get_output().stdout).unwrap();
+    assert_eq!(v["calibrations"][0], "cal2.json");
+    assert_eq!(v["runs"].as_array().unwrap().len(), 3);
+}

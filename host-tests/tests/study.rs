@@ -83,7 +83,7 @@ fn synthetic_multi_pose_recovers_hidden_scale_factors_misalignments_and_g_sensit
             t += 1.0 / rate;
         }
     }
-    let rec = Recording { source: "synthetic".to_string(), header: header(rate, g), rows };
+    let rec = Recording { source: "synthetic".to_string(), header: header(rate, g), rows, has_gyro: true };
     let s = study_multi_pose(&rec, PoseKind::Unlabelled, g, "synthetic", vec![], 1, &[]).unwrap();
     let p = s.poses.as_ref().unwrap();
     assert_eq!(p.poses.len(), 30);
@@ -138,7 +138,7 @@ fn synthetic_multi_pose_without_errors_names_no_pose_cause() {
             t += 0.01;
         }
     }
-    let rec = Recording { source: "synthetic".to_string(), header: header(100.0, g), rows };
+    let rec = Recording { source: "synthetic".to_string(), header: header(100.0, g), rows, has_gyro: true };
     let s = study_multi_pose(&rec, PoseKind::Unlabelled, g, "synthetic", vec![], 1, &[]).unwrap();
     let p = s.poses.as_ref().unwrap();
     assert!(p.norm_rms_data_mps2 / p.norm_rms_noise_mps2 < 3.0, "{}", p.norm_rms_data_mps2 / p.norm_rms_noise_mps2);
@@ -165,7 +165,7 @@ fn synthetic_single_pose_finds_hidden_rate_random_walk() {
             row(k as f64 / rate, 1, w, f)
         })
         .collect();
-    let rec = Recording { source: "synthetic".to_string(), header: header(rate, 9.8), rows };
+    let rec = Recording { source: "synthetic".to_string(), header: header(rate, 9.8), rows, has_gyro: true };
     let s = study_single_pose(&rec, "synthetic", vec![], 3);
     let gz = s.noise.iter().find(|c| c.channel == "gz").unwrap();
     assert!((gz.white_std / white_std - 1.0).abs() < 0.02, "white std {}", gz.white_std);

@@ -17,6 +17,7 @@ use super::{Analysis, ChannelDiagnostics, CHANNELS, CHANNEL_UNITS};
 /// Analyses a recording.
 pub fn analyze_recording(recording: &Recording) -> Result<Analysis, InputError> {
     let source = recording.source.as_str();
+    recording.require_gyro("analyze")?;
     let session = Session::read(recording)?;
     let blocks = Blocks::cut(&session);
     let mut problem = problem(&session, &blocks);

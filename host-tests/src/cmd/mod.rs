@@ -7,7 +7,9 @@ use std::path::Path;
 
 use anyhow::Context as _;
 
+pub mod align;
 pub mod analyze;
+pub mod apply;
 pub mod calibrate;
 pub mod demo;
 pub mod example;

@@ -2,6 +2,7 @@
 //! calibration result (JSON and summary), the analysis report and the figures. Formats: docs/formats.md.
 
 pub mod analysis_report;
+pub mod calibration_model;
 pub mod calibration_result;
 pub mod error;
 pub mod import;

@@ -73,7 +73,16 @@ pub struct Recording {
     pub header: Header,
     /// Rows in file order.
     pub rows: Vec<Row>,
+    /// Whether the recording has the three gyro columns. Accelerometer-only data (docs/formats.md#columns)
+    /// have none; their rows carry `rate_b_radps = [0.0; 3]`, which no command may take as a measurement.
+    pub has_gyro: bool,
 }
+
+/// The gyro columns, present as a group or absent (accelerometer-only data).
+pub const GYRO_COLUMNS: [&str; 3] = ["gx_radps", "gy_radps", "gz_radps"];
+
+/// Largest relative disagreement between the header's `rate_hz` and the median time step of `t_s`.
+pub const RATE_TOLERANCE: f64 = 0.01;
 
 const COLUMNS: [&str; 11] = [
     "t_s",
@@ -99,21 +108,27 @@ impl Recording {
     /// Parses the text of a recording; `source` names it in errors.
     pub fn parse(text: &str, source: &str) -> Result<Recording, InputError> {
         let mut lines = text.lines().enumerate().map(|(i, l)| (i + 1, l.trim_end_matches('\r')));
-        let (header, header_line, column_line) = parse_header(&mut lines, text, source)?;
-        let names: Vec<&str> = column_line.split(',').map(str::trim).collect();
-        let find = |name: &str| names.iter().position(|c| *c == name);
-        let mut index = [0usize; 11];
-        for (slot, name) in index.iter_mut().zip(COLUMNS) {
-            *slot =
-                find(name).ok_or_else(|| InputError::at(source, header_line, format!("missing column '{name}'")))?;
-        }
-        let temp = find("temp_c");
-        let columns = Columns { names, index, temp };
+        let (header, header_line, column_line, rate_line) = parse_header(&mut lines, text, source)?;
+        let columns = parse_columns(column_line, header_line, source)?;
         let rows = parse_rows(lines, &columns, source)?;
         if rows.is_empty() {
             return Err(InputError::at(source, header_line, "no data rows"));
         }
-        Ok(Recording { source: source.to_string(), header, rows })
+        if let (Some(rate_hz), Some(line)) = (header.rate_hz, rate_line) {
+            check_rate(rate_hz, &rows).map_err(|reason| InputError::at(source, line, reason))?;
+        }
+        let has_gyro = columns.gyro.is_some();
+        Ok(Recording { source: source.to_string(), header, rows, has_gyro })
+    }
+
+    /// Refuses accelerometer-only data for a command that needs the gyros: `command` names it
+    /// ("analyze", "navigate", ...). The message is `FILE: no gyro columns: COMMAND needs gyros`.
+    pub fn require_gyro(&self, command: &str) -> Result<(), InputError> {
+        if self.has_gyro {
+            Ok(())
+        } else {
+            Err(InputError::file(&self.source, format!("no gyro columns: {command} needs gyros")))
+        }
     }
 
     /// Writes the recording in the docs/formats.md#recording format. Numbers are written in Rust's shortest
@@ -143,17 +158,18 @@ impl Recording {
             let _ = writeln!(out, "# truth_reference_offset_rad: {}", v3(t.reference_offset_n_rad));
         }
         let with_temp = self.rows.iter().any(|r| r.temp_c.is_some());
-        out.push_str(&COLUMNS.join(","));
+        let names: Vec<&str> = COLUMNS.into_iter().filter(|c| self.has_gyro || !GYRO_COLUMNS.contains(c)).collect();
+        out.push_str(&names.join(","));
         out.push_str(if with_temp { ",temp_c\n" } else { "\n" });
         for r in &self.rows {
             let heading = r.heading_deg.map(|h| h.to_string()).unwrap_or_default();
-            let [gx, gy, gz] = r.rate_b_radps;
             let [ax, ay, az] = r.force_b_mps2;
-            let _ = write!(
-                out,
-                "{},{},{},{},{},{gx:e},{gy:e},{gz:e},{ax},{ay},{az}",
-                r.t_s, r.pos, r.pitch_deg, r.roll_deg, heading
-            );
+            let _ = write!(out, "{},{},{},{},{},", r.t_s, r.pos, r.pitch_deg, r.roll_deg, heading);
+            if self.has_gyro {
+                let [gx, gy, gz] = r.rate_b_radps;
+                let _ = write!(out, "{gx:e},{gy:e},{gz:e},");
+            }
+            let _ = write!(out, "{ax},{ay},{az}");
             if with_temp {
                 let _ = write!(out, ",{}", r.temp_c.map(|t| t.to_string()).unwrap_or_default());
             }
@@ -305,27 +321,71 @@ fn parse_finite(cell: &str) -> Option<f64> {
     cell.parse::<f64>().ok().filter(|v| v.is_finite())
 }
 
-/// Where the columns of a recording are: their names, the indices of [`COLUMNS`], and `temp_c` if present.
+/// Where the columns of a recording are: their names, the indices of the required columns (`t_s`, `pos`, the
+/// attitude and the accelerometers), of the gyros if present, and of `temp_c` if present.
 struct Columns<'a> {
     names: Vec<&'a str>,
-    index: [usize; 11],
+    /// `t_s`, `pos`, `pitch_deg`, `roll_deg`, `heading_deg`, `ax_mps2`, `ay_mps2`, `az_mps2`.
+    index: [usize; 8],
+    gyro: Option<[usize; 3]>,
     temp: Option<usize>,
 }
 
-/// The header lines up to the column line: the header, the line number of the column line and its text.
+/// Finds the columns by name: every name at most once, the required ones present, the gyros all three or none.
+fn parse_columns<'t>(column_line: &'t str, line: usize, source: &str) -> Result<Columns<'t>, InputError> {
+    let bad = |reason: String| InputError::at(source, line, reason);
+    let names: Vec<&str> = column_line.split(',').map(str::trim).collect();
+    for (i, name) in names.iter().enumerate() {
+        if let Some(j) = names[i + 1..].iter().position(|n| n == name) {
+            return Err(bad(format!("column '{name}' appears twice (columns {} and {})", i + 1, i + j + 2)));
+        }
+    }
+    let find = |name: &str| names.iter().position(|c| *c == name);
+    let mut index = [0usize; 8];
+    let required = COLUMNS.iter().filter(|c| !GYRO_COLUMNS.contains(c));
+    for (slot, name) in index.iter_mut().zip(required) {
+        *slot = find(name).ok_or_else(|| bad(format!("missing column '{name}'")))?;
+    }
+    let gyro = GYRO_COLUMNS.map(find);
+    let gyro = match gyro {
+        [Some(x), Some(y), Some(z)] => Some([x, y, z]),
+        [None, None, None] => None,
+        _ => {
+            let missing: Vec<String> =
+                GYRO_COLUMNS.iter().zip(gyro).filter(|(_, i)| i.is_none()).map(|(n, _)| format!("'{n}'")).collect();
+            return Err(bad(format!(
+                "missing column {}: the gyro columns are all three or none (accelerometer-only data)",
+                missing.join(", ")
+            )));
+        }
+    };
+    let temp = find("temp_c");
+    Ok(Columns { names, index, gyro, temp })
+}
+
+/// Whether the text before the colon of a `# ...: ...` header line is a key (one word of letters, digits, `_`,
+/// `-`, `.`) rather than free text that happens to hold a colon.
+fn is_key(key: &str) -> bool {
+    !key.is_empty() && key.chars().all(|c| c.is_ascii_alphanumeric() || "_-.".contains(c))
+}
+
+/// The header lines up to the column line: the header, the line number of the column line, its text, and the
+/// line of `rate_hz` (for the rate check).
 fn parse_header<'t>(
     lines: &mut impl Iterator<Item = (usize, &'t str)>,
     text: &str,
     source: &str,
-) -> Result<(Header, usize, &'t str), InputError> {
+) -> Result<(Header, usize, &'t str, Option<usize>), InputError> {
     let bad = |line: usize, reason: String| InputError::at(source, line, reason);
     let mut version = None;
     let mut latitude = None;
     let mut height_m = 0.0;
     let mut rate_hz = None;
+    let mut rate_line = None;
     let mut gravity = None;
     let mut comments = Vec::new();
     let mut truth_keys: Vec<(usize, String, String)> = Vec::new();
+    let mut seen: Vec<(String, usize)> = Vec::new();
     let (header_line, column_line) = loop {
         let Some((n, line)) = lines.next() else {
             return Err(bad(text.lines().count().max(1), "no column line after the header".into()));
@@ -340,16 +400,32 @@ fn parse_header<'t>(
             comments.push(rest.trim().to_string());
             continue;
         };
+        let key = key.trim();
+        if !is_key(key) {
+            comments.push(rest.trim().to_string());
+            continue;
+        }
+        if let Some((_, first)) = seen.iter().find(|(k, _)| k == key) {
+            return Err(bad(n, format!("header key '{key}' appears twice (first at line {first})")));
+        }
+        seen.push((key.to_string(), n));
         // A value may carry a trailing comment after whitespace, as in the example of docs/formats.md#recording.
         let value = value.split_whitespace().next().unwrap_or("");
         let number = |what: &str| -> Result<f64, InputError> {
             parse_finite(value).ok_or_else(|| bad(n, format!("header {what}: '{value}' is not a finite number")))
         };
-        match key.trim() {
+        match key {
             "sinscal-recording" => version = Some((n, value.to_string())),
             "latitude_deg" => latitude = Some(number("latitude_deg")?),
             "height_m" => height_m = number("height_m")?,
-            "rate_hz" => rate_hz = Some(number("rate_hz")?),
+            "rate_hz" => {
+                let r = number("rate_hz")?;
+                if r <= 0.0 {
+                    return Err(bad(n, format!("header rate_hz: {r} is not a positive rate")));
+                }
+                rate_hz = Some(r);
+                rate_line = Some(n);
+            }
             "gravity_mps2" => gravity = Some(number("gravity_mps2")?),
             k if k.starts_with("truth_") => truth_keys.push((n, k.to_string(), value.to_string())),
             _ => comments.push(rest.trim().to_string()),
@@ -371,7 +447,38 @@ fn parse_header<'t>(
     }
     let truth = parse_truth(&truth_keys, source)?;
     let header = Header { latitude_deg, height_m, rate_hz, gravity_mps2: gravity, comments, truth };
-    Ok((header, header_line, column_line))
+    Ok((header, header_line, column_line, rate_line))
+}
+
+/// The median time step of the rows, s (`None` for fewer than two rows). The median is robust to the gaps
+/// between dwells that docs/formats.md#columns allows.
+pub fn median_time_step_s(rows: &[Row]) -> Option<f64> {
+    let mut dt: Vec<f64> = rows.windows(2).map(|w| w[1].t_s - w[0].t_s).collect();
+    if dt.is_empty() {
+        return None;
+    }
+    dt.sort_by(f64::total_cmp);
+    let m = dt.len() / 2;
+    Some(if dt.len() % 2 == 1 { dt[m] } else { 0.5 * (dt[m - 1] + dt[m]) })
+}
+
+/// The header's `rate_hz` against the time column: the median time step must be `1 / rate_hz` within
+/// [`RATE_TOLERANCE`] (docs/formats.md#rate-check). The error is the reason.
+fn check_rate(rate_hz: f64, rows: &[Row]) -> Result<(), String> {
+    let Some(median_dt) = median_time_step_s(rows) else { return Ok(()) };
+    let nominal_dt = 1.0 / rate_hz;
+    if (median_dt - nominal_dt).abs() > RATE_TOLERANCE * nominal_dt {
+        // Six significant digits: the float noise of the time column (0.009999999999990905 s) is not news.
+        let short = |x: f64| format!("{:.5e}", x).parse::<f64>().map_or(x.to_string(), |r| r.to_string());
+        return Err(format!(
+            "rate_hz {rate_hz} disagrees with the time column: the median time step is {} s ({} Hz), \
+             1/rate_hz is {} s (more than 1 % apart)",
+            short(median_dt),
+            short(1.0 / median_dt),
+            short(nominal_dt)
+        ));
+    }
+    Ok(())
 }
 
 /// The data rows after the column line.
@@ -408,6 +515,12 @@ fn parse_rows<'t>(
             .parse()
             .map_err(|_| bad(n, format!("column 'pos': '{pos_cell}' is not a non-negative integer")))?;
         let heading_deg = if cells[index[4]].is_empty() { None } else { Some(num(index[4])?) };
+        let pitch_deg = num(index[2])?;
+        let roll_deg = num(index[3])?;
+        let rate_b_radps = match columns.gyro {
+            Some([x, y, z]) => [num(x)?, num(y)?, num(z)?],
+            None => [0.0; 3],
+        };
         let temp_c = match columns.temp {
             Some(i) if !cells[i].is_empty() => Some(num(i)?),
             _ => None,
@@ -415,11 +528,11 @@ fn parse_rows<'t>(
         rows.push(Row {
             t_s,
             pos,
-            pitch_deg: num(index[2])?,
-            roll_deg: num(index[3])?,
+            pitch_deg,
+            roll_deg,
             heading_deg,
-            rate_b_radps: [num(index[5])?, num(index[6])?, num(index[7])?],
-            force_b_mps2: [num(index[8])?, num(index[9])?, num(index[10])?],
+            rate_b_radps,
+            force_b_mps2: [num(index[5])?, num(index[6])?, num(index[7])?],
             temp_c,
             line: n,
         });
@@ -494,5 +607,74 @@ mod tests {
         let r = Recording::parse(&text, "r.csv").unwrap();
         let h = r.dwells()[0].attitude("r.csv").unwrap().heading_deg.unwrap();
         assert!((h - 360.0).abs() < 1e-9, "{h}");
+    }
+
+    #[test]
+    fn accelerometer_only_round_trip() {
+        let text = "# sinscal-recording: 1\n# latitude_deg: 10\n# rate_hz: 50\n\
+            t_s,pos,pitch_deg,roll_deg,heading_deg,ax_mps2,ay_mps2,az_mps2\n\
+            0,1,0,90,,-9.81,1e-3,2.5e-4\n0.02,1,0,90,,-9.8100001,-1e-3,0.1\n";
+        let r = Recording::parse(text, "a.csv").unwrap();
+        assert!(!r.has_gyro);
+        assert_eq!(r.rows[1].rate_b_radps, [0.0; 3]);
+        let csv = r.to_csv();
+        assert!(csv.contains("heading_deg,ax_mps2,ay_mps2,az_mps2\n"), "{csv}");
+        assert!(!csv.contains("gx_radps"));
+        let again = Recording::parse(&csv, "a.csv").unwrap();
+        assert!(!again.has_gyro);
+        assert_eq!(
+            again.rows.iter().map(|x| x.force_b_mps2).collect::<Vec<_>>(),
+            [[-9.81, 1e-3, 2.5e-4], [-9.8100001, -1e-3, 0.1]]
+        );
+        assert_eq!(again.header, r.header);
+        assert_eq!(r.require_gyro("analyze").unwrap_err().to_string(), "a.csv: no gyro columns: analyze needs gyros");
+        assert!(Recording::parse(GOOD, "r.csv").unwrap().require_gyro("analyze").is_ok());
+    }
+
+    #[test]
+    fn one_or_two_gyro_columns_are_bad_input_naming_the_missing_ones() {
+        let e = err(&GOOD.replace("gy_radps,gz_radps,", "a,b,"));
+        assert_eq!(
+            e,
+            "r.csv:5: missing column 'gy_radps', 'gz_radps': the gyro columns are all three or none \
+             (accelerometer-only data)"
+        );
+        let e = err(&GOOD.replace(",gx_radps,", ",gyro_x,"));
+        assert!(e.starts_with("r.csv:5: missing column 'gx_radps': the gyro columns"), "{e}");
+    }
+
+    #[test]
+    fn duplicate_columns_and_header_keys_are_bad_input() {
+        let e = err(&GOOD.replace("ax_mps2,ay_mps2,az_mps2", "ax_mps2,gx_radps,az_mps2"));
+        assert_eq!(e, "r.csv:5: column 'gx_radps' appears twice (columns 6 and 10)");
+        let e = err(&GOOD.replace("# rate_hz: 100\n", "# rate_hz: 100\n# latitude_deg: 45.7796\n"));
+        assert_eq!(e, "r.csv:5: header key 'latitude_deg' appears twice (first at line 2)");
+        // Unknown keys too; free text holding a colon is not a key.
+        let e = err(&GOOD.replace("# rate_hz: 100\n", "# source: a\n# rate_hz: 100\n# source: b\n"));
+        assert_eq!(e, "r.csv:6: header key 'source' appears twice (first at line 4)");
+        let text = GOOD.replace("# rate_hz: 100\n", "# made at 10:00\n# rate_hz: 100\n# made at 10:00\n");
+        assert_eq!(Recording::parse(&text, "r.csv").unwrap().header.comments.len(), 2);
+    }
+
+    #[test]
+    fn rate_hz_is_checked_against_the_time_column() {
+        // 0.01 s steps: 100 Hz passes, 99.5 Hz (0.5 %) passes, 98 Hz (2 %) does not.
+        assert!(Recording::parse(&GOOD.replace("rate_hz: 100", "rate_hz: 99.5"), "r.csv").is_ok());
+        let e = err(&GOOD.replace("rate_hz: 100", "rate_hz: 98"));
+        assert!(
+            e.starts_with("r.csv:4: rate_hz 98 disagrees with the time column: the median time step is 0.01 s"),
+            "{e}"
+        );
+        assert!(e.ends_with("(100 Hz), 1/rate_hz is 0.0102041 s (more than 1 % apart)"), "{e}");
+        assert!(err(&GOOD.replace("rate_hz: 100", "rate_hz: 0")).starts_with("r.csv:4: header rate_hz: 0 is not"));
+        // Gaps between dwells do not move the median.
+        let mut text = GOOD.to_string();
+        for k in 2..8 {
+            text.push_str(&format!("{},1,0,0,0,0,0,0,0,0,9.8\n", 0.01 * k as f64));
+        }
+        text.push_str("60.0,2,0,0,0,0,0,0,0,0,9.8\n60.01,2,0,0,0,0,0,0,0,0,9.8\n");
+        assert!(Recording::parse(&text, "r.csv").is_ok());
+        // Without rate_hz there is nothing to check.
+        assert!(Recording::parse(&GOOD.replace("# rate_hz: 100\n", "").replace("0.01,", "0.5,"), "r.csv").is_ok());
     }
 }

@@ -595,5 +595,6 @@ pub fn simulate(scenario: &ScenarioFile, seed: u64, source: &str) -> Recording {
             truth: Some(truth),
         },
         rows,
+        has_gyro: true,
     }
 }

@@ -251,6 +251,7 @@ impl Scenario {
                 truth: Some(self.truth(seed)),
             },
             rows,
+            has_gyro: true,
         }
     }
 }

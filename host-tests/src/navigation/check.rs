@@ -36,8 +36,13 @@ impl CalibrationBiases {
         let text = std::fs::read_to_string(path).map_err(|e| InputError::io(path, e))?;
         let v: serde_json::Value =
             serde_json::from_str(&text).map_err(|e| InputError::at(&name, e.line(), format!("not JSON: {e}")))?;
-        if v["schema"] != "sinscal-calibration/1" {
-            return Err(InputError::file(&name, "not a calibration result: schema is not 'sinscal-calibration/1'"));
+        // Version 2 (docs/formats.md#calibration-json-version-2) has every field of version 1: navigate reads its
+        // biases and leaves the other terms out.
+        if v["schema"] != "sinscal-calibration/1" && v["schema"] != "sinscal-calibration/2" {
+            return Err(InputError::file(
+                &name,
+                "not a calibration result: schema is not 'sinscal-calibration/1' or 'sinscal-calibration/2'",
+            ));
         }
         let triple = |key: &str| -> Result<[Option<f64>; 3], InputError> {
             let arr = v[key]
@@ -134,6 +139,7 @@ pub fn navigate(
     mut progress: impl FnMut(usize, usize),
 ) -> Result<NavReport, InputError> {
     let source = recording.source.as_str();
+    recording.require_gyro("navigate")?;
     let header = &recording.header;
     let dwells = recording.dwells();
     let dwell = chosen_dwell(source, &dwells, options)?;

@@ -422,6 +422,7 @@ pub fn study_dataset(dataset: Dataset, data_dir: &Path) -> Result<Study, InputEr
             let path = file("psins-lasergyro/lasergyro.imu")?;
             eprintln!("study psins: reading {}", path.display());
             let rec = import_psins(&path, None)?.recording;
+            rec.require_gyro("study")?;
             Ok(study_single_pose(&rec, "psins", vec![path.display().to_string()], STUDY_SEED))
         }
         Dataset::Ferraris => study_ferraris(
@@ -433,6 +434,7 @@ pub fn study_dataset(dataset: Dataset, data_dir: &Path) -> Result<Study, InputEr
             let gyro = file("imu-tk-xsens/xsens_gyro.mat")?;
             eprintln!("study imutk: reading {} and {}", acc.display(), gyro.display());
             let rec = import_imutk(&acc, &gyro, None, &StaticDetection::default())?.recording;
+            rec.require_gyro("study")?;
             let sources = vec![acc.display().to_string(), gyro.display().to_string()];
             study_multi_pose(&rec, PoseKind::Unlabelled, IMUTK_GRAVITY_MPS2, "imutk", sources, STUDY_SEED, &[])
         }
@@ -443,6 +445,7 @@ pub fn study_dataset(dataset: Dataset, data_dir: &Path) -> Result<Study, InputEr
 fn study_ferraris(csv: &Path, labels: &Path) -> Result<Study, InputError> {
     eprintln!("study ferraris: reading {}", csv.display());
     let rec = import_imucal(csv, labels, None)?.recording;
+    rec.require_gyro("study")?;
     let turns = ferraris_turns(&rec, labels)?;
     let g = sinscal::nav::earth::normal_gravity_mps2(
         (rec.header.latitude_deg as f32).to_radians(),

@@ -285,6 +285,7 @@ fn imucal_finish(
             truth: None,
         },
         rows,
+        has_gyro: true,
     };
     notes.insert(
         0,

@@ -348,6 +348,7 @@ fn imutk_recording(
             truth: None,
         },
         rows,
+        has_gyro: true,
     };
     let notes = vec![
         format!(

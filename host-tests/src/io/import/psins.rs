@@ -118,6 +118,7 @@ pub fn parse_psins(text: &str, source: &str, latitude_deg: Option<f64>) -> Resul
             truth: None,
         },
         rows,
+        has_gyro: true,
     };
     let notes = vec![
         format!("latitude {latitude_deg} deg ({latitude_source}), height {height_m} m, g {gravity_mps2} m/s^2"),

@@ -1,0 +1,342 @@
+//! The sensor model of a calibration JSON (docs/formats.md#calibration-json, versions 1 and 2) as numbers to
+//! compensate with: `T = I + S + M` of each sensor, the biases and the gyro g-sensitivity, all f64
+//! (docs/conventions.md#sensor-model). `sinscal apply` uses it; other commands may.
+//!
+//! Compensation inverts the model `w_meas = T_g w + b_g + G f`, `f_meas = T_a f + b_a`:
+//!
+//!     f = T_a^-1 (f_meas - b_a),        w = T_g^-1 (w_meas - b_g - G f)
+//!
+//! with the compensated `f` in `G f`. A term that is `null` or absent is the identity (T) or zero (b, G); a
+//! parameter that is `null` inside an array (the schedule could not determine it) counts as 0 and is listed in
+//! [`CalibrationModel::taken_as_zero`].
+
+use std::path::Path;
+
+use serde_json::Value;
+
+use crate::io::error::InputError;
+
+/// A 3x3 matrix, row-major, f64.
+pub type M3 = [[f64; 3]; 3];
+
+const IDENTITY: M3 = [[1.0, 0.0, 0.0], [0.0, 1.0, 0.0], [0.0, 0.0, 1.0]];
+const AXES: [char; 3] = ['x', 'y', 'z'];
+
+/// Largest accepted absolute value of an entry of `S + M` (a relative scale-factor error or a misalignment):
+/// beyond it the file is not a calibration of this sensor's axes (docs/cli.md#apply).
+pub const MAX_T_DEVIATION: f64 = 0.5;
+
+/// Smallest accepted determinant of a `T` matrix: below it `T` is singular (or reverses an axis).
+pub const MIN_T_DETERMINANT: f64 = 1e-6;
+
+/// The sensor model of a calibration result, ready to compensate with.
+#[derive(Clone, Debug, PartialEq)]
+pub struct CalibrationModel {
+    /// File name (without directories), for messages and headers.
+    pub source: String,
+    /// Schema version: 1 or 2.
+    pub version: u32,
+    /// Gyro bias `b_g`, body x, y, z, rad/s.
+    pub gyro_bias_radps: [f64; 3],
+    /// Accelerometer bias `b_a`, body x, y, z, m/s^2.
+    pub accel_bias_mps2: [f64; 3],
+    /// `T_a = I + S_a + M_a`, row i, column j: axis i's output per unit specific force along j.
+    pub accel_t: M3,
+    /// `T_g = I + S_g + M_g`, row i, column j: axis i's output per unit rate about j.
+    pub gyro_t: M3,
+    /// `G`, row i, column j: gyro i's rate error per unit specific force along j, (rad/s)/(m/s^2).
+    pub gyro_g_sensitivity_radps_per_mps2: M3,
+    /// The terms given with values (catalogue names: `gyro_bias`, `accel_scale_factor`, ...), in file order.
+    pub terms: Vec<&'static str>,
+    /// Parameters that are `null` in the file and taken as 0 (`gyro_bias_z`, `accel_misalignment_xy`, ...).
+    pub taken_as_zero: Vec<String>,
+}
+
+/// A term of the JSON: its field, its catalogue name, and its shape.
+struct Term {
+    field: &'static str,
+    name: &'static str,
+    shape: Shape,
+}
+
+#[derive(Clone, Copy, PartialEq)]
+enum Shape {
+    /// Three values, axes x, y, z.
+    Vector,
+    /// A 3x3 matrix with a zero diagonal (misalignments).
+    OffDiagonal,
+    /// A full 3x3 matrix (g-sensitivity).
+    Full,
+}
+
+const TERMS: [Term; 7] = [
+    Term { field: "gyro_bias_radps", name: "gyro_bias", shape: Shape::Vector },
+    Term { field: "accel_bias_mps2", name: "accel_bias", shape: Shape::Vector },
+    Term { field: "accel_scale_factor", name: "accel_scale_factor", shape: Shape::Vector },
+    Term { field: "accel_misalignment", name: "accel_misalignment", shape: Shape::OffDiagonal },
+    Term { field: "gyro_scale_factor", name: "gyro_scale_factor", shape: Shape::Vector },
+    Term { field: "gyro_misalignment", name: "gyro_misalignment", shape: Shape::OffDiagonal },
+    Term { field: "gyro_g_sensitivity_radps_per_mps2", name: "gyro_g_sensitivity", shape: Shape::Full },
+];
+
+impl CalibrationModel {
+    /// Reads a calibration JSON file.
+    pub fn read(path: &Path) -> Result<CalibrationModel, InputError> {
+        let name = path.display().to_string();
+        let text = std::fs::read_to_string(path).map_err(|e| InputError::io(path, e))?;
+        let mut model = CalibrationModel::parse(&text, &name)?;
+        model.source = path.file_name().map_or(name, |f| f.to_string_lossy().into_owned());
+        Ok(model)
+    }
+
+    /// Parses the text of a calibration JSON; `source` names it in errors.
+    pub fn parse(text: &str, source: &str) -> Result<CalibrationModel, InputError> {
+        let v: Value = serde_json::from_str(text).map_err(|e| {
+            // serde_json refuses numbers outside the f64 range (1e999): the file's only way to hold infinity.
+            let reason = if e.to_string().contains("number out of range") {
+                format!("a number is not finite (outside the f64 range): {e}")
+            } else {
+                format!("not JSON: {e}")
+            };
+            InputError::at(source, e.line().max(1), reason)
+        })?;
+        let bad = |reason: String| InputError::file(source, reason);
+        let version = match v["schema"].as_str() {
+            Some("sinscal-calibration/1") => 1,
+            Some("sinscal-calibration/2") => 2,
+            _ => {
+                return Err(bad(format!(
+                    "not a calibration result: schema is {}, not 'sinscal-calibration/1' or 'sinscal-calibration/2'",
+                    v["schema"]
+                )))
+            }
+        };
+        let mut model = CalibrationModel {
+            source: source.to_string(),
+            version,
+            gyro_bias_radps: [0.0; 3],
+            accel_bias_mps2: [0.0; 3],
+            accel_t: IDENTITY,
+            gyro_t: IDENTITY,
+            gyro_g_sensitivity_radps_per_mps2: [[0.0; 3]; 3],
+            terms: Vec::new(),
+            taken_as_zero: Vec::new(),
+        };
+        for term in &TERMS {
+            // Version 1 has only the biases; its other fields, if a tool adds them, are not the model's.
+            let required = term.name.ends_with("_bias");
+            if version == 1 && !required {
+                continue;
+            }
+            // The biases are fields of both versions (a whole term may be null: not estimated).
+            if required && v.get(term.field).is_none() {
+                return Err(bad(format!("'{}' is missing", term.field)));
+            }
+            let field = &v[term.field];
+            if field.is_null() {
+                continue;
+            }
+            let values = read_term(field, term, source)?;
+            model.terms.push(term.name);
+            for (i, row) in values.iter().enumerate() {
+                for (j, x) in row.iter().enumerate() {
+                    if x.is_none() {
+                        model.taken_as_zero.push(parameter_name(term, i, j));
+                    }
+                }
+            }
+            let value = |i: usize, j: usize| values[i][j].unwrap_or(0.0);
+            match term.name {
+                "gyro_bias" => model.gyro_bias_radps = [0, 1, 2].map(|i| value(i, 0)),
+                "accel_bias" => model.accel_bias_mps2 = [0, 1, 2].map(|i| value(i, 0)),
+                "accel_scale_factor" => (0..3).for_each(|i| model.accel_t[i][i] += value(i, 0)),
+                "gyro_scale_factor" => (0..3).for_each(|i| model.gyro_t[i][i] += value(i, 0)),
+                "accel_misalignment" => add_off_diagonal(&mut model.accel_t, value),
+                "gyro_misalignment" => add_off_diagonal(&mut model.gyro_t, value),
+                _ => model.gyro_g_sensitivity_radps_per_mps2 = [0, 1, 2].map(|i| [0, 1, 2].map(|j| value(i, j))),
+            }
+        }
+        for (t, sensor) in [(&model.accel_t, "accel"), (&model.gyro_t, "gyro")] {
+            check_t(t, sensor).map_err(bad)?;
+        }
+        Ok(model)
+    }
+
+    /// Whether the model has a gyro term other than zero or the identity (what an accelerometer-only recording
+    /// cannot use).
+    pub fn has_gyro_terms(&self) -> bool {
+        self.gyro_bias_radps != [0.0; 3]
+            || self.gyro_t != IDENTITY
+            || self.gyro_g_sensitivity_radps_per_mps2 != [[0.0; 3]; 3]
+    }
+
+    /// The compensated specific force `f = T_a^-1 (f_meas - b_a)`, m/s^2.
+    pub fn compensate_force(&self, force_meas_b_mps2: [f64; 3]) -> [f64; 3] {
+        let d = [0, 1, 2].map(|i| force_meas_b_mps2[i] - self.accel_bias_mps2[i]);
+        solve(&self.accel_t, d)
+    }
+
+    /// The compensated angular rate `w = T_g^-1 (w_meas - b_g - G f)`, rad/s, with `f` the compensated specific
+    /// force of the same sample ([`CalibrationModel::compensate_force`]).
+    pub fn compensate_rate(&self, rate_meas_b_radps: [f64; 3], force_b_mps2: [f64; 3]) -> [f64; 3] {
+        let g = &self.gyro_g_sensitivity_radps_per_mps2;
+        let d = [0, 1, 2].map(|i| {
+            rate_meas_b_radps[i] - self.gyro_bias_radps[i] - (0..3).map(|j| g[i][j] * force_b_mps2[j]).sum::<f64>()
+        });
+        solve(&self.gyro_t, d)
+    }
+}
+
+/// The parameter name of entry (i, j) of a term (docs/formats.md#calibration-json-version-2): `<term>_<axes>`.
+fn parameter_name(term: &Term, i: usize, j: usize) -> String {
+    match term.shape {
+        Shape::Vector => format!("{}_{}", term.name, AXES[i]),
+        _ => format!("{}_{}{}", term.name, AXES[i], AXES[j]),
+    }
+}
+
+fn add_off_diagonal(t: &mut M3, value: impl Fn(usize, usize) -> f64) {
+    for (i, row) in t.iter_mut().enumerate() {
+        for (j, x) in row.iter_mut().enumerate() {
+            if i != j {
+                *x += value(i, j);
+            }
+        }
+    }
+}
+
+/// The values of a term as rows (a vector: three rows of one value); `None` = `null`.
+fn read_term(field: &Value, term: &Term, source: &str) -> Result<Vec<Vec<Option<f64>>>, InputError> {
+    let bad = |reason: String| InputError::file(source, reason);
+    let key = term.field;
+    let number = |x: &Value, at: String| -> Result<Option<f64>, InputError> {
+        match x {
+            Value::Null => Ok(None),
+            x => match x.as_f64() {
+                Some(v) if v.is_finite() => Ok(Some(v)),
+                _ => Err(bad(format!("'{key}'{at} is {x}, not a finite number or null"))),
+            },
+        }
+    };
+    let array3 = |x: &Value, what: &str| -> Result<Vec<Value>, InputError> {
+        x.as_array().filter(|a| a.len() == 3).cloned().ok_or_else(|| bad(format!("'{key}' is not {what} (or null)")))
+    };
+    if term.shape == Shape::Vector {
+        let a = array3(field, "an array of 3 numbers or nulls")?;
+        return a.iter().enumerate().map(|(i, x)| Ok(vec![number(x, format!("[{i}]"))?])).collect();
+    }
+    let rows = array3(field, "a 3x3 array of numbers or nulls")?;
+    let mut out = Vec::new();
+    for (i, row) in rows.iter().enumerate() {
+        let row = array3(row, "a 3x3 array of numbers or nulls")?;
+        let mut values = Vec::new();
+        for (j, x) in row.iter().enumerate() {
+            let v = number(x, format!("[{i}][{j}]"))?;
+            if term.shape == Shape::OffDiagonal && i == j {
+                if v.is_some_and(|v| v != 0.0) {
+                    return Err(bad(format!(
+                        "'{key}'[{i}][{i}] is {x}: the diagonal of a misalignment is 0 (scale factors are separate)"
+                    )));
+                }
+                values.push(Some(0.0));
+            } else {
+                values.push(v);
+            }
+        }
+        out.push(values);
+    }
+    Ok(out)
+}
+
+/// Refuses a `T` that is far from the identity or singular.
+fn check_t(t: &M3, sensor: &str) -> Result<(), String> {
+    for i in 0..3 {
+        for j in 0..3 {
+            let deviation = t[i][j] - IDENTITY[i][j];
+            if deviation.abs() > MAX_T_DEVIATION {
+                let name = if i == j {
+                    format!("{sensor}_scale_factor_{}", AXES[i])
+                } else {
+                    format!("{sensor}_misalignment_{}{}", AXES[i], AXES[j])
+                };
+                // Six significant digits: 1.51 - 1 is not exactly 0.51.
+                let deviation = format!("{deviation:.5e}").parse::<f64>().unwrap_or(deviation);
+                return Err(format!(
+                    "{name} = {deviation}: T_{} = I + S + M is far from the identity (|S + M| entries above \
+                     {MAX_T_DEVIATION}): not a calibration of these axes",
+                    &sensor[..1]
+                ));
+            }
+        }
+    }
+    let d = det(t);
+    if d.is_nan() || d < MIN_T_DETERMINANT {
+        return Err(format!(
+            "T_{} = I + S + M is singular (det {d:e}, at least {MIN_T_DETERMINANT:e} is needed): it cannot be inverted",
+            &sensor[..1]
+        ));
+    }
+    Ok(())
+}
+
+/// Determinant of a 3x3 matrix.
+pub fn det(a: &M3) -> f64 {
+    a[0][0] * (a[1][1] * a[2][2] - a[1][2] * a[2][1]) - a[0][1] * (a[1][0] * a[2][2] - a[1][2] * a[2][0])
+        + a[0][2] * (a[1][0] * a[2][1] - a[1][1] * a[2][0])
+}
+
+/// `a^-1 b` by Gaussian elimination with partial pivoting (`a` checked non-singular, near the identity).
+fn solve(a: &M3, b: [f64; 3]) -> [f64; 3] {
+    let mut m = [[0.0; 4]; 3];
+    for i in 0..3 {
+        m[i][..3].copy_from_slice(&a[i]);
+        m[i][3] = b[i];
+    }
+    for col in 0..3 {
+        let pivot = (col..3).max_by(|&p, &q| m[p][col].abs().total_cmp(&m[q][col].abs())).unwrap_or(col);
+        m.swap(col, pivot);
+        for row in col + 1..3 {
+            let factor = m[row][col] / m[col][col];
+            for k in col..4 {
+                m[row][k] -= factor * m[col][k];
+            }
+        }
+    }
+    let mut x = [0.0; 3];
+    for i in (0..3).rev() {
+        let rest: f64 = (i + 1..3).map(|k| m[i][k] * x[k]).sum();
+        x[i] = (m[i][3] - rest) / m[i][i];
+    }
+    x
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    const V1: &str = r#"{"schema": "sinscal-calibration/1", "gyro_bias_radps": [1e-6, null, -2e-6],
+        "gyro_bias_std_radps": [1e-8, null, 1e-8], "accel_bias_mps2": [1e-3, -2e-3, 3e-3],
+        "accel_bias_std_mps2": [1e-5, 1e-5, 1e-5], "unobservable": ["gyro_bias_y"]}"#;
+
+    #[test]
+    fn version_1_has_biases_only_and_nulls_are_taken_as_zero() {
+        let m = CalibrationModel::parse(V1, "c.json").unwrap();
+        assert_eq!(m.version, 1);
+        assert_eq!(m.gyro_bias_radps, [1e-6, 0.0, -2e-6]);
+        assert_eq!(m.taken_as_zero, ["gyro_bias_y"]);
+        assert_eq!(m.terms, ["gyro_bias", "accel_bias"]);
+        assert_eq!((m.accel_t, m.gyro_t), (IDENTITY, IDENTITY));
+        assert_eq!(m.compensate_force([1.0, 2.0, 3.0]), [1.0 - 1e-3, 2.0 + 2e-3, 3.0 - 3e-3]);
+    }
+
+    #[test]
+    fn solve_inverts() {
+        let a = [[1.01, 0.002, -0.003], [0.001, 0.99, 0.004], [-0.002, 0.003, 1.02]];
+        let x = [0.3, -9.7, 1.5];
+        let b = [0, 1, 2].map(|i| (0..3).map(|j| a[i][j] * x[j]).sum::<f64>());
+        let got = solve(&a, b);
+        for i in 0..3 {
+            assert!((got[i] - x[i]).abs() < 1e-14, "{got:?}");
+        }
+    }
+}
