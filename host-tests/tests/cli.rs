@@ -189,6 +189,38 @@ fn bad_input_exits_1_with_file_line_and_reason() {
     let heading_std = v["positions"][1]["heading_std_deg"].as_f64().unwrap();
     assert!((heading - 180.0).abs() < 4.0 * heading_std + 0.5, "estimated heading {heading} ± {heading_std}");
 
+    // Accelerometer-only data: the accelerometer terms alone.
+    let acc_only = dir.path().join("acc.csv");
+    let acc_text: Vec<String> = text
+        .lines()
+        .map(|l| {
+            if l.starts_with('#') {
+                return l.to_string();
+            }
+            let cells: Vec<&str> = l.split(',').collect();
+            [&cells[..5], &cells[8..]].concat().join(",")
+        })
+        .collect();
+    std::fs::write(&acc_only, acc_text.join("\n")).unwrap();
+    let out = sinscal().arg("calibrate").arg(&acc_only).args(["--json", "-"]).assert().success();
+    let v: Value = serde_json::from_slice(&out.get_output().stdout).unwrap();
+    assert_eq!(v["model"], serde_json::json!(["accel_bias", "accel_scale_factor"]));
+    assert!(v["gyro_bias_radps"][0].is_null() && v["accel_bias_mps2"][0].as_f64().is_some());
+    assert!(v["positions"][0]["residual_gyro_radps"].is_null());
+    let stderr = String::from_utf8(
+        sinscal()
+            .arg("calibrate")
+            .arg(&acc_only)
+            .args(["--method", "angles"])
+            .assert()
+            .code(1)
+            .get_output()
+            .stderr
+            .clone(),
+    )
+    .unwrap();
+    assert!(stderr.contains("no gyro columns"), "{stderr}");
+
     // A reference that does not match the data (axes or attitude wrong).
     let wrong = dir.path().join("wrong.csv");
     // Position 3 reported with roll 90 (body x down) while the data have z up: an axis mismatch.

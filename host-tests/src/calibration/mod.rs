@@ -206,10 +206,6 @@ pub fn calibrate(recording: &Recording, options: &Options) -> Result<Calibration
     }
 }
 
-fn has_gyro_columns(_recording: &Recording) -> bool {
-    true
-}
-
 /// The dwell statistics of one dwell through the core's collector.
 fn collect(collector: &mut DwellCollector, dwell: &Dwell<'_>, source: &str) -> Result<DwellSummary, InputError> {
     collector.reset();
@@ -228,7 +224,7 @@ fn collect(collector: &mut DwellCollector, dwell: &Dwell<'_>, source: &str) -> R
 pub fn calibrate_channels(recording: &Recording, options: &Options) -> Result<Calibration, InputError> {
     let source = recording.source.as_str();
     let header = &recording.header;
-    let has_gyro = has_gyro_columns(recording);
+    let has_gyro = recording.has_gyro;
     let (site, gravity_source) = site_of(header);
     let dwells = calibration_dwells(recording, MAX_DWELLS)?;
     let prefilter = prefilter_of(options, &dwells[0], source)?;
@@ -337,7 +333,7 @@ fn channel_error(e: ChannelError, positions: &[PositionResult], source: &str) ->
 pub fn calibrate_angles(recording: &Recording, options: &Options) -> Result<Calibration, InputError> {
     let source = recording.source.as_str();
     let header = &recording.header;
-    if !has_gyro_columns(recording) {
+    if !recording.has_gyro {
         return Err(InputError::file(
             source,
             "no gyro columns: the angle method needs them (--method channels calibrates the accelerometers alone)",

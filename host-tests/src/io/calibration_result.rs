@@ -365,11 +365,12 @@ pub fn summary(c: &Calibration) -> String {
                     None => "       ?".to_string(),
                 };
                 let rg = s.residual_rate_b_radps[k].map(|x| x as f64 / DEG_PER_HOUR);
+                let rg: [String; 3] = rg.map(|x| if c.has_gyro { format!("{x:>+9.4}") } else { format!("{:>9}", "-") });
                 let ra = s.residual_force_b_mps2[k].map(|x| x as f64 / MICRO_G);
                 let stat = s.dwell_statistic[k];
                 let _ = writeln!(
                     out,
-                    "{:>4} {:>7.2} {:>7.2} {heading} {:>8} |  {:>+9.4} {:>+9.4} {:>+9.4} |  {:>+9.2} {:>+9.2} {:>+9.2} | {}{}",
+                    "{:>4} {:>7.2} {:>7.2} {heading} {:>8} |  {} {} {} |  {:>+9.2} {:>+9.2} {:>+9.2} | {}{}",
                     p.pos,
                     p.attitude.pitch_deg,
                     p.attitude.roll_deg,
