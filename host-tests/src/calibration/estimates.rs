@@ -8,7 +8,7 @@ use sinscal::calib::solve::{BiasSolution, Parameter};
 /// Which estimator made a calibration.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum Method {
-    /// The paper's: alignment angles per position (docs/method.md#step-5-six-positions).
+    /// The paper's: alignment angles per position (docs/method.md#step-5-schedule-and-solution).
     Angles,
     /// The general estimator: every channel of every dwell (docs/method.md#general-estimator).
     Channels,
