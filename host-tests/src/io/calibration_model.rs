@@ -4,7 +4,9 @@
 //!
 //! Compensation inverts the model `w_meas = T_g w + b_g + G f`, `f_meas = T_a f + b_a`:
 //!
-//!     f = T_a^-1 (f_meas - b_a),        w = T_g^-1 (w_meas - b_g - G f)
+//! ```text
+//! f = T_a^-1 (f_meas - b_a),        w = T_g^-1 (w_meas - b_g - G f)
+//! ```
 //!
 //! with the compensated `f` in `G f`. A term that is `null` or absent is the identity (T) or zero (b, G); a
 //! parameter that is `null` inside an array (the schedule could not determine it) counts as 0 and is listed in
