@@ -10,7 +10,7 @@
 //! rate's horizontal part does.
 //!
 //! The solution is Gauss-Newton on the dwell means weighted by their noise (the variance of each mean, which
-//! the caller takes from the data's own Allan variance, docs/method.md#honest-errors). Each pass folds the
+//! the caller supplies, docs/method.md#how-it-solves). Each pass folds the
 //! whitened rows into a square-root information factor ([`crate::math::lsq`]); a dwell's heading column is
 //! removed by a Householder reflection of that dwell's rows before they are folded in, which is the Schur
 //! complement of the nuisance in square-root form. Unknown headings are profiled exactly at the start of every
@@ -590,13 +590,16 @@ impl ChannelEstimator {
         for (dwell, d) in self.dwells.iter().enumerate() {
             let f = d.force_mean_b_mps2;
             let ratio = norm(f) / g;
-            if !((ratio - 1.0).abs() <= self.settings.max_force_magnitude_error) {
+            // NaN fails the test too.
+            let within = (ratio - 1.0).abs() <= self.settings.max_force_magnitude_error;
+            if !within {
                 return Err(ChannelError::ForceMagnitude { dwell, ratio });
             }
             let up_b = d.tilt.transpose().mul_vec([0.0, 0.0, 1.0]);
             let cos = (dot(f, up_b) / norm(f)).clamp(-1.0, 1.0);
             let angle_rad = libm::acosf(cos);
-            if !(angle_rad <= self.settings.max_gravity_angle_rad) {
+            let within = angle_rad <= self.settings.max_gravity_angle_rad;
+            if !within {
                 return Err(ChannelError::GravityDirection { dwell, angle_rad });
             }
         }
@@ -851,7 +854,8 @@ impl ChannelEstimator {
         for (c, slot) in determined.iter_mut().enumerate().take(n) {
             let mut share = 0.0f32;
             for j in 0..n {
-                if !(sigma[j] > self.settings.rank_tolerance * largest) {
+                let seen = sigma[j] > self.settings.rank_tolerance * largest;
+                if !seen {
                     share += v[c][j] * v[c][j];
                 }
             }

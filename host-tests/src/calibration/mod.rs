@@ -329,7 +329,7 @@ fn channel_error(e: ChannelError, positions: &[PositionResult], source: &str) ->
     }
 }
 
-/// The paper's estimator (docs/method.md#step-5-six-positions) on a recording: headings and gyros needed.
+/// The paper's estimator (docs/method.md#step-5-schedule-and-solution) on a recording: headings and gyros needed.
 pub fn calibrate_angles(recording: &Recording, options: &Options) -> Result<Calibration, InputError> {
     let source = recording.source.as_str();
     let header = &recording.header;
