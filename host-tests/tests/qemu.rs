@@ -73,4 +73,22 @@ fn on_target_tests_pass_in_qemu() {
         .unwrap()
         .gain()[0][0];
     assert!(report.contains(&format!("ok prefilter_gain_k00_bits {k:e}")), "host K00 = {k:e}\n{report}");
+    // The general estimator on the exact session, solved on x86 by the same core: the same bits as on the target.
+    use sinscal::calib::channels::{ChannelEstimator, ChannelSettings, Model};
+    let mut est = ChannelEstimator::new(
+        sinscal::rig::exact::site(),
+        ChannelSettings { model: Model::FULL, ..ChannelSettings::default() },
+    );
+    for d in sinscal::rig::exact::session() {
+        est.add(d).unwrap();
+    }
+    let sol = est.solve().unwrap();
+    let mut bits: u32 = 0;
+    for (i, v) in sol.parameters_si.iter().enumerate() {
+        bits = bits.rotate_left(5) ^ v.to_bits() ^ (i as u32);
+    }
+    let hash = f32::from_bits(bits & 0x3fff_ffff);
+    assert!(report.contains(&format!("ok channels_parameter_bits_hash {hash:e}")), "host hash {hash:e}\n{report}");
+    let chi = sol.chi_square;
+    assert!(report.contains(&format!("ok channels_chi_square_bits {chi:e}")), "host chi-square {chi:e}\n{report}");
 }

@@ -2,6 +2,7 @@
 //! the replay file, the emulated ADIS, the run) and, in the emulated Cortex-M4F, host files through
 //! semihosting (`semihost`, target only).
 
+pub mod exact;
 pub mod replay;
 #[cfg(target_os = "none")]
 pub mod semihost;
