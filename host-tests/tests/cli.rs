@@ -189,6 +189,22 @@ fn bad_input_exits_1_with_file_line_and_reason() {
     let heading_std = v["positions"][1]["heading_std_deg"].as_f64().unwrap();
     assert!((heading - 180.0).abs() < 4.0 * heading_std + 0.5, "estimated heading {heading} ± {heading_std}");
 
+    // A pose placed 0.05 deg off its label (pitch 0.05 written as 0): suspect, and the result without it given.
+    let tilted = dir.path().join("tilted.csv");
+    std::fs::write(&tilted, text.replace(",3,0,0,90,", ",3,0.05,0,90,")).unwrap();
+    let out = sinscal().arg("calibrate").arg(&tilted).args(["--json", "-"]).assert().success();
+    let v: Value = serde_json::from_slice(&out.get_output().stdout).unwrap();
+    let suspect: Vec<bool> =
+        v["positions"].as_array().unwrap().iter().map(|p| p["suspect"].as_bool().unwrap()).collect();
+    // The tilt leaks into the fit through the shared terms (Table 1 leaves few residual degrees of freedom), so
+    // other poses may be flagged too and the largest statistic need not be the tilted pose's; it is flagged.
+    assert!(suspect[2], "{suspect:?}");
+    assert!(v["without_suspect"]["positions"].as_array().unwrap().contains(&serde_json::json!(3)));
+    let stdout =
+        String::from_utf8(sinscal().arg("calibrate").arg(&tilted).assert().success().get_output().stdout.clone())
+            .unwrap();
+    assert!(stdout.contains("SUSPECT") && stdout.contains("Without them"), "{stdout}");
+
     // Accelerometer-only data: the accelerometer terms alone.
     let acc_only = dir.path().join("acc.csv");
     let acc_text: Vec<String> = text

@@ -158,6 +158,7 @@ pub fn calibration_from_outcome(
         solution: Some(result.solution),
         channels: None,
         has_gyro: true,
+        without_suspect: None,
         passes: result.passes,
         converged: result.converged,
         sampling: Some(outcome.sampling),

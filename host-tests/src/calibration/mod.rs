@@ -139,6 +139,9 @@ pub struct Calibration {
     pub channels: Option<ChannelSolution>,
     /// Whether the recording has gyro data.
     pub has_gyro: bool,
+    /// The general estimator's result without its suspect positions (their labels), when some are suspect and
+    /// enough remain.
+    pub without_suspect: Option<(Vec<u32>, Estimates)>,
     /// Passes made and convergence of the refinement (core).
     pub passes: u32,
     /// Whether the refinement converged.
@@ -273,7 +276,15 @@ pub fn calibrate_channels(recording: &Recording, options: &Options) -> Result<Ca
         estimator.add(dwell).map_err(|e| channel_error(e, &positions, source))?;
     }
     let solution = estimator.solve().map_err(|e| channel_error(e, &positions, source))?;
+    let suspects: Vec<u32> =
+        positions.iter().enumerate().filter(|(k, _)| solution.suspect & (1 << k) != 0).map(|(_, p)| p.pos).collect();
+    let without_suspect = if !suspects.is_empty() && positions.len() - suspects.len() >= 2 {
+        estimator.solve_excluding(solution.suspect).ok().map(|s| (suspects, Estimates::from_channels(&s)))
+    } else {
+        None
+    };
     Ok(Calibration {
+        without_suspect,
         source: source.to_string(),
         latitude_deg: header.latitude_deg,
         site,
@@ -390,6 +401,7 @@ pub fn calibrate_angles(recording: &Recording, options: &Options) -> Result<Cali
         solution: Some(solution),
         channels: None,
         has_gyro: true,
+        without_suspect: None,
         passes,
         converged,
         sampling: None,

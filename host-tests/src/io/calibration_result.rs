@@ -112,6 +112,9 @@ pub struct CalibrationJson {
     pub chi_square: f64,
     /// Its degrees of freedom.
     pub degrees_of_freedom: u32,
+    /// Extra: the determined parameters again without the suspect positions (channel method, when some are).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub without_suspect: Option<WithoutSuspectJson>,
     /// Extra: where gravity came from: "header" or "normal_gravity".
     pub gravity_source: &'static str,
     /// Extra: the prefilter that ran.
@@ -131,6 +134,19 @@ pub struct CalibrationJson {
     pub source: String,
     /// Extra: the sinscal version that wrote this.
     pub sinscal_version: &'static str,
+}
+
+/// The result without the suspect positions.
+#[derive(Debug, Serialize)]
+pub struct WithoutSuspectJson {
+    /// Labels of the positions left out.
+    pub positions: Vec<u32>,
+    /// Names of the determined parameters.
+    pub parameters: Vec<&'static str>,
+    /// Their values, SI.
+    pub values: Vec<f64>,
+    /// Their standard errors, SI.
+    pub std: Vec<f64>,
 }
 
 /// Sampling counters of the firmware path.
@@ -260,6 +276,12 @@ impl CalibrationJson {
             unobservable: e.unobservable_names(),
             chi_square: e.chi_square,
             degrees_of_freedom: e.degrees_of_freedom,
+            without_suspect: c.without_suspect.as_ref().map(|(positions, w)| WithoutSuspectJson {
+                positions: positions.clone(),
+                parameters: w.determined_names(),
+                values: w.determined.iter().map(|&i| w.value[i].unwrap_or(f64::NAN)).collect(),
+                std: w.determined.iter().map(|&i| w.std[i].unwrap_or(f64::NAN)).collect(),
+            }),
             gravity_source: match c.gravity_source {
                 GravitySource::Header => "header",
                 GravitySource::NormalGravity => "normal_gravity",
@@ -499,6 +521,28 @@ pub fn summary(c: &Calibration) -> String {
                 "Suspect positions (residuals beyond the 0.1 % level of the noise): {}",
                 suspects.join(", ")
             );
+            match &c.without_suspect {
+                Some((_, w)) => {
+                    let _ = writeln!(out, "Without them (biases, estimate ± standard error):");
+                    let _ = writeln!(
+                        out,
+                        "  gyro [deg/h]: {}, {}, {}",
+                        show(w, 0, DEG_PER_HOUR, 5),
+                        show(w, 1, DEG_PER_HOUR, 5),
+                        show(w, 2, DEG_PER_HOUR, 5)
+                    );
+                    let _ = writeln!(
+                        out,
+                        "  accel [ug]: {}, {}, {}",
+                        show(w, 3, MICRO_G, 2),
+                        show(w, 4, MICRO_G, 2),
+                        show(w, 5, MICRO_G, 2)
+                    );
+                }
+                None => {
+                    let _ = writeln!(out, "Too few positions remain without them to solve again.");
+                }
+            }
         }
     }
     out
