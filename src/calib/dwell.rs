@@ -3,8 +3,8 @@
 //! Call rate: [`DwellCollector::update`] once per IMU sample (100 Hz), for the samples that belong to the
 //! dwell; [`DwellCollector::summary`] once at its end. The collector keeps, per channel, the mean and
 //! variance of the raw samples, the mean of the filtered samples (what the alignment consumes), the
-//! filter's last state (the paper's "settled output"), and the octave Allan variance of the series whose
-//! mean is the dwell value, from which [`MeanNoise`] gives the honest noise of the dwell mean
+//! filter's last state (the paper's "settled output"), and the octave Allan variance of the raw samples,
+//! from which, with the prefilter's start term, [`MeanNoise`] gives the honest noise of the dwell mean
 //! (docs/method.md#honest-errors); [`pool_mean_noise`] combines the dwells of one session.
 
 use crate::calib::prefilter::{FixedGain, HmmKf, PrefilterError, PrefilterSettings};
@@ -106,9 +106,16 @@ pub struct MeanNoise {
     pub cluster_samples: u32,
 }
 
-/// One channel's octave Allan variance over one dwell, of the series whose mean is the dwell value (the
-/// filtered samples when a prefilter runs, the raw ones otherwise): what [`MeanNoise`] is taken from and
-/// what [`pool_mean_noise`] pools.
+/// One channel's octave Allan variance over one dwell: what [`MeanNoise`] is taken from and what
+/// [`pool_mean_noise`] pools.
+///
+/// It is the Allan variance of the **raw** samples, also when a prefilter runs. The mean of the filtered
+/// dwell is exactly the raw mean plus a term from the filter's start and end
+/// ([`HmmKf::start_transient_weight`]), so its noise is the raw mean's plus that term,
+/// `prefilter_start_var`. The filtered samples themselves would count the start twice: the filter's
+/// transient from the first sample lies in the first cluster of every level (measured on the PSINS
+/// accelerometers, 6-s dwells: 3 times the raw Allan deviation at 2.56 s), and at the cluster sizes used
+/// (64 samples and more) the filter, with its DC gain of 1, leaves the Allan variance otherwise unchanged.
 #[derive(Clone, Copy, Debug, Default, PartialEq)]
 #[cfg_attr(feature = "defmt", derive(defmt::Format))]
 pub struct DwellAllan {
@@ -168,7 +175,12 @@ pub const MAX_NOISE_GROWTH: f32 = 4.0;
 /// extrapolated as white noise (conservative when it falls). Then the start term is added. Without any
 /// difference (a dwell shorter than two blocks) the per-sample variance, as for white noise.
 #[inline(never)]
-fn mean_noise_from_levels(levels: &[(f32, f32); ALLAN_LEVELS], fallback: (f32, f32), start_q: f32, n: f32) -> MeanNoise {
+fn mean_noise_from_levels(
+    levels: &[(f32, f32); ALLAN_LEVELS],
+    fallback: (f32, f32),
+    start_q: f32,
+    n: f32,
+) -> MeanNoise {
     let pick = |min: f32| (0..ALLAN_LEVELS).rev().find(|&j| levels[j].1 >= min && levels[j].1 > 0.0);
     let Some(top) = pick(MIN_ALLAN_DIFFERENCES as f32).or_else(|| pick(1.0)) else {
         return MeanNoise { white_equivalent_var: fallback.0 + start_q, dof: fallback.1, cluster_samples: 1 };
@@ -200,7 +212,11 @@ fn mean_noise_from_levels(levels: &[(f32, f32); ALLAN_LEVELS], fallback: (f32, f
             growth = exp2_capped(slope * octaves);
         }
     }
-    MeanNoise { white_equivalent_var: m as f32 * levels[top].0 * growth + start_q, dof: levels[top].1, cluster_samples: m }
+    MeanNoise {
+        white_equivalent_var: m as f32 * levels[top].0 * growth + start_q,
+        dof: levels[top].1,
+        cluster_samples: m,
+    }
 }
 
 /// `log2 x` for a positive normal `x`, within 3e-5: the exponent plus `2 / ln 2 (t + t^3/3 + t^5/5 + t^7/7)`,
@@ -212,17 +228,19 @@ fn log2_approx(x: f32) -> f32 {
     let f = f32::from_bits((bits & 0x007f_ffff) | 0x3f80_0000);
     let t = (f - 1.0) / (f + 1.0);
     let t2 = t * t;
-    exponent as f32 + (2.0 / core::f32::consts::LN_2) * t * (1.0 + t2 * (1.0 / 3.0 + t2 * (1.0 / 5.0 + t2 * (1.0 / 7.0))))
+    exponent as f32
+        + (2.0 / core::f32::consts::LN_2) * t * (1.0 + t2 * (1.0 / 3.0 + t2 * (1.0 / 5.0 + t2 * (1.0 / 7.0))))
 }
 
 /// `min(2^y, MAX_NOISE_GROWTH)` for `y >= 0`, within 2e-5 relative (the Taylor series of `e^(y ln 2)` to
 /// the sixth power on the fraction of `y`).
 fn exp2_capped(y: f32) -> f32 {
     // MAX_NOISE_GROWTH is 4 = 2^2.
-    if !(y < 2.0) {
+    if y.is_nan() || y >= 2.0 {
         return MAX_NOISE_GROWTH;
     }
-    let (whole, a) = if y >= 1.0 { (2.0, (y - 1.0) * core::f32::consts::LN_2) } else { (1.0, y * core::f32::consts::LN_2) };
+    let (whole, a) =
+        if y >= 1.0 { (2.0, (y - 1.0) * core::f32::consts::LN_2) } else { (1.0, y * core::f32::consts::LN_2) };
     whole * (1.0 + a * (1.0 + a * (0.5 + a * (1.0 / 6.0 + a * (1.0 / 24.0 + a * (1.0 / 120.0 + a * (1.0 / 720.0)))))))
 }
 
@@ -413,15 +431,12 @@ impl DwellCollector {
         Ok(())
     }
 
-    /// The end of a block of [`BLOCK_SAMPLES`]: its sum of the dwell-value series (filtered or raw
-    /// deviations) goes to the Allan variance, and the blocked sums flush. Once per block, kept out of
-    /// line so that the per-sample path stays small.
+    /// The end of a block of [`BLOCK_SAMPLES`]: its sum of raw deviations goes to the Allan variance, and
+    /// the blocked sums flush. Once per block, kept out of line so that the per-sample path stays small.
     #[inline(never)]
     fn end_block(&mut self) {
-        let filtered = self.gains.is_some();
         for i in 0..6 {
-            let block = if filtered { self.filtered_sum[i].block() } else { self.raw_sum[i].block() };
-            self.allan[i].add(block);
+            self.allan[i].add(self.raw_sum[i].block());
             self.raw_sum[i].flush();
             self.raw_sum_sq[i].flush();
             self.filtered_sum[i].flush();
@@ -543,37 +558,41 @@ mod tests {
     }
 
     #[test]
-    fn allan_levels_are_those_of_the_dwell_value_series() {
-        // Without prefilter the series is the raw samples: the levels equal the direct estimator over the
-        // complete blocks. 100 blocks and 17 samples more (which the Allan levels do not use).
+    fn allan_levels_are_those_of_the_raw_samples_with_and_without_prefilter() {
+        // The levels equal the direct estimator over the complete blocks of the raw samples, with or without
+        // prefilter. 100 blocks and 17 samples more (which the Allan levels do not use).
         let n = 64 * 100 + 17;
         let mut rng = 99u32;
         let xs: Vec<[f32; 6]> = (0..n)
             .map(|_| core::array::from_fn(|i| [1e-5, 2e-5, 7e-5, 0.1, -0.2, 9.8][i] + 1e-3 * normal(&mut rng)))
             .collect();
-        let mut c = DwellCollector::new(&Prefilter::None).unwrap();
-        for z in &xs {
-            c.update(&sample(*z)).unwrap();
-        }
-        let d = c.summary().unwrap();
-        for i in 0..6 {
-            for j in 0..ALLAN_LEVELS {
-                let m = allan_cluster_samples(j) as usize;
-                let means: Vec<f64> = xs[..6400]
-                    .chunks_exact(m)
-                    .map(|b| b.iter().map(|z| z[i] as f64).sum::<f64>() / m as f64)
-                    .collect();
-                let diffs = means.len().saturating_sub(1);
-                assert_eq!(allan_differences(d.samples, j) as usize, diffs, "level {j}");
-                let want = means.windows(2).map(|w| (w[1] - w[0]).powi(2)).sum::<f64>() / (2 * diffs.max(1)) as f64;
-                let got = d.allan[i].avar[j] as f64;
-                assert!((got - want).abs() <= 1e-4 * want, "channel {i} level {j}: {got:e} vs {want:e}");
+        for p in [Prefilter::None, Prefilter::paper()] {
+            let mut c = DwellCollector::new(&p).unwrap();
+            for z in &xs {
+                c.update(&sample(*z)).unwrap();
             }
-            assert_eq!(d.allan[i].prefilter_start_var, 0.0);
-            // 100 blocks: level 2 (256 samples) has 24 differences, level 3 has 11: level 2 is taken.
-            let noise = d.mean_noise[i];
-            assert_eq!((noise.cluster_samples, noise.dof), (256, 24.0));
-            assert_eq!(noise.white_equivalent_var, 256.0 * d.allan[i].avar[2]);
+            let d = c.summary().unwrap();
+            for i in 0..6 {
+                for j in 0..ALLAN_LEVELS {
+                    let m = allan_cluster_samples(j) as usize;
+                    let means: Vec<f64> = xs[..6400]
+                        .chunks_exact(m)
+                        .map(|b| b.iter().map(|z| z[i] as f64).sum::<f64>() / m as f64)
+                        .collect();
+                    let diffs = means.len().saturating_sub(1);
+                    assert_eq!(allan_differences(d.samples, j) as usize, diffs, "level {j}");
+                    let want = means.windows(2).map(|w| (w[1] - w[0]).powi(2)).sum::<f64>() / (2 * diffs.max(1)) as f64;
+                    let got = d.allan[i].avar[j] as f64;
+                    assert!((got - want).abs() <= 1e-4 * want, "channel {i} level {j}: {got:e} vs {want:e}");
+                }
+                // 100 blocks: level 2 (256 samples) has 24 differences, level 3 has 11: level 2 is taken.
+                let noise = d.mean_noise[i];
+                assert_eq!((noise.cluster_samples, noise.dof), (256, 24.0));
+                let start = d.allan[i].prefilter_start_var;
+                assert_eq!(start == 0.0, p == Prefilter::None);
+                let q = 256.0 * d.allan[i].avar[2] + start * n as f32;
+                assert!((noise.white_equivalent_var / q - 1.0).abs() < 1e-6, "{noise:?}");
+            }
         }
     }
 

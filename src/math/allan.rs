@@ -144,9 +144,8 @@ mod tests {
     /// The same estimator written out directly, in f64, from a buffer.
     fn reference(xs: &[f32], m: usize) -> Option<f64> {
         let means: Vec<f64> = xs.chunks_exact(m).map(|c| c.iter().map(|&x| x as f64).sum::<f64>() / m as f64).collect();
-        (means.len() >= 2).then(|| {
-            means.windows(2).map(|w| (w[1] - w[0]).powi(2)).sum::<f64>() / (2.0 * (means.len() - 1) as f64)
-        })
+        (means.len() >= 2)
+            .then(|| means.windows(2).map(|w| (w[1] - w[0]).powi(2)).sum::<f64>() / (2.0 * (means.len() - 1) as f64))
     }
 
     #[test]
