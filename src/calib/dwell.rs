@@ -114,8 +114,9 @@ pub struct MeanNoise {
 /// ([`HmmKf::start_transient_weight`]), so its noise is the raw mean's plus that term,
 /// `prefilter_start_var`. The filtered samples themselves would count the start twice: the filter's
 /// transient from the first sample lies in the first cluster of every level (measured on the PSINS
-/// accelerometers, 6-s dwells: 3 times the raw Allan deviation at 2.56 s), and at the cluster sizes used
-/// (64 samples and more) the filter, with its DC gain of 1, leaves the Allan variance otherwise unchanged.
+/// accelerometers, 6-s dwells: errors reported 1.5 to 1.7 times the scatter of the filtered dwell values),
+/// and at the cluster sizes used (64 samples and more) the filter, with its DC gain of 1, leaves the Allan
+/// variance otherwise unchanged.
 #[derive(Clone, Copy, Debug, Default, PartialEq)]
 #[cfg_attr(feature = "defmt", derive(defmt::Format))]
 pub struct DwellAllan {
