@@ -16,7 +16,7 @@
 //!
 //! | layer | what |
 //! |---|---|
-//! | [`math`] | 3-vectors, 3x3 matrices, dwell accumulators |
+//! | [`math`] | 3-vectors, 3x3 matrices, dwell accumulators, the online octave Allan variance |
 //! | [`nav`] | frames, attitudes, Earth rate and gravity: every sign convention |
 //! | [`sensor`] | [`ImuSample`], the [`ImuSource`] trait, the ADIS driver |
 //! | [`calib`] | prefilter, dwell statistics, alignment, the bias solution, the calibration |
@@ -31,7 +31,8 @@
 //!    [`ImuSample`] in SI units, and the reading is queued (every fault counted, never unwrapped);
 //! 2. the main loop hands each queued reading to the [`CalibrationSequence`] with the turntable's
 //!    "in position" signal: it waits, lets the table settle, and feeds the dwell's
-//!    [`DwellCollector`] (HMM/KF prefilter and statistics per channel), aborting a dwell that moves;
+//!    [`DwellCollector`] (HMM/KF prefilter and statistics per channel, with the octave Allan variance that
+//!    gives the honest noise of each dwell mean), aborting a dwell that moves;
 //! 3. after the last position, [`calibrate_positions`] aligns every dwell
 //!    ([`calib::align::position_angles`]: `phi` against the turntable attitude), stacks the positions in
 //!    the [`BiasSolver`] and solves for the gyro and accelerometer biases with their standard errors,

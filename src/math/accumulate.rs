@@ -69,6 +69,12 @@ impl BlockedSum {
         self.block += x;
     }
 
+    /// The sum of the open block (what [`BlockedSum::flush`] will add to the total).
+    #[inline(always)]
+    pub fn block(&self) -> f32 {
+        self.block
+    }
+
     /// Ends the block: its sum goes into the compensated total.
     #[inline]
     pub fn flush(&mut self) {

@@ -12,7 +12,7 @@ use sinscal::calib::calibration::{calibrate_positions, CalibrationResult, Calibr
 use sinscal::calib::channels::{
     ChannelDwell, ChannelError, ChannelEstimator, ChannelSettings, ChannelSolution, Model, Term, MAX_DWELLS,
 };
-use sinscal::calib::dwell::{DwellCollector, DwellSummary, Prefilter};
+use sinscal::calib::dwell::{pool_mean_noise, DwellCollector, DwellSummary, Prefilter};
 use sinscal::calib::prefilter::{CoefficientIdentifier, PrefilterSettings};
 use sinscal::calib::solve::{BiasSolution, SolverSettings, MAX_POSITIONS};
 use sinscal::nav::earth::{normal_gravity_mps2, Site};
@@ -248,7 +248,7 @@ pub fn calibrate_channels(recording: &Recording, options: &Options) -> Result<Ca
     }
     let settings = ChannelSettings { model: options.model, use_gyro: has_gyro, ..ChannelSettings::default() };
     let mut estimator = ChannelEstimator::new(site, settings);
-    let noise = mean_noise(&positions);
+    let noise = pool_mean_noise(positions.iter().map(|p| p.summary)).map(|m| m.white_equivalent_var);
     for p in &positions {
         let a = Attitude::from_degrees(
             p.attitude.pitch_deg as f32,
@@ -301,23 +301,6 @@ pub fn calibrate_channels(recording: &Recording, options: &Options) -> Result<Ca
         sampling: None,
         on: "recording",
     })
-}
-
-/// White-equivalent sample variance of each channel (gyro x, y, z, accelerometer x, y, z), pooled over the
-/// session's dwells: a dwell mean of N samples has variance q / N.
-fn mean_noise(positions: &[PositionResult]) -> [f32; 6] {
-    let mut sum = [0.0f64; 6];
-    let mut weight = 0.0f64;
-    for p in positions {
-        let s = &p.summary;
-        let dof = s.samples.saturating_sub(1) as f64;
-        for i in 0..3 {
-            sum[i] += dof * (s.rate_sample_std_b_radps[i] as f64).powi(2);
-            sum[3 + i] += dof * (s.force_sample_std_b_mps2[i] as f64).powi(2);
-        }
-        weight += dof;
-    }
-    [0, 1, 2, 3, 4, 5].map(|i| (sum[i] / weight.max(1.0)) as f32)
 }
 
 /// A core error with the dwell's label and line.

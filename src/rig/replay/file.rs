@@ -168,8 +168,8 @@ pub fn read_header<R: ByteSource>(source: &mut R) -> Result<ReplayHeader, Replay
 
 /// Magic of an encoded outcome.
 pub const OUTCOME_MAGIC: [u8; 4] = *b"SSRO";
-/// Largest encoded outcome, bytes.
-pub const MAX_OUTCOME_BYTES: usize = 4096;
+/// Largest encoded outcome, bytes (24 positions of 424 bytes, the result and the counters: 10,984).
+pub const MAX_OUTCOME_BYTES: usize = 11_264;
 
 struct Writer<'a> {
     out: &'a mut [u8],
@@ -265,6 +265,15 @@ pub fn encode_outcome(o: &ReplayOutcome, out: &mut [u8]) -> Result<usize, Replay
             w.f32s(&v)?;
         }
         w.f32s(&d.settled_noise_gain)?;
+        for m in &d.mean_noise {
+            w.f32(m.white_equivalent_var)?;
+            w.f32(m.dof)?;
+            w.u32(m.cluster_samples)?;
+        }
+        for a in &d.allan {
+            w.f32s(&a.avar)?;
+            w.f32(a.prefilter_start_var)?;
+        }
     }
     match &o.result {
         None => w.u32(0)?,
@@ -294,7 +303,7 @@ pub fn encode_outcome(o: &ReplayOutcome, out: &mut [u8]) -> Result<usize, Replay
 
 /// Decodes an outcome written by [`encode_outcome`], with the header of the replay file it came from.
 pub fn decode_outcome(header: &ReplayHeader, bytes: &[u8]) -> Result<ReplayOutcome, ReplayError> {
-    use crate::calib::dwell::DwellSummary;
+    use crate::calib::dwell::{DwellAllan, DwellSummary, MeanNoise};
     use crate::calib::solve::{BiasSolution, MAX_PARAMETERS};
     use crate::run::sequence::AbortReason as R;
     let mut r = Reader { input: bytes };
@@ -331,7 +340,7 @@ pub fn decode_outcome(header: &ReplayHeader, bytes: &[u8]) -> Result<ReplayOutco
     }
     let mut positions = Vec::new();
     for k in 0..count {
-        let summary = DwellSummary {
+        let mut summary = DwellSummary {
             samples: r.u32()?,
             rejected: r.u32()?,
             rate_mean_b_radps: r.vec3()?,
@@ -341,7 +350,18 @@ pub fn decode_outcome(header: &ReplayHeader, bytes: &[u8]) -> Result<ReplayOutco
             rate_settled_b_radps: r.vec3()?,
             force_settled_b_mps2: r.vec3()?,
             settled_noise_gain: [r.f32()?, r.f32()?],
+            mean_noise: [MeanNoise::default(); 6],
+            allan: [DwellAllan::default(); 6],
         };
+        for m in summary.mean_noise.iter_mut() {
+            *m = MeanNoise { white_equivalent_var: r.f32()?, dof: r.f32()?, cluster_samples: r.u32()? };
+        }
+        for a in summary.allan.iter_mut() {
+            for v in a.avar.iter_mut() {
+                *v = r.f32()?;
+            }
+            a.prefilter_start_var = r.f32()?;
+        }
         let _ = positions.push(PositionInput { c_b_n: header.schedule[k].c_b_n(), summary });
     }
     let result = if r.u32()? == 0 {
