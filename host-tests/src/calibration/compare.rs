@@ -13,7 +13,7 @@ use rand_distr::{Distribution, Normal};
 use serde::Serialize;
 use sinscal::calib::calibration::{calibrate_positions, CalibrationSettings, PositionInput};
 use sinscal::calib::channels::{ChannelDwell, ChannelEstimator, ChannelSettings, Model, Term};
-use sinscal::calib::dwell::DwellSummary;
+use sinscal::calib::dwell::{DwellAllan, DwellSummary, MeanNoise};
 use sinscal::nav::earth::Site;
 use sinscal::nav::frames::Attitude;
 
@@ -160,6 +160,17 @@ fn draw(lab: &Lab, rng: &mut ChaCha8Rng) -> Run {
             rate_settled_b_radps: w,
             force_settled_b_mps2: f,
             settled_noise_gain: [1.0, 1.0],
+            // White noise of known size: what the dwell's own Allan variance would give, exactly.
+            mean_noise: [
+                per_sample_rate,
+                per_sample_rate,
+                per_sample_rate,
+                per_sample_force,
+                per_sample_force,
+                per_sample_force,
+            ]
+            .map(|s| MeanNoise { white_equivalent_var: s * s, dof: samples as f32, cluster_samples: 1 }),
+            allan: [DwellAllan::default(); 6],
         };
         run.inputs.push(PositionInput { c_b_n: attitude.c_b_n(), summary });
         run.dwells.push(ChannelDwell {
