@@ -396,6 +396,11 @@ impl ChannelSolution {
     }
 }
 
+/// Smallest largest input of a proportional term, as a fraction of its full scale (g for the accelerometer
+/// terms and the g-sensitivity, the Earth rate for the gyro scale factors and misalignments, 1 rad of offset),
+/// for the schedule to exercise it.
+pub const MIN_EXERCISE: f32 = 0.05;
+
 /// Chi-square quantiles at 0.999 for 1 to 6 degrees of freedom.
 const CHI2_999: [f32; 6] = [10.828, 13.816, 16.266, 18.467, 20.515, 22.458];
 
@@ -807,6 +812,7 @@ impl ChannelEstimator {
         // Column norms of the weighted and the structural designs, for equilibration.
         let mut norm_w = [0.0f32; PARAMETERS];
         let mut norm_s = [0.0f32; PARAMETERS];
+        let mut peak_s = [0.0f32; PARAMETERS];
         for (k, d) in self.dwells.iter().enumerate().filter(|(k, _)| used(*k)) {
             let lin = linearise(theta, &d.tilt, heading[k], &self.site, model);
             let lin_s = linearise(&zero, &d.tilt, heading[k], &self.site, model);
@@ -816,7 +822,22 @@ impl ChannelEstimator {
                 for r in 0..w.rows {
                     norm_w[c] += w.a[r][c] * w.a[r][c];
                     norm_s[c] += s.a[r][c] * s.a[r][c];
+                    peak_s[c] = peak_s[c].max(s.a[r][c].abs());
                 }
+            }
+        }
+        // A proportional term whose input never reaches 5 % of full scale in any dwell (an axis tilted by less
+        // than 3 deg from horizontal for a scale factor) is not exercised by the schedule: absent, whatever a
+        // fit would make of it (a 0.05 deg tilt would otherwise "determine" a scale factor from 9e-4 g).
+        for c in 0..n {
+            let p = cols[c];
+            let full_scale = match p {
+                6..=23 | 33..=35 => 1.0,
+                24..=32 => self.site.gravity_mps2 / EARTH_RATE_RADPS,
+                _ => continue,
+            };
+            if peak_s[c] < MIN_EXERCISE * full_scale {
+                norm_s[c] = 0.0;
             }
         }
         let mut scale = [1.0f32; PARAMETERS];
@@ -827,6 +848,8 @@ impl ChannelEstimator {
             }
             if norm_s[c] > 0.0 {
                 scale_s[c] = 1.0 / libm::sqrtf(norm_s[c]);
+            } else {
+                scale_s[c] = 0.0;
             }
         }
         let mut weighted = SqrtInfo::<PARAMETERS>::new(n);

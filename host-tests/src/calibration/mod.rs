@@ -276,13 +276,7 @@ pub fn calibrate_channels(recording: &Recording, options: &Options) -> Result<Ca
         estimator.add(dwell).map_err(|e| channel_error(e, &positions, source))?;
     }
     let solution = estimator.solve().map_err(|e| channel_error(e, &positions, source))?;
-    let suspects: Vec<u32> =
-        positions.iter().enumerate().filter(|(k, _)| solution.suspect & (1 << k) != 0).map(|(_, p)| p.pos).collect();
-    let without_suspect = if !suspects.is_empty() && positions.len() - suspects.len() >= 2 {
-        estimator.solve_excluding(solution.suspect).ok().map(|s| (suspects, Estimates::from_channels(&s)))
-    } else {
-        None
-    };
+    let without_suspect = leave_out_suspects(&estimator, &solution, &positions);
     Ok(Calibration {
         without_suspect,
         source: source.to_string(),
@@ -301,6 +295,32 @@ pub fn calibrate_channels(recording: &Recording, options: &Options) -> Result<Ca
         sampling: None,
         on: "recording",
     })
+}
+
+/// The solution without its worst dwells: the dwell with the largest statistic among the suspect ones is left
+/// out and the rest solved again, until no dwell is suspect, at most half the dwells are out, or fewer than two
+/// would remain. Returns the labels left out and the last solution, when any was left out.
+fn leave_out_suspects(
+    estimator: &ChannelEstimator,
+    solution: &ChannelSolution,
+    positions: &[PositionResult],
+) -> Option<(Vec<u32>, Estimates)> {
+    let mut mask = 0u64;
+    let mut current = solution.clone();
+    let mut out = 0;
+    while current.suspect & !mask != 0 && out < positions.len() / 2 && positions.len() - out > 2 {
+        let worst = (0..positions.len())
+            .filter(|k| current.suspect & !mask & (1 << k) != 0)
+            .max_by(|&a, &b| current.dwell_statistic[a].total_cmp(&current.dwell_statistic[b]))?;
+        mask |= 1 << worst;
+        out += 1;
+        current = estimator.solve_excluding(mask).ok()?;
+    }
+    if mask == 0 {
+        return None;
+    }
+    let labels = positions.iter().enumerate().filter(|(k, _)| mask & (1 << k) != 0).map(|(_, p)| p.pos).collect();
+    Some((labels, Estimates::from_channels(&current)))
 }
 
 /// A core error with the dwell's label and line.

@@ -522,8 +522,14 @@ pub fn summary(c: &Calibration) -> String {
                 suspects.join(", ")
             );
             match &c.without_suspect {
-                Some((_, w)) => {
-                    let _ = writeln!(out, "Without them (biases, estimate ± standard error):");
+                Some((left_out, w)) => {
+                    let labels: Vec<String> = left_out.iter().map(u32::to_string).collect();
+                    let _ = writeln!(
+                        out,
+                        "Without position(s) {} (the worst, left out one at a time until none is suspect; biases, \
+                         estimate ± standard error):",
+                        labels.join(", ")
+                    );
                     let _ = writeln!(
                         out,
                         "  gyro [deg/h]: {}, {}, {}",
