@@ -374,6 +374,15 @@ pub fn summary(c: &Calibration) -> String {
         ),
     };
     let _ = writeln!(out, "method: {method}\nprefilter: {prefilter}; the {value} of each dwell\n");
+    positions_table(&mut out, c);
+    terms(&mut out, e);
+    fit(&mut out, e);
+    suspects(&mut out, c);
+    out
+}
+
+/// The per-position table: channel residuals (channel method) or alignment angles (angle method).
+fn positions_table(out: &mut String, c: &Calibration) {
     match &c.channels {
         Some(s) => {
             let _ = writeln!(
@@ -443,44 +452,27 @@ pub fn summary(c: &Calibration) -> String {
             }
         }
     }
+}
+
+/// Every term of the model, estimate ± standard error in a display unit, and the unobservable parameters.
+fn terms(out: &mut String, e: &Estimates) {
     let _ = writeln!(out);
+    show_term(out, e, Term::GyroBias, "Gyro bias, body frame [deg/h] (estimate ± standard error)", DEG_PER_HOUR, 5);
+    show_term(out, e, Term::AccelBias, "Accelerometer bias, body frame [ug] (1 ug = 9.80665e-6 m/s^2)", MICRO_G, 2);
+    show_term(out, e, Term::AccelScaleFactor, "Accelerometer scale factor [ppm]", 1e-6, 2);
     show_term(
-        &mut out,
-        e,
-        Term::GyroBias,
-        "Gyro bias, body frame [deg/h] (estimate ± standard error)",
-        DEG_PER_HOUR,
-        5,
-    );
-    show_term(
-        &mut out,
-        e,
-        Term::AccelBias,
-        "Accelerometer bias, body frame [ug] (1 ug = 9.80665e-6 m/s^2)",
-        MICRO_G,
-        2,
-    );
-    show_term(&mut out, e, Term::AccelScaleFactor, "Accelerometer scale factor [ppm]", 1e-6, 2);
-    show_term(
-        &mut out,
+        out,
         e,
         Term::AccelMisalignment,
         "Accelerometer misalignment, axis i along j [arcsec]",
         1.0 / ARCSEC_PER_RAD,
         2,
     );
-    show_term(&mut out, e, Term::GyroScaleFactor, "Gyro scale factor [ppm]", 1e-6, 1);
+    show_term(out, e, Term::GyroScaleFactor, "Gyro scale factor [ppm]", 1e-6, 1);
+    show_term(out, e, Term::GyroMisalignment, "Gyro misalignment, axis i about j [arcsec]", 1.0 / ARCSEC_PER_RAD, 1);
+    show_term(out, e, Term::GyroGSensitivity, "Gyro g-sensitivity [(deg/h)/g]", DEG_PER_HOUR / 9.80665, 4);
     show_term(
-        &mut out,
-        e,
-        Term::GyroMisalignment,
-        "Gyro misalignment, axis i about j [arcsec]",
-        1.0 / ARCSEC_PER_RAD,
-        1,
-    );
-    show_term(&mut out, e, Term::GyroGSensitivity, "Gyro g-sensitivity [(deg/h)/g]", DEG_PER_HOUR / 9.80665, 4);
-    show_term(
-        &mut out,
+        out,
         e,
         Term::ReferenceOffset,
         "Reference (turntable) offset phi0, e n u [arcsec]",
@@ -491,6 +483,10 @@ pub fn summary(c: &Calibration) -> String {
     if !unobservable.is_empty() {
         let _ = writeln!(out, "Not determined by this schedule: {}", unobservable.join(", "));
     }
+}
+
+/// The chi-square of the fit and, when it is significant, what the model misses.
+fn fit(out: &mut String, e: &Estimates) {
     let dof = e.degrees_of_freedom;
     let _ = write!(out, "Fit: chi-square {:.2} on {dof} degrees of freedom", e.chi_square);
     if dof > 0 {
@@ -507,6 +503,10 @@ pub fn summary(c: &Calibration) -> String {
         }
     }
     let _ = writeln!(out);
+}
+
+/// The suspect positions and the result without them.
+fn suspects(out: &mut String, c: &Calibration) {
     if let Some(s) = &c.channels {
         let suspects: Vec<String> = c
             .positions
@@ -551,5 +551,4 @@ pub fn summary(c: &Calibration) -> String {
             }
         }
     }
-    out
 }
