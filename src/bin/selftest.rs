@@ -126,7 +126,7 @@ mod firmware {
     fn general_estimator(report: &mut Report) {
         // The exact 24-pose session with every static term, solved on the target: the truth comes back, and the
         // bits of every parameter are printed for the host test to compare with x86.
-        use sinscal::calib::channels::{ChannelEstimator, ChannelSettings, Model, PARAMETERS};
+        use sinscal::calib::channels::{ChannelEstimator, ChannelSettings, Model};
         let mut est = ChannelEstimator::new(
             sinscal::rig::exact::site(),
             ChannelSettings { model: Model::FULL, ..ChannelSettings::default() },
@@ -144,20 +144,10 @@ mod firmware {
         let truth = sinscal::rig::exact::truth();
         let mut worst = 0.0f32;
         for (i, t) in truth.iter().enumerate() {
-            let scale = match i {
-                0..=2 => 7.292_115e-5,
-                3..=5 => 9.8,
-                24..=32 => 7.292_115e-5 / 9.8,
-                _ => 1.0,
-            };
-            worst = worst.max((sol.parameters_si[i] - t).abs() / scale);
+            worst = worst.max((sol.parameters_si[i] - t).abs() / sinscal::rig::exact::physical_scale(i));
         }
         report.check("channels_full_model_worst_error_of_scale", worst < 1e-6 && sol.unobservable == 0, worst);
-        let mut bits: u32 = 0;
-        for (i, v) in sol.parameters_si.iter().enumerate().take(PARAMETERS) {
-            bits = bits.rotate_left(5) ^ v.to_bits() ^ (i as u32);
-        }
-        report.check("channels_parameter_bits_hash", true, f32::from_bits(bits & 0x3fff_ffff));
+        report.check("channels_parameter_bits_hash", true, sinscal::rig::exact::bits_hash(&sol.parameters_si));
         report.check("channels_chi_square_bits", true, sol.chi_square);
     }
 

@@ -432,7 +432,9 @@ fn columns(model: Model) -> ([usize; PARAMETERS], usize) {
     (cols, n)
 }
 
-fn sensor_matrix(theta: &[f32; PARAMETERS], scale_first: usize, misalignment_first: usize) -> Mat3 {
+/// `T = I + S + M` of one sensor from the parameters: scale factors from index `scale_first`, misalignments
+/// (order xy, xz, yx, yz, zx, zy) from `misalignment_first`.
+pub fn sensor_matrix(theta: &[f32; PARAMETERS], scale_first: usize, misalignment_first: usize) -> Mat3 {
     let mut t = Mat3::IDENTITY;
     for i in 0..3 {
         t.0[i][i] += theta[scale_first + i];
@@ -443,6 +445,11 @@ fn sensor_matrix(theta: &[f32; PARAMETERS], scale_first: usize, misalignment_fir
         }
     }
     t
+}
+
+/// The gyro g-sensitivity `G` from the parameters, (rad/s)/(m/s^2), row i = gyro i.
+pub fn g_sensitivity_radps_per_mps2(theta: &[f32; PARAMETERS]) -> Mat3 {
+    Mat3([[theta[24], theta[25], theta[26]], [theta[27], theta[28], theta[29]], [theta[30], theta[31], theta[32]]])
 }
 
 /// Prediction and Jacobian of one dwell at the parameters `theta` and heading `heading_rad`.
@@ -632,15 +639,7 @@ impl ChannelEstimator {
                 continue;
             }
             let without = self.solve_excluding(1 << k)?;
-            let cost = |heading: f32| {
-                let lin = linearise(&without.parameters_si, &d.tilt, heading, &self.site, without.model);
-                (0..3)
-                    .map(|i| {
-                        let r = d.rate_mean_b_radps[i] - lin.pred[i];
-                        r * r / d.rate_mean_var_b_radps2[i]
-                    })
-                    .sum::<f32>()
-            };
+            let cost = |heading: f32| self.heading_cost(d, &without.parameters_si, heading, without.model);
             let at_given = cost(given);
             for quarter in 1..4 {
                 let other = given + quarter as f32 * core::f32::consts::FRAC_PI_2;
@@ -780,7 +779,7 @@ impl ChannelEstimator {
                 let p = cols[c];
                 let step = pass.step_si[c];
                 theta[p] += step;
-                let std = libm::sqrtf(pass.cov_scaled[c][c].max(0.0)) / pass.scale[c];
+                let std = libm::sqrtf(pass.cov_scaled[c][c].max(0.0)) * pass.scale[c];
                 if std > 0.0 {
                     largest = largest.max(step.abs() / std);
                 }
@@ -911,10 +910,6 @@ impl ChannelEstimator {
                 pass.cov_scaled[ci][cj] = cov_kept[i][j];
             }
         }
-        // cov_scaled is the covariance of the scaled parameters; scale[c] multiplies back to SI below.
-        for c in 0..n {
-            pass.scale[c] = if scale[c] != 0.0 { 1.0 / scale[c] } else { 0.0 };
-        }
         pass.restricted = restricted.r;
         pass.kept = kept;
         pass.kept_count = m;
@@ -960,8 +955,7 @@ impl ChannelEstimator {
                 sol.parameters_si[p] = theta[p];
                 for d in 0..n {
                     if pass.determined[d] {
-                        // pass.scale holds SI units per scaled unit (the inverse of the equilibration).
-                        sol.covariance_si[p][cols[d]] = pass.cov_scaled[c][d] / (pass.scale[c] * pass.scale[d]);
+                        sol.covariance_si[p][cols[d]] = pass.cov_scaled[c][d] * pass.scale[c] * pass.scale[d];
                     }
                 }
             } else {
@@ -971,11 +965,9 @@ impl ChannelEstimator {
         let first = if self.settings.use_gyro { 0 } else { 3 };
         let mut channels = 0u32;
         let mut nuisances = 0u32;
-        let inv_scale: [f32; PARAMETERS] =
-            core::array::from_fn(|c| if pass.scale[c] != 0.0 { 1.0 / pass.scale[c] } else { 0.0 });
         for (k, d) in self.dwells.iter().enumerate() {
             let lin = linearise(theta, &d.tilt, heading[k], &self.site, model);
-            let rows = self.rows(d, &lin, cols, n, &inv_scale, false, profiled(k));
+            let rows = self.rows(d, &lin, cols, n, &pass.scale, false, profiled(k));
             for i in 0..3 {
                 sol.residual_rate_b_radps[k][i] = if first == 0 { d.rate_mean_b_radps[i] - lin.pred[i] } else { 0.0 };
                 sol.residual_force_b_mps2[k][i] = d.force_mean_b_mps2[i] - lin.pred[3 + i];
@@ -1026,7 +1018,8 @@ struct Pass {
     step_si: [f32; PARAMETERS],
     /// Covariance of the equilibrated parameters, by model column.
     cov_scaled: [[f32; PARAMETERS]; PARAMETERS],
-    /// SI units per equilibrated unit, by model column.
+    /// The equilibration, by model column: the design's columns are multiplied by it, so it is also the SI
+    /// units per equilibrated unit of each parameter.
     scale: [f32; PARAMETERS],
     /// Whether each model column is determined by the schedule.
     determined: [bool; PARAMETERS],

@@ -5,8 +5,8 @@
 
 use heapless::Vec;
 
-use crate::calib::channels::{misalignment_index, ChannelDwell, PARAMETERS};
-use crate::math::linalg::{rotation, Mat3};
+use crate::calib::channels::{g_sensitivity_radps_per_mps2, sensor_matrix, ChannelDwell, PARAMETERS};
+use crate::math::linalg::rotation;
 use crate::nav::earth::Site;
 use crate::nav::frames::Attitude;
 
@@ -65,25 +65,33 @@ pub fn truth() -> [f32; PARAMETERS] {
     t
 }
 
-fn sensor(t: &[f32; PARAMETERS], scale: usize, misalignment: usize) -> Mat3 {
-    let mut m = Mat3::IDENTITY;
-    for i in 0..3 {
-        m.0[i][i] += t[scale + i];
-        for j in 0..3 {
-            if i != j {
-                m.0[i][j] += t[misalignment + misalignment_index(i, j)];
-            }
-        }
+/// The scale an error of parameter `index` is judged against: the Earth rate for gyro biases, g for
+/// accelerometer biases, their ratio for the g-sensitivity, 1 for the dimensionless terms and radians.
+pub fn physical_scale(index: usize) -> f32 {
+    match index {
+        0..=2 => crate::nav::earth::EARTH_RATE_RADPS,
+        3..=5 => 9.8,
+        24..=32 => crate::nav::earth::EARTH_RATE_RADPS / 9.8,
+        _ => 1.0,
     }
-    m
+}
+
+/// A hash of the bits of every parameter, for comparing two solutions bit for bit through a text report (the
+/// top exponent bit is cleared, so the hash prints as a finite f32).
+pub fn bits_hash(parameters_si: &[f32; PARAMETERS]) -> f32 {
+    let mut bits: u32 = 0;
+    for (i, v) in parameters_si.iter().enumerate() {
+        bits = bits.rotate_left(5) ^ v.to_bits() ^ (i as u32);
+    }
+    f32::from_bits(bits & 0x3fff_ffff)
 }
 
 /// The session's dwell means (navigation-grade weights: 0.005 deg/h and 1 ug per mean), headings known.
 pub fn session() -> Vec<ChannelDwell, POSES> {
     let site = site();
     let t = truth();
-    let (t_a, t_g) = (sensor(&t, 6, 9), sensor(&t, 15, 18));
-    let g = Mat3([[t[24], t[25], t[26]], [t[27], t[28], t[29]], [t[30], t[31], t[32]]]);
+    let (t_a, t_g) = (sensor_matrix(&t, 6, 9), sensor_matrix(&t, 15, 18));
+    let g = g_sensitivity_radps_per_mps2(&t);
     let faces = [[0.0, 0.0], [180.0, 0.0], [90.0, 0.0], [-90.0, 0.0], [0.0, 90.0], [0.0, -90.0]];
     let mut out = Vec::new();
     for face in faces {
