@@ -8,6 +8,12 @@ fn sinscal() -> Command {
     Command::cargo_bin("sinscal").unwrap()
 }
 
+/// The stderr of `sinscal calibrate PATH EXTRA...`, which must exit with status 1.
+fn calibrate_fails(path: &std::path::Path, extra: &[&str]) -> String {
+    let out = sinscal().arg("calibrate").arg(path).args(extra).assert().code(1);
+    String::from_utf8(out.get_output().stderr.clone()).unwrap()
+}
+
 fn example_file(dir: &tempfile::TempDir, seconds: f64) -> std::path::PathBuf {
     let path = dir.path().join("example.csv");
     let scenario = Scenario { dwell_s: seconds, ..Scenario::example() };
@@ -62,7 +68,7 @@ fn calibrate_writes_the_spec_json_and_numbers_read_back_bit_exact() {
     // The same run as a library call gives the same bits.
     let recording = sinscal_host::io::recording::Recording::read(&rec).unwrap();
     let cal = sinscal_host::calibration::calibrate(&recording, &Default::default()).unwrap();
-    let eps_x = cal.estimates.value[0].unwrap();
+    let eps_x = cal.estimates.value_si[0].unwrap();
     assert_eq!(v["gyro_bias_radps"][0].as_f64().unwrap(), eps_x);
 
     // --json - writes only the JSON to stdout.
@@ -155,8 +161,7 @@ fn bad_input_exits_1_with_file_line_and_reason() {
         })
         .collect();
     std::fs::write(&short, body.join("\n")).unwrap();
-    let stderr =
-        String::from_utf8(sinscal().arg("calibrate").arg(&short).assert().code(1).get_output().stderr.clone()).unwrap();
+    let stderr = calibrate_fails(&short, &[]);
     assert!(stderr.contains("dwell 6") && stderr.contains("too short"), "{stderr}");
 
     // Missing file.
@@ -169,18 +174,7 @@ fn bad_input_exits_1_with_file_line_and_reason() {
     // Unknown heading: the angle method needs it, and says so; the general estimator estimates it.
     let unknown = dir.path().join("unknown.csv");
     std::fs::write(&unknown, text.replace(",2,0,0,180,", ",2,0,0,,")).unwrap();
-    let stderr = String::from_utf8(
-        sinscal()
-            .arg("calibrate")
-            .arg(&unknown)
-            .args(["--method", "angles"])
-            .assert()
-            .code(1)
-            .get_output()
-            .stderr
-            .clone(),
-    )
-    .unwrap();
+    let stderr = calibrate_fails(&unknown, &["--method", "angles"]);
     assert!(stderr.contains("dwell 2: heading is unknown"), "{stderr}");
     let out = sinscal().arg("calibrate").arg(&unknown).args(["--json", "-"]).assert().success();
     let v: Value = serde_json::from_slice(&out.get_output().stdout).unwrap();
@@ -224,39 +218,16 @@ fn bad_input_exits_1_with_file_line_and_reason() {
     assert_eq!(v["model"], serde_json::json!(["accel_bias", "accel_scale_factor"]));
     assert!(v["gyro_bias_radps"][0].is_null() && v["accel_bias_mps2"][0].as_f64().is_some());
     assert!(v["positions"][0]["residual_gyro_radps"].is_null());
-    let stderr = String::from_utf8(
-        sinscal()
-            .arg("calibrate")
-            .arg(&acc_only)
-            .args(["--method", "angles"])
-            .assert()
-            .code(1)
-            .get_output()
-            .stderr
-            .clone(),
-    )
-    .unwrap();
+    let stderr = calibrate_fails(&acc_only, &["--method", "angles"]);
     assert!(stderr.contains("no gyro columns"), "{stderr}");
 
     // A reference that does not match the data (axes or attitude wrong).
     let wrong = dir.path().join("wrong.csv");
     // Position 3 reported with roll 90 (body x down) while the data have z up: an axis mismatch.
     std::fs::write(&wrong, text.replace(",3,0,0,90,", ",3,0,90,90,")).unwrap();
-    let stderr =
-        String::from_utf8(sinscal().arg("calibrate").arg(&wrong).assert().code(1).get_output().stderr.clone()).unwrap();
+    let stderr = calibrate_fails(&wrong, &[]);
     assert!(stderr.contains("dwell 3") && stderr.contains("from where the reference attitude puts it"), "{stderr}");
-    let stderr = String::from_utf8(
-        sinscal()
-            .arg("calibrate")
-            .arg(&wrong)
-            .args(["--method", "angles"])
-            .assert()
-            .code(1)
-            .get_output()
-            .stderr
-            .clone(),
-    )
-    .unwrap();
+    let stderr = calibrate_fails(&wrong, &["--method", "angles"]);
     assert!(stderr.contains("dwell 3") && stderr.contains("differs from the reference attitude"), "{stderr}");
 }
 

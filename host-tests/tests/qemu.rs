@@ -83,11 +83,7 @@ fn on_target_tests_pass_in_qemu() {
         est.add(d).unwrap();
     }
     let sol = est.solve().unwrap();
-    let mut bits: u32 = 0;
-    for (i, v) in sol.parameters_si.iter().enumerate() {
-        bits = bits.rotate_left(5) ^ v.to_bits() ^ (i as u32);
-    }
-    let hash = f32::from_bits(bits & 0x3fff_ffff);
+    let hash = sinscal::rig::exact::bits_hash(&sol.parameters_si);
     assert!(report.contains(&format!("ok channels_parameter_bits_hash {hash:e}")), "host hash {hash:e}\n{report}");
     let chi = sol.chi_square;
     assert!(report.contains(&format!("ok channels_chi_square_bits {chi:e}")), "host chi-square {chi:e}\n{report}");

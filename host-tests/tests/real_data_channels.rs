@@ -8,7 +8,7 @@
 mod common;
 
 use sinscal::calib::channels::{Model, Term};
-use sinscal_host::calibration::{calibrate, Calibration, Options, PrefilterKind};
+use sinscal_host::calibration::{calibrate, site_of, Calibration, Options, PrefilterKind};
 use sinscal_host::io::import::import_imucal;
 use sinscal_host::io::recording::Recording;
 use sinscal_host::model::synth::{mul_vec, M3};
@@ -60,7 +60,7 @@ fn unlabelled_static_means(rec: &Recording, rate_hz: f64) -> Vec<[f64; 3]> {
 /// terms: identity and zero).
 fn held_out_rms(cal: &Calibration, means: &[[f64; 3]]) -> f64 {
     let e = &cal.estimates;
-    let v = |i: usize| e.value[i].unwrap_or(0.0);
+    let v = |i: usize| e.value_si[i].unwrap_or(0.0);
     let mut t: M3 = [[1.0, 0.0, 0.0], [0.0, 1.0, 0.0], [0.0, 0.0, 1.0]];
     let mut k = 9;
     for (i, row) in t.iter_mut().enumerate() {
@@ -94,7 +94,8 @@ fn ferraris_held_out_static_intervals() {
     let means = unlabelled_static_means(&rec, 102.4);
     println!("Ferraris session: {} unlabelled static intervals (held out)", means.len());
     assert!(means.len() >= 5, "the session rests between its turns: {} intervals found", means.len());
-    let g = 9.810344;
+    // The gravity every calibration below uses: WGS-84 normal gravity at the session's latitude.
+    let g = site_of(&rec.header).0.gravity_mps2 as f64;
     let raw = (means.iter().map(|m| ((m[0] * m[0] + m[1] * m[1] + m[2] * m[2]).sqrt() - g).powi(2)).sum::<f64>()
         / means.len() as f64)
         .sqrt();

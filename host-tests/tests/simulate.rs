@@ -217,8 +217,8 @@ fn calibration_recovers_the_biases_of_the_clean_scenario() {
         let cal = calibrate(&rec, &Options::default()).unwrap_or_else(|e| panic!("{e}"));
         for i in 0..3 {
             let e = &cal.estimates;
-            let (g, g_std) = (e.value[i].expect("observable"), e.std[i].expect("observable"));
-            let (a, a_std) = (e.value[3 + i].expect("observable"), e.std[3 + i].expect("observable"));
+            let (g, g_std) = (e.value_si[i].expect("observable"), e.std_si[i].expect("observable"));
+            let (a, a_std) = (e.value_si[3 + i].expect("observable"), e.std_si[3 + i].expect("observable"));
             let zg = (g - file.gyro.bias_radps[i]) / g_std;
             let za = (a - file.accel.bias_mps2[i]) / a_std;
             assert!(zg.abs() < 4.0 && za.abs() < 4.0, "seed {seed} axis {i}: z {zg:.2} {za:.2}");

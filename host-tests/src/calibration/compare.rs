@@ -133,8 +133,8 @@ fn draw(lab: &Lab, rng: &mut ChaCha8Rng) -> Run {
     }
     let accel = Triad::new(accel_bias, [0.0, 0.0, lab.accel_scale_factor_z], &accel_m, [[0.0; 3]; 3]);
     let gyro = Triad::new(gyro_bias, [0.0; 3], &gyro_m, [[0.0; 3]; 3]);
-    let rate_std = lab.gyro_arw_radps_per_rthz / lab.dwell_s.sqrt();
-    let force_std = lab.accel_noise_mps2_per_rthz / lab.dwell_s.sqrt();
+    let rate_mean_std_radps = lab.gyro_arw_radps_per_rthz / lab.dwell_s.sqrt();
+    let force_mean_std_mps2 = lab.accel_noise_mps2_per_rthz / lab.dwell_s.sqrt();
     let w_n = earth_rate_n_radps(lab.latitude_deg.to_radians());
     let samples = (lab.dwell_s * 100.0) as u32;
     let mut run = Run { inputs: Vec::new(), dwells: Vec::new(), truth: [0.0; 6] };
@@ -145,29 +145,29 @@ fn draw(lab: &Lab, rng: &mut ChaCha8Rng) -> Run {
         let c_true = mul(&rotation(error), &c_b_n(p[0], p[1], p[2]));
         let f_b = mul_t_vec(&c_true, [0.0, 0.0, lab.gravity_mps2]);
         let w_b = mul_t_vec(&c_true, w_n);
-        let f = accel.measure(f_b, [0.0; 3]).map(|x| (x + n() * force_std) as f32);
-        let w = gyro.measure(w_b, f_b).map(|x| (x + n() * rate_std) as f32);
+        let f = accel.measure(f_b, [0.0; 3]).map(|x| (x + n() * force_mean_std_mps2) as f32);
+        let w = gyro.measure(w_b, f_b).map(|x| (x + n() * rate_mean_std_radps) as f32);
         let attitude = Attitude::from_degrees(p[0] as f32, p[1] as f32, p[2] as f32);
-        let per_sample_rate = (rate_std * (samples as f64).sqrt()) as f32;
-        let per_sample_force = (force_std * (samples as f64).sqrt()) as f32;
+        let rate_sample_std_radps = (rate_mean_std_radps * (samples as f64).sqrt()) as f32;
+        let force_sample_std_mps2 = (force_mean_std_mps2 * (samples as f64).sqrt()) as f32;
         let summary = DwellSummary {
             samples,
             rejected: 0,
             rate_mean_b_radps: w,
             force_mean_b_mps2: f,
-            rate_sample_std_b_radps: [per_sample_rate; 3],
-            force_sample_std_b_mps2: [per_sample_force; 3],
+            rate_sample_std_b_radps: [rate_sample_std_radps; 3],
+            force_sample_std_b_mps2: [force_sample_std_mps2; 3],
             rate_settled_b_radps: w,
             force_settled_b_mps2: f,
             settled_noise_gain: [1.0, 1.0],
             // White noise of known size: what the dwell's own Allan variance would give, exactly.
             mean_noise: [
-                per_sample_rate,
-                per_sample_rate,
-                per_sample_rate,
-                per_sample_force,
-                per_sample_force,
-                per_sample_force,
+                rate_sample_std_radps,
+                rate_sample_std_radps,
+                rate_sample_std_radps,
+                force_sample_std_mps2,
+                force_sample_std_mps2,
+                force_sample_std_mps2,
             ]
             .map(|s| MeanNoise { white_equivalent_var: s * s, dof: samples as f32, cluster_samples: 1 }),
             allan: [DwellAllan::default(); 6],
@@ -178,8 +178,8 @@ fn draw(lab: &Lab, rng: &mut ChaCha8Rng) -> Run {
             heading_rad: Some(attitude.heading_rad),
             rate_mean_b_radps: w,
             force_mean_b_mps2: f,
-            rate_mean_var_b_radps2: [(rate_std * rate_std) as f32; 3],
-            force_mean_var_b_mps2sq: [(force_std * force_std) as f32; 3],
+            rate_mean_var_b_radps2: [(rate_mean_std_radps * rate_mean_std_radps) as f32; 3],
+            force_mean_var_b_mps2sq: [(force_mean_std_mps2 * force_mean_std_mps2) as f32; 3],
         });
     }
     run
@@ -192,7 +192,7 @@ pub struct CandidateStats {
     /// The candidate's name.
     pub name: String,
     /// RMS of estimate - truth, SI.
-    pub rms_error: [f64; 6],
+    pub rms_error_si: [f64; 6],
     /// RMS of (estimate - truth) / reported standard error.
     pub rms_z: [f64; 6],
     /// Runs in which the bias was reported unobservable.
@@ -229,7 +229,7 @@ pub fn compare(lab: &Lab, candidates: &[Candidate], runs: usize, seed: u64) -> V
                 }
             };
             for i in 0..6 {
-                match (estimates.value[i], estimates.std[i]) {
+                match (estimates.value_si[i], estimates.std_si[i]) {
                     (Some(v), Some(sd)) => {
                         let e = v - run.truth[i];
                         sq[c][i] += e * e;
@@ -246,7 +246,7 @@ pub fn compare(lab: &Lab, candidates: &[Candidate], runs: usize, seed: u64) -> V
         .enumerate()
         .map(|(c, candidate)| CandidateStats {
             name: candidate.name(),
-            rms_error: [0, 1, 2, 3, 4, 5].map(|i| (sq[c][i] / count[c][i].max(1) as f64).sqrt()),
+            rms_error_si: [0, 1, 2, 3, 4, 5].map(|i| (sq[c][i] / count[c][i].max(1) as f64).sqrt()),
             rms_z: [0, 1, 2, 3, 4, 5].map(|i| (zsq[c][i] / count[c][i].max(1) as f64).sqrt()),
             unobservable_runs: unobservable[c],
         })
@@ -259,8 +259,8 @@ pub fn table(stats: &[CandidateStats]) -> String {
         "estimator                                    | RMS error gyro x, y, z [deg/h] | RMS error accel x, y, z [ug] | RMS z (6 biases)\n",
     );
     for s in stats {
-        let g = [0, 1, 2].map(|i| s.rms_error[i] / DEG_PER_HOUR);
-        let a = [3, 4, 5].map(|i| s.rms_error[i] / MICRO_G);
+        let g = [0, 1, 2].map(|i| s.rms_error_si[i] / DEG_PER_HOUR);
+        let a = [3, 4, 5].map(|i| s.rms_error_si[i] / MICRO_G);
         let z: Vec<String> = s.rms_z.iter().map(|z| format!("{z:.2}")).collect();
         out.push_str(&format!(
             "{:<44} | {:>8.5} {:>8.5} {:>8.5}   | {:>7.2} {:>7.2} {:>7.2}     | {}\n",

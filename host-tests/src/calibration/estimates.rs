@@ -32,15 +32,15 @@ pub struct Estimates {
     /// The terms estimated.
     pub model: Model,
     /// Value of each parameter, SI; `None` when not in the model or not determined.
-    pub value: [Option<f64>; PARAMETERS],
+    pub value_si: [Option<f64>; PARAMETERS],
     /// Standard error of each parameter, SI; `None` likewise.
-    pub std: [Option<f64>; PARAMETERS],
+    pub std_si: [Option<f64>; PARAMETERS],
     /// Parameters in the model that the schedule cannot determine.
     pub unobservable: Vec<usize>,
     /// The determined parameters, in layout order.
     pub determined: Vec<usize>,
     /// Their covariance, SI, in the order of `determined`.
-    pub covariance: Vec<Vec<f64>>,
+    pub covariance_si: Vec<Vec<f64>>,
     /// Sum of squared whitened residuals and its degrees of freedom.
     pub chi_square: f64,
     /// Degrees of freedom.
@@ -53,14 +53,14 @@ impl Estimates {
         let mut e = Estimates::empty(Method::Channels, s.model, s.chi_square as f64, s.degrees_of_freedom);
         for i in 0..PARAMETERS {
             if let Some((v, sd)) = s.estimate(i) {
-                e.value[i] = Some(v as f64);
-                e.std[i] = Some(sd as f64);
+                e.value_si[i] = Some(v as f64);
+                e.std_si[i] = Some(sd as f64);
                 e.determined.push(i);
             } else if s.unobservable & (1 << i) != 0 {
                 e.unobservable.push(i);
             }
         }
-        e.covariance = e
+        e.covariance_si = e
             .determined
             .iter()
             .map(|&i| e.determined.iter().map(|&j| s.covariance_si[i][j] as f64).collect())
@@ -77,14 +77,15 @@ impl Estimates {
         }
         let mut e = Estimates::empty(Method::Angles, model, s.chi_square as f64, s.degrees_of_freedom);
         // The angle solver's order (gyro 0-2, accelerometer 3-5, offset 6-8) in the core's layout.
-        let layout = |k: usize| if k < 6 { k } else { 33 + (k - 6) };
+        let offset_first = Term::ReferenceOffset.parameters().0;
+        let layout = |k: usize| if k < 6 { k } else { offset_first + (k - 6) };
         let mut solver_index = Vec::new();
         for (k, p) in Parameter::ALL.iter().enumerate() {
             let i = layout(k);
             match s.get(*p) {
                 Some(est) => {
-                    e.value[i] = Some(est.value as f64);
-                    e.std[i] = Some(est.std_error as f64);
+                    e.value_si[i] = Some(est.value as f64);
+                    e.std_si[i] = Some(est.std_error as f64);
                     e.determined.push(i);
                     solver_index.push(k);
                 }
@@ -92,7 +93,7 @@ impl Estimates {
                 None => {}
             }
         }
-        e.covariance = solver_index
+        e.covariance_si = solver_index
             .iter()
             .map(|&a| solver_index.iter().map(|&b| s.covariance_si[a][b] as f64).collect())
             .collect();
@@ -103,11 +104,11 @@ impl Estimates {
         Estimates {
             method,
             model,
-            value: [None; PARAMETERS],
-            std: [None; PARAMETERS],
+            value_si: [None; PARAMETERS],
+            std_si: [None; PARAMETERS],
             unobservable: Vec::new(),
             determined: Vec::new(),
-            covariance: Vec::new(),
+            covariance_si: Vec::new(),
             chi_square,
             degrees_of_freedom,
         }

@@ -59,7 +59,7 @@ fn print_truth(scenario: &Scenario, cal: &Calibration) {
         ("offset u", 35, scenario.reference_offset_n_rad[2], 1.0 / ARCSEC_PER_RAD, "arcsec"),
     ];
     for (name, index, truth, unit, unit_name) in rows {
-        match (e.value[index], e.std[index]) {
+        match (e.value_si[index], e.std_si[index]) {
             (Some(v), Some(sd)) => println!(
                 "  {name:<8} truth {:>+10.5} {unit_name:<6} estimate {:>+10.5}  ({:+.2} sigma)",
                 truth / unit,

@@ -4,7 +4,7 @@ use std::fmt::Write as _;
 
 use serde::Serialize;
 use sinscal::calib::align::DwellValue;
-use sinscal::calib::channels::{misalignment_index, Term};
+use sinscal::calib::channels::{misalignment_index, Term, PARAMETERS};
 use sinscal::calib::dwell::Prefilter;
 
 use crate::calibration::{Calibration, Estimates, GravitySource};
@@ -181,13 +181,13 @@ pub struct PrefilterJson {
 }
 
 /// A three-parameter term's values (or standard errors), null when the term is not in the model.
-fn triple(e: &Estimates, term: Term, of: &[Option<f64>; 36]) -> Option<[Option<f64>; 3]> {
+fn triple(e: &Estimates, term: Term, of: &[Option<f64>; PARAMETERS]) -> Option<[Option<f64>; 3]> {
     let (first, _) = term.parameters();
     e.model.contains(term).then(|| [of[first], of[first + 1], of[first + 2]])
 }
 
 /// A misalignment term as a matrix with zeros on the diagonal.
-fn misalignment(e: &Estimates, term: Term, of: &[Option<f64>; 36]) -> Option<Matrix> {
+fn misalignment(e: &Estimates, term: Term, of: &[Option<f64>; PARAMETERS]) -> Option<Matrix> {
     let (first, _) = term.parameters();
     e.model.contains(term).then(|| {
         core::array::from_fn(|i| {
@@ -197,7 +197,7 @@ fn misalignment(e: &Estimates, term: Term, of: &[Option<f64>; 36]) -> Option<Mat
 }
 
 /// A full 3x3 term (the g-sensitivity), row by row.
-fn full_matrix(e: &Estimates, term: Term, of: &[Option<f64>; 36]) -> Option<Matrix> {
+fn full_matrix(e: &Estimates, term: Term, of: &[Option<f64>; PARAMETERS]) -> Option<Matrix> {
     let (first, _) = term.parameters();
     e.model.contains(term).then(|| core::array::from_fn(|i| core::array::from_fn(|j| of[first + 3 * i + j])))
 }
@@ -247,7 +247,7 @@ impl CalibrationJson {
                 r: Some([gyro.r as f64, accel.r as f64]),
             },
         };
-        let (value, std) = (&e.value, &e.std);
+        let (value, std) = (&e.value_si, &e.std_si);
         CalibrationJson {
             schema: "sinscal-calibration/2",
             method: e.method.name(),
@@ -272,15 +272,15 @@ impl CalibrationJson {
             reference_offset_rad: triple(e, Term::ReferenceOffset, value),
             reference_offset_std_rad: triple(e, Term::ReferenceOffset, std),
             parameters: e.determined_names(),
-            covariance: e.covariance.clone(),
+            covariance: e.covariance_si.clone(),
             unobservable: e.unobservable_names(),
             chi_square: e.chi_square,
             degrees_of_freedom: e.degrees_of_freedom,
             without_suspect: c.without_suspect.as_ref().map(|(positions, w)| WithoutSuspectJson {
                 positions: positions.clone(),
                 parameters: w.determined_names(),
-                values: w.determined.iter().map(|&i| w.value[i].unwrap_or(f64::NAN)).collect(),
-                std: w.determined.iter().map(|&i| w.std[i].unwrap_or(f64::NAN)).collect(),
+                values: w.determined.iter().map(|&i| w.value_si[i].unwrap_or(f64::NAN)).collect(),
+                std: w.determined.iter().map(|&i| w.std_si[i].unwrap_or(f64::NAN)).collect(),
             }),
             gravity_source: match c.gravity_source {
                 GravitySource::Header => "header",
@@ -309,7 +309,7 @@ impl CalibrationJson {
 
 /// Formats an estimate in a display unit: `+0.05012 ± 0.00041`, `unobservable`, or `-`.
 fn show(e: &Estimates, index: usize, per_unit: f64, decimals: usize) -> String {
-    match (e.value[index], e.std[index]) {
+    match (e.value_si[index], e.std_si[index]) {
         (Some(v), Some(sd)) => format!("{:+.*} ± {:.*}", decimals, v / per_unit, decimals, sd / per_unit),
         _ if e.unobservable.contains(&index) => "unobservable".to_string(),
         _ => "-".to_string(),
