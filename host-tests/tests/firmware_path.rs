@@ -50,6 +50,49 @@ fn replay_matches_the_direct_calibration_to_the_device_quantisation() {
     }
 }
 
+/// The example with the headings of positions 2 and 5 removed from every row.
+fn without_headings(mut rec: Recording) -> Recording {
+    for row in rec.rows.iter_mut().filter(|r| r.pos == 2 || r.pos == 5) {
+        row.heading_deg = None;
+    }
+    rec
+}
+
+#[test]
+fn general_estimator_on_the_firmware_path_matches_the_direct_one() {
+    let rec = example(60.0);
+    let full = Options { model: sinscal::calib::channels::Model::FULL, ..Options::default() };
+    for (rec, options) in
+        [(rec.clone(), Options::default()), (without_headings(rec.clone()), Options::default()), (rec, full)]
+    {
+        let direct = calibrate(&rec, &options).unwrap();
+        let replayed = calibrate_on_host(&rec, &options).unwrap();
+        let (d, r) = (direct.channels.as_ref().unwrap(), replayed.channels.as_ref().unwrap());
+        assert_eq!((d.observable, d.unobservable, d.dwells), (r.observable, r.unobservable, r.dwells));
+        // The device's 32-bit LSB (6.7e-9 rad/s, 3.7e-8 m/s^2) moves every estimate by far less than its
+        // standard error.
+        let mut compared = 0;
+        for i in 0..sinscal::calib::channels::PARAMETERS {
+            if let (Some((dv, ds)), Some((rv, _))) = (d.estimate(i), r.estimate(i)) {
+                assert!(
+                    (dv - rv).abs() < 0.02 * ds,
+                    "{}: {dv} vs {rv} (std {ds})",
+                    sinscal::calib::channels::parameter_name(i)
+                );
+                compared += 1;
+            }
+        }
+        assert!(compared >= 8 && compared == d.observable.count_ones(), "{compared} parameters compared");
+        for k in [1, 4] {
+            if rec.rows.iter().any(|row| row.pos == k as u32 + 1 && row.heading_deg.is_none()) {
+                assert!(r.heading_std_rad[k] > 0.0, "position {} heading estimated", k + 1);
+                assert!((d.heading_rad[k] - r.heading_rad[k]).abs() < 0.02 * d.heading_std_rad[k]);
+            }
+        }
+        assert_eq!(replayed.options.method, sinscal_host::calibration::Method::Channels);
+    }
+}
+
 #[test]
 fn corrupted_frames_are_counted_and_the_dwell_survives_a_few() {
     let rec = example(20.0);

@@ -3,7 +3,9 @@
 //! and the thumbv7em target (scripts/setup installs both); in CI (CI=true) a missing QEMU is a failure,
 //! elsewhere the test reports itself as skipped.
 
-use sinscal::rig::replay::{encode_outcome, run_replay, MAX_OUTCOME_BYTES};
+use sinscal::calib::session::{session_estimator, SessionDwell};
+use sinscal::rig::replay::{decode_outcome, encode_outcome, read_header, run_replay, MAX_OUTCOME_BYTES};
+use sinscal::run::sequence::{Estimator, SequenceSolution};
 use sinscal_host::calibration::firmware_path::{calibrate_on_host, replay_file};
 use sinscal_host::calibration::qemu::{
     calibrate_on_qemu, firmware_binary, firmware_elf, run_firmware, run_with_output, QEMU,
@@ -34,11 +36,22 @@ fn firmware_in_qemu_and_the_host_replay_agree_to_the_bit() {
     }
     let elf = firmware_elf().expect("firmware builds");
     let rec = Scenario { dwell_s: 30.0, ..Scenario::example() }.recording(11, "example.csv");
-    for options in [
-        Options::angles(),
-        Options { prefilter: sinscal_host::calibration::PrefilterKind::None, max_passes: 1, ..Options::angles() },
+    let mut unknown_headings = rec.clone();
+    for row in unknown_headings.rows.iter_mut().filter(|r| r.pos == 2 || r.pos == 5) {
+        row.heading_deg = None;
+    }
+    let full = Options { model: sinscal::calib::channels::Model::FULL, ..Options::default() };
+    for (rec, options) in [
+        (&rec, Options::angles()),
+        (
+            &rec,
+            Options { prefilter: sinscal_host::calibration::PrefilterKind::None, max_passes: 1, ..Options::angles() },
+        ),
+        (&rec, Options::default()),
+        (&rec, full),
+        (&unknown_headings, Options::default()),
     ] {
-        let (mut file, _) = replay_file(&rec, &options).unwrap();
+        let (mut file, _) = replay_file(rec, &options).unwrap();
         // Also a corrupted frame (a gyro byte of row 1000, inside dwell 1), so the fault path runs on both.
         let header_len = 20 + 12 + 16 * 6 + 4;
         let record = 1 + sinscal::sensor::adis::BURST32_LEN;
@@ -51,11 +64,37 @@ fn firmware_in_qemu_and_the_host_replay_agree_to_the_bit() {
         assert_eq!(target, bytes[..n].to_vec(), "outcome bytes differ; firmware log:\n{log}");
         assert!(host.result.is_some());
         assert_eq!(host.sampling.faults(), 1);
+        // The general estimator solved on the Cortex-M4F is the host core's solution of the firmware's own
+        // dwell statistics, to the bit.
+        let header = read_header(&mut &file[..]).unwrap();
+        let decoded = decode_outcome(&header, &target).unwrap();
+        if let (Some(SequenceSolution::Channels(on_target)), Estimator::Channels(settings)) =
+            (&decoded.result, header.settings.estimator)
+        {
+            let dwells = decoded.positions.iter().enumerate().zip(&header.schedule).map(|((k, p), a)| SessionDwell {
+                attitude: *a,
+                heading_known: header.settings.unknown_headings & (1 << k) == 0,
+                summary: &p.summary,
+            });
+            let on_x86 =
+                session_estimator(dwells, header.site, settings, options.dwell_value).unwrap().solve().unwrap();
+            let bits = |c: &sinscal::calib::channels::ChannelSolution| {
+                let mut b = c.parameters_si.map(f32::to_bits).to_vec();
+                b.extend(c.covariance_si.iter().flatten().map(|x| x.to_bits()));
+                b.extend(c.heading_rad[..c.dwells].iter().map(|x| x.to_bits()));
+                b.push(c.chi_square.to_bits());
+                b
+            };
+            assert_eq!(bits(on_target), bits(&on_x86), "the estimator in QEMU differs from x86");
+            assert_eq!((on_target.observable, on_target.suspect), (on_x86.observable, on_x86.suspect));
+        }
     }
-    let on_host = calibrate_on_host(&rec, &Options::angles()).unwrap();
-    let on_qemu = calibrate_on_qemu(&rec, &Options::angles()).unwrap();
-    assert_eq!(on_qemu.on, "qemu");
-    assert_eq!(json_without_on(&on_host), json_without_on(&on_qemu));
+    for options in [Options::angles(), Options::default()] {
+        let on_host = calibrate_on_host(&rec, &options).unwrap();
+        let on_qemu = calibrate_on_qemu(&rec, &options).unwrap();
+        assert_eq!(on_qemu.on, "qemu");
+        assert_eq!(json_without_on(&on_host), json_without_on(&on_qemu));
+    }
 }
 
 #[test]

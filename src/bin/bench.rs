@@ -25,9 +25,9 @@ mod firmware {
     use sinscal::calib::dwell::Prefilter;
     use sinscal::nav::earth::Site;
     use sinscal::nav::frames::Attitude;
-    use sinscal::rig::replay::{replay_sequence_settings, ReplayDevice};
+    use sinscal::rig::replay::{replay_sequence_settings, ReplayDevice, ReplaySolve};
     use sinscal::run::sampling::{on_data_ready, process_next, QueueItem, SamplingStats, QUEUE_SLOTS};
-    use sinscal::run::sequence::CalibrationSequence;
+    use sinscal::run::sequence::{CalibrationSequence, Estimator};
     use sinscal::sensor::adis::{encode_burst, Adis, Burst, Model, BURST32_LEN, I16F16};
 
     /// Instructions per SysTick tick under -icount shift=0 with the 25 MHz core clock.
@@ -39,12 +39,23 @@ mod firmware {
         start.wrapping_sub(end) & 0x00FF_FFFF
     }
 
+    /// The solve settings of the measured sequences (the per-sample path does not depend on them).
+    fn single_pass() -> ReplaySolve {
+        ReplaySolve {
+            estimator: Estimator::Angles,
+            dwell_value: sinscal::calib::align::DwellValue::Mean,
+            max_passes: 1,
+            estimate_reference_offset: true,
+            unknown_headings: 0,
+        }
+    }
+
     fn measure(prefilter: Prefilter) -> (u32, u32, u32) {
         let model = Model::Adis16505_2;
         let mut imu = Adis::new(ReplayDevice::new(model), model);
         let _ = imu.init();
         let site = Site::with_normal_gravity(45.7796f32.to_radians(), 0.0);
-        let settings = replay_sequence_settings(prefilter, sinscal::calib::align::DwellValue::Mean, 1, true);
+        let settings = replay_sequence_settings(prefilter, single_pass());
         let schedule = [Attitude::from_degrees(0.0, 0.0, 0.0)];
         let Ok(mut sequence) = CalibrationSequence::new(&schedule, site, settings) else { return (0, 0, 0) };
         let mut queue: Queue<QueueItem, QUEUE_SLOTS> = Queue::new();
@@ -122,7 +133,7 @@ mod firmware {
         let mut imu = Adis::new(ReplayDevice::new(model), model);
         let _ = imu.init();
         let site = Site::with_normal_gravity(45.7796f32.to_radians(), 0.0);
-        let settings = replay_sequence_settings(Prefilter::paper(), sinscal::calib::align::DwellValue::Mean, 1, true);
+        let settings = replay_sequence_settings(Prefilter::paper(), single_pass());
         let schedule = [Attitude::from_degrees(0.0, 0.0, 0.0)];
         let Ok(mut sequence) = CalibrationSequence::new(&schedule, site, settings) else { return (0, 0) };
         let mut queue: Queue<QueueItem, QUEUE_SLOTS> = Queue::new();

@@ -22,11 +22,12 @@ mod firmware {
     use defmt_full as defmt;
     use heapless::spsc::{Consumer, Producer, Queue};
     use sinscal::board::mps2_an386::{self as board, exit, Pl022, TIMER0_IRQ};
+    use sinscal::calib::channels::parameter_name;
     use sinscal::calib::solve::TABLE1_POSITIONS_DEG;
     use sinscal::nav::earth::Site;
     use sinscal::nav::frames::Attitude;
     use sinscal::run::sampling::{on_data_ready, process_next, QueueItem, SamplingStats, QUEUE_SLOTS};
-    use sinscal::run::sequence::{CalibrationSequence, Event, SequenceSettings};
+    use sinscal::run::sequence::{CalibrationSequence, Event, SequenceSettings, SequenceSolution};
     use sinscal::sensor::adis::{Adis, Model, OUTPUT_RATE_HZ};
 
     /// What the data-ready interrupt owns.
@@ -60,8 +61,14 @@ mod firmware {
             Event::DwellCompleted { index, samples, faults } => {
                 defmt::info!("position {=usize}: {=u32} samples, {=u32} faults", index + 1, samples, faults)
             }
-            Event::Solved => {
-                if let Some(r) = sequence.result() {
+            Event::Solved => match sequence.result() {
+                Some(SequenceSolution::Channels(c)) => {
+                    for i in 0..6 {
+                        let (value, std) = c.estimate(i).unwrap_or((f32::NAN, f32::NAN));
+                        defmt::info!("{=str}: {=f32} +- {=f32} (SI)", parameter_name(i), value, std);
+                    }
+                }
+                Some(SequenceSolution::Angles(r)) => {
                     let s = &r.solution;
                     for i in 0..3 {
                         let (g, a) = (s.gyro_bias_b_radps[i], s.accel_bias_b_mps2[i]);
@@ -75,7 +82,8 @@ mod firmware {
                         );
                     }
                 }
-            }
+                None => {}
+            },
             Event::Failed(_) => defmt::error!("calibration failed"),
         }
     }

@@ -19,7 +19,7 @@ mod firmware {
     use sinscal::board::exit;
     use sinscal::rig::replay::{encode_outcome, run_replay, MAX_OUTCOME_BYTES};
     use sinscal::rig::semihost::FileSource;
-    use sinscal::run::sequence::Event;
+    use sinscal::run::sequence::{Event, SequenceSolution};
 
     fn fail(what: &str) -> ! {
         defmt::error!("sinscal-replay: {=str}", what);
@@ -41,13 +41,13 @@ mod firmware {
         }
     }
 
-    fn log_result(r: &sinscal::calib::calibration::CalibrationResult) {
-        {
-            {
+    fn log_result(result: &SequenceSolution) {
+        match result {
+            SequenceSolution::Angles(r) => {
                 let s = &r.solution;
                 let v = |e: Option<sinscal::calib::solve::Estimate>| e.map_or(f32::NAN, |e| e.value);
                 defmt::info!(
-                    "solved in {=u32} passes: gyro bias [{=f32}, {=f32}, {=f32}] rad/s, accel bias [{=f32}, {=f32}, {=f32}] m/s^2",
+                    "angle method, {=u32} passes: gyro bias [{=f32}, {=f32}, {=f32}] rad/s, accel bias [{=f32}, {=f32}, {=f32}] m/s^2",
                     r.passes,
                     v(s.gyro_bias_b_radps[0]),
                     v(s.gyro_bias_b_radps[1]),
@@ -57,6 +57,13 @@ mod firmware {
                     v(s.accel_bias_b_mps2[2])
                 )
             }
+            SequenceSolution::Channels(c) => defmt::info!(
+                "general estimator, {=u32} passes: chi-square {=f32} on {=u32} degrees of freedom, suspect dwells {=u64:b}",
+                c.iterations,
+                c.chi_square,
+                c.degrees_of_freedom,
+                c.suspect
+            ),
         }
     }
 

@@ -58,7 +58,37 @@ pub enum CalibrationError {
     },
     /// The solution failed.
     Solve(SolveError),
+    /// The first pass's alignment of a position differs from its reference attitude by more than
+    /// [`MAX_LEVEL_MISALIGNMENT_RAD`] in level or [`MAX_HEADING_MISALIGNMENT_RAD`] in heading: the reference
+    /// or the axes do not match the data (a wrong face down, a heading a half turn off).
+    Implausible {
+        /// Which position.
+        index: usize,
+        /// Larger of |phi_e| and |phi_n|, rad.
+        level_rad: f32,
+        /// phi_u, rad.
+        heading_rad: f32,
+    },
+    /// The dwell's |f| differs from g by more than [`MAX_FORCE_MAGNITUDE_ERROR`] (relative): an accelerometer
+    /// scale error, or a body not at rest.
+    ForceMagnitude {
+        /// Which position.
+        index: usize,
+        /// |f| / g.
+        ratio: f32,
+    },
 }
+
+/// Largest relative difference between a dwell's |f| and g accepted (the general estimator's default too).
+pub const MAX_FORCE_MAGNITUDE_ERROR: f32 = 0.2;
+
+/// Largest level misalignment (phi_e, phi_n) accepted, rad: 0.05 rad (2.9 deg) is an accelerometer bias
+/// of 50 mg. Larger means the reference attitude or the axis convention is wrong.
+pub const MAX_LEVEL_MISALIGNMENT_RAD: f32 = 0.05;
+/// Largest heading misalignment (phi_u) accepted, rad: 0.5 rad (29 deg) is an east gyro bias of about
+/// 0.5 W cos L (about 5 deg/h at 45 deg latitude), beyond which gyrocompassing on the Earth rate
+/// is not a calibration method any more.
+pub const MAX_HEADING_MISALIGNMENT_RAD: f32 = 0.5;
 
 impl core::fmt::Display for CalibrationError {
     fn fmt(&self, f: &mut core::fmt::Formatter<'_>) -> core::fmt::Result {
@@ -67,6 +97,20 @@ impl core::fmt::Display for CalibrationError {
                 write!(f, "position {}: {error}", index + 1)
             }
             CalibrationError::Solve(e) => write!(f, "{e}"),
+            CalibrationError::Implausible { index, level_rad, heading_rad } => write!(
+                f,
+                "position {}: alignment differs from the reference attitude by {:.2} deg in level and {:.2} deg \
+                 in heading: the reference or the axes do not match the data (docs/conventions.md: ENU, body x \
+                 right, y forward, z up)",
+                index + 1,
+                level_rad.to_degrees(),
+                heading_rad.to_degrees()
+            ),
+            CalibrationError::ForceMagnitude { index, ratio } => write!(
+                f,
+                "position {}: |f| is {ratio:.4} g: an accelerometer scale error or a body not at rest",
+                index + 1
+            ),
         }
     }
 }
@@ -87,6 +131,17 @@ pub struct CalibrationResult {
     pub converged: bool,
     /// Largest |correction| / standard error of the last pass.
     pub last_correction_sigma: f32,
+}
+
+/// How far the computed attitude is from the reference, at any angle (the misalignment angles are first
+/// order, and a half turn about up has no skew-symmetric part at all): the angle between the two up axes, rad,
+/// and the heading difference, rad, in (-pi, pi], of the sign of `phi_u` (`R = C_hat C^T = I - [phi x]` for
+/// small angles, so `R[0][1] - R[1][0] = 2 phi_u`).
+pub fn attitude_difference_rad(c_hat_b_n: &Mat3, c_b_n: &Mat3) -> (f32, f32) {
+    let r = c_hat_b_n.mul(&c_b_n.transpose()).0;
+    let level_rad = libm::acosf(r[2][2].clamp(-1.0, 1.0));
+    let heading_rad = libm::atan2f(r[0][1] - r[1][0], r[0][0] + r[1][1]);
+    (level_rad, heading_rad)
 }
 
 /// Calibrates from a set of positions (any number up to [`crate::calib::solve::MAX_POSITIONS`]).
@@ -117,8 +172,22 @@ pub fn calibrate_positions(
                 s.force_settled_b_mps2[i] -= accel_bias_b_mps2[i];
             }
             let c_b_n = correct_reference.mul(&p.c_b_n);
+            let f = p.summary.force_mean_b_mps2;
+            let ratio = libm::sqrtf(f[0] * f[0] + f[1] * f[1] + f[2] * f[2]) / site.gravity_mps2;
+            if passes == 1 && ((ratio - 1.0).abs() > MAX_FORCE_MAGNITUDE_ERROR || ratio.is_nan()) {
+                return Err(CalibrationError::ForceMagnitude { index, ratio });
+            }
             let angles = position_angles(&s, settings.dwell_value, &c_b_n, site)
                 .map_err(|error| CalibrationError::Align { index, error })?;
+            // Plausibility first: checked on the data as measured (the first pass), not after corrections.
+            if passes == 1 {
+                let (level_rad, heading_rad) = attitude_difference_rad(&angles.c_hat_b_n, &c_b_n);
+                let too_far =
+                    level_rad > MAX_LEVEL_MISALIGNMENT_RAD || heading_rad.abs() > MAX_HEADING_MISALIGNMENT_RAD;
+                if too_far || level_rad.is_nan() || heading_rad.is_nan() {
+                    return Err(CalibrationError::Implausible { index, level_rad, heading_rad });
+                }
+            }
             solver.add(&c_b_n, angles.phi_n_rad, &angles.covariance_rad2).map_err(CalibrationError::Solve)?;
         }
         let mut sol = solver.solve().map_err(CalibrationError::Solve)?;

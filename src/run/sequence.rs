@@ -1,7 +1,8 @@
 //! The calibration sequence: a state machine over the positions of a schedule.
 //!
 //! Per position: wait until the turntable reports "in position", let it settle, collect the dwell, then
-//! go on; after the last position, solve. Call rate: [`CalibrationSequence::on_sample`] once per queue
+//! go on; after the last position, solve with the estimator the settings name ([`Estimator`]: the general
+//! estimator by default, or the paper's angle method). Call rate: [`CalibrationSequence::on_sample`] once per queue
 //! item (100 Hz), with the turntable's in-position signal at that sample.
 //!
 //! A dwell is aborted, with its reason, and collected again (after settling) when a sample contradicts
@@ -16,10 +17,12 @@ use heapless::Vec;
 use crate::calib::calibration::{
     calibrate_positions, CalibrationError, CalibrationResult, CalibrationSettings, PositionInput,
 };
+use crate::calib::channels::{ChannelError, ChannelSettings, ChannelSolution};
 use crate::calib::dwell::{DwellCollector, Prefilter, MIN_DWELL_SAMPLES};
 use crate::calib::prefilter::PrefilterError;
+use crate::calib::session::{default_channel_settings, session_estimator, SessionDwell};
 use crate::calib::solve::MAX_POSITIONS;
-use crate::math::linalg::{dot, Mat3, Vec3};
+use crate::math::linalg::{dot, Vec3};
 use crate::nav::earth::Site;
 use crate::nav::frames::Attitude;
 use crate::run::sampling::QueueItem;
@@ -47,8 +50,34 @@ pub struct SequenceSettings {
     pub max_aborts: u32,
     /// Prefilter of the dwell collector.
     pub prefilter: Prefilter,
-    /// The solution.
+    /// The estimator that solves after the last position.
+    pub estimator: Estimator,
+    /// The angle method's settings (with [`Estimator::Angles`]).
     pub calibration: CalibrationSettings,
+    /// Bit k: the heading of position k is unknown (the general estimator estimates it; the angle method
+    /// needs every heading, so a sequence with [`Estimator::Angles`] refuses a non-zero mask).
+    pub unknown_headings: u32,
+}
+
+/// The estimator of a sequence.
+#[derive(Clone, Copy, Debug, PartialEq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub enum Estimator {
+    /// The paper's angle method ([`calibrate_positions`]), with [`SequenceSettings::calibration`].
+    Angles,
+    /// The general estimator (docs/method.md#general-estimator) with these settings.
+    Channels(ChannelSettings),
+}
+
+/// What a solved sequence gives.
+#[allow(clippy::large_enum_variant, reason = "no allocation in the core: one solution, held once by the sequence")]
+#[derive(Clone, Debug, PartialEq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub enum SequenceSolution {
+    /// The angle method's result.
+    Angles(CalibrationResult),
+    /// The general estimator's solution.
+    Channels(ChannelSolution),
 }
 
 impl Default for SequenceSettings {
@@ -63,7 +92,9 @@ impl Default for SequenceSettings {
             max_faults_per_dwell: 60,
             max_aborts: 3,
             prefilter: Prefilter::paper(),
+            estimator: Estimator::Channels(default_channel_settings()),
             calibration: CalibrationSettings::default(),
+            unknown_headings: 0,
         }
     }
 }
@@ -159,8 +190,10 @@ pub enum SequenceFailure {
         /// Last reason.
         reason: AbortReason,
     },
-    /// The solution failed.
+    /// The angle method failed.
     Calibration(CalibrationError),
+    /// The general estimator refused the data or failed (dwell indices are position indices).
+    Channels(ChannelError),
 }
 
 /// Errors of construction.
@@ -168,7 +201,7 @@ pub enum SequenceFailure {
 #[cfg_attr(feature = "defmt", derive(defmt::Format))]
 #[non_exhaustive]
 pub enum SequenceError {
-    /// No positions, or more than [`MAX_POSITIONS`].
+    /// No positions, more than [`MAX_POSITIONS`], or unknown headings with the angle method.
     BadSchedule,
     /// The prefilter settings are invalid.
     Prefilter(PrefilterError),
@@ -195,8 +228,8 @@ pub enum Phase {
 pub struct CalibrationSequence {
     settings: SequenceSettings,
     site: Site,
-    /// `C_b^n` of each position; its third row is the up direction in the body frame.
-    schedule_c_b_n: Vec<Mat3, MAX_POSITIONS>,
+    /// The turntable attitude of each position.
+    schedule: Vec<Attitude, MAX_POSITIONS>,
     inputs: Vec<PositionInput, MAX_POSITIONS>,
     collector: DwellCollector,
     phase: Phase,
@@ -210,28 +243,30 @@ pub struct CalibrationSequence {
     gravity_cos2_max: f32,
     rate2_max_radps2: f32,
     force2_bounds_mps2sq: (f32, f32),
-    result: Option<CalibrationResult>,
+    result: Option<SequenceSolution>,
 }
 
 impl CalibrationSequence {
     /// A sequence over a schedule of turntable attitudes.
     pub fn new(schedule: &[Attitude], site: Site, settings: SequenceSettings) -> Result<Self, SequenceError> {
-        if schedule.is_empty() || schedule.len() > MAX_POSITIONS {
+        let angles_without_heading = settings.estimator == Estimator::Angles && settings.unknown_headings != 0;
+        if schedule.is_empty() || schedule.len() > MAX_POSITIONS || angles_without_heading {
             return Err(SequenceError::BadSchedule);
         }
-        let mut schedule_c_b_n = Vec::new();
+        let mut stored = Vec::new();
         for a in schedule {
             // Capacity checked above.
-            let _ = schedule_c_b_n.push(a.c_b_n());
+            let _ = stored.push(*a);
         }
         let c = libm::cosf(settings.max_gravity_angle_rad);
-        let up_b = schedule_c_b_n[0].row(2);
+        // The third row of C_b^n: the up direction in the body frame.
+        let up_b = schedule[0].c_b_n().row(2);
         let (g, e) = (site.gravity_mps2, settings.max_force_error_mps2);
         Ok(CalibrationSequence {
             collector: DwellCollector::new(&settings.prefilter).map_err(SequenceError::Prefilter)?,
             settings,
             site,
-            schedule_c_b_n,
+            schedule: stored,
             inputs: Vec::new(),
             phase: Phase::WaitingForTable,
             index: 0,
@@ -257,7 +292,7 @@ impl CalibrationSequence {
     }
 
     /// The solution, once [`Event::Solved`] was reported.
-    pub fn result(&self) -> Option<&CalibrationResult> {
+    pub fn result(&self) -> Option<&SequenceSolution> {
         self.result.as_ref()
     }
 
@@ -290,7 +325,8 @@ impl CalibrationSequence {
             Err(_) => return self.abort(AbortReason::TableLeft, false),
         };
         let faults = self.faults;
-        let _ = self.inputs.push(PositionInput { c_b_n: self.schedule_c_b_n[self.index], summary });
+        let Some(attitude) = self.schedule.get(self.index) else { return self.abort(AbortReason::TableLeft, false) };
+        let _ = self.inputs.push(PositionInput { c_b_n: attitude.c_b_n(), summary });
         let event = Event::DwellCompleted { index: self.index, samples: summary.samples, faults };
         self.index += 1;
         self.aborts = 0;
@@ -305,17 +341,39 @@ impl CalibrationSequence {
             // Report the completed dwell; the next call solves if it was the last.
             return Some(self.complete(false));
         }
-        if self.phase == Phase::Finished || self.index < self.schedule_c_b_n.len() {
+        if self.phase == Phase::Finished || self.index < self.schedule.len() {
             return None;
         }
         self.phase = Phase::Finished;
-        Some(match calibrate_positions(&self.inputs, &self.site, &self.settings.calibration) {
+        Some(match self.solve() {
             Ok(result) => {
                 self.result = Some(result);
                 Event::Solved
             }
-            Err(e) => Event::Failed(SequenceFailure::Calibration(e)),
+            Err(e) => Event::Failed(e),
         })
+    }
+
+    /// The solution of the completed positions with the settings' estimator.
+    fn solve(&self) -> Result<SequenceSolution, SequenceFailure> {
+        match self.settings.estimator {
+            Estimator::Angles => calibrate_positions(&self.inputs, &self.site, &self.settings.calibration)
+                .map(SequenceSolution::Angles)
+                .map_err(SequenceFailure::Calibration),
+            Estimator::Channels(settings) => {
+                let mask = self.settings.unknown_headings;
+                let dwells = self.inputs.iter().zip(&self.schedule).enumerate().map(|(k, (p, a))| SessionDwell {
+                    attitude: *a,
+                    heading_known: k >= 32 || mask & (1 << k) == 0,
+                    summary: &p.summary,
+                });
+                let dwell_value = self.settings.calibration.dwell_value;
+                session_estimator(dwells, self.site, settings, dwell_value)
+                    .and_then(|estimator| estimator.solve())
+                    .map(SequenceSolution::Channels)
+                    .map_err(SequenceFailure::Channels)
+            }
+        }
     }
 
     /// One queue item, with the turntable's in-position signal at that sample.
@@ -326,13 +384,13 @@ impl CalibrationSequence {
                 if !in_position {
                     self.phase = Phase::WaitingForTable;
                 }
-                if self.index == self.schedule_c_b_n.len() {
+                if self.index == self.schedule.len() {
                     return self.finish();
                 }
                 None
             }
             Phase::WaitingForTable => {
-                if self.index >= self.schedule_c_b_n.len() {
+                if self.index >= self.schedule.len() {
                     return self.finish();
                 }
                 if !in_position {
@@ -364,8 +422,8 @@ impl CalibrationSequence {
     }
 
     fn start_dwell(&mut self) {
-        if let Some(c_b_n) = self.schedule_c_b_n.get(self.index) {
-            self.up_b = c_b_n.row(2);
+        if let Some(attitude) = self.schedule.get(self.index) {
+            self.up_b = attitude.c_b_n().row(2);
         }
         self.collector.reset();
         self.dwell_sample = 0;

@@ -5,16 +5,20 @@
 use sinscal::calib::align::{position_angles, DwellValue};
 use sinscal::calib::dwell::Prefilter;
 use sinscal::rig::replay::{
-    decode_outcome, encode_outcome, read_header, run_replay, ReplayOutcome, MAGIC, MAX_OUTCOME_BYTES, VERSION,
+    decode_outcome, encode_outcome, read_header, run_replay, terms_bits, ReplayOutcome, MAGIC, MAX_OUTCOME_BYTES,
+    VERSION,
 };
-use sinscal::run::sequence::SequenceFailure;
+use sinscal::run::sequence::{SequenceFailure, SequenceSolution};
 use sinscal::sensor::adis::{encode_burst, Burst, Model, BURST32_LEN, I16F16};
 
 use crate::calibration::{
-    calibration_dwells, prefilter_of, site_of, Calibration, Estimates, Method, Options, PositionResult,
+    angle_error, calibration_dwells, channel_error, leave_out_suspects, prefilter_of, session_dwells, site_of,
+    Calibration, Estimates, Method, Options, PositionResult,
 };
 use crate::io::error::InputError;
 use crate::io::recording::{DwellAttitude, Recording};
+use sinscal::calib::session::session_estimator;
+use sinscal::run::sequence::Estimator;
 
 /// The sensor model the replay files emulate.
 pub const REPLAY_MODEL: Model = Model::Adis16505_2;
@@ -40,6 +44,11 @@ pub fn replay_file(rec: &Recording, options: &Options) -> Result<(Vec<u8>, Vec<D
         previous = row.pos;
     }
     let (site, _) = site_of(&rec.header);
+    let estimator = match options.method {
+        Method::Angles => 0u8,
+        Method::Channels if rec.has_gyro => 1,
+        Method::Channels => 2,
+    };
     let (prefilter_code, [a_gyro, a_accel]) = match prefilter_of(options, &dwells[0], source)? {
         Prefilter::None => (0u8, [1.0f32, 1.0]),
         Prefilter::HmmKf { gyro, accel } => (1, [gyro.a, accel.a]),
@@ -48,11 +57,11 @@ pub fn replay_file(rec: &Recording, options: &Options) -> Result<(Vec<u8>, Vec<D
     out.extend_from_slice(&MAGIC);
     out.extend_from_slice(&VERSION.to_le_bytes());
     out.push(1); // ADIS16505-2
-    out.push(0);
+    out.push(estimator);
     out.extend_from_slice(&site.latitude_rad.to_le_bytes());
     out.extend_from_slice(&site.gravity_mps2.to_le_bytes());
     out.extend_from_slice(&(dwells.len() as u16).to_le_bytes());
-    out.extend_from_slice(&[0, 0]);
+    out.extend_from_slice(&terms_bits(options.model).to_le_bytes());
     out.push(prefilter_code);
     out.push(match options.dwell_value {
         DwellValue::Mean => 0,
@@ -64,12 +73,16 @@ pub fn replay_file(rec: &Recording, options: &Options) -> Result<(Vec<u8>, Vec<D
     out.extend_from_slice(&a_accel.to_le_bytes());
     let mut attitudes = Vec::new();
     for d in &dwells {
-        let (att, heading) = d.attitude_with_heading(source, "the calibration")?;
-        for v in [att.pitch_deg, att.roll_deg, heading] {
+        // The angle method needs every heading; the general estimator estimates an unknown one.
+        let att = match options.method {
+            Method::Angles => d.attitude_with_heading(source, "the angle method")?.0,
+            Method::Channels => d.attitude(source)?,
+        };
+        for v in [att.pitch_deg, att.roll_deg, att.heading_deg.unwrap_or(0.0)] {
             out.extend_from_slice(&(v as f32).to_radians().to_le_bytes());
         }
         out.extend_from_slice(&(d.pos.min(u16::MAX as u32) as u16).to_le_bytes());
-        out.extend_from_slice(&[0, 0]);
+        out.extend_from_slice(&u16::from(att.heading_deg.is_none()).to_le_bytes());
         attitudes.push(att);
     }
     out.extend_from_slice(&(rec.rows.len() as u32).to_le_bytes());
@@ -102,7 +115,8 @@ pub fn replay_file(rec: &Recording, options: &Options) -> Result<(Vec<u8>, Vec<D
 }
 
 /// The calibration of a replay outcome, in the host's report types (angles per position recomputed with
-/// the core from the replayed dwell statistics).
+/// the core from the replayed dwell statistics where the heading is known). A refusal of the core comes back
+/// with the dwell's label and line, as on the direct path.
 pub fn calibration_from_outcome(
     rec: &Recording,
     options: &Options,
@@ -111,19 +125,40 @@ pub fn calibration_from_outcome(
 ) -> Result<Calibration, InputError> {
     let source = rec.source.as_str();
     let site = outcome.header.site;
-    if let Some(f) = &outcome.failure {
-        let reason = match f {
-            SequenceFailure::PositionAborted { index, reason } => format!(
-                "calibration sequence failed: position {} (dwell {}) aborted: {reason:?}",
-                index + 1,
-                outcome.header.labels.get(*index).copied().unwrap_or(0)
-            ),
-            SequenceFailure::Calibration(e) => format!("calibration sequence failed: {e}"),
-            _ => "calibration sequence failed".to_string(),
+    let dwells = rec.dwells();
+    let mut positions = Vec::new();
+    for (k, p) in outcome.positions.iter().enumerate() {
+        let angles = match attitudes[k].heading_deg {
+            Some(_) => Some(position_angles(&p.summary, options.dwell_value, &p.c_b_n, &site).map_err(|e| {
+                InputError::at(source, dwells[k].first_line(), format!("dwell {}: {e}", dwells[k].pos))
+            })?),
+            None => None,
         };
-        return Err(InputError::file(source, reason));
+        positions.push(PositionResult {
+            pos: outcome.header.labels[k] as u32,
+            first_line: dwells[k].first_line(),
+            attitude: attitudes[k],
+            summary: p.summary,
+            angles,
+        });
     }
-    let result = outcome.result.ok_or_else(|| {
+    if let Some(f) = &outcome.failure {
+        return Err(match *f {
+            SequenceFailure::PositionAborted { index, reason } => InputError::at(
+                source,
+                dwells.get(index).map_or(0, |d| d.first_line()),
+                format!(
+                    "calibration sequence failed: position {} (dwell {}) aborted: {reason:?}",
+                    index + 1,
+                    outcome.header.labels.get(index).copied().unwrap_or(0)
+                ),
+            ),
+            SequenceFailure::Calibration(e) => angle_error(e, &positions, source),
+            SequenceFailure::Channels(e) => channel_error(e, &positions, source),
+            _ => InputError::file(source, "calibration sequence failed"),
+        });
+    }
+    let result = outcome.result.as_ref().ok_or_else(|| {
         InputError::file(
             source,
             format!(
@@ -133,36 +168,41 @@ pub fn calibration_from_outcome(
             ),
         )
     })?;
-    let dwells = rec.dwells();
-    let mut positions = Vec::new();
-    for (k, p) in outcome.positions.iter().enumerate() {
-        let angles = position_angles(&p.summary, options.dwell_value, &p.c_b_n, &site)
-            .map_err(|e| InputError::at(source, dwells[k].first_line(), format!("dwell {}: {e}", dwells[k].pos)))?;
-        positions.push(PositionResult {
-            pos: outcome.header.labels[k] as u32,
-            first_line: dwells[k].first_line(),
-            attitude: attitudes[k],
-            summary: p.summary,
-            angles: Some(angles),
-        });
-    }
-    Ok(Calibration {
+    let on_firmware = |estimates, solution, channels, without_suspect, passes, converged| Calibration {
         source: source.to_string(),
         latitude_deg: rec.header.latitude_deg,
         site,
         gravity_source: site_of(&rec.header).1,
         prefilter: outcome.header.settings.prefilter,
-        options: Options { method: Method::Angles, ..*options },
-        positions,
-        estimates: Estimates::from_angles(&result.solution),
-        solution: Some(result.solution),
-        channels: None,
-        has_gyro: true,
-        without_suspect: None,
-        passes: result.passes,
-        converged: result.converged,
+        options: *options,
+        positions: positions.clone(),
+        estimates,
+        solution,
+        channels,
+        has_gyro: rec.has_gyro,
+        without_suspect,
+        passes,
+        converged,
         sampling: Some(outcome.sampling),
         on: "host",
+    };
+    Ok(match result {
+        SequenceSolution::Angles(r) => {
+            on_firmware(Estimates::from_angles(&r.solution), Some(r.solution), None, None, r.passes, r.converged)
+        }
+        SequenceSolution::Channels(c) => {
+            // The result without suspect dwells, solved on this machine from the firmware's dwell statistics
+            // with the same core function.
+            let settings = match outcome.header.settings.estimator {
+                Estimator::Channels(s) => s,
+                Estimator::Angles => return Err(InputError::file(source, "replay outcome: estimator mismatch")),
+            };
+            let without_suspect = session_estimator(session_dwells(&positions), site, settings, options.dwell_value)
+                .ok()
+                .and_then(|estimator| leave_out_suspects(&estimator, c, &positions));
+            let estimates = Estimates::from_channels(c);
+            on_firmware(estimates, None, Some(c.clone()), without_suspect, c.iterations, c.converged)
+        }
     })
 }
 

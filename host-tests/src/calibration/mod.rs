@@ -8,12 +8,13 @@ pub mod montecarlo;
 pub mod qemu;
 
 use sinscal::calib::align::{position_angles, DwellValue, PositionAngles};
-use sinscal::calib::calibration::{calibrate_positions, CalibrationResult, CalibrationSettings, PositionInput};
-use sinscal::calib::channels::{
-    ChannelDwell, ChannelError, ChannelEstimator, ChannelSettings, ChannelSolution, Model, Term, MAX_DWELLS,
+use sinscal::calib::calibration::{
+    calibrate_positions, CalibrationError, CalibrationResult, CalibrationSettings, PositionInput,
 };
-use sinscal::calib::dwell::{pool_mean_noise, DwellCollector, DwellSummary, Prefilter};
+use sinscal::calib::channels::{ChannelError, ChannelEstimator, ChannelSettings, ChannelSolution, Model, MAX_DWELLS};
+use sinscal::calib::dwell::{DwellCollector, DwellSummary, Prefilter};
 use sinscal::calib::prefilter::{CoefficientIdentifier, PrefilterSettings};
+use sinscal::calib::session::{session_estimator, SessionDwell};
 use sinscal::calib::solve::{BiasSolution, SolverSettings, MAX_POSITIONS};
 use sinscal::nav::earth::{normal_gravity_mps2, Site};
 use sinscal::nav::frames::Attitude;
@@ -70,10 +71,7 @@ impl Options {
 
 /// The estimator `calibrate` uses unless told otherwise, chosen by measurement (docs/method.md#default-estimator).
 pub const DEFAULT_METHOD: Method = Method::Channels;
-/// The general estimator's default terms (docs/method.md#default-estimator).
-/// Gyro and accelerometer biases and the accelerometer scale factors: under a real laboratory's errors the
-/// scale factor keeps the gravity model's error and the vertical scale factor out of the vertical bias.
-pub const DEFAULT_MODEL: Model = Model::BIASES.with(Term::AccelScaleFactor);
+pub use sinscal::calib::session::DEFAULT_MODEL;
 
 impl Default for Options {
     fn default() -> Options {
@@ -247,34 +245,8 @@ pub fn calibrate_channels(recording: &Recording, options: &Options) -> Result<Ca
         positions.push(PositionResult { pos: dwell.pos, first_line: dwell.first_line(), attitude, summary, angles });
     }
     let settings = ChannelSettings { model: options.model, use_gyro: has_gyro, ..ChannelSettings::default() };
-    let mut estimator = ChannelEstimator::new(site, settings);
-    let noise = pool_mean_noise(positions.iter().map(|p| p.summary)).map(|m| m.white_equivalent_var);
-    for p in &positions {
-        let a = Attitude::from_degrees(
-            p.attitude.pitch_deg as f32,
-            p.attitude.roll_deg as f32,
-            p.attitude.heading_deg.unwrap_or(0.0) as f32,
-        );
-        let s = &p.summary;
-        let (rate, force) = match options.dwell_value {
-            DwellValue::Mean => (s.rate_mean_b_radps, s.force_mean_b_mps2),
-            DwellValue::Settled => (s.rate_settled_b_radps, s.force_settled_b_mps2),
-        };
-        let n = s.samples.max(1) as f32;
-        // A floor at the f32 resolution of a mean (2^-23 of the Earth rate, of g) keeps the weights finite on
-        // noise-free data.
-        let floor = |scale: f32| (1.2e-7 * scale) * (1.2e-7 * scale);
-        let (rate_floor, force_floor) = (floor(sinscal::nav::earth::EARTH_RATE_RADPS), floor(site.gravity_mps2));
-        let dwell = ChannelDwell {
-            tilt: a.tilt(),
-            heading_rad: p.attitude.heading_deg.map(|_| a.heading_rad),
-            rate_mean_b_radps: rate,
-            force_mean_b_mps2: force,
-            rate_mean_var_b_radps2: [0, 1, 2].map(|i| (noise[i] / n).max(rate_floor)),
-            force_mean_var_b_mps2sq: [0, 1, 2].map(|i| (noise[3 + i] / n).max(force_floor)),
-        };
-        estimator.add(dwell).map_err(|e| channel_error(e, &positions, source))?;
-    }
+    let estimator = session_estimator(session_dwells(&positions), site, settings, options.dwell_value)
+        .map_err(|e| channel_error(e, &positions, source))?;
     let solution = estimator.solve().map_err(|e| channel_error(e, &positions, source))?;
     let without_suspect = leave_out_suspects(&estimator, &solution, &positions);
     Ok(Calibration {
@@ -297,10 +269,23 @@ pub fn calibrate_channels(recording: &Recording, options: &Options) -> Result<Ca
     })
 }
 
+/// The positions as the core's session: the reference attitude, whether it gives the heading, the statistics.
+pub fn session_dwells(positions: &[PositionResult]) -> impl Iterator<Item = SessionDwell<'_>> + Clone {
+    positions.iter().map(|p| SessionDwell {
+        attitude: Attitude::from_degrees(
+            p.attitude.pitch_deg as f32,
+            p.attitude.roll_deg as f32,
+            p.attitude.heading_deg.unwrap_or(0.0) as f32,
+        ),
+        heading_known: p.attitude.heading_deg.is_some(),
+        summary: &p.summary,
+    })
+}
+
 /// The solution without its worst dwells: the dwell with the largest statistic among the suspect ones is left
 /// out and the rest solved again, until no dwell is suspect, at most half the dwells are out, or fewer than two
 /// would remain. Returns the labels left out and the last solution, when any was left out.
-fn leave_out_suspects(
+pub fn leave_out_suspects(
     estimator: &ChannelEstimator,
     solution: &ChannelSolution,
     positions: &[PositionResult],
@@ -323,8 +308,8 @@ fn leave_out_suspects(
     Some((labels, Estimates::from_channels(&current)))
 }
 
-/// A core error with the dwell's label and line.
-fn channel_error(e: ChannelError, positions: &[PositionResult], source: &str) -> InputError {
+/// A core error of the general estimator with the dwell's label and line.
+pub fn channel_error(e: ChannelError, positions: &[PositionResult], source: &str) -> InputError {
     let dwell = match e {
         ChannelError::BadInput { dwell }
         | ChannelError::ForceMagnitude { dwell, .. }
@@ -332,15 +317,7 @@ fn channel_error(e: ChannelError, positions: &[PositionResult], source: &str) ->
         | ChannelError::HeadingMismatch { dwell, .. } => positions.get(dwell),
         _ => None,
     };
-    match dwell {
-        Some(p) => {
-            // The core counts dwells from 1 in the order given; the recording names them by label.
-            let text = e.to_string();
-            let reason = text.split_once(": ").map_or(text.as_str(), |(_, r)| r);
-            InputError::at(source, p.first_line, format!("dwell {}: {reason}", p.pos))
-        }
-        None => InputError::file(source, e.to_string()),
-    }
+    dwell_error(dwell, e.to_string(), source)
 }
 
 /// The paper's estimator (docs/method.md#step-5-schedule-and-solution) on a recording: headings and gyros needed.
@@ -375,23 +352,12 @@ pub fn calibrate_angles(recording: &Recording, options: &Options) -> Result<Cali
         let c_b_n =
             Attitude::from_degrees(attitude.pitch_deg as f32, attitude.roll_deg as f32, heading_deg as f32).c_b_n();
         let angles = position_angles(&summary, options.dwell_value, &c_b_n, &site).map_err(|e| at(e.to_string()))?;
-        let [phi_e, phi_n, phi_u] = angles.phi_n_rad;
-        let level = phi_e.abs().max(phi_n.abs());
-        if level > MAX_LEVEL_MISALIGNMENT_RAD || phi_u.abs() > MAX_HEADING_MISALIGNMENT_RAD {
-            return Err(at(format!(
-                "alignment differs from the reference attitude by {:.2} deg in level and {:.2} deg in heading: \
-                 the reference or the axes do not match the data (docs/conventions.md: ENU, body x right, \
-                 y forward, z up)",
-                level.to_degrees(),
-                phi_u.to_degrees()
-            )));
-        }
         inputs.push(PositionInput { c_b_n, summary });
         let angles = Some(angles);
         positions.push(PositionResult { pos: dwell.pos, first_line: dwell.first_line(), attitude, summary, angles });
     }
     let CalibrationResult { solution, passes, converged, .. } =
-        calibrate_positions(&inputs, &site, &settings).map_err(|e| InputError::file(source, e.to_string()))?;
+        calibrate_positions(&inputs, &site, &settings).map_err(|e| angle_error(e, &positions, source))?;
     Ok(Calibration {
         source: source.to_string(),
         latitude_deg: header.latitude_deg,
@@ -412,13 +378,28 @@ pub fn calibrate_angles(recording: &Recording, options: &Options) -> Result<Cali
     })
 }
 
-/// Largest level misalignment (phi_e, phi_n) accepted, rad: 0.05 rad (2.9 deg) is an accelerometer bias
-/// of 50 mg. Larger means the reference attitude or the axis convention is wrong.
-pub const MAX_LEVEL_MISALIGNMENT_RAD: f32 = 0.05;
-/// Largest heading misalignment (phi_u) accepted, rad: 0.5 rad (29 deg) is an east gyro bias of about
-/// 0.5 W cos L (about 5 deg/h at 45 deg latitude), beyond which gyrocompassing on the Earth rate
-/// is not a calibration method any more.
-pub const MAX_HEADING_MISALIGNMENT_RAD: f32 = 0.5;
+/// A core error of the angle method with the dwell's label and line.
+pub fn angle_error(e: CalibrationError, positions: &[PositionResult], source: &str) -> InputError {
+    let index = match e {
+        CalibrationError::Align { index, .. }
+        | CalibrationError::Implausible { index, .. }
+        | CalibrationError::ForceMagnitude { index, .. } => Some(index),
+        _ => None,
+    };
+    dwell_error(index.and_then(|k| positions.get(k)), e.to_string(), source)
+}
+
+/// An error message of the core that starts with "position k: " or "dwell k: " (counted from 1 in the
+/// order given), with the dwell's label and line instead.
+fn dwell_error(dwell: Option<&PositionResult>, text: String, source: &str) -> InputError {
+    match dwell {
+        Some(p) => {
+            let reason = text.split_once(": ").map_or(text.as_str(), |(_, r)| r);
+            InputError::at(source, p.first_line, format!("dwell {}: {reason}", p.pos))
+        }
+        None => InputError::file(source, text),
+    }
+}
 
 /// Identifies the prefilter coefficient `a` of the gyros and of the accelerometers from a dwell.
 pub fn identify_coefficients(

@@ -66,7 +66,7 @@ pub struct Args {
     method: Option<MethodArg>,
     /// The general estimator's terms: 'biases', 'full', or a comma list of gyro_bias, accel_bias,
     /// accel_scale_factor, accel_misalignment, gyro_scale_factor, gyro_misalignment, gyro_g_sensitivity,
-    /// reference_offset (default: biases).
+    /// reference_offset (default: biases,accel_scale_factor).
     #[arg(long, value_parser = parse_model)]
     model: Option<Model>,
     /// Prefilter in front of the dwell statistics.
@@ -105,13 +105,10 @@ impl Args {
         let usage = |text: &str| -> ! {
             clap::Error::raw(clap::error::ErrorKind::ArgumentConflict, format!("{text}\n")).exit()
         };
-        let method = match (self.method, self.on) {
-            (Some(MethodArg::Channels), Some(_)) => {
-                usage("--on: the firmware path solves with the angle method in this version (--method angles)")
-            }
-            (Some(MethodArg::Angles), _) | (None, Some(_)) => Method::Angles,
-            (Some(MethodArg::Channels), None) => Method::Channels,
-            (None, None) => DEFAULT_METHOD,
+        let method = match self.method {
+            Some(MethodArg::Angles) => Method::Angles,
+            Some(MethodArg::Channels) => Method::Channels,
+            None => DEFAULT_METHOD,
         };
         let model = match self.model {
             Some(_) if method == Method::Angles => {

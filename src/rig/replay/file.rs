@@ -6,20 +6,21 @@ use heapless::Vec;
 
 use super::run::ReplayOutcome;
 use crate::calib::align::DwellValue;
-use crate::calib::calibration::{CalibrationResult, CalibrationSettings, PositionInput};
+use crate::calib::calibration::{CalibrationError, CalibrationResult, CalibrationSettings, PositionInput};
+use crate::calib::channels::{ChannelError, ChannelSettings, ChannelSolution, Model as Terms, Term};
 use crate::calib::dwell::{Prefilter, MIN_DWELL_SAMPLES};
 use crate::calib::prefilter::PrefilterSettings;
 use crate::calib::solve::MAX_POSITIONS;
 use crate::nav::earth::Site;
 use crate::nav::frames::Attitude;
 use crate::run::sampling::SamplingStats;
-use crate::run::sequence::{SequenceError, SequenceFailure, SequenceSettings};
+use crate::run::sequence::{Estimator, SequenceError, SequenceFailure, SequenceSettings, SequenceSolution};
 use crate::sensor::adis::Model;
 
 /// File magic.
 pub const MAGIC: [u8; 4] = *b"SSRP";
 /// File version.
-pub const VERSION: u16 = 1;
+pub const VERSION: u16 = 2;
 
 /// Errors of a replay.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -40,7 +41,7 @@ impl core::fmt::Display for ReplayError {
     fn fmt(&self, f: &mut core::fmt::Formatter<'_>) -> core::fmt::Result {
         match self {
             ReplayError::Read => f.write_str("replay file ended early or could not be read"),
-            ReplayError::Format => f.write_str("not a sinscal replay file (version 1)"),
+            ReplayError::Format => f.write_str("not a sinscal replay file (version 2)"),
             ReplayError::Sequence(e) => write!(f, "calibration sequence: {e:?}"),
             ReplayError::Init => f.write_str("IMU initialisation failed"),
         }
@@ -73,23 +74,55 @@ impl ByteSource for &[u8] {
     }
 }
 
+/// What a replay file asks of the solution.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct ReplaySolve {
+    /// The estimator.
+    pub estimator: Estimator,
+    /// Which dwell value the solution uses.
+    pub dwell_value: DwellValue,
+    /// Passes of the angle method at most.
+    pub max_passes: u32,
+    /// Whether the angle method estimates the reference offset.
+    pub estimate_reference_offset: bool,
+    /// Bit k: the heading of position k is unknown.
+    pub unknown_headings: u32,
+}
+
 /// Settings of a replayed sequence: no settling (the recording's dwells are already the static parts),
 /// dwells as long as the table says, at least [`MIN_DWELL_SAMPLES`] samples.
-pub fn replay_sequence_settings(
-    prefilter: Prefilter,
-    dwell_value: DwellValue,
-    max_passes: u32,
-    estimate_reference_offset: bool,
-) -> SequenceSettings {
+pub fn replay_sequence_settings(prefilter: Prefilter, solve: ReplaySolve) -> SequenceSettings {
+    let (dwell_value, max_passes) = (solve.dwell_value, solve.max_passes);
     let mut calibration = CalibrationSettings { dwell_value, max_passes, ..CalibrationSettings::default() };
-    calibration.solver.estimate_reference_offset = estimate_reference_offset;
+    calibration.solver.estimate_reference_offset = solve.estimate_reference_offset;
     SequenceSettings {
         settle_samples: 0,
         dwell_samples: u32::MAX,
         min_dwell_samples: MIN_DWELL_SAMPLES,
         prefilter,
+        estimator: solve.estimator,
         calibration,
+        unknown_headings: solve.unknown_headings,
         ..SequenceSettings::default()
+    }
+}
+
+/// The bits of a set of terms in the replay file: bit i is `Term::ALL[i]`.
+pub fn terms_bits(model: Terms) -> u16 {
+    Term::ALL.iter().enumerate().fold(0, |bits, (i, t)| if model.contains(*t) { bits | 1 << i } else { bits })
+}
+
+/// The set of terms of [`terms_bits`].
+pub fn terms_of_bits(bits: u16) -> Terms {
+    Term::ALL.iter().enumerate().fold(Terms::EMPTY, |m, (i, t)| if bits & (1 << i) != 0 { m.with(*t) } else { m })
+}
+
+/// The estimator code of the replay file.
+pub fn estimator_code(estimator: &Estimator) -> u8 {
+    match estimator {
+        Estimator::Angles => 0,
+        Estimator::Channels(s) if s.use_gyro => 1,
+        Estimator::Channels(_) => 2,
     }
 }
 
@@ -136,6 +169,15 @@ pub fn read_header<R: ByteSource>(source: &mut R) -> Result<ReplayHeader, Replay
     if count == 0 || count > MAX_POSITIONS {
         return Err(ReplayError::Format);
     }
+    let channels = |use_gyro| {
+        Estimator::Channels(ChannelSettings { model: terms_of_bits(u16_at(&head, 18)), use_gyro, ..Default::default() })
+    };
+    let estimator = match head[7] {
+        0 => Estimator::Angles,
+        1 => channels(true),
+        2 => channels(false),
+        _ => return Err(ReplayError::Format),
+    };
     let mut run = [0u8; 12];
     source.read_exact(&mut run)?;
     let prefilter = match run[0] {
@@ -151,16 +193,27 @@ pub fn read_header<R: ByteSource>(source: &mut R) -> Result<ReplayHeader, Replay
         1 => DwellValue::Settled,
         _ => return Err(ReplayError::Format),
     };
-    let settings = replay_sequence_settings(prefilter, dwell_value, run[2] as u32, run[3] != 0);
     let mut schedule = Vec::new();
     let mut labels = Vec::new();
-    for _ in 0..count {
+    let mut unknown_headings = 0u32;
+    for k in 0..count {
         let mut p = [0u8; 16];
         source.read_exact(&mut p)?;
         let attitude = Attitude { pitch_rad: f32_at(&p, 0), roll_rad: f32_at(&p, 4), heading_rad: f32_at(&p, 8) };
         schedule.push(attitude).map_err(|_| ReplayError::Format)?;
         labels.push(u16_at(&p, 12)).map_err(|_| ReplayError::Format)?;
+        if u16_at(&p, 14) & 1 != 0 {
+            unknown_headings |= 1 << k;
+        }
     }
+    let solve = ReplaySolve {
+        estimator,
+        dwell_value,
+        max_passes: run[2] as u32,
+        estimate_reference_offset: run[3] != 0,
+        unknown_headings,
+    };
+    let settings = replay_sequence_settings(prefilter, solve);
     let mut n = [0u8; 4];
     source.read_exact(&mut n)?;
     Ok(ReplayHeader { model, site, schedule, labels, settings, frames: u32::from_le_bytes(n) })
@@ -168,8 +221,9 @@ pub fn read_header<R: ByteSource>(source: &mut R) -> Result<ReplayHeader, Replay
 
 /// Magic of an encoded outcome.
 pub const OUTCOME_MAGIC: [u8; 4] = *b"SSRO";
-/// Largest encoded outcome, bytes (24 positions of 424 bytes, the result and the counters: 10,984).
-pub const MAX_OUTCOME_BYTES: usize = 11_264;
+/// Largest encoded outcome, bytes: 24 positions of 424 bytes (10,176), the general estimator's solution
+/// (6,260 for 24 dwells; the angle method's is 808) and the counters and failure (68): 16,504.
+pub const MAX_OUTCOME_BYTES: usize = 16_896;
 
 struct Writer<'a> {
     out: &'a mut [u8],
@@ -227,12 +281,113 @@ impl Reader<'_> {
     }
 }
 
-fn failure_code(f: &Option<SequenceFailure>) -> [u32; 3] {
-    match f {
-        None => [0, 0, 0],
-        Some(SequenceFailure::PositionAborted { index, reason }) => [1, *index as u32, reason.code() as u32],
-        Some(SequenceFailure::Calibration(_)) => [2, 0, 0],
+/// A failure as five words: kind (0 none, 1 a position aborted, 2 the angle method, 3 the general
+/// estimator), position, reason code, and two values (f32 bits).
+fn failure_code(f: &Option<SequenceFailure>) -> [u32; 5] {
+    let bits = |x: f32, y: f32| [x.to_bits(), y.to_bits()];
+    let (kind, index, code, [x, y]) = match *f {
+        None => (0, 0, 0, [0, 0]),
+        Some(SequenceFailure::PositionAborted { index, reason }) => (1, index, reason.code() as u32, [0, 0]),
+        Some(SequenceFailure::Calibration(e)) => match e {
+            CalibrationError::Align { index, error } => (2, index, 1 + error as u32, [0, 0]),
+            CalibrationError::Solve(e) => (2, 0, 3 + e as u32, [0, 0]),
+            CalibrationError::Implausible { index, level_rad, heading_rad } => {
+                (2, index, 6, bits(level_rad, heading_rad))
+            }
+            CalibrationError::ForceMagnitude { index, ratio } => (2, index, 7, bits(ratio, 0.0)),
+        },
+        Some(SequenceFailure::Channels(e)) => match e {
+            ChannelError::NoDwells => (3, 0, 1, [0, 0]),
+            ChannelError::TooManyDwells => (3, 0, 2, [0, 0]),
+            ChannelError::BadInput { dwell } => (3, dwell, 3, [0, 0]),
+            ChannelError::ForceMagnitude { dwell, ratio } => (3, dwell, 4, bits(ratio, 0.0)),
+            ChannelError::GravityDirection { dwell, angle_rad } => (3, dwell, 5, bits(angle_rad, 0.0)),
+            ChannelError::HeadingMismatch { dwell, given_rad, fits_rad } => (3, dwell, 6, bits(given_rad, fits_rad)),
+            ChannelError::NothingToEstimate => (3, 0, 7, [0, 0]),
+        },
+    };
+    [kind, index as u32, code, x, y]
+}
+
+/// The failure of [`failure_code`]'s words.
+fn failure_of_code(words: [u32; 5]) -> Result<Option<SequenceFailure>, ReplayError> {
+    use crate::calib::align::AlignError;
+    use crate::calib::solve::SolveError;
+    let [kind, index, code, x, y] = words;
+    let (index, x, y) = (index as usize, f32::from_bits(x), f32::from_bits(y));
+    let calibration = |e| Some(SequenceFailure::Calibration(e));
+    let channels = |e| Some(SequenceFailure::Channels(e));
+    Ok(match (kind, code) {
+        (0, _) => None,
+        (1, _) => Some(SequenceFailure::PositionAborted {
+            index,
+            reason: crate::run::sequence::AbortReason::from_code(code as u8).ok_or(ReplayError::Format)?,
+        }),
+        (2, 1) => calibration(CalibrationError::Align { index, error: AlignError::Degenerate }),
+        (2, 2) => calibration(CalibrationError::Align { index, error: AlignError::NotFinite }),
+        (2, 3) => calibration(CalibrationError::Solve(SolveError::TooManyPositions)),
+        (2, 4) => calibration(CalibrationError::Solve(SolveError::NoPositions)),
+        (2, 5) => calibration(CalibrationError::Solve(SolveError::BadInput)),
+        (2, 6) => calibration(CalibrationError::Implausible { index, level_rad: x, heading_rad: y }),
+        (2, 7) => calibration(CalibrationError::ForceMagnitude { index, ratio: x }),
+        (3, 1) => channels(ChannelError::NoDwells),
+        (3, 2) => channels(ChannelError::TooManyDwells),
+        (3, 3) => channels(ChannelError::BadInput { dwell: index }),
+        (3, 4) => channels(ChannelError::ForceMagnitude { dwell: index, ratio: x }),
+        (3, 5) => channels(ChannelError::GravityDirection { dwell: index, angle_rad: x }),
+        (3, 6) => channels(ChannelError::HeadingMismatch { dwell: index, given_rad: x, fits_rad: y }),
+        (3, 7) => channels(ChannelError::NothingToEstimate),
+        _ => return Err(ReplayError::Format),
+    })
+}
+
+fn encode_angles(w: &mut Writer<'_>, r: &CalibrationResult) -> Result<(), ReplayError> {
+    w.u32(r.passes)?;
+    w.u32(r.converged as u32)?;
+    w.f32(r.last_correction_sigma)?;
+    let b = &r.solution;
+    for e in b.gyro_bias_b_radps.iter().chain(&b.accel_bias_b_mps2).chain(&b.reference_offset_n_rad) {
+        w.estimate(*e)?;
     }
+    w.u32(b.reference_offset_estimated as u32)?;
+    w.u32(b.positions as u32)?;
+    for r in &b.residual_n_rad {
+        w.f32s(r)?;
+    }
+    w.f32(b.chi_square)?;
+    w.u32(b.degrees_of_freedom)?;
+    for row in &b.covariance_si {
+        w.f32s(row)?;
+    }
+    Ok(())
+}
+
+/// The general estimator's solution; the per-dwell arrays for its dwells only.
+fn encode_channels(w: &mut Writer<'_>, c: &ChannelSolution) -> Result<(), ReplayError> {
+    w.u32(terms_bits(c.model) as u32)?;
+    w.f32s(&c.parameters_si)?;
+    for bits in [c.observable, c.unobservable] {
+        w.u32(bits as u32)?;
+        w.u32((bits >> 32) as u32)?;
+    }
+    for row in &c.covariance_si {
+        w.f32s(row)?;
+    }
+    let n = c.dwells.min(c.heading_rad.len());
+    w.u32(n as u32)?;
+    w.f32s(&c.heading_rad[..n])?;
+    w.f32s(&c.heading_std_rad[..n])?;
+    for k in 0..n {
+        w.f32s(&c.residual_rate_b_radps[k])?;
+        w.f32s(&c.residual_force_b_mps2[k])?;
+    }
+    w.f32s(&c.dwell_statistic[..n])?;
+    w.u32(c.suspect as u32)?;
+    w.u32((c.suspect >> 32) as u32)?;
+    w.f32(c.chi_square)?;
+    w.u32(c.degrees_of_freedom)?;
+    w.u32(c.iterations)?;
+    w.u32(c.converged as u32)
 }
 
 /// Encodes an outcome (every f32 as its bit pattern) into `out`; returns the length.
@@ -277,25 +432,13 @@ pub fn encode_outcome(o: &ReplayOutcome, out: &mut [u8]) -> Result<usize, Replay
     }
     match &o.result {
         None => w.u32(0)?,
-        Some(r) => {
+        Some(SequenceSolution::Angles(r)) => {
             w.u32(1)?;
-            w.u32(r.passes)?;
-            w.u32(r.converged as u32)?;
-            w.f32(r.last_correction_sigma)?;
-            let b = &r.solution;
-            for e in b.gyro_bias_b_radps.iter().chain(&b.accel_bias_b_mps2).chain(&b.reference_offset_n_rad) {
-                w.estimate(*e)?;
-            }
-            w.u32(b.reference_offset_estimated as u32)?;
-            w.u32(b.positions as u32)?;
-            for r in &b.residual_n_rad {
-                w.f32s(r)?;
-            }
-            w.f32(b.chi_square)?;
-            w.u32(b.degrees_of_freedom)?;
-            for row in &b.covariance_si {
-                w.f32s(row)?;
-            }
+            encode_angles(&mut w, r)?;
+        }
+        Some(SequenceSolution::Channels(c)) => {
+            w.u32(2)?;
+            encode_channels(&mut w, c)?;
         }
     }
     Ok(w.at)
@@ -304,8 +447,6 @@ pub fn encode_outcome(o: &ReplayOutcome, out: &mut [u8]) -> Result<usize, Replay
 /// Decodes an outcome written by [`encode_outcome`], with the header of the replay file it came from.
 pub fn decode_outcome(header: &ReplayHeader, bytes: &[u8]) -> Result<ReplayOutcome, ReplayError> {
     use crate::calib::dwell::{DwellAllan, DwellSummary, MeanNoise};
-    use crate::calib::solve::{BiasSolution, MAX_PARAMETERS};
-    use crate::run::sequence::AbortReason as R;
     let mut r = Reader { input: bytes };
     let mut magic = [0u8; 4];
     r.input.read_exact(&mut magic)?;
@@ -323,17 +464,7 @@ pub fn decode_outcome(header: &ReplayHeader, bytes: &[u8]) -> Result<ReplayOutco
         missed_samples: r.u32()?,
     };
     let aborted_dwells = r.u32()?;
-    let [kind, index, reason] = [r.u32()?, r.u32()?, r.u32()?];
-    let failure = match kind {
-        0 => None,
-        1 => Some(SequenceFailure::PositionAborted {
-            index: index as usize,
-            reason: R::from_code(reason as u8).ok_or(ReplayError::Format)?,
-        }),
-        _ => Some(SequenceFailure::Calibration(crate::calib::calibration::CalibrationError::Solve(
-            crate::calib::solve::SolveError::BadInput,
-        ))),
-    };
+    let failure = failure_of_code([r.u32()?, r.u32()?, r.u32()?, r.u32()?, r.u32()?])?;
     let count = r.u32()? as usize;
     if count > header.schedule.len() {
         return Err(ReplayError::Format);
@@ -364,46 +495,110 @@ pub fn decode_outcome(header: &ReplayHeader, bytes: &[u8]) -> Result<ReplayOutco
         }
         let _ = positions.push(PositionInput { c_b_n: header.schedule[k].c_b_n(), summary });
     }
-    let result = if r.u32()? == 0 {
-        None
-    } else {
-        let passes = r.u32()?;
-        let converged = r.u32()? != 0;
-        let last_correction_sigma = r.f32()?;
-        let mut est = [None; MAX_PARAMETERS];
-        for e in est.iter_mut() {
-            *e = r.estimate()?;
-        }
-        let reference_offset_estimated = r.u32()? != 0;
-        let npos = r.u32()? as usize;
-        let mut residual_n_rad = [[0.0f32; 3]; MAX_POSITIONS];
-        for res in residual_n_rad.iter_mut() {
-            *res = r.vec3()?;
-        }
-        let chi_square = r.f32()?;
-        let degrees_of_freedom = r.u32()?;
-        let mut covariance_si = [[0.0f32; MAX_PARAMETERS]; MAX_PARAMETERS];
-        for row in covariance_si.iter_mut() {
-            for c in row.iter_mut() {
-                *c = r.f32()?;
-            }
-        }
-        Some(CalibrationResult {
-            solution: BiasSolution {
-                gyro_bias_b_radps: [est[0], est[1], est[2]],
-                accel_bias_b_mps2: [est[3], est[4], est[5]],
-                reference_offset_n_rad: [est[6], est[7], est[8]],
-                reference_offset_estimated,
-                positions: npos,
-                residual_n_rad,
-                chi_square,
-                degrees_of_freedom,
-                covariance_si,
-            },
-            passes,
-            converged,
-            last_correction_sigma,
-        })
+    let result = match r.u32()? {
+        0 => None,
+        1 => Some(SequenceSolution::Angles(decode_angles(&mut r)?)),
+        2 => Some(SequenceSolution::Channels(decode_channels(&mut r)?)),
+        _ => return Err(ReplayError::Format),
     };
     Ok(ReplayOutcome { header: header.clone(), positions, result, failure, sampling, aborted_dwells })
+}
+
+fn decode_angles(r: &mut Reader<'_>) -> Result<CalibrationResult, ReplayError> {
+    use crate::calib::solve::{BiasSolution, MAX_PARAMETERS};
+    let passes = r.u32()?;
+    let converged = r.u32()? != 0;
+    let last_correction_sigma = r.f32()?;
+    let mut est = [None; MAX_PARAMETERS];
+    for e in est.iter_mut() {
+        *e = r.estimate()?;
+    }
+    let reference_offset_estimated = r.u32()? != 0;
+    let positions = r.u32()? as usize;
+    let mut residual_n_rad = [[0.0f32; 3]; MAX_POSITIONS];
+    for res in residual_n_rad.iter_mut() {
+        *res = r.vec3()?;
+    }
+    let chi_square = r.f32()?;
+    let degrees_of_freedom = r.u32()?;
+    let mut covariance_si = [[0.0f32; MAX_PARAMETERS]; MAX_PARAMETERS];
+    for row in covariance_si.iter_mut() {
+        for c in row.iter_mut() {
+            *c = r.f32()?;
+        }
+    }
+    Ok(CalibrationResult {
+        solution: BiasSolution {
+            gyro_bias_b_radps: [est[0], est[1], est[2]],
+            accel_bias_b_mps2: [est[3], est[4], est[5]],
+            reference_offset_n_rad: [est[6], est[7], est[8]],
+            reference_offset_estimated,
+            positions,
+            residual_n_rad,
+            chi_square,
+            degrees_of_freedom,
+            covariance_si,
+        },
+        passes,
+        converged,
+        last_correction_sigma,
+    })
+}
+
+fn decode_channels(r: &mut Reader<'_>) -> Result<ChannelSolution, ReplayError> {
+    use crate::calib::channels::{MAX_DWELLS, PARAMETERS};
+    let model = terms_of_bits(r.u32()? as u16);
+    let mut parameters_si = [0.0f32; PARAMETERS];
+    for p in parameters_si.iter_mut() {
+        *p = r.f32()?;
+    }
+    let mut u64_word = || -> Result<u64, ReplayError> { Ok(r.u32()? as u64 | (r.u32()? as u64) << 32) };
+    let (observable, unobservable) = (u64_word()?, u64_word()?);
+    let mut covariance_si = [[0.0f32; PARAMETERS]; PARAMETERS];
+    for row in covariance_si.iter_mut() {
+        for c in row.iter_mut() {
+            *c = r.f32()?;
+        }
+    }
+    let dwells = r.u32()? as usize;
+    if dwells > MAX_DWELLS {
+        return Err(ReplayError::Format);
+    }
+    let mut c = ChannelSolution {
+        model,
+        parameters_si,
+        observable,
+        unobservable,
+        covariance_si,
+        dwells,
+        heading_rad: [0.0; MAX_DWELLS],
+        heading_std_rad: [0.0; MAX_DWELLS],
+        residual_rate_b_radps: [[0.0; 3]; MAX_DWELLS],
+        residual_force_b_mps2: [[0.0; 3]; MAX_DWELLS],
+        dwell_statistic: [0.0; MAX_DWELLS],
+        suspect: 0,
+        chi_square: 0.0,
+        degrees_of_freedom: 0,
+        iterations: 0,
+        converged: false,
+    };
+    for k in 0..dwells {
+        c.heading_rad[k] = r.f32()?;
+    }
+    for k in 0..dwells {
+        c.heading_std_rad[k] = r.f32()?;
+    }
+    for k in 0..dwells {
+        c.residual_rate_b_radps[k] = r.vec3()?;
+        c.residual_force_b_mps2[k] = r.vec3()?;
+    }
+    for k in 0..dwells {
+        c.dwell_statistic[k] = r.f32()?;
+    }
+    c.suspect = r.u32()? as u64 | (r.u32()? as u64) << 32;
+    c.chi_square = r.f32()?;
+    c.degrees_of_freedom = r.u32()?;
+    c.iterations = r.u32()?;
+    c.converged = r.u32()? != 0;
+    Ok(c)
 }

@@ -6,10 +6,10 @@ use heapless::Vec;
 
 use super::device::ReplayDevice;
 use super::file::{read_header, ByteSource, ReplayError, ReplayHeader};
-use crate::calib::calibration::{CalibrationResult, PositionInput};
+use crate::calib::calibration::PositionInput;
 use crate::calib::solve::MAX_POSITIONS;
 use crate::run::sampling::{on_data_ready, process_next, QueueItem, SamplingStats, QUEUE_SLOTS};
-use crate::run::sequence::{CalibrationSequence, Event, SequenceFailure};
+use crate::run::sequence::{CalibrationSequence, Event, SequenceFailure, SequenceSolution};
 use crate::sensor::adis::{Adis, AdisError, BURST32_LEN};
 
 /// What a replay produced.
@@ -20,7 +20,7 @@ pub struct ReplayOutcome {
     /// Completed positions (attitude and dwell statistics).
     pub positions: Vec<PositionInput, MAX_POSITIONS>,
     /// The solution, if the sequence got there.
-    pub result: Option<CalibrationResult>,
+    pub result: Option<SequenceSolution>,
     /// The failure, if it failed.
     pub failure: Option<SequenceFailure>,
     /// Sampling counters.
@@ -76,7 +76,7 @@ pub fn run_replay<R: ByteSource>(
     while let Some(event) = sequence.finish() {
         handle(event);
     }
-    let result = sequence.result().copied();
+    let result = sequence.result().cloned();
     let mut positions = Vec::new();
     for p in sequence.completed() {
         let _ = positions.push(*p);

@@ -1,0 +1,75 @@
+//! A session's dwell statistics into the general estimator (docs/method.md#general-estimator): one function
+//! that the workstation's `calibrate` and the firmware's calibration sequence both call, so that the same
+//! dwells give the same estimator input, bit for bit, on either machine.
+//!
+//! Each dwell contributes its mean (or the prefilter's settled value) and the variance of that mean: the
+//! session's pooled honest noise ([`pool_mean_noise`], docs/method.md#honest-errors) over the dwell's number
+//! of samples, never below the f32 resolution of a mean (2^-23 of the Earth rate, of g), which keeps the
+//! weights finite on noise-free data.
+
+use crate::calib::align::DwellValue;
+use crate::calib::channels::{ChannelDwell, ChannelError, ChannelEstimator, ChannelSettings, Model, Term};
+use crate::calib::dwell::{pool_mean_noise, DwellSummary};
+use crate::nav::earth::{Site, EARTH_RATE_RADPS};
+use crate::nav::frames::Attitude;
+
+/// The general estimator's terms unless told otherwise, chosen by measurement
+/// (docs/method.md#default-estimator): gyro and accelerometer biases and the accelerometer scale factors.
+/// Under a real laboratory's errors the scale factor keeps the gravity model's error and the vertical scale
+/// factor out of the vertical bias.
+pub const DEFAULT_MODEL: Model = Model::BIASES.with(Term::AccelScaleFactor);
+
+/// The general estimator's settings with the default terms.
+pub fn default_channel_settings() -> ChannelSettings {
+    ChannelSettings { model: DEFAULT_MODEL, ..ChannelSettings::default() }
+}
+
+/// One dwell of a session.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct SessionDwell<'a> {
+    /// The reference attitude (its heading is ignored when `heading_known` is false).
+    pub attitude: Attitude,
+    /// Whether the reference gives the heading.
+    pub heading_known: bool,
+    /// The dwell's statistics.
+    pub summary: &'a DwellSummary,
+}
+
+/// Smallest variance of a dwell mean, (unit)^2: the f32 resolution of a mean of magnitude `scale`.
+fn resolution_floor(scale: f32) -> f32 {
+    (1.2e-7 * scale) * (1.2e-7 * scale)
+}
+
+/// The estimator loaded with a session's dwells, ready to solve: the pooled noise of the session over each
+/// dwell's samples, the dwell value `dwell_value`. Errors are the estimator's refusals (with the dwell's
+/// index in the order given).
+pub fn session_estimator<'a, I>(
+    dwells: I,
+    site: Site,
+    settings: ChannelSettings,
+    dwell_value: DwellValue,
+) -> Result<ChannelEstimator, ChannelError>
+where
+    I: Iterator<Item = SessionDwell<'a>> + Clone,
+{
+    let noise = pool_mean_noise(dwells.clone().map(|d| *d.summary)).map(|m| m.white_equivalent_var);
+    let (rate_floor, force_floor) = (resolution_floor(EARTH_RATE_RADPS), resolution_floor(site.gravity_mps2));
+    let mut estimator = ChannelEstimator::new(site, settings);
+    for d in dwells {
+        let s = d.summary;
+        let (rate, force) = match dwell_value {
+            DwellValue::Mean => (s.rate_mean_b_radps, s.force_mean_b_mps2),
+            DwellValue::Settled => (s.rate_settled_b_radps, s.force_settled_b_mps2),
+        };
+        let n = s.samples.max(1) as f32;
+        estimator.add(ChannelDwell {
+            tilt: d.attitude.tilt(),
+            heading_rad: d.heading_known.then_some(d.attitude.heading_rad),
+            rate_mean_b_radps: rate,
+            force_mean_b_mps2: force,
+            rate_mean_var_b_radps2: [0, 1, 2].map(|i| (noise[i] / n).max(rate_floor)),
+            force_mean_var_b_mps2sq: [0, 1, 2].map(|i| (noise[3 + i] / n).max(force_floor)),
+        })?;
+    }
+    Ok(estimator)
+}
