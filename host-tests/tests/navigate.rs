@@ -23,8 +23,7 @@ fn exact_run(attitude_deg: [f64; 3], scenario: &Scenario, hours: f64) -> Vec<Nav
     let setup = setup(attitude_deg, scenario);
     let sample = scenario.exact_sample(attitude_deg);
     let samples = (hours * 3600.0 * scenario.rate_hz).round() as usize;
-    let mut runs =
-        [Run { name: "exact".into(), gyro_bias_radps: [0.0; 3], accel_bias_mps2: [0.0; 3], history: vec![] }];
+    let mut runs = [Run::with_biases("exact", [0.0; 3], [0.0; 3])];
     navigate_runs(&setup, samples, |_| sample, &mut runs, |_, _| {});
     runs[0].history.clone()
 }
@@ -125,7 +124,7 @@ fn schuler_period_and_level_error_of_an_accelerometer_bias() {
     let setup = StaticSetup { record_every: 10, ..setup([0.0; 3], &scenario) };
     let samples = (2.0 * 3600.0 * scenario.rate_hz) as usize;
     let sample = scenario.exact_sample([0.0; 3]);
-    let mut runs = [Run { name: "a".into(), gyro_bias_radps: [0.0; 3], accel_bias_mps2: [0.0; 3], history: vec![] }];
+    let mut runs = [Run::with_biases("a", [0.0; 3], [0.0; 3])];
     navigate_runs(&setup, samples, |_| sample, &mut runs, |_, _| {});
     let h = &runs[0].history;
     // Zero crossings of the north velocity (after the start), interpolated.
@@ -154,7 +153,7 @@ fn schuler_period_and_level_error_of_an_accelerometer_bias() {
 fn a_six_position_calibration_shows_its_gain_in_a_two_hour_run() {
     use sinscal_host::calibration::{calibrate, Options};
     use sinscal_host::io::calibration_result::CalibrationJson;
-    use sinscal_host::navigation::check::{navigate, CalibrationBiases, NavOptions};
+    use sinscal_host::navigation::check::{navigate, NavCalibration, NavOptions};
 
     // SIMULATION: the built-in example IMU, calibrated on Table 1, then 2 hours at rest at position 1.
     let dir = tempfile::tempdir().unwrap();
@@ -162,7 +161,7 @@ fn a_six_position_calibration_shows_its_gain_in_a_two_hour_run() {
     let cal = calibrate(&recording, &Options::default()).unwrap();
     let cal_path = dir.path().join("cal.json");
     std::fs::write(&cal_path, serde_json::to_string(&CalibrationJson::new(&cal)).unwrap()).unwrap();
-    let biases = CalibrationBiases::read(&cal_path).unwrap();
+    let biases = NavCalibration::read(&cal_path).unwrap();
     let options = NavOptions { hours: Some(2.0), ..NavOptions::default() };
     let report = navigate(&recording, &biases, None, &options, |_, _| {}).unwrap();
 
@@ -222,4 +221,147 @@ fn east_gyro_drift_couples_through_earth_rate_as_the_textbook_approximation_says
     );
     assert!((last.position_en_m[1] / dp_n - 1.0).abs() < 0.05);
     assert!((last.attitude_n_rad[2] / phi_u - 1.0).abs() < 0.05);
+}
+
+/// SIMULATION, exact: `minutes` at rest at `attitude_deg` of an IMU with the given sensor model, as a recording of
+/// one dwell at 100 Hz, and the scenario's site.
+fn recording_of_model(
+    attitude_deg: [f64; 3],
+    minutes: f64,
+    measure: impl Fn([f64; 3], [f64; 3]) -> ([f64; 3], [f64; 3]),
+) -> sinscal_host::io::recording::Recording {
+    use sinscal_host::io::recording::{Header, Recording, Row};
+    let scenario = Scenario { reference_offset_n_rad: [0.0; 3], ..Scenario::table1_exact() };
+    let (w, f) = scenario.exact_sample(attitude_deg);
+    let (w, f) = measure(w, f);
+    let rows = (0..(minutes * 6000.0) as usize)
+        .map(|k| Row {
+            t_s: k as f64 / 100.0,
+            pos: 1,
+            pitch_deg: attitude_deg[0],
+            roll_deg: attitude_deg[1],
+            heading_deg: Some(attitude_deg[2]),
+            rate_b_radps: w,
+            force_b_mps2: f,
+            temp_c: None,
+            line: k + 2,
+        })
+        .collect();
+    let header = Header {
+        latitude_deg: scenario.latitude_deg,
+        height_m: scenario.height_m,
+        rate_hz: Some(100.0),
+        gravity_mps2: Some(scenario.gravity_mps2),
+        comments: Vec::new(),
+        truth: None,
+    };
+    Recording { source: "model.csv".into(), header, rows, has_gyro: true }
+}
+
+/// A version 2 calibration JSON with the given terms (JSON texts) and covariance.
+fn calibration_json(
+    dir: &std::path::Path,
+    name: &str,
+    terms: &str,
+    parameters: &[&str],
+    covariance: &[Vec<f64>],
+) -> std::path::PathBuf {
+    let text = format!(
+        r#"{{"schema": "sinscal-calibration/2", {terms}, "parameters": {}, "covariance": {}}}"#,
+        serde_json::to_string(parameters).unwrap(),
+        serde_json::to_string(covariance).unwrap()
+    );
+    let path = dir.join(name);
+    std::fs::write(&path, text).unwrap();
+    path
+}
+
+#[test]
+fn navigate_compensates_the_whole_sensor_model() {
+    use sinscal_host::navigation::check::{navigate, NavCalibration, NavOptions};
+    // Scale factors, misalignments and g-sensitivity of both signs, and biases.
+    let t_a = [[1.0 + 300e-6, 60e-6, -80e-6], [-40e-6, 1.0 - 200e-6, 90e-6], [70e-6, -50e-6, 1.0 + 150e-6]];
+    let t_g = [[1.0 - 400e-6, 30e-6, -20e-6], [50e-6, 1.0 + 250e-6, -60e-6], [-10e-6, 40e-6, 1.0 - 100e-6]];
+    // g-sensitivity of a few 0.01 deg/h per g: (rad/s) per (m/s^2).
+    let g_sens = [[2e-9, -1e-9, 0.5e-9], [0.0, 3e-9, -2e-9], [1e-9, 0.0, -1.5e-9]];
+    let (b_g, b_a) = (
+        [0.02 * DEG_PER_HOUR, -0.01 * DEG_PER_HOUR, 0.015 * DEG_PER_HOUR],
+        [50.0 * MICRO_G, -30.0 * MICRO_G, 20.0 * MICRO_G],
+    );
+    let attitude = [20.0, -30.0, 40.0];
+    let rec = recording_of_model(attitude, 60.0, |w, f| {
+        let fm = [0, 1, 2].map(|i| (0..3).map(|j| t_a[i][j] * f[j]).sum::<f64>() + b_a[i]);
+        let wm = [0, 1, 2].map(|i| (0..3).map(|j| t_g[i][j] * w[j] + g_sens[i][j] * f[j]).sum::<f64>() + b_g[i]);
+        (wm, fm)
+    });
+    let diag = |t: &[[f64; 3]; 3]| format!("[{}, {}, {}]", t[0][0] - 1.0, t[1][1] - 1.0, t[2][2] - 1.0);
+    let off = |t: &[[f64; 3]; 3]| {
+        format!("[[0, {}, {}], [{}, 0, {}], [{}, {}, 0]]", t[0][1], t[0][2], t[1][0], t[1][2], t[2][0], t[2][1])
+    };
+    let biases = format!(r#""gyro_bias_radps": {:?}, "accel_bias_mps2": {:?}"#, b_g, b_a);
+    let whole = format!(
+        r#"{biases}, "accel_scale_factor": {}, "accel_misalignment": {}, "gyro_scale_factor": {}, "gyro_misalignment": {}, "gyro_g_sensitivity_radps_per_mps2": {:?}"#,
+        diag(&t_a),
+        off(&t_a),
+        diag(&t_g),
+        off(&t_g),
+        g_sens
+    );
+    let dir = tempfile::tempdir().unwrap();
+    let one = [vec![1e-12]];
+    let whole =
+        NavCalibration::read(&calibration_json(dir.path(), "whole.json", &whole, &["gyro_bias_x"], &one)).unwrap();
+    let only =
+        NavCalibration::read(&calibration_json(dir.path(), "biases.json", &biases, &["gyro_bias_x"], &one)).unwrap();
+    let options = NavOptions { position: Some(1), ..NavOptions::default() };
+    let report = navigate(&rec, &whole, Some(&only), &options, |_, _| {}).unwrap();
+    let [raw, whole_run, biases_run] = [&report.runs[0], &report.runs[1], &report.runs[2]];
+    println!(
+        "largest horizontal error over 1 h: uncompensated {:.1} m, biases only {:.1} m, whole model {:.2e} m",
+        raw.max_horizontal_position_error_m,
+        biases_run.max_horizontal_position_error_m,
+        whole_run.max_horizontal_position_error_m
+    );
+    assert_eq!(whole_run.terms_applied.len(), 7);
+    // The whole model removes every error of these exact data; the biases alone leave the scale factors' and
+    // misalignments' Schuler oscillation (hundreds of metres at 1e-4).
+    assert!(whole_run.max_horizontal_position_error_m < 0.01, "{}", whole_run.max_horizontal_position_error_m);
+    assert!(biases_run.max_horizontal_position_error_m > 100.0, "{}", biases_run.max_horizontal_position_error_m);
+}
+
+#[test]
+fn the_prediction_combines_the_parameters_through_their_covariance() {
+    use sinscal_host::navigation::check::{navigate, output_sensitivity, NavCalibration, NavOptions};
+    let attitude = [20.0, -30.0, 40.0];
+    let rec = recording_of_model(attitude, 20.0, |w, f| (w, f));
+    // At this attitude accelerometer x reads c = f_b,x: a bias error b and a scale-factor error s move it by
+    // b + c s. Errors along (c, -1) cancel exactly; along (c, 1) they add.
+    let scenario = Scenario { reference_offset_n_rad: [0.0; 3], ..Scenario::table1_exact() };
+    let (w, f) = scenario.exact_sample(attitude);
+    let c = output_sensitivity("accel_scale_factor_x", w, f).unwrap().1[0];
+    assert!((c - f[0]).abs() < 1e-12 && c.abs() > 1.0);
+    let names = ["accel_bias_x", "accel_scale_factor_x"];
+    let sigma = 1e-4;
+    let rank_one = |sign: f64| {
+        vec![vec![c * c * sigma * sigma, sign * c * sigma * sigma], vec![sign * c * sigma * sigma, sigma * sigma]]
+    };
+    let diagonal = vec![vec![c * c * sigma * sigma, 0.0], vec![0.0, sigma * sigma]];
+    let terms = r#""gyro_bias_radps": null, "accel_bias_mps2": [0, 0, 0]"#;
+    let dir = tempfile::tempdir().unwrap();
+    let options = NavOptions { position: Some(1), ..NavOptions::default() };
+    let mut predicted = Vec::new();
+    for (name, p) in [("cancel", rank_one(-1.0)), ("add", rank_one(1.0)), ("diagonal", diagonal)] {
+        let cal = NavCalibration::read(&calibration_json(dir.path(), name, terms, &names, &p)).unwrap();
+        let report = navigate(&rec, &cal, None, &options, |_, _| {}).unwrap();
+        let pr = report.predicted_from_std_errors.unwrap();
+        assert_eq!(pr.parameters, 2);
+        predicted.push(pr.max_rms_horizontal_position_error_m);
+    }
+    println!(
+        "largest RMS horizontal error predicted: anti-correlated {:.3e} m, correlated {:.3} m, uncorrelated {:.3} m",
+        predicted[0], predicted[1], predicted[2]
+    );
+    // Fully correlated errors add as amplitudes (twice the single one), uncorrelated as variances (sqrt 2 times).
+    assert!(predicted[0] < 1e-6 * predicted[1], "{predicted:?}");
+    assert!((predicted[1] / predicted[2] - 2f64.sqrt()).abs() < 1e-9, "{predicted:?}");
 }

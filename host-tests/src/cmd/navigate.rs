@@ -1,5 +1,5 @@
 //! `sinscal navigate RECORDING --calibration CAL.json`: static pure-inertial navigation with and without
-//! the calibration's biases removed.
+//! the calibration's sensor model compensated.
 
 use std::path::PathBuf;
 
@@ -7,7 +7,7 @@ use crate::cmd::{json_to_stdout, write_json};
 use crate::io::calibration_result::ARCSEC_PER_RAD;
 use crate::io::plot::navigation_plot;
 use crate::io::recording::Recording;
-use crate::navigation::check::{navigate, CalibrationBiases, NavOptions, NavReport};
+use crate::navigation::check::{navigate, NavCalibration, NavOptions, NavReport};
 
 /// Arguments of `sinscal navigate`.
 #[derive(clap::Args)]
@@ -43,8 +43,8 @@ pub fn run(args: Args) -> anyhow::Result<()> {
     let Args { recording, calibration, compare, hours, position, seed, json, plot } = args;
     let quiet = json_to_stdout(json.as_deref());
     let rec = Recording::read(&recording)?;
-    let cal = CalibrationBiases::read(&calibration)?;
-    let second = compare.as_deref().map(CalibrationBiases::read).transpose()?;
+    let cal = NavCalibration::read(&calibration)?;
+    let second = compare.as_deref().map(NavCalibration::read).transpose()?;
     let options = NavOptions { hours, position, seed, ..NavOptions::default() };
     let started = std::time::Instant::now();
     let mut last_tenth = 0;
@@ -124,8 +124,9 @@ fn navigation_summary(r: &NavReport, elapsed_s: f64) -> String {
     if let Some(p) = &r.predicted_from_std_errors {
         let _ = writeln!(
             out,
-            "  the calibration's standard errors predict for the calibrated run (bias uncertainty only, RMS): \
+            "  the calibration's covariance ({} parameters) predicts for the calibrated run (RMS): \
              {:.2} m at the end, {:.2} m at most; heading {:.2} arcsec at the end",
+            p.parameters,
             p.rms_final_horizontal_position_error_m,
             p.max_rms_horizontal_position_error_m,
             p.rms_final_heading_error_rad * ARCSEC_PER_RAD

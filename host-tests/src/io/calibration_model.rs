@@ -164,6 +164,25 @@ impl CalibrationModel {
         Ok(model)
     }
 
+    /// A model of biases only (`T = I`, `G = 0`); zero biases compensate nothing.
+    pub fn biases_only(source: &str, gyro_bias_radps: [f64; 3], accel_bias_mps2: [f64; 3]) -> CalibrationModel {
+        CalibrationModel {
+            source: source.to_string(),
+            version: 2,
+            gyro_bias_radps,
+            accel_bias_mps2,
+            accel_t: IDENTITY,
+            gyro_t: IDENTITY,
+            gyro_g_sensitivity_radps_per_mps2: [[0.0; 3]; 3],
+            terms: if gyro_bias_radps == [0.0; 3] && accel_bias_mps2 == [0.0; 3] {
+                Vec::new()
+            } else {
+                vec!["gyro_bias", "accel_bias"]
+            },
+            taken_as_zero: Vec::new(),
+        }
+    }
+
     /// Whether the model has a gyro term other than zero or the identity (what an accelerometer-only recording
     /// cannot use).
     pub fn has_gyro_terms(&self) -> bool {

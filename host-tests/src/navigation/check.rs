@@ -8,66 +8,89 @@ use rand_chacha::ChaCha8Rng;
 use rand_distr::{Distribution, Normal};
 use serde::Serialize;
 
+use crate::io::calibration_model::CalibrationModel;
 use crate::io::error::InputError;
 use crate::io::recording::{Dwell, Header, Recording, SimulationTruth};
-use crate::model::synth::{c_b_n, mul_vec, Scenario};
+use crate::model::synth::{c_b_n, mul_vec, transpose, Scenario, EARTH_RATE_RADPS};
 use crate::navigation::strapdown::{linear_error_model, navigate_runs, NavError, Run, RunSummary, StaticSetup};
 
-/// The biases (and their standard errors) of a calibration JSON file (docs/formats.md#calibration-json).
+/// A calibration JSON file as navigate uses it (docs/formats.md#calibration-json): the whole sensor model to
+/// compensate with, and the covariance of its parameters to predict the calibrated run's error.
 #[derive(Clone, Debug, PartialEq)]
-pub struct CalibrationBiases {
+pub struct NavCalibration {
     /// File name.
     pub source: String,
-    /// Gyro bias, body, rad/s (unobservable entries: 0).
-    pub gyro_bias_radps: [f64; 3],
-    /// Accelerometer bias, body, m/s^2 (unobservable entries: 0).
-    pub accel_bias_mps2: [f64; 3],
-    /// Standard errors, rad/s (unobservable: None).
-    pub gyro_bias_std_radps: [Option<f64>; 3],
-    /// Standard errors, m/s^2 (unobservable: None).
-    pub accel_bias_std_mps2: [Option<f64>; 3],
+    /// The sensor model (every term the file gives).
+    pub model: CalibrationModel,
+    /// The parameters the covariance is of (`gyro_bias_x`, `accel_scale_factor_z`, ...): version 2's
+    /// `parameters`; for version 1, the biases with a standard error.
+    pub parameters: Vec<String>,
+    /// Their covariance, SI: version 2's `covariance`; for version 1, the squared standard errors on the
+    /// diagonal. Empty when a determined bias has no standard error.
+    pub covariance_si: Vec<Vec<f64>>,
 }
 
-impl CalibrationBiases {
+impl NavCalibration {
     /// Reads a calibration JSON file.
-    pub fn read(path: &Path) -> Result<CalibrationBiases, InputError> {
+    pub fn read(path: &Path) -> Result<NavCalibration, InputError> {
+        let model = CalibrationModel::read(path)?;
         let name = path.display().to_string();
-        let short = path.file_name().map_or(name.clone(), |f| f.to_string_lossy().into_owned());
         let text = std::fs::read_to_string(path).map_err(|e| InputError::io(path, e))?;
         let v: serde_json::Value =
             serde_json::from_str(&text).map_err(|e| InputError::at(&name, e.line(), format!("not JSON: {e}")))?;
-        // Version 2 (docs/formats.md#calibration-json-version-2) has every field of version 1: navigate reads its
-        // biases and leaves the other terms out.
-        if v["schema"] != "sinscal-calibration/1" && v["schema"] != "sinscal-calibration/2" {
-            return Err(InputError::file(
-                &name,
-                "not a calibration result: schema is not 'sinscal-calibration/1' or 'sinscal-calibration/2'",
-            ));
-        }
-        let triple = |key: &str| -> Result<[Option<f64>; 3], InputError> {
-            let arr = v[key]
-                .as_array()
-                .filter(|a| a.len() == 3)
-                .ok_or_else(|| InputError::file(&name, format!("'{key}' is not an array of 3 numbers or nulls")))?;
-            let mut out = [None; 3];
-            for (slot, x) in out.iter_mut().zip(arr) {
-                *slot = match x {
-                    serde_json::Value::Null => None,
-                    x => Some(x.as_f64().filter(|x| x.is_finite()).ok_or_else(|| {
-                        InputError::file(&name, format!("'{key}' holds '{x}', not a finite number or null"))
-                    })?),
-                };
-            }
-            Ok(out)
-        };
-        Ok(CalibrationBiases {
-            source: short,
-            gyro_bias_radps: triple("gyro_bias_radps")?.map(|x| x.unwrap_or(0.0)),
-            accel_bias_mps2: triple("accel_bias_mps2")?.map(|x| x.unwrap_or(0.0)),
-            gyro_bias_std_radps: triple("gyro_bias_std_radps")?,
-            accel_bias_std_mps2: triple("accel_bias_std_mps2")?,
-        })
+        // A version 2 file without `parameters` and `covariance` (written by another tool) gives its bias
+        // standard errors as version 1 does.
+        let has_covariance = !(v["parameters"].is_null() && v["covariance"].is_null());
+        let (parameters, covariance_si) =
+            if model.version == 2 && has_covariance { covariance_of(&v, &name)? } else { version_1_variances(&v) };
+        Ok(NavCalibration { source: model.source.clone(), model, parameters, covariance_si })
     }
+}
+
+/// Version 2's `parameters` and `covariance` (a square matrix of finite numbers of that size).
+fn covariance_of(v: &serde_json::Value, name: &str) -> Result<(Vec<String>, Vec<Vec<f64>>), InputError> {
+    let bad = |what: &str| {
+        InputError::file(name, format!("'{what}' is not what docs/formats.md#calibration-json-version-2 says"))
+    };
+    let parameters: Vec<String> = v["parameters"]
+        .as_array()
+        .ok_or_else(|| bad("parameters"))?
+        .iter()
+        .map(|p| p.as_str().map(str::to_string).ok_or_else(|| bad("parameters")))
+        .collect::<Result<_, _>>()?;
+    let rows = v["covariance"].as_array().filter(|r| r.len() == parameters.len()).ok_or_else(|| bad("covariance"))?;
+    let covariance = rows
+        .iter()
+        .map(|row| {
+            let row = row.as_array().filter(|r| r.len() == parameters.len()).ok_or_else(|| bad("covariance"))?;
+            row.iter().map(|x| x.as_f64().filter(|x| x.is_finite()).ok_or_else(|| bad("covariance"))).collect()
+        })
+        .collect::<Result<Vec<Vec<f64>>, _>>()?;
+    Ok((parameters, covariance))
+}
+
+/// The bias standard errors of version 1 as a diagonal covariance (empty when a given bias has none).
+fn version_1_variances(v: &serde_json::Value) -> (Vec<String>, Vec<Vec<f64>>) {
+    let mut parameters = Vec::new();
+    let mut variances = Vec::new();
+    for (field, std_field, term) in [
+        ("gyro_bias_radps", "gyro_bias_std_radps", "gyro_bias"),
+        ("accel_bias_mps2", "accel_bias_std_mps2", "accel_bias"),
+    ] {
+        for (i, axis) in ["x", "y", "z"].iter().enumerate() {
+            if v[field][i].is_null() {
+                continue;
+            }
+            let Some(std) = v[std_field][i].as_f64().filter(|s| s.is_finite()) else {
+                return (Vec::new(), Vec::new());
+            };
+            parameters.push(format!("{term}_{axis}"));
+            variances.push(std * std);
+        }
+    }
+    let n = variances.len();
+    let covariance = (0..n).map(|i| (0..n).map(|j| if i == j { variances[i] } else { 0.0 }).collect()).collect();
+    (parameters, covariance)
 }
 
 /// Options of a navigation check.
@@ -91,9 +114,12 @@ impl Default for NavOptions {
     }
 }
 
-/// What the calibration's standard errors predict for the calibrated run.
+/// What the calibration's covariance predicts for the calibrated run.
 #[derive(Clone, Debug, Serialize)]
 pub struct Prediction {
+    /// Parameters of the calibration that enter the navigation (biases, scale factors, misalignments,
+    /// g-sensitivity), whose covariance the prediction uses.
+    pub parameters: usize,
     /// RMS horizontal position error at the end, m.
     pub rms_final_horizontal_position_error_m: f64,
     /// Largest RMS horizontal position error over the run, m.
@@ -133,8 +159,8 @@ pub struct NavReport {
 /// Runs the navigation check.
 pub fn navigate(
     recording: &Recording,
-    calibration: &CalibrationBiases,
-    second: Option<&CalibrationBiases>,
+    calibration: &NavCalibration,
+    second: Option<&NavCalibration>,
     options: &NavOptions,
     mut progress: impl FnMut(usize, usize),
 ) -> Result<NavReport, InputError> {
@@ -223,34 +249,19 @@ fn sample_rate_hz(source: &str, header_rate_hz: Option<f64>, dwell: &Dwell) -> R
 /// The runs: uncompensated, calibrated, the second calibration if any, and the truth removed when the
 /// recording is a simulation that states it.
 fn runs_to_compare(
-    calibration: &CalibrationBiases,
-    second: Option<&CalibrationBiases>,
+    calibration: &NavCalibration,
+    second: Option<&NavCalibration>,
     truth: Option<&SimulationTruth>,
 ) -> Vec<Run> {
-    let mut runs = vec![
-        Run { name: "uncompensated".into(), gyro_bias_radps: [0.0; 3], accel_bias_mps2: [0.0; 3], history: vec![] },
-        Run {
-            name: format!("calibrated ({})", calibration.source),
-            gyro_bias_radps: calibration.gyro_bias_radps,
-            accel_bias_mps2: calibration.accel_bias_mps2,
-            history: vec![],
-        },
-    ];
-    if let Some(second) = second {
-        runs.push(Run {
-            name: format!("calibrated ({})", second.source),
-            gyro_bias_radps: second.gyro_bias_radps,
-            accel_bias_mps2: second.accel_bias_mps2,
-            history: vec![],
-        });
-    }
+    let calibrated = |c: &NavCalibration| Run {
+        name: format!("calibrated ({})", c.source),
+        compensation: c.model.clone(),
+        history: Vec::new(),
+    };
+    let mut runs = vec![Run::with_biases("uncompensated", [0.0; 3], [0.0; 3]), calibrated(calibration)];
+    runs.extend(second.map(calibrated));
     if let Some(t) = truth {
-        runs.push(Run {
-            name: "true errors removed".into(),
-            gyro_bias_radps: t.gyro_bias_b_radps,
-            accel_bias_mps2: t.accel_bias_b_mps2,
-            history: vec![],
-        });
+        runs.push(Run::with_biases("true errors removed", t.gyro_bias_b_radps, t.accel_bias_b_mps2));
     }
     runs
 }
@@ -317,43 +328,77 @@ impl SimulatedRun<'_> {
     }
 }
 
-/// The RMS errors that the calibration's standard errors predict for the calibrated run: the closed-form
-/// error model's response to each body-frame bias, weighted by its variance (biases taken as
-/// uncorrelated; noise during the run not included). `None` if a standard error is missing.
+/// How a unit error of calibration parameter `name` changes the sensor outputs at rest (the body's rate
+/// `rate_b_radps` and specific force `force_b_mps2`): `(d rate, d force)`, body frame, per unit of the
+/// parameter (docs/conventions.md#sensor-model: `w_meas = T_g w + b_g + G f`, `f_meas = T_a f + b_a`). `None`
+/// for a parameter that does not enter the navigation (the turntable's reference offset).
+pub fn output_sensitivity(name: &str, rate_b_radps: [f64; 3], force_b_mps2: [f64; 3]) -> Option<([f64; 3], [f64; 3])> {
+    let axis = |c: char| "xyz".find(c);
+    let (term, axes) = name.rsplit_once('_')?;
+    let mut chars = axes.chars();
+    let i = axis(chars.next()?)?;
+    let j = chars.next().map(axis);
+    let (mut dw, mut df) = ([0.0; 3], [0.0; 3]);
+    match (term, j) {
+        ("gyro_bias", None) => dw[i] = 1.0,
+        ("accel_bias", None) => df[i] = 1.0,
+        ("gyro_scale_factor", None) => dw[i] = rate_b_radps[i],
+        ("accel_scale_factor", None) => df[i] = force_b_mps2[i],
+        ("gyro_misalignment", Some(Some(j))) => dw[i] = rate_b_radps[j],
+        ("accel_misalignment", Some(Some(j))) => df[i] = force_b_mps2[j],
+        ("gyro_g_sensitivity", Some(Some(j))) => dw[i] = force_b_mps2[j],
+        _ => return None,
+    }
+    Some((dw, df))
+}
+
+/// The RMS errors that the calibration's covariance predicts for the calibrated run: the closed-form error
+/// model's response to each parameter's error at the run's attitude, combined through the full covariance
+/// (`e(t)^T P e(t)`, correlations included; noise during the run not included). `None` without a covariance.
 fn predict(
     setup: &StaticSetup,
-    cal: &CalibrationBiases,
+    cal: &NavCalibration,
     samples: usize,
     record_every: usize,
     rate_hz: f64,
 ) -> Option<Prediction> {
-    let stds: Vec<f64> =
-        cal.gyro_bias_std_radps.iter().chain(cal.accel_bias_std_mps2.iter()).copied().collect::<Option<_>>()?;
+    if cal.parameters.is_empty() {
+        return None;
+    }
+    let c = &setup.c_b_n;
+    let (sl, cl) = setup.latitude_rad.sin_cos();
+    let rate_b = mul_vec(&transpose(c), [0.0, EARTH_RATE_RADPS * cl, EARTH_RATE_RADPS * sl]);
+    let force_b = mul_vec(&transpose(c), [0.0, 0.0, setup.gravity_mps2]);
     let steps = samples / record_every;
+    // Per parameter, its response over the run (zero for a parameter that does not enter the navigation).
+    let responses: Vec<Option<Vec<NavError>>> = cal
+        .parameters
+        .iter()
+        .map(|name| {
+            let (dw, df) = output_sensitivity(name, rate_b, force_b)?;
+            let (eps, nabla) = (mul_vec(c, dw), mul_vec(c, df));
+            let (lat, h, g) = (setup.latitude_rad, setup.height_m, setup.gravity_mps2);
+            Some(linear_error_model(lat, h, g, eps, nabla, record_every as f64 / rate_hz, steps))
+        })
+        .collect();
     let mut var_pos = vec![0.0f64; steps + 1];
     let mut var_heading = vec![0.0f64; steps + 1];
-    for (i, sd) in stds.iter().enumerate() {
-        let mut unit = [0.0; 3];
-        unit[i % 3] = 1.0;
-        let (eps, nabla) =
-            if i < 3 { (mul_vec(&setup.c_b_n, unit), [0.0; 3]) } else { ([0.0; 3], mul_vec(&setup.c_b_n, unit)) };
-        let response = linear_error_model(
-            setup.latitude_rad,
-            setup.height_m,
-            setup.gravity_mps2,
-            eps,
-            nabla,
-            record_every as f64 / rate_hz,
-            steps,
-        );
-        for (k, e) in response.iter().enumerate() {
-            var_pos[k] += sd * sd * (e.position_en_m[0].powi(2) + e.position_en_m[1].powi(2));
-            var_heading[k] += sd * sd * e.attitude_n_rad[2].powi(2);
+    for (p, rp) in responses.iter().enumerate() {
+        for (q, rq) in responses.iter().enumerate() {
+            let (Some(rp), Some(rq)) = (rp, rq) else { continue };
+            let pq = cal.covariance_si[p][q];
+            for k in 0..=steps {
+                let (a, b) = (&rp[k], &rq[k]);
+                var_pos[k] += pq * (a.position_en_m[0] * b.position_en_m[0] + a.position_en_m[1] * b.position_en_m[1]);
+                var_heading[k] += pq * a.attitude_n_rad[2] * b.attitude_n_rad[2];
+            }
         }
     }
+    let used = responses.iter().filter(|r| r.is_some()).count();
     Some(Prediction {
-        rms_final_horizontal_position_error_m: var_pos.last()?.sqrt(),
-        max_rms_horizontal_position_error_m: var_pos.iter().fold(0.0f64, |m, v| m.max(v.sqrt())),
-        rms_final_heading_error_rad: var_heading.last()?.sqrt(),
+        parameters: used,
+        rms_final_horizontal_position_error_m: var_pos.last()?.max(0.0).sqrt(),
+        max_rms_horizontal_position_error_m: var_pos.iter().fold(0.0f64, |m, v| m.max(v.max(0.0).sqrt())),
+        rms_final_heading_error_rad: var_heading.last()?.max(0.0).sqrt(),
     })
 }

@@ -13,6 +13,7 @@
 
 use sinscal::nav::earth::{WGS84_A_M, WGS84_E2};
 
+use crate::io::calibration_model::CalibrationModel;
 use crate::model::synth::{mul, mul_vec, rotation, transpose, EARTH_RATE_RADPS, M3};
 
 /// Meridian and prime-vertical radii of curvature of WGS-84 at a latitude, m.
@@ -161,6 +162,8 @@ pub struct RunSummary {
     pub gyro_bias_removed_radps: [f64; 3],
     /// Accelerometer bias subtracted, body frame, m/s^2.
     pub accel_bias_removed_mps2: [f64; 3],
+    /// The terms of the sensor model the run compensates (`gyro_bias`, `accel_scale_factor`, ...).
+    pub terms_applied: Vec<&'static str>,
     /// Largest horizontal position error, m.
     pub max_horizontal_position_error_m: f64,
     /// Horizontal position error at the end, m.
@@ -175,20 +178,28 @@ pub struct RunSummary {
     pub final_heading_error_rad: f64,
 }
 
-/// One run: its name, the biases it removes, and its error history.
+/// One run: its name, the sensor model it compensates every sample with, and its error history.
 #[derive(Clone, Debug)]
 pub struct Run {
     /// Name.
     pub name: String,
-    /// Gyro bias subtracted from every sample, rad/s.
-    pub gyro_bias_radps: [f64; 3],
-    /// Accelerometer bias subtracted, m/s^2.
-    pub accel_bias_mps2: [f64; 3],
+    /// The compensation (docs/conventions.md#sensor-model): `f = T_a^-1 (f_meas - b_a)`,
+    /// `w = T_g^-1 (w_meas - b_g - G f)`.
+    pub compensation: CalibrationModel,
     /// Errors at the recording interval.
     pub history: Vec<NavError>,
 }
 
 impl Run {
+    /// A run that removes biases only (zero biases: the uncompensated run).
+    pub fn with_biases(name: &str, gyro_bias_radps: [f64; 3], accel_bias_mps2: [f64; 3]) -> Run {
+        Run {
+            name: name.to_string(),
+            compensation: CalibrationModel::biases_only(name, gyro_bias_radps, accel_bias_mps2),
+            history: Vec::new(),
+        }
+    }
+
     /// The summary figures.
     pub fn summary(&self) -> RunSummary {
         let last = self.history.last().copied().unwrap_or(NavError {
@@ -200,8 +211,9 @@ impl Run {
         let max = |f: &dyn Fn(&NavError) -> f64| self.history.iter().map(f).fold(0.0, f64::max);
         RunSummary {
             name: self.name.clone(),
-            gyro_bias_removed_radps: self.gyro_bias_radps,
-            accel_bias_removed_mps2: self.accel_bias_mps2,
+            gyro_bias_removed_radps: self.compensation.gyro_bias_radps,
+            accel_bias_removed_mps2: self.compensation.accel_bias_mps2,
+            terms_applied: self.compensation.terms.clone(),
             max_horizontal_position_error_m: max(&|e| e.horizontal_position_m()),
             final_horizontal_position_error_m: last.horizontal_position_m(),
             max_horizontal_velocity_error_mps: max(&|e| e.horizontal_velocity_mps()),
@@ -229,7 +241,7 @@ pub struct StaticSetup {
     pub record_every: usize,
 }
 
-/// Navigates several runs in lockstep over one stream of samples: each run subtracts its own biases.
+/// Navigates several runs in lockstep over one stream of samples: each run compensates with its own model.
 /// `next_sample(k)` gives sample k as (rate_b_radps, force_b_mps2); `progress(done, total)` is called
 /// at every recorded point.
 pub fn navigate_runs(
@@ -250,8 +262,8 @@ pub fn navigate_runs(
     for k in 0..samples {
         let (w, f) = next_sample(k);
         for (run, nav) in runs.iter_mut().zip(navs.iter_mut()) {
-            let wc = [0, 1, 2].map(|i| w[i] - run.gyro_bias_radps[i]);
-            let fc = [0, 1, 2].map(|i| f[i] - run.accel_bias_mps2[i]);
+            let fc = run.compensation.compensate_force(f);
+            let wc = run.compensation.compensate_rate(w, fc);
             nav.step(wc, fc, setup.dt_s);
             if (k + 1) % setup.record_every == 0 || k + 1 == samples {
                 run.history.push(nav.error((k + 1) as f64 * setup.dt_s));
