@@ -249,8 +249,8 @@ pub fn calibrate_channels(recording: &Recording, options: &Options) -> Result<Ca
     }
     let settings = ChannelSettings { model: options.model, use_gyro: has_gyro, ..ChannelSettings::default() };
     let mut estimator = ChannelEstimator::new(site, settings);
-    let noise = pool_mean_noise(positions.iter().map(|p| p.summary)).map(|m| m.white_equivalent_var);
-    for p in &positions {
+    let variances = mean_variances(&positions);
+    for (p, variance) in positions.iter().zip(&variances) {
         let a = Attitude::from_degrees(
             p.attitude.pitch_deg as f32,
             p.attitude.roll_deg as f32,
@@ -261,7 +261,6 @@ pub fn calibrate_channels(recording: &Recording, options: &Options) -> Result<Ca
             DwellValue::Mean => (s.rate_mean_b_radps, s.force_mean_b_mps2),
             DwellValue::Settled => (s.rate_settled_b_radps, s.force_settled_b_mps2),
         };
-        let n = s.samples.max(1) as f32;
         // A floor at the f32 resolution of a mean (2^-23 of the Earth rate, of g) keeps the weights finite on
         // noise-free data.
         let floor = |scale: f32| (1.2e-7 * scale) * (1.2e-7 * scale);
@@ -271,8 +270,8 @@ pub fn calibrate_channels(recording: &Recording, options: &Options) -> Result<Ca
             heading_rad: p.attitude.heading_deg.map(|_| a.heading_rad),
             rate_mean_b_radps: rate,
             force_mean_b_mps2: force,
-            rate_mean_var_b_radps2: [0, 1, 2].map(|i| (noise[i] / n).max(rate_floor)),
-            force_mean_var_b_mps2sq: [0, 1, 2].map(|i| (noise[3 + i] / n).max(force_floor)),
+            rate_mean_var_b_radps2: [0, 1, 2].map(|i| variance[i].max(rate_floor)),
+            force_mean_var_b_mps2sq: [0, 1, 2].map(|i| variance[3 + i].max(force_floor)),
         };
         estimator.add(dwell).map_err(|e| channel_error(e, &positions, source))?;
     }
@@ -296,6 +295,31 @@ pub fn calibrate_channels(recording: &Recording, options: &Options) -> Result<Ca
         sampling: None,
         on: "recording",
     })
+}
+
+/// The variance of each dwell mean, per channel: the session's pooled honest noise of the raw mean
+/// (docs/method.md#honest-errors, `pool_mean_noise`) over the dwell's samples, plus the dwell's own prefilter
+/// start term. The start term follows the dwell's own per-sample scatter, which can differ between the dwells of
+/// one session: a quantised channel whose input sits on a step of the quantiser scatters little, one whose input
+/// lies between two steps by up to half a step (docs/method.md#coloured-noise-monte-carlo).
+fn mean_variances(positions: &[PositionResult]) -> Vec<[f32; 6]> {
+    let pooled = pool_mean_noise(positions.iter().map(|p| p.summary));
+    let dwells = positions.len().max(1) as f32;
+    // pool_mean_noise adds the dwells' average start term (white-equivalent); it is replaced by each dwell's own.
+    let start_q: [f32; 6] = core::array::from_fn(|i| {
+        positions.iter().map(|p| p.summary.allan[i].prefilter_start_var * p.summary.samples as f32).sum::<f32>()
+            / dwells
+    });
+    positions
+        .iter()
+        .map(|p| {
+            let s = &p.summary;
+            let n = s.samples.max(1) as f32;
+            core::array::from_fn(|i| {
+                (pooled[i].white_equivalent_var - start_q[i]).max(0.0) / n + s.allan[i].prefilter_start_var
+            })
+        })
+        .collect()
 }
 
 /// The solution without its worst dwells: the dwell with the largest statistic among the suspect ones is left
