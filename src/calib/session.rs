@@ -3,9 +3,11 @@
 //! dwells give the same estimator input, bit for bit, on either machine.
 //!
 //! Each dwell contributes its mean (or the prefilter's settled value) and the variance of that mean: the
-//! session's pooled honest noise ([`pool_mean_noise`], docs/method.md#honest-errors) over the dwell's number
-//! of samples, never below the f32 resolution of a mean (2^-23 of the Earth rate, of g), which keeps the
-//! weights finite on noise-free data.
+//! session's pooled honest noise of the raw mean ([`pool_mean_noise`], docs/method.md#honest-errors) over the
+//! dwell's number of samples, plus the dwell's own prefilter start term (it follows the dwell's own per-sample
+//! scatter and length: a quantised channel whose input sits on a step scatters little, one between two steps by
+//! up to half a step; docs/method.md#coloured-noise-monte-carlo), never below the f32 resolution of a mean
+//! (2^-23 of the Earth rate, of g), which keeps the weights finite on noise-free data.
 
 use crate::calib::align::DwellValue;
 use crate::calib::channels::{ChannelDwell, ChannelError, ChannelEstimator, ChannelSettings, Model, Term};
@@ -52,7 +54,17 @@ pub fn session_estimator<'a, I>(
 where
     I: Iterator<Item = SessionDwell<'a>> + Clone,
 {
-    let noise = pool_mean_noise(dwells.clone().map(|d| *d.summary)).map(|m| m.white_equivalent_var);
+    let pooled = pool_mean_noise(dwells.clone().map(|d| *d.summary)).map(|m| m.white_equivalent_var);
+    // pool_mean_noise adds the dwells' average prefilter start term (white-equivalent); it is replaced by each
+    // dwell's own, which follows that dwell's per-sample scatter and length.
+    let (mut start_q, mut count) = ([0.0f32; 6], 0.0f32);
+    for d in dwells.clone() {
+        for (i, q) in start_q.iter_mut().enumerate() {
+            *q += d.summary.allan[i].prefilter_start_var * d.summary.samples as f32;
+        }
+        count += 1.0;
+    }
+    let raw_q: [f32; 6] = core::array::from_fn(|i| (pooled[i] - start_q[i] / count.max(1.0)).max(0.0));
     let (rate_floor, force_floor) = (resolution_floor(EARTH_RATE_RADPS), resolution_floor(site.gravity_mps2));
     let mut estimator = ChannelEstimator::new(site, settings);
     for d in dwells {
@@ -62,13 +74,14 @@ where
             DwellValue::Settled => (s.rate_settled_b_radps, s.force_settled_b_mps2),
         };
         let n = s.samples.max(1) as f32;
+        let variance = |i: usize| raw_q[i] / n + s.allan[i].prefilter_start_var;
         estimator.add(ChannelDwell {
             tilt: d.attitude.tilt(),
             heading_rad: d.heading_known.then_some(d.attitude.heading_rad),
             rate_mean_b_radps: rate,
             force_mean_b_mps2: force,
-            rate_mean_var_b_radps2: [0, 1, 2].map(|i| (noise[i] / n).max(rate_floor)),
-            force_mean_var_b_mps2sq: [0, 1, 2].map(|i| (noise[3 + i] / n).max(force_floor)),
+            rate_mean_var_b_radps2: [0, 1, 2].map(|i| variance(i).max(rate_floor)),
+            force_mean_var_b_mps2sq: [0, 1, 2].map(|i| variance(3 + i).max(force_floor)),
         })?;
     }
     Ok(estimator)

@@ -494,6 +494,16 @@ fn angle_step_deg(a: f64, b: f64) -> f64 {
     (b - a + 540.0).rem_euclid(360.0) - 180.0
 }
 
+/// The true body rate and specific force of the interval from attitude `c0` to `c1` (`C_b^n`) over `dt`: the
+/// rotation vector of `C0^T C1` over dt plus the Earth rate at mid-interval, and the force at mid-interval.
+fn interval_truth(c0: &M3, c1: &M3, dt: f64, w_ie_n: [f64; 3], f_n: [f64; 3]) -> ([f64; 3], [f64; 3]) {
+    let relative = mul(&transpose(c0), c1);
+    let turn = rotation_vector(&relative);
+    let c_mid = mul(c0, &rotation(turn.map(|x| 0.5 * x)));
+    let earth_b = mul_t_vec(&c_mid, w_ie_n);
+    ([0, 1, 2].map(|i| turn[i] / dt + earth_b[i]), mul_t_vec(&c_mid, f_n))
+}
+
 /// The simulated session as a recording, reproducible from `seed`.
 pub fn simulate(scenario: &ScenarioFile, seed: u64, source: &str) -> Recording {
     let s = &scenario.schedule;
@@ -543,18 +553,21 @@ pub fn simulate(scenario: &ScenarioFile, seed: u64, source: &str) -> Recording {
     let c_true =
         |(att, _, err): ([f64; 3], u32, [f64; 3])| mul(&rotation(err.map(|x| -x)), &c_b_n(att[0], att[1], att[2]));
     let mut rows = Vec::with_capacity(boundaries.len());
+    // The attitude at a boundary and an interval's truth are computed where they change (bit-identical).
+    let mut c1 = boundaries.first().map_or([[0.0; 3]; 3], |&b| c_true(b));
+    let mut truth = ([0.0; 3], [0.0; 3]);
     for k in 0..boundaries.len().saturating_sub(1) {
         let (att0, pos, _) = boundaries[k];
-        let c0 = c_true(boundaries[k]);
-        let c1 = c_true(boundaries[k + 1]);
+        let c0 = c1;
+        let moved = boundaries[k + 1] != boundaries[k];
+        if moved {
+            c1 = c_true(boundaries[k + 1]);
+        }
         let t0 = k as f64 * dt;
-        // Body rate of the interval: rotation vector of C0^T C1 over dt, plus Earth rate at mid-interval.
-        let relative = mul(&transpose(&c0), &c1);
-        let turn = rotation_vector(&relative);
-        let c_mid = mul(&c0, &rotation(turn.map(|x| 0.5 * x)));
-        let earth_b = mul_t_vec(&c_mid, w_ie_n);
-        let w_b = [0, 1, 2].map(|i| turn[i] / dt + earth_b[i]);
-        let f_b = mul_t_vec(&c_mid, f_n);
+        if k == 0 || moved || boundaries[k] != boundaries[k - 1] {
+            truth = interval_truth(&c0, &c1, dt, w_ie_n, f_n);
+        }
+        let (w_b, f_b) = truth;
         let (temp_c, delta_temp) = match &scenario.temperature {
             Some(t) => {
                 let c = t.at(t0 + 0.5 * dt);
