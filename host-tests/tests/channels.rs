@@ -58,6 +58,11 @@ fn misalignment(t: &[f64; PARAMETERS], first: usize) -> M3 {
 
 /// Exact dwell means of a pose (pitch, roll, heading in degrees) for the true errors `t` of `model`.
 fn dwell(t: &[f64; PARAMETERS], model: Model, pose: [f64; 3], heading_known: bool) -> ChannelDwell {
+    dwell_with(t, model, pose, heading_known, 1.0)
+}
+
+/// As [`dwell`], with the Earth rate scaled by `earth` (0: gyros that do not see it).
+fn dwell_with(t: &[f64; PARAMETERS], model: Model, pose: [f64; 3], heading_known: bool, earth: f64) -> ChannelDwell {
     let keep = |term: Term, x: f64| if model.contains(term) { x } else { 0.0 };
     let part = |term: Term| -> [f64; PARAMETERS] {
         let (first, count) = term.parameters();
@@ -78,7 +83,7 @@ fn dwell(t: &[f64; PARAMETERS], model: Model, pose: [f64; 3], heading_known: boo
     let c_ref = c_b_n(pose[0], pose[1], pose[2]);
     let c_true = mul(&rotation([-off[33], -off[34], -off[35]]), &c_ref);
     let f_b = mul_t_vec(&c_true, [0.0, 0.0, G_MPS2]);
-    let w_b = mul_t_vec(&c_true, earth_rate_n_radps(LATITUDE_DEG.to_radians()));
+    let w_b = mul_t_vec(&c_true, earth_rate_n_radps(LATITUDE_DEG.to_radians()).map(|x| earth * x));
     let f = accel.measure(f_b, [0.0; 3]);
     let w = gyro.measure(w_b, f_b);
     let attitude = Attitude::from_degrees(pose[0] as f32, pose[1] as f32, pose[2] as f32);
@@ -358,11 +363,16 @@ fn in_accelerometer_frame(t: &[f64; PARAMETERS]) -> ([f64; PARAMETERS], M3) {
 /// the dwells carry no tilt (identity) and no heading, so nothing of the truth reaches the estimator but the
 /// means.
 fn solve_hand_placed(model: Model, use_gyro: bool, attitude: AttitudeKnowledge, sign: f64) -> ChannelSolution {
-    let t = truth(sign);
-    let settings = ChannelSettings { model, use_gyro, attitude, ..ChannelSettings::default() };
+    solve_hand_placed_with(ChannelSettings { model, use_gyro, attitude, ..ChannelSettings::default() }, sign)
+}
+
+/// As [`solve_hand_placed`] with any settings; gyros that do not resolve the Earth rate see none.
+fn solve_hand_placed_with(settings: ChannelSettings, sign: f64) -> ChannelSolution {
+    let (t, model, attitude) = (truth(sign), settings.model, settings.attitude);
+    let earth = if settings.earth_rate_resolved { 1.0 } else { 0.0 };
     let mut est = ChannelEstimator::new(site(), settings);
     for p in &HAND_PLACED_DEG {
-        let mut d = dwell(&t, model, *p, attitude == AttitudeKnowledge::Reference);
+        let mut d = dwell_with(&t, model, *p, attitude == AttitudeKnowledge::Reference, earth);
         if attitude == AttitudeKnowledge::Unknown {
             d.tilt = Mat3::IDENTITY;
         }
@@ -431,7 +441,11 @@ fn unknown_attitudes_every_static_term() {
     let model = Model::FULL;
     for sign in [1.0, -1.0] {
         let sol = solve_hand_placed(model, true, AttitudeKnowledge::Unknown, sign);
-        println!("unknown attitudes, gyros: blind spots {}, unobservable {:?}", sol.blind_spots, names(sol.unobservable));
+        println!(
+            "unknown attitudes, gyros: blind spots {}, unobservable {:?}",
+            sol.blind_spots,
+            names(sol.unobservable)
+        );
         let offset = Term::ReferenceOffset.parameters().0;
         assert_eq!(sol.blind_spots, 6, "three for the common rotation, three for the offset");
         assert_eq!(sol.gauge, bits(&GAUGE_PARAMETERS));
@@ -448,3 +462,33 @@ fn unknown_attitudes_every_static_term() {
     }
 }
 
+#[test]
+fn unknown_attitudes_gyros_that_do_not_resolve_the_earth_rate() {
+    // MEMS gyros in hand-placed poses: without the Earth rate a static pose shows the gyros only gravity, which
+    // gives their bias and g-sensitivity (in the accelerometer frame) and nothing of their scale factors.
+    let model = Model::BIASES
+        .with(Term::AccelScaleFactor)
+        .with(Term::AccelMisalignment)
+        .with(Term::GyroScaleFactor)
+        .with(Term::GyroGSensitivity);
+    let settings = ChannelSettings {
+        model,
+        attitude: AttitudeKnowledge::Unknown,
+        earth_rate_resolved: false,
+        ..ChannelSettings::default()
+    };
+    for sign in [1.0, -1.0] {
+        let sol = solve_hand_placed_with(settings, sign);
+        println!("no Earth rate: blind spots {}, unobservable {:?}", sol.blind_spots, names(sol.unobservable));
+        let scale = Term::GyroScaleFactor.parameters().0;
+        assert_eq!(sol.blind_spots, 6, "the common rotation and the three unexercised gyro scale factors");
+        assert_eq!(sol.unobservable, bits(&GAUGE_PARAMETERS) | bits(&[scale, scale + 1, scale + 2]));
+        let (expected, _) = in_accelerometer_frame(&truth(sign));
+        let worst = assert_recovered_against(&sol, model, &expected, 1e-6);
+        // Per pose: one accelerometer row (two tilt angles), three gyro rows, no heading.
+        assert_eq!(sol.degrees_of_freedom, 20 * 4 - (3 + 3 + 3 + 3 + 9));
+        assert!(sol.chi_square < sol.degrees_of_freedom as f32, "chi-square {}", sol.chi_square);
+        assert!(!sol.earth_rate_resolved && sol.heading_std_rad.iter().all(|s| *s == 0.0));
+        println!("no Earth rate, sign {sign:+}: worst error {worst:.2e} of scale, {} passes", sol.iterations);
+    }
+}

@@ -256,6 +256,10 @@ pub struct ChannelSettings {
     pub max_gravity_angle_rad: f32,
     /// Whether the dwells' tilts are a reference or unknown (then nuisance parameters).
     pub attitude: AttitudeKnowledge,
+    /// Whether the gyros resolve the Earth rate (their dwell means and errors are well below it). Without, the
+    /// gyro model leaves the Earth rate out: no heading is estimated or checked, and the gyro scale factors and
+    /// misalignments, which a static pose sees only through the Earth rate, are not exercised.
+    pub earth_rate_resolved: bool,
 }
 
 /// What the session knows of the dwells' attitudes.
@@ -286,6 +290,7 @@ impl Default for ChannelSettings {
             max_force_magnitude_error: 0.2,
             max_gravity_angle_rad: 0.1745,
             attitude: AttitudeKnowledge::Reference,
+            earth_rate_resolved: true,
         }
     }
 }
@@ -416,6 +421,8 @@ pub struct ChannelSolution {
     pub converged: bool,
     /// The attitude knowledge the solution assumed.
     pub attitude: AttitudeKnowledge,
+    /// Whether the gyro model included the Earth rate ([`ChannelSettings::earth_rate_resolved`]).
+    pub earth_rate_resolved: bool,
     /// Up (the direction of measured gravity) in the body of every dwell, a unit vector: the reference's, or
     /// the estimate when the attitudes are unknown.
     pub up_b: [Vec3; MAX_DWELLS],
@@ -498,7 +505,8 @@ pub fn g_sensitivity_radps_per_mps2(theta: &[f32; PARAMETERS]) -> Mat3 {
 }
 
 /// Prediction and Jacobian of one dwell at the parameters `theta` and the attitude `c_ref` (`C_b^n`).
-fn linearise(theta: &[f32; PARAMETERS], c_ref: &Mat3, site: &Site, model: Model) -> Linearised {
+/// Without `earth_rate` the gyros are predicted without the Earth rate.
+fn linearise(theta: &[f32; PARAMETERS], c_ref: &Mat3, site: &Site, model: Model, earth_rate: bool) -> Linearised {
     let c_ref = *c_ref;
     let offset = [theta[33], theta[34], theta[35]];
     let c_true = if model.contains(Term::ReferenceOffset) {
@@ -507,7 +515,7 @@ fn linearise(theta: &[f32; PARAMETERS], c_ref: &Mat3, site: &Site, model: Model)
         c_ref
     };
     let f_n = site.force_at_rest_n_mps2();
-    let w_n = site.earth_rate_n_radps();
+    let w_n = if earth_rate { site.earth_rate_n_radps() } else { [0.0; 3] };
     let ct = c_true.transpose();
     let f_b = ct.mul_vec(f_n);
     let w_b = ct.mul_vec(w_n);
@@ -705,7 +713,7 @@ impl ChannelEstimator {
     /// fit a heading 90, 180 or 270 deg off far better than the reference's.
     fn check_headings(&self, solution: &ChannelSolution) -> Result<(), ChannelError> {
         let unknown_tilt = self.settings.attitude == AttitudeKnowledge::Unknown;
-        if !self.settings.use_gyro || unknown_tilt || solution.suspect == 0 {
+        if !self.settings.use_gyro || !self.settings.earth_rate_resolved || unknown_tilt || solution.suspect == 0 {
             return Ok(());
         }
         for (k, d) in self.dwells.iter().enumerate() {
@@ -729,8 +737,15 @@ impl ChannelEstimator {
 
     /// The weighted cost of one dwell at `heading` over the tilt `tilt` (gyro rows only: gravity does not see
     /// the heading).
-    fn heading_cost(&self, d: &ChannelDwell, tilt: &Mat3, theta: &[f32; PARAMETERS], heading: f32, model: Model) -> f32 {
-        let lin = linearise(theta, &heading_rotation(heading).mul(tilt), &self.site, model);
+    fn heading_cost(
+        &self,
+        d: &ChannelDwell,
+        tilt: &Mat3,
+        theta: &[f32; PARAMETERS],
+        heading: f32,
+        model: Model,
+    ) -> f32 {
+        let lin = self.linearise(theta, &heading_rotation(heading).mul(tilt), model);
         let mut c = 0.0;
         for i in 0..3 {
             let r = d.rate_mean_b_radps[i] - lin.pred[i];
@@ -753,7 +768,7 @@ impl ChannelEstimator {
         }
         let mut heading = best.1;
         for _ in 0..6 {
-            let lin = linearise(theta, &heading_rotation(heading).mul(tilt), &self.site, model);
+            let lin = self.linearise(theta, &heading_rotation(heading).mul(tilt), model);
             let (mut num, mut den) = (0.0f32, 0.0f32);
             for i in 0..3 {
                 let r = d.rate_mean_b_radps[i] - lin.pred[i];
@@ -773,11 +788,17 @@ impl ChannelEstimator {
         heading
     }
 
+    /// Prediction and Jacobian of one dwell (the Earth rate only when the gyros resolve it).
+    fn linearise(&self, theta: &[f32; PARAMETERS], c_ref: &Mat3, model: Model) -> Linearised {
+        linearise(theta, c_ref, &self.site, model, self.settings.earth_rate_resolved)
+    }
+
     /// Which attitude angles of dwell `d` are nuisance parameters: tilt about e and n (unknown attitudes),
-    /// heading (unknown heading, gyro data used).
+    /// heading (unknown heading, gyro data used and resolving the Earth rate).
     fn nuisances(&self, d: &ChannelDwell) -> [bool; 3] {
         let tilt = self.settings.attitude == AttitudeKnowledge::Unknown;
-        [tilt, tilt, self.settings.use_gyro && d.heading_rad.is_none()]
+        let heading = self.settings.use_gyro && self.settings.earth_rate_resolved && d.heading_rad.is_none();
+        [tilt, tilt, heading]
     }
 
     /// The attitude of dwell `d` that fits its means best given `theta`, with its heading: the tilt that puts
@@ -798,7 +819,7 @@ impl ChannelEstimator {
         let mut c = heading_rotation(heading).mul(&tilt);
         let first = if self.settings.use_gyro { 0 } else { 3 };
         for _ in 0..4 {
-            let lin = linearise(theta, &c, &self.site, model);
+            let lin = self.linearise(theta, &c, model);
             let mut normal = Mat3::IDENTITY;
             let mut rhs = [0.0f32; 3];
             for ch in first..6 {
@@ -818,11 +839,14 @@ impl ChannelEstimator {
             }
             // Equilibrated solve (the tilt and heading rows differ by orders of magnitude); an inactive angle
             // keeps its unit diagonal and a zero step.
-            let scale = [0, 1, 2].map(|a| 1.0 / libm::sqrtf(normal.0[a][a]));
+            let scale = [0, 1, 2].map(|a| if normal.0[a][a] > 0.0 { 1.0 / libm::sqrtf(normal.0[a][a]) } else { 0.0 });
             let mut scaled = normal;
             for a in 0..3 {
                 for b in 0..3 {
                     scaled.0[a][b] *= scale[a] * scale[b];
+                }
+                if scale[a] == 0.0 {
+                    scaled.0[a][a] = 1.0;
                 }
             }
             let Some(inverse) = scaled.inverse() else { break };
@@ -972,8 +996,8 @@ impl ChannelEstimator {
         let mut norm_s = [0.0f32; PARAMETERS];
         let mut peak_s = [0.0f32; PARAMETERS];
         for (k, d) in self.dwells.iter().enumerate().filter(|(k, _)| used(*k)) {
-            let lin = linearise(theta, &attitude[k], &self.site, model);
-            let lin_s = linearise(&zero, &attitude[k], &self.site, model);
+            let lin = self.linearise(theta, &attitude[k], model);
+            let lin_s = self.linearise(&zero, &attitude[k], model);
             let w = self.rows(d, &lin, cols, n, &ones, false, none);
             let s = self.rows(d, &lin_s, cols, n, &ones, true, none);
             for c in 0..n {
@@ -1013,8 +1037,8 @@ impl ChannelEstimator {
         let mut weighted = SqrtInfo::<PARAMETERS>::new(n);
         let mut structure = SqrtInfo::<PARAMETERS>::new(n);
         for (k, d) in self.dwells.iter().enumerate().filter(|(k, _)| used(*k)) {
-            let lin = linearise(theta, &attitude[k], &self.site, model);
-            let lin_s = linearise(&zero, &attitude[k], &self.site, model);
+            let lin = self.linearise(theta, &attitude[k], model);
+            let lin_s = self.linearise(&zero, &attitude[k], model);
             let nuisance = self.nuisances(d);
             let mut w = self.rows(d, &lin, cols, n, &scale, false, nuisance);
             let mut s = self.rows(d, &lin_s, cols, n, &scale_s, true, nuisance);
@@ -1132,6 +1156,7 @@ impl ChannelEstimator {
             iterations,
             converged,
             attitude: self.settings.attitude,
+            earth_rate_resolved: self.settings.earth_rate_resolved,
             up_b: [[0.0; 3]; MAX_DWELLS],
             blind_spots: pass.blind_spots,
             gauge: pass.gauge,
@@ -1155,7 +1180,7 @@ impl ChannelEstimator {
         let mut nuisances = 0u32;
         for (k, d) in self.dwells.iter().enumerate() {
             sol.up_b[k] = attitude[k].row(2);
-            let lin = linearise(theta, &attitude[k], &self.site, model);
+            let lin = self.linearise(theta, &attitude[k], model);
             let nuisance = self.nuisances(d);
             let mut rows = self.rows(d, &lin, cols, n, &pass.scale, false, nuisance);
             for i in 0..3 {
