@@ -1011,9 +1011,14 @@ impl ChannelEstimator {
         // A proportional term whose input never reaches 5 % of full scale in any dwell (an axis tilted by less
         // than 3 deg from horizontal for a scale factor) is not exercised by the schedule: absent, whatever a
         // fit would make of it (a 0.05 deg tilt would otherwise "determine" a scale factor from 9e-4 g).
+        // A dwell whose heading is neither given nor estimated leaves the reference offset undefined: its axes
+        // are navigation axes, and that dwell's are not known.
+        let offset_undefined =
+            self.dwells.iter().enumerate().any(|(k, d)| used(k) && d.heading_rad.is_none() && !self.nuisances(d)[2]);
         for c in 0..n {
             let p = cols[c];
             let full_scale = match p {
+                33..=35 if offset_undefined => f32::INFINITY,
                 6..=23 | 33..=35 => 1.0,
                 24..=32 => self.site.gravity_mps2 / EARTH_RATE_RADPS,
                 _ => continue,

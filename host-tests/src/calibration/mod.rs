@@ -60,6 +60,10 @@ pub struct Options {
     pub method: Method,
     /// The terms of the general estimator (the angle method estimates the biases and the offset).
     pub model: Model,
+    /// General estimator: estimate every position's pitch and roll from the data (|f| = g), whatever the
+    /// recording says; recordings levelled from their own accelerometers are always solved so
+    /// (docs/method.md#unknown-attitudes).
+    pub estimate_attitudes: bool,
 }
 
 impl Options {
@@ -86,6 +90,7 @@ impl Default for Options {
             max_passes: CalibrationSettings::default().max_passes,
             method: DEFAULT_METHOD,
             model: DEFAULT_MODEL,
+            estimate_attitudes: false,
         }
     }
 }
@@ -278,10 +283,10 @@ pub fn calibrate_channels(recording: &Recording, options: &Options) -> Result<Ca
         positions.push(PositionResult { pos: dwell.pos, first_line: dwell.first_line(), attitude, summary, angles });
     }
     let noise = pool_mean_noise(positions.iter().map(|p| p.summary)).map(|m| m.white_equivalent_var);
-    let attitude = attitude_knowledge(header);
-    // Without reference attitudes the Earth rate is used only where the gyros resolve it (docs/method.md#unknown-attitudes).
-    let earth_rate_resolved = attitude == AttitudeKnowledge::Reference
-        || gyros_resolve_earth_rate(&noise, positions.iter().map(|p| p.summary.samples));
+    let attitude = if options.estimate_attitudes { AttitudeKnowledge::Unknown } else { attitude_knowledge(header) };
+    // The Earth rate is in the gyro model only where the gyros resolve it (docs/method.md#unknown-attitudes).
+    let earth_rate_resolved =
+        !has_gyro || gyros_resolve_earth_rate(&noise, positions.iter().map(|p| p.summary.samples));
     let settings = ChannelSettings {
         model: options.model,
         use_gyro: has_gyro,

@@ -400,8 +400,8 @@ pub fn summary(c: &Calibration) -> String {
         crate::calibration::Method::Channels => format!(
             "channels (every channel of every dwell{}; model {}; {} Gauss-Newton passes{})",
             if c.channels.as_ref().is_some_and(estimated) {
-                "; no reference attitudes (pitch and roll levelled from the data): the direction of gravity of \
-                 every position is estimated with the sensor model, |f| = g (docs/method.md#unknown-attitudes)"
+                "; attitudes estimated, not taken from the recording: the direction of gravity of every position \
+                 is estimated with the sensor model, |f| = g (docs/method.md#unknown-attitudes)"
             } else {
                 ""
             },
@@ -481,11 +481,16 @@ fn positions_table(out: &mut String, c: &Calibration) {
                     "(? = estimated: pitch and roll from calibrated gravity{}, in the body frame of the calibration)",
                     if c.has_gyro && s.earth_rate_resolved { ", heading from the Earth rate" } else { "" }
                 );
-            } else if c.positions.iter().any(|p| p.attitude.heading_deg.is_none())
-                && c.has_gyro
-                && s.earth_rate_resolved
-            {
-                let _ = writeln!(out, "(? = heading unknown in the recording: estimated from the Earth rate)");
+            } else if c.positions.iter().any(|p| p.attitude.heading_deg.is_none()) && c.has_gyro {
+                let _ = writeln!(
+                    out,
+                    "(? = heading unknown in the recording: {})",
+                    if s.earth_rate_resolved {
+                        "estimated from the Earth rate"
+                    } else {
+                        "not estimated, the gyros do not resolve the Earth rate"
+                    }
+                );
             }
         }
         None => {
