@@ -14,6 +14,7 @@ use common::held_out::{
 use sinscal::calib::channels::{AttitudeKnowledge, Model, Term, GAUGE_PARAMETERS};
 use sinscal::nav::earth::normal_gravity_mps2;
 use sinscal_host::calibration::{calibrate, site_of, Calibration, Options, DEFAULT_MODEL};
+use sinscal_host::io::calibration_result::summary;
 use sinscal_host::io::import::{
     import_imucal, import_imutk, import_psins, StaticDetection, FERRARIS_POSES, IMUTK_ACCEL_GAIN_COUNTS_PER_MPS2,
     IMUTK_GYRO_GAIN_COUNTS_PER_RADPS, IMUTK_OFFSET_COUNTS,
@@ -109,6 +110,8 @@ fn imu_tk_xsens_beside_the_factory_calibration() {
     let ratio_fullest = fit_line("fullest", &fullest);
     let solution = fullest.channels.as_ref().expect("channel method");
     assert_eq!(solution.attitude, AttitudeKnowledge::Unknown, "the import levels the poses: attitudes estimated");
+    let text = summary(&fullest);
+    assert!(text.contains("attitudes estimated") && text.contains("Body frame: the accelerometer triad"), "{text}");
     assert!(!solution.earth_rate_resolved, "the Earth rate is below these gyros' resolution");
     let expected =
         Model::BIASES.with(Term::AccelScaleFactor).with(Term::AccelMisalignment).with(Term::GyroGSensitivity);
@@ -133,10 +136,10 @@ fn imu_tk_xsens_beside_the_factory_calibration() {
     let (mis_fit, mis_f, mis_fi) =
         (lower_misalignments(&l_fullest), lower_misalignments(&l_factory), lower_misalignments(&l_factory_inverse));
     for (k, name) in ["yx", "zx", "zy"].iter().enumerate() {
-        let cells =
-            ["-".to_string(), format!("{:+.4}", mis_fit[k]), format!("{:+.4} (M^-1: {:+.4})", mis_f[k], mis_fi[k])];
+        let cells = ["-".to_string(), format!("{:+.4}", mis_fit[k]), format!("{:+.4} / {:+.4}", mis_f[k], mis_fi[k])];
         row(&format!("accel misalignment {name} [1]"), &cells);
     }
+    println!("  (factory misalignments read as counts = diag(gain) M f / as counts = diag(gain) M^-1 f)");
     for i in 0..3 {
         let offset = |b: [f64; 3]| format!("{:.1}", IMUTK_OFFSET_COUNTS + nominal[i] * b[i]);
         row(&format!("accel offset {} [counts]", AXES[i]), &[offset(b_default), offset(b_fullest), "not given".into()]);
@@ -319,6 +322,24 @@ fn ferraris_beside_imucal_formulas_and_the_held_out_rests() {
         }
     }
     ferraris_held_out(&rec, &runs, (&t_f, b_f), g);
+    // With estimated attitudes the accelerometer terms are imucal's (its scale factors are the row norms of T,
+    // what a model without misalignments estimates); the gyro terms of every calibration are the formulas'.
+    let estimated = &runs.cals[2];
+    let near = |cal: &Calibration, i: usize, reference: f64, sigmas: f64| {
+        let (v, s) = (cal.estimates.value_si[i].expect("determined"), cal.estimates.std_si[i].expect("std"));
+        assert!((v - reference).abs() < sigmas * s, "{i}: {v} ± {s} vs {reference}");
+    };
+    for i in 0..3 {
+        near(estimated, 3 + i, b_f[i], 3.0);
+        near(estimated, 6 + i, norm(t_f[i]) - 1.0, 3.0);
+        for cal in &runs.cals {
+            near(cal, i, bg_f[i], 3.0);
+        }
+        for j in 0..3 {
+            near(&runs.cals[1], 24 + 3 * i + j, gs_f[i][j], 2.0);
+            near(&runs.cals[3], 24 + 3 * i + j, gs_f[i][j], 2.0);
+        }
+    }
     // The labelled attitudes are not exact (hand-placed faces): taken as a reference they miss by far; estimated,
     // the six poses fit within a few times their noise.
     assert!(ratios[0] > 100.0 && ratios[2] < 5.0, "chi-square per degree of freedom {ratios:?}");
@@ -328,7 +349,7 @@ fn ferraris_beside_imucal_formulas_and_the_held_out_rests() {
 fn ferraris_held_out(rec: &Recording, runs: &FerrarisRuns, formulas: (&M3, [f64; 3]), g: f64) {
     let intervals = unlabelled_static_intervals(rec, 102.4);
     let rms = |(t, b): (&M3, [f64; 3])| held_out_rms_mps2(t, b, g, &intervals);
-    let mut values: Vec<f64> = runs.cals.iter().map(|c| accelerometer_model(c)).map(|(t, b)| rms((&t, b))).collect();
+    let mut values: Vec<f64> = runs.cals.iter().map(accelerometer_model).map(|(t, b)| rms((&t, b))).collect();
     values.push(rms(formulas));
     let raw = rms((&IDENTITY, [0.0; 3]));
     let cells: Vec<String> = values.iter().map(|v| format!("{v:.4}")).collect();

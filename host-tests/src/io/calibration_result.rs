@@ -7,7 +7,7 @@ use sinscal::calib::align::DwellValue;
 use sinscal::calib::channels::{misalignment_index, AttitudeKnowledge, ChannelSolution, Term, PARAMETERS};
 use sinscal::calib::dwell::Prefilter;
 
-use crate::calibration::{Calibration, Estimates, GravitySource};
+use crate::calibration::{Calibration, Estimates, GravitySource, PositionResult};
 use crate::model::synth::{DEG_PER_HOUR, MICRO_G};
 
 /// Arcseconds per radian.
@@ -217,40 +217,40 @@ fn f64s(v: [f32; 3]) -> [f64; 3] {
     v.map(|x| x as f64)
 }
 
+impl PositionJson {
+    /// Position `k` (`p`) of a calibration.
+    fn new(c: &Calibration, k: usize, p: &PositionResult) -> PositionJson {
+        let channels = c.channels.as_ref();
+        let resolved = channels.filter(|s| c.has_gyro && s.earth_rate_resolved);
+        let estimated_heading = resolved.map(|s| (s.heading_rad[k] as f64).to_degrees());
+        PositionJson {
+            pos: p.pos,
+            pitch_deg: p.attitude.pitch_deg,
+            roll_deg: p.attitude.roll_deg,
+            heading_deg: p.attitude.heading_deg.or(estimated_heading.map(|h| h.rem_euclid(360.0))),
+            heading_known: p.attitude.heading_deg.is_some(),
+            up_estimated_b: channels.filter(|s| estimated(s)).map(|s| f64s(s.up_b[k])),
+            heading_std_deg: resolved
+                .filter(|_| p.attitude.heading_deg.is_none())
+                .map(|s| (s.heading_std_rad[k] as f64).to_degrees()),
+            samples: p.summary.samples,
+            phi_rad: p.angles.map(|a| f64s(a.phi_n_rad)),
+            phi_std_rad: p.angles.map(|a| [0, 1, 2].map(|i| (a.covariance_rad2.0[i][i] as f64).sqrt())),
+            residual_rad: c.solution.as_ref().map(|s| f64s(s.residual_n_rad[k])),
+            residual_gyro_radps: channels.filter(|_| c.has_gyro).map(|s| f64s(s.residual_rate_b_radps[k])),
+            residual_accel_mps2: channels.map(|s| f64s(s.residual_force_b_mps2[k])),
+            suspect: channels.is_some_and(|s| s.suspect & (1 << k) != 0),
+            statistic: channels.map(|s| s.dwell_statistic[k] as f64).filter(|x| *x >= 0.0),
+        }
+    }
+}
+
 impl CalibrationJson {
     /// Builds the JSON document of a calibration. f32 values are widened to f64 exactly, and serde_json
     /// writes the shortest decimal that reads back to the same f64, hence to the same f32.
     pub fn new(c: &Calibration) -> CalibrationJson {
         let e = &c.estimates;
-        let positions = c
-            .positions
-            .iter()
-            .enumerate()
-            .map(|(k, p)| {
-                let channels = c.channels.as_ref();
-                let resolved = channels.filter(|s| c.has_gyro && s.earth_rate_resolved);
-                let estimated_heading = resolved.map(|s| (s.heading_rad[k] as f64).to_degrees());
-                PositionJson {
-                    pos: p.pos,
-                    pitch_deg: p.attitude.pitch_deg,
-                    roll_deg: p.attitude.roll_deg,
-                    heading_deg: p.attitude.heading_deg.or(estimated_heading.map(|h| h.rem_euclid(360.0))),
-                    heading_known: p.attitude.heading_deg.is_some(),
-                    up_estimated_b: channels.filter(|s| estimated(s)).map(|s| f64s(s.up_b[k])),
-                    heading_std_deg: resolved
-                        .filter(|_| p.attitude.heading_deg.is_none())
-                        .map(|s| (s.heading_std_rad[k] as f64).to_degrees()),
-                    samples: p.summary.samples,
-                    phi_rad: p.angles.map(|a| f64s(a.phi_n_rad)),
-                    phi_std_rad: p.angles.map(|a| [0, 1, 2].map(|i| (a.covariance_rad2.0[i][i] as f64).sqrt())),
-                    residual_rad: c.solution.as_ref().map(|s| f64s(s.residual_n_rad[k])),
-                    residual_gyro_radps: channels.filter(|_| c.has_gyro).map(|s| f64s(s.residual_rate_b_radps[k])),
-                    residual_accel_mps2: channels.map(|s| f64s(s.residual_force_b_mps2[k])),
-                    suspect: channels.is_some_and(|s| s.suspect & (1 << k) != 0),
-                    statistic: channels.map(|s| s.dwell_statistic[k] as f64).filter(|x| *x >= 0.0),
-                }
-            })
-            .collect();
+        let positions = c.positions.iter().enumerate().map(|(k, p)| PositionJson::new(c, k, p)).collect();
         let prefilter = match c.prefilter {
             Prefilter::None => PrefilterJson { kind: "none", a: None, q: None, r: None },
             Prefilter::HmmKf { gyro, accel } => PrefilterJson {
