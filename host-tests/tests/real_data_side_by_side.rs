@@ -108,6 +108,15 @@ fn imu_tk_xsens_beside_the_factory_calibration() {
     println!("imu_tk Xsens, {} poses, g = {} m/s^2 (imu_tk's):", rec.dwells().len(), fullest.site.gravity_mps2);
     let ratio_default = fit_line("default", &default);
     let ratio_fullest = fit_line("fullest", &fullest);
+    // The same with the import's levelled attitudes taken as the reference (its header's attitude source
+    // replaced): they carry the errors the calibration is for, and no model fits.
+    let mut as_reference = rec.clone();
+    as_reference.header.comments.retain(|c| !c.starts_with("attitude_source"));
+    println!("  with the levelled attitudes as the reference:");
+    for (what, model) in [("default", DEFAULT_MODEL), ("fullest", model)] {
+        let ratio = fit_line(what, &run(&as_reference, model));
+        assert!(ratio > 1000.0, "levelled attitudes as the reference, {what}: {ratio:.1} per degree of freedom");
+    }
     let solution = fullest.channels.as_ref().expect("channel method");
     assert_eq!(solution.attitude, AttitudeKnowledge::Unknown, "the import levels the poses: attitudes estimated");
     let text = summary(&fullest);
