@@ -1,16 +1,22 @@
 //! The general estimator of the core (docs/method.md#general-estimator) on exact synthetic dwell means: every
-//! static term of both signs, known and unknown headings, accelerometer-only data, the structural
-//! observability at navigation-grade noise, and the plausibility checks. The data are generated in f64 by
-//! the host's own model (model::sensor::Triad, model::synth::c_b_n), independently of the core's formulas.
+//! static term of both signs, known and unknown headings, unknown attitudes (the imu_tk case), accelerometer-only
+//! data, the structural observability at navigation-grade noise, and the plausibility checks. The data are
+//! generated in f64 by the host's own model (model::sensor::Triad, model::synth::c_b_n), independently of the
+//! core's formulas.
 
 use sinscal::calib::channels::{
-    parameter_name, ChannelDwell, ChannelError, ChannelEstimator, ChannelSettings, ChannelSolution, Model, Term,
-    PARAMETERS,
+    misalignment_index, parameter_name, AttitudeKnowledge, ChannelDwell, ChannelError, ChannelEstimator,
+    ChannelSettings, ChannelSolution, Model, Term, GAUGE_PARAMETERS, PARAMETERS,
 };
+use sinscal::math::linalg::Mat3;
 use sinscal::nav::earth::Site;
 use sinscal::nav::frames::Attitude;
 use sinscal_host::model::sensor::Triad;
-use sinscal_host::model::synth::{c_b_n, earth_rate_n_radps, mul, mul_t_vec, rotation, M3, TABLE1_DEG};
+use sinscal_host::model::synth::{
+    c_b_n, earth_rate_n_radps, mul, mul_t_vec, mul_vec, rotation, transpose, M3, TABLE1_DEG,
+};
+use sinscal_host::stats::solve::inverse3;
+use sinscal_host::study::factory::lower_triangular_form;
 
 const LATITUDE_DEG: f64 = 45.7796;
 const G_MPS2: f64 = 9.8063;
@@ -52,6 +58,11 @@ fn misalignment(t: &[f64; PARAMETERS], first: usize) -> M3 {
 
 /// Exact dwell means of a pose (pitch, roll, heading in degrees) for the true errors `t` of `model`.
 fn dwell(t: &[f64; PARAMETERS], model: Model, pose: [f64; 3], heading_known: bool) -> ChannelDwell {
+    dwell_with(t, model, pose, heading_known, 1.0)
+}
+
+/// As [`dwell`], with the Earth rate scaled by `earth` (0: gyros that do not see it).
+fn dwell_with(t: &[f64; PARAMETERS], model: Model, pose: [f64; 3], heading_known: bool, earth: f64) -> ChannelDwell {
     let keep = |term: Term, x: f64| if model.contains(term) { x } else { 0.0 };
     let part = |term: Term| -> [f64; PARAMETERS] {
         let (first, count) = term.parameters();
@@ -72,7 +83,7 @@ fn dwell(t: &[f64; PARAMETERS], model: Model, pose: [f64; 3], heading_known: boo
     let c_ref = c_b_n(pose[0], pose[1], pose[2]);
     let c_true = mul(&rotation([-off[33], -off[34], -off[35]]), &c_ref);
     let f_b = mul_t_vec(&c_true, [0.0, 0.0, G_MPS2]);
-    let w_b = mul_t_vec(&c_true, earth_rate_n_radps(LATITUDE_DEG.to_radians()));
+    let w_b = mul_t_vec(&c_true, earth_rate_n_radps(LATITUDE_DEG.to_radians()).map(|x| earth * x));
     let f = accel.measure(f_b, [0.0; 3]);
     let w = gyro.measure(w_b, f_b);
     let attitude = Attitude::from_degrees(pose[0] as f32, pose[1] as f32, pose[2] as f32);
@@ -125,7 +136,11 @@ fn scale_of(index: usize) -> f64 {
 
 /// Every determined parameter of `model` within `tol` of its scale; returns the worst relative error.
 fn assert_recovered(sol: &ChannelSolution, model: Model, sign: f64, tol: f64) -> f64 {
-    let t = truth(sign);
+    assert_recovered_against(sol, model, &truth(sign), tol)
+}
+
+/// Every determined parameter of `model` within `tol` of its scale from `t`; returns the worst relative error.
+fn assert_recovered_against(sol: &ChannelSolution, model: Model, t: &[f64; PARAMETERS], tol: f64) -> f64 {
     let mut worst = 0.0f64;
     for i in 0..PARAMETERS {
         if !model.has_parameter(i) {
@@ -282,4 +297,198 @@ fn implausible_data_are_refused_with_the_dwell() {
     let e = est.solve().expect_err("heading");
     println!("{e}");
     assert!(matches!(e, ChannelError::HeadingMismatch { dwell: 3, .. }), "{e}");
+}
+
+/// 20 hand-placed poses (pitch, roll, heading in degrees): the six faces and fourteen tilted ones, headings
+/// spread over the circle.
+const HAND_PLACED_DEG: [[f64; 3]; 20] = [
+    [0.0, 0.0, 0.0],
+    [0.0, 180.0, 40.0],
+    [90.0, 0.0, 80.0],
+    [-90.0, 0.0, 120.0],
+    [0.0, 90.0, 160.0],
+    [0.0, -90.0, 200.0],
+    [30.0, 20.0, 10.0],
+    [-35.0, 50.0, 75.0],
+    [50.0, -30.0, 140.0],
+    [-20.0, -60.0, 210.0],
+    [60.0, 120.0, 250.0],
+    [-55.0, 150.0, 300.0],
+    [15.0, -130.0, 330.0],
+    [-70.0, -100.0, 20.0],
+    [40.0, 70.0, 95.0],
+    [-10.0, 35.0, 185.0],
+    [75.0, -160.0, 275.0],
+    [25.0, 100.0, 355.0],
+    [-45.0, -20.0, 45.0],
+    [10.0, -75.0, 125.0],
+];
+
+/// `I + S + M` of one sensor from the true parameters (scale factors from `scale_first`, misalignments from
+/// `misalignment_first`), f64.
+fn sensor_matrix_f64(t: &[f64; PARAMETERS], scale_first: usize, misalignment_first: usize) -> M3 {
+    let mut m = misalignment(t, misalignment_first);
+    for i in 0..3 {
+        m[i][i] = 1.0 + t[scale_first + i];
+    }
+    m
+}
+
+/// The true parameters in the body frame the estimator fixes without reference attitudes: body x along
+/// accelerometer x, body y in the accelerometers' x-y plane. With `T_a = L Q` (L lower-triangular, Q a
+/// rotation), the body vectors become `Q v`, so `T_a -> L`, `T_g -> T_g Q^T`, `G -> G Q^T`; biases unchanged.
+/// Returns the parameters and Q.
+fn in_accelerometer_frame(t: &[f64; PARAMETERS]) -> ([f64; PARAMETERS], M3) {
+    let t_a = sensor_matrix_f64(t, 6, 9);
+    let l = lower_triangular_form(&t_a);
+    let q = mul(&inverse3(&l).expect("L invertible"), &t_a);
+    let t_g = mul(&sensor_matrix_f64(t, 15, 18), &transpose(&q));
+    let g = mul(&[[t[24], t[25], t[26]], [t[27], t[28], t[29]], [t[30], t[31], t[32]]], &transpose(&q));
+    let mut out = *t;
+    for i in 0..3 {
+        out[6 + i] = l[i][i] - 1.0;
+        out[15 + i] = t_g[i][i] - 1.0;
+        for j in 0..3 {
+            if i != j {
+                out[9 + misalignment_index(i, j)] = l[i][j];
+                out[18 + misalignment_index(i, j)] = t_g[i][j];
+            }
+            out[24 + 3 * i + j] = g[i][j];
+        }
+    }
+    (out, q)
+}
+
+/// Solves exact dwells of the hand-placed poses with the given attitude knowledge; without reference attitudes
+/// the dwells carry no tilt (identity) and no heading, so nothing of the truth reaches the estimator but the
+/// means.
+fn solve_hand_placed(model: Model, use_gyro: bool, attitude: AttitudeKnowledge, sign: f64) -> ChannelSolution {
+    solve_hand_placed_with(ChannelSettings { model, use_gyro, attitude, ..ChannelSettings::default() }, sign)
+}
+
+/// As [`solve_hand_placed`] with any settings; gyros that do not resolve the Earth rate see none.
+fn solve_hand_placed_with(settings: ChannelSettings, sign: f64) -> ChannelSolution {
+    let (t, model, attitude) = (truth(sign), settings.model, settings.attitude);
+    let earth = if settings.earth_rate_resolved { 1.0 } else { 0.0 };
+    let mut est = ChannelEstimator::new(site(), settings);
+    for p in &HAND_PLACED_DEG {
+        let mut d = dwell_with(&t, model, *p, attitude == AttitudeKnowledge::Reference, earth);
+        if attitude == AttitudeKnowledge::Unknown {
+            d.tilt = Mat3::IDENTITY;
+        }
+        est.add(d).expect("dwell");
+    }
+    est.solve().expect("solve")
+}
+
+fn bits(indices: &[usize]) -> u64 {
+    indices.iter().fold(0, |b, i| b | 1 << i)
+}
+
+fn names(mask: u64) -> Vec<&'static str> {
+    (0..PARAMETERS).filter(|i| mask & (1 << i) != 0).map(parameter_name).collect()
+}
+
+#[test]
+fn unknown_attitudes_accelerometer_only_in_the_accelerometer_frame() {
+    // The imu_tk method: |T_a^-1 (f - b_a)| = g on hand-placed poses, accelerometer bias, scale factors and
+    // misalignments (9 parameters from one equation per pose).
+    let model = Model::EMPTY.with(Term::AccelBias).with(Term::AccelScaleFactor).with(Term::AccelMisalignment);
+    for sign in [1.0, -1.0] {
+        // With reference attitudes every one of the nine is determined: the control.
+        let known = solve_hand_placed(model, false, AttitudeKnowledge::Reference, sign);
+        assert_eq!((known.blind_spots, known.unobservable, known.gauge), (0, 0, 0));
+        let worst = assert_recovered(&known, model, sign, 1e-6);
+        println!("reference attitudes, sign {sign:+}: worst error {worst:.2e} of scale");
+        // Without them, a common rotation of every pose is invisible: three blind spots, the antisymmetric
+        // part of the misalignments. Holding xy, xz, yz at zero fixes the body frame to the accelerometers; the
+        // rest is then determined, and equal to the truth in that frame.
+        let sol = solve_hand_placed(model, false, AttitudeKnowledge::Unknown, sign);
+        println!("unknown attitudes: blind spots {}, unobservable {:?}", sol.blind_spots, names(sol.unobservable));
+        assert_eq!(sol.blind_spots, 3, "a common rotation: three blind spots");
+        assert_eq!(sol.gauge, bits(&GAUGE_PARAMETERS));
+        assert_eq!(sol.unobservable, sol.gauge, "only the gauge is not determined: {:?}", names(sol.unobservable));
+        assert_eq!(names(sol.gauge), ["accel_misalignment_xy", "accel_misalignment_xz", "accel_misalignment_yz"]);
+        let (expected, q) = in_accelerometer_frame(&truth(sign));
+        let worst = assert_recovered_against(&sol, model, &expected, 1e-6);
+        // One equation per pose, nine parameters, two nuisance angles per pose.
+        assert_eq!(sol.degrees_of_freedom, 20 - 9);
+        // Exact data fit to the f32 resolution of the means (0.1 ug against the 1 ug weights), well inside
+        // the noise: the Gauss-Newton steps then wander at 0.1 standard error, so no convergence flag is asked.
+        assert!(sol.chi_square < sol.degrees_of_freedom as f32, "chi-square {}", sol.chi_square);
+        // The poses come back too, in that frame: up_b = Q C^T e_u.
+        let mut worst_up_rad = 0.0f64;
+        for (k, p) in HAND_PLACED_DEG.iter().enumerate() {
+            let up = mul_vec(&q, mul_t_vec(&c_b_n(p[0], p[1], p[2]), [0.0, 0.0, 1.0]));
+            let est = sol.up_b[k].map(|x| x as f64);
+            let d = [0, 1, 2].map(|i| est[i] - up[i]);
+            worst_up_rad = worst_up_rad.max((d[0] * d[0] + d[1] * d[1] + d[2] * d[2]).sqrt());
+        }
+        assert!(worst_up_rad < 1e-6, "up directions: {worst_up_rad:.2e} rad");
+        println!(
+            "unknown attitudes, sign {sign:+}: worst error {worst:.2e} of scale, up directions within \
+             {worst_up_rad:.1e} rad, {} passes, chi-square {:.2e}",
+            sol.iterations, sol.chi_square
+        );
+    }
+}
+
+#[test]
+fn unknown_attitudes_every_static_term() {
+    // With gyros too, every static term and the reference offset: the offset is indistinguishable from the
+    // poses' own attitudes (three more blind spots), the common rotation as above; everything else is
+    // determined in the accelerometer frame, the gyro terms from the Earth rate and gravity.
+    let model = Model::FULL;
+    for sign in [1.0, -1.0] {
+        let sol = solve_hand_placed(model, true, AttitudeKnowledge::Unknown, sign);
+        println!(
+            "unknown attitudes, gyros: blind spots {}, unobservable {:?}",
+            sol.blind_spots,
+            names(sol.unobservable)
+        );
+        let offset = Term::ReferenceOffset.parameters().0;
+        assert_eq!(sol.blind_spots, 6, "three for the common rotation, three for the offset");
+        assert_eq!(sol.gauge, bits(&GAUGE_PARAMETERS));
+        assert_eq!(sol.unobservable, sol.gauge | bits(&[offset, offset + 1, offset + 2]));
+        let (expected, _) = in_accelerometer_frame(&truth(sign));
+        let worst = assert_recovered_against(&sol, model, &expected, 1e-6);
+        // Per pose: six channel means, three nuisance angles (tilt about e and n, heading).
+        assert_eq!(sol.degrees_of_freedom, 20 * 3 - (36 - 6));
+        assert!(sol.chi_square < sol.degrees_of_freedom as f32, "chi-square {}", sol.chi_square);
+        println!(
+            "unknown attitudes, every static term, sign {sign:+}: worst error {worst:.2e} of scale, {} passes",
+            sol.iterations
+        );
+    }
+}
+
+#[test]
+fn unknown_attitudes_gyros_that_do_not_resolve_the_earth_rate() {
+    // MEMS gyros in hand-placed poses: without the Earth rate a static pose shows the gyros only gravity, which
+    // gives their bias and g-sensitivity (in the accelerometer frame) and nothing of their scale factors.
+    let model = Model::BIASES
+        .with(Term::AccelScaleFactor)
+        .with(Term::AccelMisalignment)
+        .with(Term::GyroScaleFactor)
+        .with(Term::GyroGSensitivity);
+    let settings = ChannelSettings {
+        model,
+        attitude: AttitudeKnowledge::Unknown,
+        earth_rate_resolved: false,
+        ..ChannelSettings::default()
+    };
+    for sign in [1.0, -1.0] {
+        let sol = solve_hand_placed_with(settings, sign);
+        println!("no Earth rate: blind spots {}, unobservable {:?}", sol.blind_spots, names(sol.unobservable));
+        let scale = Term::GyroScaleFactor.parameters().0;
+        assert_eq!(sol.blind_spots, 6, "the common rotation and the three unexercised gyro scale factors");
+        assert_eq!(sol.unobservable, bits(&GAUGE_PARAMETERS) | bits(&[scale, scale + 1, scale + 2]));
+        let (expected, _) = in_accelerometer_frame(&truth(sign));
+        let worst = assert_recovered_against(&sol, model, &expected, 1e-6);
+        // Per pose: one accelerometer row (two tilt angles), three gyro rows, no heading.
+        assert_eq!(sol.degrees_of_freedom, 20 * 4 - (3 + 3 + 3 + 3 + 9));
+        assert!(sol.chi_square < sol.degrees_of_freedom as f32, "chi-square {}", sol.chi_square);
+        assert!(!sol.earth_rate_resolved && sol.heading_std_rad.iter().all(|s| *s == 0.0));
+        println!("no Earth rate, sign {sign:+}: worst error {worst:.2e} of scale, {} passes", sol.iterations);
+    }
 }

@@ -9,6 +9,17 @@
 //! dwell whose heading is unknown, that heading as a nuisance parameter: gravity does not depend on it, the Earth
 //! rate's horizontal part does.
 //!
+//! Without reference attitudes ([`AttitudeKnowledge::Unknown`], hand-placed poses levelled from the data) the
+//! direction of gravity in the body is two more nuisance angles per dwell (the tilt about east and north): the
+//! accelerometers then constrain the sensor model only through `|T_a^-1 (f - b_a)| = g` (the imu_tk method).
+//! The tilt is linearised about the direction of the calibrated measured gravity, `T_a^-1 (f - b_a)`, refined
+//! with the dwell's heading by Gauss-Newton on its own rows, and eliminated like the heading. A common rotation
+//! of every pose is then invisible: it moves the antisymmetric part of the misalignments (`T_a R`, and `T_g R`
+//! with it), three blind spots of the structural design. With the accelerometer misalignments in the model, the
+//! body frame is fixed to the accelerometer triad (x along accelerometer x, y in its x-y plane): the
+//! misalignments xy, xz and yz are held at zero ([`ChannelSolution::gauge`]) and the others are estimated in
+//! that frame (a lower-triangular `T_a`).
+//!
 //! The solution is Gauss-Newton on the dwell means weighted by their noise (the variance of each mean, which
 //! the caller supplies, docs/method.md#how-it-solves). Each pass folds the
 //! whitened rows into a square-root information factor ([`crate::math::lsq`]); a dwell's heading column is
@@ -24,15 +35,15 @@
 //! with a share in them is unobservable and is not estimated. Noise never makes a parameter unobservable: a
 //! parameter that is determined but imprecise gets its (large) standard error.
 //!
-//! Memory: the problem holds [`MAX_DWELLS`] dwells (2.6 KB); a solution is 7.7 KB; solving uses about 27 KB of
-//! stack (three 36 x 36 factors and the SVD's workspace).
+//! Memory: the problem holds [`MAX_DWELLS`] dwells (2.6 KB); a solution is 8.5 KB; solving uses about 30 KB of
+//! stack (three 36 x 36 factors, the SVD's workspace and the attitude of every dwell).
 
 use heapless::Vec;
 
 use crate::math::linalg::{cross, dot, norm, rotation, Mat3, Vec3};
 use crate::math::lsq::{inverse_gram, jacobi_svd, solve_upper, solve_upper_transposed, SqrtInfo};
 use crate::nav::earth::{Site, EARTH_RATE_RADPS};
-use crate::nav::frames::heading_rotation;
+use crate::nav::frames::{heading_rotation, Attitude};
 
 /// Most dwells one solution takes (a bit mask of `u64` marks suspect dwells).
 pub const MAX_DWELLS: usize = 64;
@@ -243,7 +254,30 @@ pub struct ChannelSettings {
     pub max_force_magnitude_error: f32,
     /// Largest angle between measured gravity and the reference's accepted before the fit, rad.
     pub max_gravity_angle_rad: f32,
+    /// Whether the dwells' tilts are a reference or unknown (then nuisance parameters).
+    pub attitude: AttitudeKnowledge,
+    /// Whether the gyros resolve the Earth rate (their dwell means and errors are well below it). Without, the
+    /// gyro model leaves the Earth rate out: no heading is estimated or checked, and the gyro scale factors and
+    /// misalignments, which a static pose sees only through the Earth rate, are not exercised.
+    pub earth_rate_resolved: bool,
 }
+
+/// What the session knows of the dwells' attitudes.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Default)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub enum AttitudeKnowledge {
+    /// Every dwell's tilt ([`ChannelDwell::tilt`]) is the reference's; its heading too unless `None`.
+    #[default]
+    Reference,
+    /// No dwell's tilt is known (hand-placed poses): the direction of gravity in the body is two nuisance
+    /// angles per dwell and [`ChannelDwell::tilt`] is ignored; a heading given is kept, an unknown one is a
+    /// nuisance as well when gyro data are used.
+    Unknown,
+}
+
+/// The parameters held at zero to fix the body frame when the attitudes are unknown: the accelerometer
+/// misalignments xy, xz and yz (body x along accelerometer x, body y in the accelerometers' x-y plane).
+pub const GAUGE_PARAMETERS: [usize; 3] = [9, 10, 12];
 
 impl Default for ChannelSettings {
     fn default() -> ChannelSettings {
@@ -255,6 +289,8 @@ impl Default for ChannelSettings {
             share_tolerance: 1e-3,
             max_force_magnitude_error: 0.2,
             max_gravity_angle_rad: 0.1745,
+            attitude: AttitudeKnowledge::Reference,
+            earth_rate_resolved: true,
         }
     }
 }
@@ -383,6 +419,20 @@ pub struct ChannelSolution {
     /// Whether the last correction was below 1e-3 of every standard error, or stopped shrinking below 0.05 of
     /// them (f32 rounding).
     pub converged: bool,
+    /// The attitude knowledge the solution assumed.
+    pub attitude: AttitudeKnowledge,
+    /// Whether the gyro model included the Earth rate ([`ChannelSettings::earth_rate_resolved`]).
+    pub earth_rate_resolved: bool,
+    /// Up (the direction of measured gravity) in the body of every dwell, a unit vector: the reference's, or
+    /// the estimate when the attitudes are unknown.
+    pub up_b: [Vec3; MAX_DWELLS],
+    /// Number of blind spots of the structural design (singular values below the rank tolerance) before the
+    /// body frame is fixed: three more than with reference attitudes when a common rotation of the poses is
+    /// invisible.
+    pub blind_spots: u32,
+    /// Bit i: parameter i is held at zero to fix the body frame ([`GAUGE_PARAMETERS`]); it is also in
+    /// `unobservable`, and the other parameters are estimated in that frame.
+    pub gauge: u64,
 }
 
 impl ChannelSolution {
@@ -412,11 +462,13 @@ pub struct ChannelEstimator {
     dwells: Vec<ChannelDwell, MAX_DWELLS>,
 }
 
-/// The prediction of one dwell and its derivatives: rows 0-2 gyro x, y, z, rows 3-5 accelerometer x, y, z.
+/// The prediction of one dwell and its derivatives: rows 0-2 gyro x, y, z, rows 3-5 accelerometer x, y, z;
+/// `d_attitude[row][m]`: by a rotation of the dwell's attitude about navigation axis m (e, n, u; u is the
+/// heading), `C' = R(-phi) C`.
 struct Linearised {
     pred: [f32; 6],
     jac: [[f32; PARAMETERS]; 6],
-    d_heading: [f32; 6],
+    d_attitude: [[f32; 3]; 6],
 }
 
 /// The model's parameter indices in order, and their count.
@@ -452,9 +504,10 @@ pub fn g_sensitivity_radps_per_mps2(theta: &[f32; PARAMETERS]) -> Mat3 {
     Mat3([[theta[24], theta[25], theta[26]], [theta[27], theta[28], theta[29]], [theta[30], theta[31], theta[32]]])
 }
 
-/// Prediction and Jacobian of one dwell at the parameters `theta` and heading `heading_rad`.
-fn linearise(theta: &[f32; PARAMETERS], tilt: &Mat3, heading_rad: f32, site: &Site, model: Model) -> Linearised {
-    let c_ref = heading_rotation(heading_rad).mul(tilt);
+/// Prediction and Jacobian of one dwell at the parameters `theta` and the attitude `c_ref` (`C_b^n`).
+/// Without `earth_rate` the gyros are predicted without the Earth rate.
+fn linearise(theta: &[f32; PARAMETERS], c_ref: &Mat3, site: &Site, model: Model, earth_rate: bool) -> Linearised {
+    let c_ref = *c_ref;
     let offset = [theta[33], theta[34], theta[35]];
     let c_true = if model.contains(Term::ReferenceOffset) {
         rotation([-offset[0], -offset[1], -offset[2]]).mul(&c_ref)
@@ -462,7 +515,7 @@ fn linearise(theta: &[f32; PARAMETERS], tilt: &Mat3, heading_rad: f32, site: &Si
         c_ref
     };
     let f_n = site.force_at_rest_n_mps2();
-    let w_n = site.earth_rate_n_radps();
+    let w_n = if earth_rate { site.earth_rate_n_radps() } else { [0.0; 3] };
     let ct = c_true.transpose();
     let f_b = ct.mul_vec(f_n);
     let w_b = ct.mul_vec(w_n);
@@ -473,7 +526,7 @@ fn linearise(theta: &[f32; PARAMETERS], tilt: &Mat3, heading_rad: f32, site: &Si
     let fa = t_a.mul_vec(f_b);
     let wg = t_g.mul_vec(w_b);
     let gf = g_mat.mul_vec(f_b);
-    let mut out = Linearised { pred: [0.0; 6], jac: [[0.0; PARAMETERS]; 6], d_heading: [0.0; 6] };
+    let mut out = Linearised { pred: [0.0; 6], jac: [[0.0; PARAMETERS]; 6], d_attitude: [[0.0; 3]; 6] };
     for i in 0..3 {
         out.pred[i] = wg[i] + theta[i] + gf[i];
         out.pred[3 + i] = fa[i] + theta[3 + i];
@@ -501,56 +554,80 @@ fn linearise(theta: &[f32; PARAMETERS], tilt: &Mat3, heading_rad: f32, site: &Si
             out.jac[3 + i][33 + m] = da[i];
         }
     }
-    // Heading: d(C_true^T v)/d(psi) = C_ref^T (e_u x (C_ref v_b)) with v_b = C_true^T v (exact).
-    let up = [0.0, 0.0, 1.0];
-    let dfb = c_ref.transpose().mul_vec(cross(up, c_ref.mul_vec(f_b)));
-    let dwb = c_ref.transpose().mul_vec(cross(up, c_ref.mul_vec(w_b)));
-    let (da, dg, dgf) = (t_a.mul_vec(dfb), t_g.mul_vec(dwb), g_mat.mul_vec(dfb));
-    for i in 0..3 {
-        out.d_heading[i] = dg[i] + dgf[i];
-        out.d_heading[3 + i] = da[i];
+    // Attitude (tilt about e and n, heading about u): d(C_true^T v)/d(phi_m) = C_ref^T (e_m x (C_ref v_b)) with
+    // v_b = C_true^T v (exact); the heading psi is phi_u.
+    for (m, e) in axes.iter().enumerate() {
+        let dfb = c_ref.transpose().mul_vec(cross(*e, c_ref.mul_vec(f_b)));
+        let dwb = c_ref.transpose().mul_vec(cross(*e, c_ref.mul_vec(w_b)));
+        let (da, dg, dgf) = (t_a.mul_vec(dfb), t_g.mul_vec(dwb), g_mat.mul_vec(dfb));
+        for i in 0..3 {
+            out.d_attitude[i][m] = dg[i] + dgf[i];
+            out.d_attitude[3 + i][m] = da[i];
+        }
     }
     out
 }
 
-/// Whitened rows of one dwell: channel rows (`rows` of them), their right-hand sides and heading column.
+/// Whitened rows of one dwell: channel rows (`rows` of them), their right-hand sides and the columns of its
+/// nuisance attitude angles (e, n, u; zero for the angles that are not nuisances).
 struct DwellRows {
     a: [[f32; PARAMETERS]; 6],
     y: [f32; 6],
-    h: [f32; 6],
+    h: [[f32; 3]; 6],
     rows: usize,
 }
 
-/// Removes the heading column from a dwell's rows by a Householder reflection: row 0 then carries all the
-/// heading information and is dropped; the rest are orthogonal to the heading direction.
-fn eliminate_heading(d: &mut DwellRows, n: usize) -> usize {
+/// Removes the nuisance columns from a dwell's rows by Householder reflections, one column at a time: the
+/// first rows then carry all the nuisance information and are dropped (their number is returned); the rest are
+/// orthogonal to the nuisance directions. This is the Schur complement of the nuisances in square-root form.
+fn eliminate_nuisances(d: &mut DwellRows, n: usize) -> usize {
     let m = d.rows;
-    let h_norm = libm::sqrtf(d.h[..m].iter().map(|x| x * x).sum());
-    if h_norm == 0.0 {
-        return 0;
-    }
-    let alpha = if d.h[0] >= 0.0 { -h_norm } else { h_norm };
-    let mut u = d.h;
-    u[0] -= alpha;
-    let uu: f32 = u[..m].iter().map(|x| x * x).sum();
-    if uu == 0.0 {
-        return 0;
-    }
-    for c in 0..=n {
-        let mut s = 0.0f32;
-        for r in 0..m {
-            s += u[r] * if c < n { d.a[r][c] } else { d.y[r] };
+    let mut top = 0;
+    for col in 0..3 {
+        if top >= m {
+            break;
         }
-        let k = 2.0 * s / uu;
-        for r in 0..m {
-            if c < n {
-                d.a[r][c] -= k * u[r];
-            } else {
-                d.y[r] -= k * u[r];
+        let h_norm = libm::sqrtf(d.h[top..m].iter().map(|x| x[col] * x[col]).sum());
+        if h_norm == 0.0 {
+            continue;
+        }
+        let alpha = if d.h[top][col] >= 0.0 { -h_norm } else { h_norm };
+        let mut u = [0.0f32; 6];
+        for r in top..m {
+            u[r] = d.h[r][col];
+        }
+        u[top] -= alpha;
+        let uu: f32 = u[top..m].iter().map(|x| x * x).sum();
+        if uu == 0.0 {
+            continue;
+        }
+        // Reflect every column: the parameters', the right-hand side and the later nuisance columns.
+        for c in 0..n + 4 {
+            let value = |d: &DwellRows, r: usize| match c {
+                c if c < n => d.a[r][c],
+                c if c == n => d.y[r],
+                c => d.h[r][c - n - 1],
+            };
+            let s: f32 = (top..m).map(|r| u[r] * value(d, r)).sum();
+            let k = 2.0 * s / uu;
+            for r in top..m {
+                match c {
+                    c if c < n => d.a[r][c] -= k * u[r],
+                    c if c == n => d.y[r] -= k * u[r],
+                    c => d.h[r][c - n - 1] -= k * u[r],
+                }
             }
         }
+        top += 1;
     }
-    1
+    top
+}
+
+/// The tilt (`Rx(pitch) Ry(roll)`) that puts body direction `up_b` (any length) up.
+fn tilt_of_up(up_b: Vec3) -> Mat3 {
+    let pitch_rad = libm::atan2f(up_b[1], libm::hypotf(up_b[0], up_b[2]));
+    let roll_rad = libm::atan2f(-up_b[0], up_b[2]);
+    Attitude { pitch_rad, roll_rad, heading_rad: 0.0 }.tilt()
 }
 
 impl ChannelEstimator {
@@ -577,11 +654,12 @@ impl ChannelEstimator {
         let gyro_ok =
             !self.settings.use_gyro || (finite(dwell.rate_mean_b_radps) && positive(dwell.rate_mean_var_b_radps2));
         let heading_ok = dwell.heading_rad.is_none_or(|h| h.is_finite());
+        let tilt_ok = self.settings.attitude == AttitudeKnowledge::Unknown || dwell.tilt.is_finite();
         if !(gyro_ok
             && heading_ok
+            && tilt_ok
             && finite(dwell.force_mean_b_mps2)
-            && positive(dwell.force_mean_var_b_mps2sq)
-            && dwell.tilt.is_finite())
+            && positive(dwell.force_mean_var_b_mps2sq))
         {
             return Err(ChannelError::BadInput { dwell: index });
         }
@@ -596,7 +674,8 @@ impl ChannelEstimator {
         }
     }
 
-    /// The checks before any fit: |f| against g, and the direction of measured gravity against the reference.
+    /// The checks before any fit: |f| against g, and the direction of measured gravity against the reference
+    /// (when the attitudes are a reference).
     fn check_plausible(&self) -> Result<(), ChannelError> {
         let g = self.site.gravity_mps2;
         for (dwell, d) in self.dwells.iter().enumerate() {
@@ -606,6 +685,9 @@ impl ChannelEstimator {
             let within = (ratio - 1.0).abs() <= self.settings.max_force_magnitude_error;
             if !within {
                 return Err(ChannelError::ForceMagnitude { dwell, ratio });
+            }
+            if self.settings.attitude == AttitudeKnowledge::Unknown {
+                continue;
             }
             let up_b = d.tilt.transpose().mul_vec([0.0, 0.0, 1.0]);
             let cos = (dot(f, up_b) / norm(f)).clamp(-1.0, 1.0);
@@ -627,10 +709,11 @@ impl ChannelEstimator {
         Ok(solution)
     }
 
-    /// Suspect dwells with a known heading: refit without the dwell and test whether its gyro means fit a
-    /// heading 90, 180 or 270 deg off far better than the reference's.
+    /// Suspect dwells with a known heading and tilt: refit without the dwell and test whether its gyro means
+    /// fit a heading 90, 180 or 270 deg off far better than the reference's.
     fn check_headings(&self, solution: &ChannelSolution) -> Result<(), ChannelError> {
-        if !self.settings.use_gyro || solution.suspect == 0 {
+        let unknown_tilt = self.settings.attitude == AttitudeKnowledge::Unknown;
+        if !self.settings.use_gyro || !self.settings.earth_rate_resolved || unknown_tilt || solution.suspect == 0 {
             return Ok(());
         }
         for (k, d) in self.dwells.iter().enumerate() {
@@ -639,7 +722,7 @@ impl ChannelEstimator {
                 continue;
             }
             let without = self.solve_excluding(1 << k)?;
-            let cost = |heading: f32| self.heading_cost(d, &without.parameters_si, heading, without.model);
+            let cost = |heading: f32| self.heading_cost(d, &d.tilt, &without.parameters_si, heading, without.model);
             let at_given = cost(given);
             for quarter in 1..4 {
                 let other = given + quarter as f32 * core::f32::consts::FRAC_PI_2;
@@ -652,9 +735,17 @@ impl ChannelEstimator {
         Ok(())
     }
 
-    /// The weighted cost of one dwell at `heading` (gyro rows only: gravity does not see the heading).
-    fn heading_cost(&self, d: &ChannelDwell, theta: &[f32; PARAMETERS], heading: f32, model: Model) -> f32 {
-        let lin = linearise(theta, &d.tilt, heading, &self.site, model);
+    /// The weighted cost of one dwell at `heading` over the tilt `tilt` (gyro rows only: gravity does not see
+    /// the heading).
+    fn heading_cost(
+        &self,
+        d: &ChannelDwell,
+        tilt: &Mat3,
+        theta: &[f32; PARAMETERS],
+        heading: f32,
+        model: Model,
+    ) -> f32 {
+        let lin = self.linearise(theta, &heading_rotation(heading).mul(tilt), model);
         let mut c = 0.0;
         for i in 0..3 {
             let r = d.rate_mean_b_radps[i] - lin.pred[i];
@@ -663,26 +754,27 @@ impl ChannelEstimator {
         c
     }
 
-    /// The heading that fits dwell `d` best given `theta`: a 5 deg grid, then Gauss-Newton in one dimension.
-    fn profile_heading(&self, d: &ChannelDwell, theta: &[f32; PARAMETERS], model: Model) -> f32 {
+    /// The heading that fits dwell `d` over `tilt` best given `theta`: a 5 deg grid, then Gauss-Newton in one
+    /// dimension.
+    fn profile_heading(&self, d: &ChannelDwell, tilt: &Mat3, theta: &[f32; PARAMETERS], model: Model) -> f32 {
         let step = core::f32::consts::PI / 36.0;
         let mut best = (f32::INFINITY, 0.0f32);
         for i in 0..72 {
             let h = i as f32 * step;
-            let c = self.heading_cost(d, theta, h, model);
+            let c = self.heading_cost(d, tilt, theta, h, model);
             if c < best.0 {
                 best = (c, h);
             }
         }
         let mut heading = best.1;
         for _ in 0..6 {
-            let lin = linearise(theta, &d.tilt, heading, &self.site, model);
+            let lin = self.linearise(theta, &heading_rotation(heading).mul(tilt), model);
             let (mut num, mut den) = (0.0f32, 0.0f32);
             for i in 0..3 {
                 let r = d.rate_mean_b_radps[i] - lin.pred[i];
                 let w = 1.0 / d.rate_mean_var_b_radps2[i];
-                num += lin.d_heading[i] * r * w;
-                den += lin.d_heading[i] * lin.d_heading[i] * w;
+                num += lin.d_attitude[i][2] * r * w;
+                den += lin.d_attitude[i][2] * lin.d_attitude[i][2] * w;
             }
             if den <= 0.0 {
                 break;
@@ -696,7 +788,88 @@ impl ChannelEstimator {
         heading
     }
 
-    /// Whitened rows of dwell `d` for the model's columns `cols` (`n` of them), scaled by `scale`.
+    /// Prediction and Jacobian of one dwell (the Earth rate only when the gyros resolve it).
+    fn linearise(&self, theta: &[f32; PARAMETERS], c_ref: &Mat3, model: Model) -> Linearised {
+        linearise(theta, c_ref, &self.site, model, self.settings.earth_rate_resolved)
+    }
+
+    /// Which attitude angles of dwell `d` are nuisance parameters: tilt about e and n (unknown attitudes),
+    /// heading (unknown heading, gyro data used and resolving the Earth rate).
+    fn nuisances(&self, d: &ChannelDwell) -> [bool; 3] {
+        let tilt = self.settings.attitude == AttitudeKnowledge::Unknown;
+        let heading = self.settings.use_gyro && self.settings.earth_rate_resolved && d.heading_rad.is_none();
+        [tilt, tilt, heading]
+    }
+
+    /// The attitude of dwell `d` that fits its means best given `theta`, with its heading: the tilt that puts
+    /// the calibrated measured gravity `T_a^-1 (f - b_a)` up, the heading profiled over it when unknown, then
+    /// Gauss-Newton on every nuisance angle with all of the dwell's rows.
+    fn profile_attitude(&self, d: &ChannelDwell, theta: &[f32; PARAMETERS], model: Model) -> (Mat3, f32) {
+        let b_a = [theta[3], theta[4], theta[5]];
+        let f = [0, 1, 2].map(|i| d.force_mean_b_mps2[i] - b_a[i]);
+        let t_a = sensor_matrix(theta, 6, 9);
+        let up_b = t_a.inverse().map_or(f, |t| t.mul_vec(f));
+        let tilt = tilt_of_up(up_b);
+        let active = self.nuisances(d);
+        let mut heading = match d.heading_rad {
+            Some(h) => h,
+            None if active[2] => self.profile_heading(d, &tilt, theta, model),
+            None => 0.0,
+        };
+        let mut c = heading_rotation(heading).mul(&tilt);
+        let first = if self.settings.use_gyro { 0 } else { 3 };
+        for _ in 0..4 {
+            let lin = self.linearise(theta, &c, model);
+            let mut normal = Mat3::IDENTITY;
+            let mut rhs = [0.0f32; 3];
+            for ch in first..6 {
+                let (measured, var) = if ch < 3 {
+                    (d.rate_mean_b_radps[ch], d.rate_mean_var_b_radps2[ch])
+                } else {
+                    (d.force_mean_b_mps2[ch - 3], d.force_mean_var_b_mps2sq[ch - 3])
+                };
+                let r = measured - lin.pred[ch];
+                let j = [0, 1, 2].map(|m| if active[m] { lin.d_attitude[ch][m] } else { 0.0 });
+                for a in 0..3 {
+                    rhs[a] += j[a] * r / var;
+                    for b in 0..3 {
+                        normal.0[a][b] += j[a] * j[b] / var;
+                    }
+                }
+            }
+            // Equilibrated solve (the tilt and heading rows differ by orders of magnitude); an inactive angle
+            // keeps its unit diagonal and a zero step.
+            let scale = [0, 1, 2].map(|a| if normal.0[a][a] > 0.0 { 1.0 / libm::sqrtf(normal.0[a][a]) } else { 0.0 });
+            let mut scaled = normal;
+            for a in 0..3 {
+                for b in 0..3 {
+                    scaled.0[a][b] *= scale[a] * scale[b];
+                }
+                if scale[a] == 0.0 {
+                    scaled.0[a][a] = 1.0;
+                }
+            }
+            let Some(inverse) = scaled.inverse() else { break };
+            let step = inverse.mul_vec([0, 1, 2].map(|a| rhs[a] * scale[a]));
+            let mut phi = [0, 1, 2].map(|a| step[a] * scale[a]);
+            let size = norm(phi);
+            if !size.is_finite() {
+                break;
+            }
+            if size > 0.1 {
+                phi = phi.map(|x| x * 0.1 / size);
+            }
+            c = rotation([-phi[0], -phi[1], -phi[2]]).mul(&c);
+            heading += phi[2];
+            if size < 1e-7 {
+                break;
+            }
+        }
+        (c, heading)
+    }
+
+    /// Whitened rows of dwell `d` for the model's columns `cols` (`n` of them), scaled by `scale`, with the
+    /// columns of the nuisance angles `nuisance`.
     #[allow(clippy::too_many_arguments, reason = "one call site; a struct would only rename the arguments")]
     fn rows(
         &self,
@@ -706,9 +879,9 @@ impl ChannelEstimator {
         n: usize,
         scale: &[f32; PARAMETERS],
         structural: bool,
-        unknown_heading: bool,
+        nuisance: [bool; 3],
     ) -> DwellRows {
-        let mut out = DwellRows { a: [[0.0; PARAMETERS]; 6], y: [0.0; 6], h: [0.0; 6], rows: 0 };
+        let mut out = DwellRows { a: [[0.0; PARAMETERS]; 6], y: [0.0; 6], h: [[0.0; 3]; 6], rows: 0 };
         let first = if self.settings.use_gyro { 0 } else { 3 };
         let g = self.site.gravity_mps2;
         for ch in first..6 {
@@ -735,11 +908,13 @@ impl ChannelEstimator {
                 out.a[r][c] = x * scale[c];
             }
             out.y[r] = (measured - lin.pred[ch]) * weight;
-            let mut h = if unknown_heading { lin.d_heading[ch] * weight } else { 0.0 };
-            if structural && h.abs() < 1e-6 {
-                h = 0.0;
+            for m in 0..3 {
+                let mut h = if nuisance[m] { lin.d_attitude[ch][m] * weight } else { 0.0 };
+                if structural && h.abs() < 1e-6 {
+                    h = 0.0;
+                }
+                out.h[r][m] = h;
             }
-            out.h[r] = h;
             out.rows += 1;
         }
         out
@@ -756,24 +931,30 @@ impl ChannelEstimator {
             return Err(ChannelError::NothingToEstimate);
         }
         let used = |k: usize| exclude & (1u64 << k) == 0;
+        let unknown_tilt = self.settings.attitude == AttitudeKnowledge::Unknown;
         let mut theta = [0.0f32; PARAMETERS];
         let mut heading = [0.0f32; MAX_DWELLS];
+        let mut attitude = [Mat3::IDENTITY; MAX_DWELLS];
         for (k, d) in self.dwells.iter().enumerate() {
             heading[k] = d.heading_rad.unwrap_or(0.0);
+            attitude[k] = heading_rotation(heading[k]).mul(&d.tilt);
         }
-        let profiled = |k: usize| self.settings.use_gyro && self.dwells[k].heading_rad.is_none();
         let mut pass = Pass::default();
         let mut iterations = 0;
         let mut converged = false;
         let mut previous = f32::INFINITY;
         while iterations < self.settings.max_iterations.max(1) {
             iterations += 1;
+            // Every dwell's nuisance angles, the left-out ones too (their residuals are reported).
             for (k, d) in self.dwells.iter().enumerate() {
-                if used(k) && profiled(k) {
-                    heading[k] = self.profile_heading(d, &theta, model);
+                if unknown_tilt {
+                    (attitude[k], heading[k]) = self.profile_attitude(d, &theta, model);
+                } else if self.nuisances(d)[2] {
+                    heading[k] = self.profile_heading(d, &d.tilt, &theta, model);
+                    attitude[k] = heading_rotation(heading[k]).mul(&d.tilt);
                 }
             }
-            pass = self.pass(&theta, &heading, &cols, n, used, profiled);
+            pass = self.pass(&theta, &attitude, &cols, n, used);
             let mut largest = 0.0f32;
             for c in 0..n {
                 let p = cols[c];
@@ -792,31 +973,33 @@ impl ChannelEstimator {
             }
             previous = largest;
         }
-        Ok(self.finish(&theta, &heading, &cols, n, &pass, used, profiled, iterations, converged, model))
+        let state = State { theta: &theta, heading: &heading, attitude: &attitude, cols: &cols, n, model };
+        Ok(self.finish(&state, &pass, used, iterations, converged))
     }
 
-    /// One Gauss-Newton pass at `theta`: structural rank, weighted solution of the determined parameters.
+    /// One Gauss-Newton pass at `theta` and the dwells' `attitude`: structural rank, weighted solution of the
+    /// determined parameters.
     fn pass(
         &self,
         theta: &[f32; PARAMETERS],
-        heading: &[f32; MAX_DWELLS],
+        attitude: &[Mat3; MAX_DWELLS],
         cols: &[usize; PARAMETERS],
         n: usize,
         used: impl Fn(usize) -> bool,
-        profiled: impl Fn(usize) -> bool,
     ) -> Pass {
         let model = self.model();
         let zero = [0.0f32; PARAMETERS];
         let ones = [1.0f32; PARAMETERS];
+        let none = [false; 3];
         // Column norms of the weighted and the structural designs, for equilibration.
         let mut norm_w = [0.0f32; PARAMETERS];
         let mut norm_s = [0.0f32; PARAMETERS];
         let mut peak_s = [0.0f32; PARAMETERS];
         for (k, d) in self.dwells.iter().enumerate().filter(|(k, _)| used(*k)) {
-            let lin = linearise(theta, &d.tilt, heading[k], &self.site, model);
-            let lin_s = linearise(&zero, &d.tilt, heading[k], &self.site, model);
-            let w = self.rows(d, &lin, cols, n, &ones, false, false);
-            let s = self.rows(d, &lin_s, cols, n, &ones, true, false);
+            let lin = self.linearise(theta, &attitude[k], model);
+            let lin_s = self.linearise(&zero, &attitude[k], model);
+            let w = self.rows(d, &lin, cols, n, &ones, false, none);
+            let s = self.rows(d, &lin_s, cols, n, &ones, true, none);
             for c in 0..n {
                 for r in 0..w.rows {
                     norm_w[c] += w.a[r][c] * w.a[r][c];
@@ -828,9 +1011,14 @@ impl ChannelEstimator {
         // A proportional term whose input never reaches 5 % of full scale in any dwell (an axis tilted by less
         // than 3 deg from horizontal for a scale factor) is not exercised by the schedule: absent, whatever a
         // fit would make of it (a 0.05 deg tilt would otherwise "determine" a scale factor from 9e-4 g).
+        // A dwell whose heading is neither given nor estimated leaves the reference offset undefined: its axes
+        // are navigation axes, and that dwell's are not known.
+        let offset_undefined =
+            self.dwells.iter().enumerate().any(|(k, d)| used(k) && d.heading_rad.is_none() && !self.nuisances(d)[2]);
         for c in 0..n {
             let p = cols[c];
             let full_scale = match p {
+                33..=35 if offset_undefined => f32::INFINITY,
                 6..=23 | 33..=35 => 1.0,
                 24..=32 => self.site.gravity_mps2 / EARTH_RATE_RADPS,
                 _ => continue,
@@ -854,12 +1042,13 @@ impl ChannelEstimator {
         let mut weighted = SqrtInfo::<PARAMETERS>::new(n);
         let mut structure = SqrtInfo::<PARAMETERS>::new(n);
         for (k, d) in self.dwells.iter().enumerate().filter(|(k, _)| used(*k)) {
-            let lin = linearise(theta, &d.tilt, heading[k], &self.site, model);
-            let lin_s = linearise(&zero, &d.tilt, heading[k], &self.site, model);
-            let mut w = self.rows(d, &lin, cols, n, &scale, false, profiled(k));
-            let mut s = self.rows(d, &lin_s, cols, n, &scale_s, true, profiled(k));
-            let skip_w = if profiled(k) { eliminate_heading(&mut w, n) } else { 0 };
-            let skip_s = if profiled(k) { eliminate_heading(&mut s, n) } else { 0 };
+            let lin = self.linearise(theta, &attitude[k], model);
+            let lin_s = self.linearise(&zero, &attitude[k], model);
+            let nuisance = self.nuisances(d);
+            let mut w = self.rows(d, &lin, cols, n, &scale, false, nuisance);
+            let mut s = self.rows(d, &lin_s, cols, n, &scale_s, true, nuisance);
+            let skip_w = eliminate_nuisances(&mut w, n);
+            let skip_s = eliminate_nuisances(&mut s, n);
             for r in skip_w..w.rows {
                 weighted.add_row(&w.a[r], w.y[r]);
             }
@@ -867,22 +1056,7 @@ impl ChannelEstimator {
                 structure.add_row(&s.a[r], 0.0);
             }
         }
-        // Structural rank: SVD of the (unit-column) structural factor.
-        let mut a = structure.r;
-        let mut v = [[0.0f32; PARAMETERS]; PARAMETERS];
-        let sigma = jacobi_svd(&mut a, &mut v, n);
-        let largest = sigma.iter().take(n).fold(0.0f32, |m, s| m.max(*s));
-        let mut determined = [false; PARAMETERS];
-        for (c, slot) in determined.iter_mut().enumerate().take(n) {
-            let mut share = 0.0f32;
-            for j in 0..n {
-                let seen = sigma[j] > self.settings.rank_tolerance * largest;
-                if !seen {
-                    share += v[c][j] * v[c][j];
-                }
-            }
-            *slot = largest > 0.0 && share <= self.settings.share_tolerance;
-        }
+        let (determined, blind_spots, gauge) = self.structural_rank(&structure.r, cols, n);
         // The determined columns of the weighted factor, triangularised again.
         let mut kept = [0usize; PARAMETERS];
         let mut m = 0;
@@ -903,7 +1077,7 @@ impl ChannelEstimator {
         let x = solve_upper(&restricted.r, &restricted.z, m);
         let mut cov_kept = [[0.0f32; PARAMETERS]; PARAMETERS];
         inverse_gram(&restricted.r, m, &mut cov_kept);
-        let mut pass = Pass { scale, determined, ..Pass::default() };
+        let mut pass = Pass { scale, determined, blind_spots, gauge, ..Pass::default() };
         for (i, &ci) in kept.iter().enumerate().take(m) {
             pass.step_si[ci] = x[i] * scale[ci];
             for (j, &cj) in kept.iter().enumerate().take(m) {
@@ -916,20 +1090,59 @@ impl ChannelEstimator {
         pass
     }
 
-    #[allow(clippy::too_many_arguments, reason = "the state of one solve, passed once")]
-    fn finish(
+    /// The structural rank of the (unit-column) structural factor `r`: which model columns are determined, the
+    /// number of blind spots, and the gauge (parameter bits held at zero to fix the body frame). With unknown
+    /// attitudes and the accelerometer misalignments in the model, the gauge columns are removed and the rank
+    /// is taken again.
+    fn structural_rank(
         &self,
-        theta: &[f32; PARAMETERS],
-        heading: &[f32; MAX_DWELLS],
+        r: &[[f32; PARAMETERS]; PARAMETERS],
         cols: &[usize; PARAMETERS],
         n: usize,
+    ) -> ([bool; PARAMETERS], u32, u64) {
+        let (mut determined, blind_spots) = self.determined_columns(r, n);
+        let mut gauge = 0u64;
+        if self.settings.attitude == AttitudeKnowledge::Unknown && self.model().contains(Term::AccelMisalignment) {
+            // Zeroing a column of R zeroes the same column of the design (A = Q R).
+            let mut fixed = *r;
+            for c in 0..n {
+                if GAUGE_PARAMETERS.contains(&cols[c]) {
+                    gauge |= 1 << cols[c];
+                    for row in fixed.iter_mut() {
+                        row[c] = 0.0;
+                    }
+                }
+            }
+            determined = self.determined_columns(&fixed, n).0;
+        }
+        (determined, blind_spots, gauge)
+    }
+
+    /// SVD of a structural factor of `n` columns: whether each column is determined (its squared share in the
+    /// blind spots at most the share tolerance), and the number of blind spots.
+    fn determined_columns(&self, r: &[[f32; PARAMETERS]; PARAMETERS], n: usize) -> ([bool; PARAMETERS], u32) {
+        let mut a = *r;
+        let mut v = [[0.0f32; PARAMETERS]; PARAMETERS];
+        let sigma = jacobi_svd(&mut a, &mut v, n);
+        let largest = sigma.iter().take(n).fold(0.0f32, |m, s| m.max(*s));
+        let seen = |j: usize| sigma[j] > self.settings.rank_tolerance * largest;
+        let mut determined = [false; PARAMETERS];
+        for (c, slot) in determined.iter_mut().enumerate().take(n) {
+            let share: f32 = (0..n).filter(|&j| !seen(j)).map(|j| v[c][j] * v[c][j]).sum();
+            *slot = largest > 0.0 && share <= self.settings.share_tolerance;
+        }
+        (determined, (0..n).filter(|&j| !seen(j)).count() as u32)
+    }
+
+    fn finish(
+        &self,
+        state: &State<'_>,
         pass: &Pass,
         used: impl Fn(usize) -> bool,
-        profiled: impl Fn(usize) -> bool,
         iterations: u32,
         converged: bool,
-        model: Model,
     ) -> ChannelSolution {
+        let State { theta, heading, attitude, cols, n, model } = *state;
         let mut sol = ChannelSolution {
             model,
             parameters_si: [0.0; PARAMETERS],
@@ -947,6 +1160,11 @@ impl ChannelEstimator {
             degrees_of_freedom: 0,
             iterations,
             converged,
+            attitude: self.settings.attitude,
+            earth_rate_resolved: self.settings.earth_rate_resolved,
+            up_b: [[0.0; 3]; MAX_DWELLS],
+            blind_spots: pass.blind_spots,
+            gauge: pass.gauge,
         };
         for c in 0..n {
             let p = cols[c];
@@ -966,8 +1184,10 @@ impl ChannelEstimator {
         let mut channels = 0u32;
         let mut nuisances = 0u32;
         for (k, d) in self.dwells.iter().enumerate() {
-            let lin = linearise(theta, &d.tilt, heading[k], &self.site, model);
-            let rows = self.rows(d, &lin, cols, n, &pass.scale, false, profiled(k));
+            sol.up_b[k] = attitude[k].row(2);
+            let lin = self.linearise(theta, &attitude[k], model);
+            let nuisance = self.nuisances(d);
+            let mut rows = self.rows(d, &lin, cols, n, &pass.scale, false, nuisance);
             for i in 0..3 {
                 sol.residual_rate_b_radps[k][i] = if first == 0 { d.rate_mean_b_radps[i] - lin.pred[i] } else { 0.0 };
                 sol.residual_force_b_mps2[k][i] = d.force_mean_b_mps2[i] - lin.pred[3 + i];
@@ -975,13 +1195,21 @@ impl ChannelEstimator {
             if !used(k) {
                 continue;
             }
-            // Leverage of the dwell's rows: h = |R^-T a|^2 over the determined columns.
+            let h_norm2: f32 = rows.h[..rows.rows].iter().map(|h| h[2] * h[2]).sum();
+            if nuisance[2] && h_norm2 > 0.0 {
+                sol.heading_std_rad[k] = 1.0 / libm::sqrtf(h_norm2);
+            }
+            // The dwell's own freedom: its nuisance angles take one row each (the residuals are at the
+            // profiled optimum, so the reflection leaves the residual sum of squares unchanged).
+            let skip = eliminate_nuisances(&mut rows, n);
+            // Leverage of the dwell's remaining rows: h = |R^-T a|^2 over the determined columns.
             let mut chi2 = 0.0f32;
-            let mut leverage = 0.0f32;
-            let mut h_norm2 = 0.0f32;
+            let mut leverage = skip as f32;
             for r in 0..rows.rows {
                 chi2 += rows.y[r] * rows.y[r];
-                h_norm2 += rows.h[r] * rows.h[r];
+                if r < skip {
+                    continue;
+                }
                 let mut a = [0.0f32; PARAMETERS];
                 for (slot, &c) in a.iter_mut().zip(pass.kept.iter()).take(pass.kept_count) {
                     *slot = rows.a[r][c];
@@ -989,13 +1217,7 @@ impl ChannelEstimator {
                 let b = solve_upper_transposed(&pass.restricted, &a, pass.kept_count);
                 leverage += b.iter().take(pass.kept_count).map(|x| x * x).sum::<f32>();
             }
-            if profiled(k) {
-                leverage += 1.0;
-                nuisances += 1;
-                if h_norm2 > 0.0 {
-                    sol.heading_std_rad[k] = 1.0 / libm::sqrtf(h_norm2);
-                }
-            }
+            nuisances += skip as u32;
             channels += rows.rows as u32;
             sol.chi_square += chi2;
             let free = rows.rows as f32 - leverage;
@@ -1010,6 +1232,17 @@ impl ChannelEstimator {
         sol.degrees_of_freedom = channels.saturating_sub(pass.kept_count as u32 + nuisances);
         sol
     }
+}
+
+/// The state of one solve that [`ChannelEstimator::finish`] reports.
+#[derive(Clone, Copy)]
+struct State<'a> {
+    theta: &'a [f32; PARAMETERS],
+    heading: &'a [f32; MAX_DWELLS],
+    attitude: &'a [Mat3; MAX_DWELLS],
+    cols: &'a [usize; PARAMETERS],
+    n: usize,
+    model: Model,
 }
 
 /// What one Gauss-Newton pass leaves for the next and for the final statistics.
@@ -1028,6 +1261,9 @@ struct Pass {
     /// Model columns of the determined parameters, and their number.
     kept: [usize; PARAMETERS],
     kept_count: usize,
+    /// Blind spots of the structural design before the gauge, and the gauge's parameter bits.
+    blind_spots: u32,
+    gauge: u64,
 }
 
 impl Default for Pass {
@@ -1040,6 +1276,8 @@ impl Default for Pass {
             restricted: [[0.0; PARAMETERS]; PARAMETERS],
             kept: [0; PARAMETERS],
             kept_count: 0,
+            blind_spots: 0,
+            gauge: 0,
         }
     }
 }

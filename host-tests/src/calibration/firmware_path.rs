@@ -12,8 +12,8 @@ use sinscal::run::sequence::{SequenceFailure, SequenceSolution};
 use sinscal::sensor::adis::{encode_burst, Burst, Model, BURST32_LEN, I16F16};
 
 use crate::calibration::{
-    angle_error, calibration_dwells, channel_error, leave_out_suspects, prefilter_of, session_dwells, site_of,
-    Calibration, Estimates, Method, Options, PositionResult,
+    angle_error, attitude_knowledge, calibration_dwells, channel_error, leave_out_suspects, prefilter_of,
+    session_dwells, site_of, Calibration, Estimates, Method, Options, PositionResult,
 };
 use crate::io::error::InputError;
 use crate::io::recording::{DwellAttitude, Recording};
@@ -27,6 +27,13 @@ pub const REPLAY_MODEL: Model = Model::Adis16505_2;
 pub fn replay_file(rec: &Recording, options: &Options) -> Result<(Vec<u8>, Vec<DwellAttitude>), InputError> {
     let source = rec.source.as_str();
     let dwells = calibration_dwells(rec, sinscal::calib::solve::MAX_POSITIONS)?;
+    if attitude_knowledge(&rec.header) == sinscal::calib::channels::AttitudeKnowledge::Unknown {
+        return Err(InputError::file(
+            source,
+            "the firmware path takes the recording's attitudes as its reference, and this recording's were \
+             levelled from its own accelerometers: calibrate it without --on (docs/method.md#unknown-attitudes)",
+        ));
+    }
     // The firmware path needs each dwell as one contiguous stretch of rows (one turntable stop).
     let mut seen = Vec::new();
     let mut previous = 0;

@@ -12,8 +12,10 @@ use sinscal::calib::align::{position_angles, DwellValue, PositionAngles};
 use sinscal::calib::calibration::{
     calibrate_positions, CalibrationError, CalibrationResult, CalibrationSettings, PositionInput,
 };
-use sinscal::calib::channels::{ChannelError, ChannelEstimator, ChannelSettings, ChannelSolution, Model, MAX_DWELLS};
-use sinscal::calib::dwell::{DwellCollector, DwellSummary, Prefilter};
+use sinscal::calib::channels::{
+    AttitudeKnowledge, ChannelError, ChannelEstimator, ChannelSettings, ChannelSolution, Model, MAX_DWELLS,
+};
+use sinscal::calib::dwell::{pool_mean_noise, DwellCollector, DwellSummary, Prefilter};
 use sinscal::calib::prefilter::{CoefficientIdentifier, PrefilterSettings};
 use sinscal::calib::session::{session_estimator, SessionDwell};
 use sinscal::calib::solve::{BiasSolution, SolverSettings, MAX_POSITIONS};
@@ -61,6 +63,10 @@ pub struct Options {
     pub method: Method,
     /// The terms of the general estimator (the angle method estimates the biases and the offset).
     pub model: Model,
+    /// General estimator: estimate every position's pitch and roll from the data (|f| = g), whatever the
+    /// recording says; recordings levelled from their own accelerometers are always solved so
+    /// (docs/method.md#unknown-attitudes).
+    pub estimate_attitudes: bool,
 }
 
 impl Options {
@@ -84,6 +90,7 @@ impl Default for Options {
             max_passes: CalibrationSettings::default().max_passes,
             method: DEFAULT_METHOD,
             model: DEFAULT_MODEL,
+            estimate_attitudes: false,
         }
     }
 }
@@ -169,6 +176,36 @@ pub fn site_of(header: &Header) -> (Site, GravitySource) {
     }
 }
 
+/// What a recording knows of its attitudes: unknown when its header says the pitch and roll were levelled from
+/// its own accelerometers (`# attitude_source: accelerometer-levelled`, the imu_tk import), a reference otherwise.
+pub fn attitude_knowledge(header: &Header) -> AttitudeKnowledge {
+    let levelled = header.comments.iter().any(|c| {
+        c.split_once(':').is_some_and(|(key, value)| {
+            key.trim() == "attitude_source"
+                && value.split_whitespace().next() == Some(crate::io::import::ATTITUDE_SOURCE_LEVELLED)
+        })
+    });
+    if levelled {
+        AttitudeKnowledge::Unknown
+    } else {
+        AttitudeKnowledge::Reference
+    }
+}
+
+/// Whether gyros of per-sample noise variance `noise_var` (the pooled honest noise, gyro x, y, z first) resolve
+/// the Earth rate in dwells of `samples`: the standard error of the median dwell's mean, on its worst axis, is
+/// below a third of the Earth rate.
+pub fn gyros_resolve_earth_rate(noise_var: &[f32; 6], samples: impl Iterator<Item = u32>) -> bool {
+    let mut counts: Vec<u32> = samples.collect();
+    if counts.is_empty() {
+        return false;
+    }
+    counts.sort_unstable();
+    let n = counts[counts.len() / 2].max(1) as f32;
+    let worst = noise_var[..3].iter().fold(0.0f32, |m, v| m.max(*v));
+    (worst / n).sqrt() < sinscal::nav::earth::EARTH_RATE_RADPS / 3.0
+}
+
 /// The dwells of a recording, at least one and at most `limit` (the estimator's).
 pub fn calibration_dwells(recording: &Recording, limit: usize) -> Result<Vec<Dwell<'_>>, InputError> {
     let source = recording.source.as_str();
@@ -245,7 +282,20 @@ pub fn calibrate_channels(recording: &Recording, options: &Options) -> Result<Ca
         };
         positions.push(PositionResult { pos: dwell.pos, first_line: dwell.first_line(), attitude, summary, angles });
     }
-    let settings = ChannelSettings { model: options.model, use_gyro: has_gyro, ..ChannelSettings::default() };
+    let attitude = if options.estimate_attitudes { AttitudeKnowledge::Unknown } else { attitude_knowledge(header) };
+    // With reference attitudes the Earth rate is always in the gyro model ("unobservable" stays a property of the
+    // schedule). Without any, it is in the model only where the gyros resolve it (docs/method.md#unknown-attitudes).
+    let noise = pool_mean_noise(positions.iter().map(|p| p.summary)).map(|m| m.white_equivalent_var);
+    let earth_rate_resolved = attitude == AttitudeKnowledge::Reference
+        || !has_gyro
+        || gyros_resolve_earth_rate(&noise, positions.iter().map(|p| p.summary.samples));
+    let settings = ChannelSettings {
+        model: options.model,
+        use_gyro: has_gyro,
+        attitude,
+        earth_rate_resolved,
+        ..ChannelSettings::default()
+    };
     let estimator = session_estimator(session_dwells(&positions), site, settings, options.dwell_value)
         .map_err(|e| channel_error(e, &positions, source))?;
     let solution = estimator.solve().map_err(|e| channel_error(e, &positions, source))?;

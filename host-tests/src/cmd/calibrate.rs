@@ -81,6 +81,11 @@ pub struct Args {
     /// Take the turntable reference as exact (do not estimate the constant offset phi0).
     #[arg(long)]
     no_reference_offset: bool,
+    /// Channel method: estimate every position's pitch and roll from the data (|f| = g) instead of taking the
+    /// recording's as a reference (hand-placed poses); automatic for recordings levelled from their own
+    /// accelerometers.
+    #[arg(long)]
+    estimate_attitudes: bool,
     /// Passes of the solution at most: 1 = the paper's single linear solution; more remove its
     /// second-order error by realigning the bias-compensated dwells.
     #[arg(long, default_value_t = 6, value_parser = clap::value_parser!(u32).range(1..=50))]
@@ -110,6 +115,9 @@ impl Args {
             Some(MethodArg::Channels) => Method::Channels,
             None => DEFAULT_METHOD,
         };
+        if self.estimate_attitudes && method == Method::Angles {
+            usage("--estimate-attitudes: the angle method needs the reference attitudes (--method channels)")
+        }
         let model = match self.model {
             Some(_) if method == Method::Angles => {
                 usage("--model: the angle method estimates the biases (and the reference offset) only")
@@ -131,6 +139,7 @@ impl Args {
             },
             estimate_reference_offset: !self.no_reference_offset,
             max_passes: self.passes,
+            estimate_attitudes: self.estimate_attitudes,
         })
     }
 }

@@ -4,10 +4,10 @@ use std::fmt::Write as _;
 
 use serde::Serialize;
 use sinscal::calib::align::DwellValue;
-use sinscal::calib::channels::{misalignment_index, Term, PARAMETERS};
+use sinscal::calib::channels::{misalignment_index, AttitudeKnowledge, ChannelSolution, Term, PARAMETERS};
 use sinscal::calib::dwell::Prefilter;
 
-use crate::calibration::{Calibration, Estimates, GravitySource};
+use crate::calibration::{Calibration, Estimates, GravitySource, PositionResult};
 use crate::model::synth::{DEG_PER_HOUR, MICRO_G};
 
 /// Arcseconds per radian.
@@ -27,6 +27,10 @@ pub struct PositionJson {
     pub heading_deg: Option<f64>,
     /// Whether the heading is the reference's.
     pub heading_known: bool,
+    /// Extra: up (the direction of gravity) in the body as estimated, a unit vector, when the recording has no
+    /// reference attitudes (its pitch and roll were levelled from the data).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub up_estimated_b: Option<[f64; 3]>,
     /// Standard error of an estimated heading, degrees (extra field; absent for a known heading).
     #[serde(skip_serializing_if = "Option::is_none")]
     pub heading_std_deg: Option<f64>,
@@ -117,6 +121,13 @@ pub struct CalibrationJson {
     pub without_suspect: Option<WithoutSuspectJson>,
     /// Extra: where gravity came from: "header" or "normal_gravity".
     pub gravity_source: &'static str,
+    /// Extra: the positions' attitudes: "reference", or "estimated" (channel method on a recording levelled
+    /// from its own accelerometers: the direction of gravity of every position is a nuisance parameter).
+    pub attitude: &'static str,
+    /// Extra: parameters held at zero to fix the body frame when the attitudes are estimated (also in
+    /// `unobservable`).
+    #[serde(skip_serializing_if = "Vec::is_empty")]
+    pub gauge: Vec<&'static str>,
     /// Extra: the prefilter that ran.
     pub prefilter: PrefilterJson,
     /// Extra: "mean" or "settled".
@@ -206,38 +217,40 @@ fn f64s(v: [f32; 3]) -> [f64; 3] {
     v.map(|x| x as f64)
 }
 
+impl PositionJson {
+    /// Position `k` (`p`) of a calibration.
+    fn new(c: &Calibration, k: usize, p: &PositionResult) -> PositionJson {
+        let channels = c.channels.as_ref();
+        let resolved = channels.filter(|s| c.has_gyro && s.earth_rate_resolved);
+        let estimated_heading = resolved.map(|s| (s.heading_rad[k] as f64).to_degrees());
+        PositionJson {
+            pos: p.pos,
+            pitch_deg: p.attitude.pitch_deg,
+            roll_deg: p.attitude.roll_deg,
+            heading_deg: p.attitude.heading_deg.or(estimated_heading.map(|h| h.rem_euclid(360.0))),
+            heading_known: p.attitude.heading_deg.is_some(),
+            up_estimated_b: channels.filter(|s| estimated(s)).map(|s| f64s(s.up_b[k])),
+            heading_std_deg: resolved
+                .filter(|_| p.attitude.heading_deg.is_none())
+                .map(|s| (s.heading_std_rad[k] as f64).to_degrees()),
+            samples: p.summary.samples,
+            phi_rad: p.angles.map(|a| f64s(a.phi_n_rad)),
+            phi_std_rad: p.angles.map(|a| [0, 1, 2].map(|i| (a.covariance_rad2.0[i][i] as f64).sqrt())),
+            residual_rad: c.solution.as_ref().map(|s| f64s(s.residual_n_rad[k])),
+            residual_gyro_radps: channels.filter(|_| c.has_gyro).map(|s| f64s(s.residual_rate_b_radps[k])),
+            residual_accel_mps2: channels.map(|s| f64s(s.residual_force_b_mps2[k])),
+            suspect: channels.is_some_and(|s| s.suspect & (1 << k) != 0),
+            statistic: channels.map(|s| s.dwell_statistic[k] as f64).filter(|x| *x >= 0.0),
+        }
+    }
+}
+
 impl CalibrationJson {
     /// Builds the JSON document of a calibration. f32 values are widened to f64 exactly, and serde_json
     /// writes the shortest decimal that reads back to the same f64, hence to the same f32.
     pub fn new(c: &Calibration) -> CalibrationJson {
         let e = &c.estimates;
-        let positions = c
-            .positions
-            .iter()
-            .enumerate()
-            .map(|(k, p)| {
-                let channels = c.channels.as_ref();
-                let estimated_heading = channels.filter(|_| c.has_gyro).map(|s| (s.heading_rad[k] as f64).to_degrees());
-                PositionJson {
-                    pos: p.pos,
-                    pitch_deg: p.attitude.pitch_deg,
-                    roll_deg: p.attitude.roll_deg,
-                    heading_deg: p.attitude.heading_deg.or(estimated_heading.map(|h| h.rem_euclid(360.0))),
-                    heading_known: p.attitude.heading_deg.is_some(),
-                    heading_std_deg: channels
-                        .filter(|_| p.attitude.heading_deg.is_none() && c.has_gyro)
-                        .map(|s| (s.heading_std_rad[k] as f64).to_degrees()),
-                    samples: p.summary.samples,
-                    phi_rad: p.angles.map(|a| f64s(a.phi_n_rad)),
-                    phi_std_rad: p.angles.map(|a| [0, 1, 2].map(|i| (a.covariance_rad2.0[i][i] as f64).sqrt())),
-                    residual_rad: c.solution.as_ref().map(|s| f64s(s.residual_n_rad[k])),
-                    residual_gyro_radps: channels.filter(|_| c.has_gyro).map(|s| f64s(s.residual_rate_b_radps[k])),
-                    residual_accel_mps2: channels.map(|s| f64s(s.residual_force_b_mps2[k])),
-                    suspect: channels.is_some_and(|s| s.suspect & (1 << k) != 0),
-                    statistic: channels.map(|s| s.dwell_statistic[k] as f64).filter(|x| *x >= 0.0),
-                }
-            })
-            .collect();
+        let positions = c.positions.iter().enumerate().map(|(k, p)| PositionJson::new(c, k, p)).collect();
         let prefilter = match c.prefilter {
             Prefilter::None => PrefilterJson { kind: "none", a: None, q: None, r: None },
             Prefilter::HmmKf { gyro, accel } => PrefilterJson {
@@ -286,6 +299,8 @@ impl CalibrationJson {
                 GravitySource::Header => "header",
                 GravitySource::NormalGravity => "normal_gravity",
             },
+            attitude: if c.channels.as_ref().is_some_and(estimated) { "estimated" } else { "reference" },
+            gauge: c.channels.as_ref().map_or_else(Vec::new, gauge_names),
             prefilter,
             dwell_value: match c.options.dwell_value {
                 DwellValue::Mean => "mean",
@@ -305,6 +320,22 @@ impl CalibrationJson {
             sinscal_version: env!("CARGO_PKG_VERSION"),
         }
     }
+}
+
+/// Whether a solution estimated the positions' attitudes (no reference attitudes).
+fn estimated(s: &ChannelSolution) -> bool {
+    s.attitude == AttitudeKnowledge::Unknown
+}
+
+/// Names of the parameters a solution held at zero to fix the body frame.
+fn gauge_names(s: &ChannelSolution) -> Vec<&'static str> {
+    (0..PARAMETERS).filter(|i| s.gauge & (1 << i) != 0).map(sinscal::calib::channels::parameter_name).collect()
+}
+
+/// The pitch and roll (degrees) that put the body direction `up_b` up (docs/conventions.md#attitude).
+fn pitch_roll_deg(up_b: [f32; 3]) -> (f64, f64) {
+    let u = up_b.map(f64::from);
+    (u[1].atan2(u[0].hypot(u[2])).to_degrees(), (-u[0]).atan2(u[2]).to_degrees())
 }
 
 /// Formats an estimate in a display unit: `+0.05012 ± 0.00041`, `unobservable`, or `-`.
@@ -367,7 +398,13 @@ pub fn summary(c: &Calibration) -> String {
             if c.converged { ", converged" } else { ", NOT converged: the second-order terms are large" }
         ),
         crate::calibration::Method::Channels => format!(
-            "channels (every channel of every dwell; model {}; {} Gauss-Newton passes{})",
+            "channels (every channel of every dwell{}; model {}; {} Gauss-Newton passes{})",
+            if c.channels.as_ref().is_some_and(estimated) {
+                "; attitudes estimated, not taken from the recording: the direction of gravity of every position \
+                 is estimated with the sensor model, |f| = g (docs/method.md#unknown-attitudes)"
+            } else {
+                ""
+            },
             e.model_names().join(", "),
             c.passes,
             if c.converged { ", converged" } else { ", NOT converged" }
@@ -376,6 +413,22 @@ pub fn summary(c: &Calibration) -> String {
     let _ = writeln!(out, "method: {method}\nprefilter: {prefilter}; the {value} of each dwell\n");
     positions_table(&mut out, c);
     terms(&mut out, e);
+    if c.channels.as_ref().is_some_and(|s| c.has_gyro && !s.earth_rate_resolved) {
+        let _ = writeln!(
+            out,
+            "Gyros: their dwell means do not resolve the Earth rate ({:.1} deg/h): it is left out of the gyro model, \
+             no heading is estimated, and the gyro scale factors and misalignments are not exercised",
+            sinscal::nav::earth::EARTH_RATE_RADPS as f64 / DEG_PER_HOUR
+        );
+    }
+    if let Some(s) = c.channels.as_ref().filter(|s| s.gauge != 0) {
+        let _ = writeln!(
+            out,
+            "Body frame: the accelerometer triad (x along accelerometer x, y in its x-y plane): {} held at 0, the \
+             other terms in that frame (a common rotation of all positions is not seen without reference attitudes)",
+            gauge_names(s).join(", ")
+        );
+    }
     fit(&mut out, e);
     suspects(&mut out, c);
     out
@@ -392,8 +445,16 @@ fn positions_table(out: &mut String, c: &Calibration) {
             for (k, p) in c.positions.iter().enumerate() {
                 let heading = match p.attitude.heading_deg {
                     Some(h) => format!("{h:>8.2}"),
-                    None if c.has_gyro => format!("{:>7.1}?", (s.heading_rad[k] as f64).to_degrees().rem_euclid(360.0)),
+                    None if c.has_gyro && s.earth_rate_resolved => {
+                        format!("{:>7.1}?", (s.heading_rad[k] as f64).to_degrees().rem_euclid(360.0))
+                    }
                     None => "       ?".to_string(),
+                };
+                let (pitch, roll) = if estimated(s) {
+                    let (p, r) = pitch_roll_deg(s.up_b[k]);
+                    (format!("{p:>6.2}?"), format!("{r:>6.2}?"))
+                } else {
+                    (format!("{:>7.2}", p.attitude.pitch_deg), format!("{:>7.2}", p.attitude.roll_deg))
                 };
                 let rg = s.residual_rate_b_radps[k].map(|x| x as f64 / DEG_PER_HOUR);
                 let rg: [String; 3] = rg.map(|x| if c.has_gyro { format!("{x:>+9.4}") } else { format!("{:>9}", "-") });
@@ -401,10 +462,8 @@ fn positions_table(out: &mut String, c: &Calibration) {
                 let stat = s.dwell_statistic[k];
                 let _ = writeln!(
                     out,
-                    "{:>4} {:>7.2} {:>7.2} {heading} {:>8} |  {} {} {} |  {:>+9.2} {:>+9.2} {:>+9.2} | {}{}",
+                    "{:>4} {pitch} {roll} {heading} {:>8} |  {} {} {} |  {:>+9.2} {:>+9.2} {:>+9.2} | {}{}",
                     p.pos,
-                    p.attitude.pitch_deg,
-                    p.attitude.roll_deg,
                     p.summary.samples,
                     rg[0],
                     rg[1],
@@ -416,8 +475,22 @@ fn positions_table(out: &mut String, c: &Calibration) {
                     if s.suspect & (1 << k) != 0 { "  SUSPECT" } else { "" }
                 );
             }
-            if c.positions.iter().any(|p| p.attitude.heading_deg.is_none()) && c.has_gyro {
-                let _ = writeln!(out, "(? = heading unknown in the recording: estimated from the Earth rate)");
+            if estimated(s) {
+                let _ = writeln!(
+                    out,
+                    "(? = estimated: pitch and roll from calibrated gravity{}, in the body frame of the calibration)",
+                    if c.has_gyro && s.earth_rate_resolved { ", heading from the Earth rate" } else { "" }
+                );
+            } else if c.positions.iter().any(|p| p.attitude.heading_deg.is_none()) && c.has_gyro {
+                let _ = writeln!(
+                    out,
+                    "(? = heading unknown in the recording: {})",
+                    if s.earth_rate_resolved {
+                        "estimated from the Earth rate"
+                    } else {
+                        "not estimated, the gyros do not resolve the Earth rate"
+                    }
+                );
             }
         }
         None => {

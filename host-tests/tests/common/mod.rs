@@ -4,6 +4,8 @@
 use std::io::Write as _;
 use std::path::{Path, PathBuf};
 
+pub mod held_out;
+
 /// The shared data directory, or `None` (with a message) when `SINSCAL_DATA` is not set.
 pub fn data_dir() -> Option<PathBuf> {
     match std::env::var_os("SINSCAL_DATA") {

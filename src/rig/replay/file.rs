@@ -7,7 +7,7 @@ use heapless::Vec;
 use super::run::ReplayOutcome;
 use crate::calib::align::DwellValue;
 use crate::calib::calibration::{CalibrationError, CalibrationResult, CalibrationSettings, PositionInput};
-use crate::calib::channels::{ChannelError, ChannelSettings, ChannelSolution, Model as Terms, Term};
+use crate::calib::channels::{AttitudeKnowledge, ChannelError, ChannelSettings, ChannelSolution, Model as Terms, Term};
 use crate::calib::dwell::{Prefilter, MIN_DWELL_SAMPLES};
 use crate::calib::prefilter::PrefilterSettings;
 use crate::calib::solve::MAX_POSITIONS;
@@ -222,7 +222,7 @@ pub fn read_header<R: ByteSource>(source: &mut R) -> Result<ReplayHeader, Replay
 /// Magic of an encoded outcome.
 pub const OUTCOME_MAGIC: [u8; 4] = *b"SSRO";
 /// Largest encoded outcome, bytes: 24 positions of 424 bytes (10,176), the general estimator's solution
-/// (6,260 for 24 dwells; the angle method's is 808) and the counters and failure (68): 16,504.
+/// (6,568 for 24 dwells; the angle method's is 808) and the counters and failure (68): 16,812.
 pub const MAX_OUTCOME_BYTES: usize = 16_896;
 
 struct Writer<'a> {
@@ -387,7 +387,18 @@ fn encode_channels(w: &mut Writer<'_>, c: &ChannelSolution) -> Result<(), Replay
     w.f32(c.chi_square)?;
     w.u32(c.degrees_of_freedom)?;
     w.u32(c.iterations)?;
-    w.u32(c.converged as u32)
+    w.u32(c.converged as u32)?;
+    w.u32(match c.attitude {
+        AttitudeKnowledge::Reference => 0,
+        AttitudeKnowledge::Unknown => 1,
+    })?;
+    w.u32(c.earth_rate_resolved as u32)?;
+    for up in &c.up_b[..n] {
+        w.f32s(up)?;
+    }
+    w.u32(c.blind_spots)?;
+    w.u32(c.gauge as u32)?;
+    w.u32((c.gauge >> 32) as u32)
 }
 
 /// Encodes an outcome (every f32 as its bit pattern) into `out`; returns the length.
@@ -581,6 +592,11 @@ fn decode_channels(r: &mut Reader<'_>) -> Result<ChannelSolution, ReplayError> {
         degrees_of_freedom: 0,
         iterations: 0,
         converged: false,
+        attitude: AttitudeKnowledge::Reference,
+        earth_rate_resolved: true,
+        up_b: [[0.0; 3]; MAX_DWELLS],
+        blind_spots: 0,
+        gauge: 0,
     };
     for k in 0..dwells {
         c.heading_rad[k] = r.f32()?;
@@ -600,5 +616,16 @@ fn decode_channels(r: &mut Reader<'_>) -> Result<ChannelSolution, ReplayError> {
     c.degrees_of_freedom = r.u32()?;
     c.iterations = r.u32()?;
     c.converged = r.u32()? != 0;
+    c.attitude = match r.u32()? {
+        0 => AttitudeKnowledge::Reference,
+        1 => AttitudeKnowledge::Unknown,
+        _ => return Err(ReplayError::Format),
+    };
+    c.earth_rate_resolved = r.u32()? != 0;
+    for k in 0..dwells {
+        c.up_b[k] = r.vec3()?;
+    }
+    c.blind_spots = r.u32()?;
+    c.gauge = r.u32()? as u64 | (r.u32()? as u64) << 32;
     Ok(c)
 }

@@ -334,7 +334,7 @@ fn imutk_recording(
         format!("scale: {gains}"),
         format!("latitude_source: {latitude_source}"),
         format!("gravity_source: imu_tk example value {IMUTK_GRAVITY_MPS2} m/s^2"),
-        "attitude_source: accelerometer-levelled".to_string(),
+        format!("attitude_source: {ATTITUDE_SOURCE_LEVELLED}"),
         format!("static_detection: {rule}"),
     ];
     let recording = Recording {

@@ -64,6 +64,11 @@ pub const IMUTK_GYRO_GAIN_COUNTS_PER_RADPS: [f64; 3] = [4778.0, 4758.0, 4766.0];
 /// Nominal zero of the imu_tk unsigned 16-bit counts.
 pub const IMUTK_OFFSET_COUNTS: f64 = 32768.0;
 
+/// The `# attitude_source:` of a recording whose pitch and roll were levelled from its own accelerometers (no
+/// reference attitude): `sinscal calibrate` then estimates every position's attitude
+/// (docs/method.md#unknown-attitudes).
+pub const ATTITUDE_SOURCE_LEVELLED: &str = "accelerometer-levelled";
+
 /// Largest difference accepted between the time stamps of the imu_tk accelerometer and gyro files, s.
 pub const IMUTK_MAX_TIME_MISMATCH_S: f64 = 1e-6;
 
