@@ -236,6 +236,8 @@ fn usage_errors_exit_2() {
     sinscal().assert().code(2);
     sinscal().args(["calibrate"]).assert().code(2);
     sinscal().args(["calibrate", "x.csv", "--prefilter", "bogus"]).assert().code(2);
+    sinscal().args(["calibrate", "x.csv", "--estimate-attitudes", "--on", "host"]).assert().code(2);
+    sinscal().args(["calibrate", "x.csv", "--estimate-attitudes", "--method", "angles"]).assert().code(2);
 }
 
 #[test]

@@ -45,6 +45,9 @@ pub struct Estimates {
     pub chi_square: f64,
     /// Degrees of freedom.
     pub degrees_of_freedom: u32,
+    /// The factor the standard errors (and the covariance's square root) carry beyond the dwell noise:
+    /// `S = sqrt(chi_square / degrees_of_freedom)` when that is above 1, else 1 (docs/method.md#fit-scale).
+    pub std_scale: f64,
 }
 
 impl Estimates {
@@ -65,6 +68,7 @@ impl Estimates {
             .iter()
             .map(|&i| e.determined.iter().map(|&j| s.covariance_si[i][j] as f64).collect())
             .collect();
+        e.scale_by_fit();
         e
     }
 
@@ -97,7 +101,27 @@ impl Estimates {
             .iter()
             .map(|&a| solver_index.iter().map(|&b| s.covariance_si[a][b] as f64).collect())
             .collect();
+        e.scale_by_fit();
         e
+    }
+
+    /// Scales the standard errors and the covariance by the fit (docs/method.md#fit-scale): when the residuals
+    /// are larger than the dwell noise explains (`chi_square / degrees_of_freedom = S^2 > 1`), the errors are
+    /// taken as S times larger, the noise the data really have beyond what each dwell's own statistics see.
+    fn scale_by_fit(&mut self) {
+        let dof = self.degrees_of_freedom as f64;
+        let ratio = if dof > 0.0 { self.chi_square / dof } else { 0.0 };
+        if !(ratio.is_finite() && ratio > 1.0) {
+            return;
+        }
+        self.std_scale = ratio.sqrt();
+        // In f32, as the core's values are: every number written stays exactly an f32, and each standard error is
+        // the square root of its covariance entry.
+        let s2 = ratio as f32;
+        self.covariance_si.iter_mut().flatten().for_each(|c| *c = (*c as f32 * s2) as f64);
+        for (k, &i) in self.determined.iter().enumerate() {
+            self.std_si[i] = Some((self.covariance_si[k][k] as f32).max(0.0).sqrt() as f64);
+        }
     }
 
     fn empty(method: Method, model: Model, chi_square: f64, degrees_of_freedom: u32) -> Estimates {
@@ -111,6 +135,7 @@ impl Estimates {
             covariance_si: Vec::new(),
             chi_square,
             degrees_of_freedom,
+            std_scale: 1.0,
         }
     }
 

@@ -118,6 +118,9 @@ impl Args {
         if self.estimate_attitudes && method == Method::Angles {
             usage("--estimate-attitudes: the angle method needs the reference attitudes (--method channels)")
         }
+        if self.estimate_attitudes && self.on.is_some() {
+            usage("--estimate-attitudes: the firmware path takes the recording's attitudes as its reference")
+        }
         let model = match self.model {
             Some(_) if method == Method::Angles => {
                 usage("--model: the angle method estimates the biases (and the reference offset) only")

@@ -116,6 +116,9 @@ pub struct CalibrationJson {
     pub chi_square: f64,
     /// Its degrees of freedom.
     pub degrees_of_freedom: u32,
+    /// Extra: the factor the standard errors and the covariance's square root carry beyond the dwell noise,
+    /// `sqrt(chi_square / degrees_of_freedom)` when above 1, else 1.
+    pub std_scale: f64,
     /// Extra: the determined parameters again without the suspect positions (channel method, when some are).
     #[serde(skip_serializing_if = "Option::is_none")]
     pub without_suspect: Option<WithoutSuspectJson>,
@@ -289,6 +292,7 @@ impl CalibrationJson {
             unobservable: e.unobservable_names(),
             chi_square: e.chi_square,
             degrees_of_freedom: e.degrees_of_freedom,
+            std_scale: e.std_scale,
             without_suspect: c.without_suspect.as_ref().map(|(positions, w)| WithoutSuspectJson {
                 positions: positions.clone(),
                 parameters: w.determined_names(),
@@ -569,9 +573,15 @@ fn fit(out: &mut String, e: &Estimates) {
         if p_value < 1e-3 {
             let _ = write!(
                 out,
-                "\n  The model misses something: the residuals are {:.1} times what the dwell noise explains. \
-                 Standard errors above are from the noise alone.",
+                "\n  The model misses something: the residuals are {:.1} times what the dwell noise explains.",
                 ratio.sqrt()
+            );
+        }
+        if e.std_scale > 1.0 {
+            let _ = write!(
+                out,
+                "\n  Standard errors above are {:.2} times those of the dwell noise alone (sqrt of the ratio).",
+                e.std_scale
             );
         }
     }
