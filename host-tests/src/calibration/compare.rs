@@ -225,7 +225,8 @@ pub fn compare(lab: &Lab, candidates: &[Candidate], runs: usize, seed: u64) -> V
                     for d in &run.dwells {
                         est.add(*d).expect("dwell");
                     }
-                    Estimates::from_channels(&est.solve().expect("general estimator"))
+                    // As `calibrate` reports them: with the fit scale of each sensor.
+                    Estimates::from_session(&est, &est.solve().expect("general estimator"), 0)
                 }
             };
             for i in 0..6 {

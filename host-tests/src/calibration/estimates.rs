@@ -2,7 +2,9 @@
 //! (docs/formats.md#calibration-json-version-2), values and standard errors in SI units, the full covariance of
 //! the determined parameters, and which parameters the schedule cannot determine.
 
-use sinscal::calib::channels::{parameter_name, ChannelSolution, Model, Term, PARAMETERS};
+use sinscal::calib::channels::{
+    parameter_name, AttitudeKnowledge, ChannelEstimator, ChannelSolution, Model, Term, PARAMETERS,
+};
 use sinscal::calib::solve::{BiasSolution, Parameter};
 
 /// Which estimator made a calibration.
@@ -45,9 +47,10 @@ pub struct Estimates {
     pub chi_square: f64,
     /// Degrees of freedom.
     pub degrees_of_freedom: u32,
-    /// The factor the standard errors (and the covariance's square root) carry beyond the dwell noise:
-    /// `S = sqrt(chi_square / degrees_of_freedom)` when that is above 1, else 1 (docs/method.md#fit-scale).
-    pub std_scale: f64,
+    /// The factors the standard errors (and the covariance's square root) carry beyond the dwell noise, for the
+    /// gyro terms and for the others: `S = sqrt(chi_square / degrees_of_freedom)` of that sensor's channels when
+    /// above 1, else 1 (docs/method.md#fit-scale). The angle method's are 1.
+    pub std_scale: [f64; 2],
 }
 
 impl Estimates {
@@ -68,8 +71,64 @@ impl Estimates {
             .iter()
             .map(|&i| e.determined.iter().map(|&j| s.covariance_si[i][j] as f64).collect())
             .collect();
-        e.scale_by_fit();
         e
+    }
+
+    /// From the general estimator's solution of `estimator`'s dwells (those not in `excluded`), with the fit
+    /// scale of each sensor (docs/method.md#fit-scale).
+    pub fn from_session(estimator: &ChannelEstimator, s: &ChannelSolution, excluded: u64) -> Estimates {
+        let mut e = Estimates::from_channels(s);
+        let use_gyro = estimator.settings().use_gyro;
+        let (mut chi, mut rows) = ([0.0f64; 2], [0i64; 2]);
+        let mut nuisance = [0i64; 2];
+        for (k, d) in estimator.dwells().iter().enumerate().take(s.dwells) {
+            if k < 64 && excluded & (1 << k) != 0 {
+                continue;
+            }
+            for i in 0..3 {
+                if use_gyro {
+                    chi[0] += (s.residual_rate_b_radps[k][i] as f64).powi(2) / d.rate_mean_var_b_radps2[i] as f64;
+                    rows[0] += 1;
+                }
+                chi[1] += (s.residual_force_b_mps2[k][i] as f64).powi(2) / d.force_mean_var_b_mps2sq[i] as f64;
+                rows[1] += 1;
+            }
+            // An estimated heading is the gyros' to determine; an estimated tilt the accelerometers'.
+            nuisance[0] += i64::from(s.heading_std_rad[k] > 0.0);
+            nuisance[1] += if s.attitude == AttitudeKnowledge::Unknown { 2 } else { 0 };
+        }
+        let mut params = [0i64; 2];
+        for &i in &e.determined {
+            params[sensor_of(i)] += 1;
+        }
+        e.std_scale = core::array::from_fn(|g| {
+            let dof = rows[g] - params[g] - nuisance[g];
+            let ratio = if dof > 0 { chi[g] / dof as f64 } else { 0.0 };
+            if ratio.is_finite() && ratio > 1.0 {
+                ratio.sqrt()
+            } else {
+                1.0
+            }
+        });
+        e.apply_scale();
+        e
+    }
+
+    /// Multiplies the covariance by the scales (entry `(i, j)` by `S(i) S(j)`) and takes each standard error as
+    /// the square root of its entry, in f32 as the core's values are: every number written stays an f32.
+    fn apply_scale(&mut self) {
+        if self.std_scale == [1.0; 2] {
+            return;
+        }
+        let scale: Vec<f64> = self.determined.iter().map(|&i| self.std_scale[sensor_of(i)]).collect();
+        for (a, row) in self.covariance_si.iter_mut().enumerate() {
+            for (b, c) in row.iter_mut().enumerate() {
+                *c = (*c as f32 * (scale[a] * scale[b]) as f32) as f64;
+            }
+        }
+        for (k, &i) in self.determined.iter().enumerate() {
+            self.std_si[i] = Some((self.covariance_si[k][k] as f32).max(0.0).sqrt() as f64);
+        }
     }
 
     /// From the angle method's solution: gyro and accelerometer biases, and the reference offset when it was
@@ -101,27 +160,7 @@ impl Estimates {
             .iter()
             .map(|&a| solver_index.iter().map(|&b| s.covariance_si[a][b] as f64).collect())
             .collect();
-        e.scale_by_fit();
         e
-    }
-
-    /// Scales the standard errors and the covariance by the fit (docs/method.md#fit-scale): when the residuals
-    /// are larger than the dwell noise explains (`chi_square / degrees_of_freedom = S^2 > 1`), the errors are
-    /// taken as S times larger, the noise the data really have beyond what each dwell's own statistics see.
-    fn scale_by_fit(&mut self) {
-        let dof = self.degrees_of_freedom as f64;
-        let ratio = if dof > 0.0 { self.chi_square / dof } else { 0.0 };
-        if !(ratio.is_finite() && ratio > 1.0) {
-            return;
-        }
-        self.std_scale = ratio.sqrt();
-        // In f32, as the core's values are: every number written stays exactly an f32, and each standard error is
-        // the square root of its covariance entry.
-        let s2 = ratio as f32;
-        self.covariance_si.iter_mut().flatten().for_each(|c| *c = (*c as f32 * s2) as f64);
-        for (k, &i) in self.determined.iter().enumerate() {
-            self.std_si[i] = Some((self.covariance_si[k][k] as f32).max(0.0).sqrt() as f64);
-        }
     }
 
     fn empty(method: Method, model: Model, chi_square: f64, degrees_of_freedom: u32) -> Estimates {
@@ -135,7 +174,7 @@ impl Estimates {
             covariance_si: Vec::new(),
             chi_square,
             degrees_of_freedom,
-            std_scale: 1.0,
+            std_scale: [1.0; 2],
         }
     }
 
@@ -153,6 +192,15 @@ impl Estimates {
     pub fn model_names(&self) -> Vec<&'static str> {
         Term::ALL.iter().filter(|t| self.model.contains(**t)).map(|t| t.name()).collect()
     }
+}
+
+/// 0 for a gyro term's parameter, 1 for the accelerometers' and the reference offset's (seen through the tilt).
+fn sensor_of(index: usize) -> usize {
+    let gyro = Term::ALL.iter().any(|t| {
+        let (first, count) = t.parameters();
+        t.is_gyro() && (first..first + count).contains(&index)
+    });
+    usize::from(!gyro)
 }
 
 /// Parses `--model`: `biases`, `full`, or a comma list of term names. `position_error` is analyze's.

@@ -204,10 +204,10 @@ pub fn calibration_from_outcome(
                 Estimator::Channels(s) => s,
                 Estimator::Angles => return Err(InputError::file(source, "replay outcome: estimator mismatch")),
             };
-            let without_suspect = session_estimator(session_dwells(&positions), site, settings, options.dwell_value)
-                .ok()
-                .and_then(|estimator| leave_out_suspects(&estimator, c, &positions));
-            let estimates = Estimates::from_channels(c);
+            let estimator = session_estimator(session_dwells(&positions), site, settings, options.dwell_value)
+                .map_err(|e| channel_error(e, &positions, source))?;
+            let without_suspect = leave_out_suspects(&estimator, c, &positions);
+            let estimates = Estimates::from_session(&estimator, c, 0);
             on_firmware(estimates, None, Some(c.clone()), without_suspect, c.iterations, c.converged)
         }
     })

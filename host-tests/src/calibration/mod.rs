@@ -309,7 +309,7 @@ pub fn calibrate_channels(recording: &Recording, options: &Options) -> Result<Ca
         prefilter,
         options: *options,
         positions,
-        estimates: Estimates::from_channels(&solution),
+        estimates: Estimates::from_session(&estimator, &solution, 0),
         solution: None,
         passes: solution.iterations,
         converged: solution.converged,
@@ -356,7 +356,7 @@ pub fn leave_out_suspects(
         return None;
     }
     let labels = positions.iter().enumerate().filter(|(k, _)| mask & (1 << k) != 0).map(|(_, p)| p.pos).collect();
-    Some((labels, Estimates::from_channels(&current)))
+    Some((labels, Estimates::from_session(estimator, &current, mask)))
 }
 
 /// A core error of the general estimator with the dwell's label and line.

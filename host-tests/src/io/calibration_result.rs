@@ -116,9 +116,10 @@ pub struct CalibrationJson {
     pub chi_square: f64,
     /// Its degrees of freedom.
     pub degrees_of_freedom: u32,
-    /// Extra: the factor the standard errors and the covariance's square root carry beyond the dwell noise,
-    /// `sqrt(chi_square / degrees_of_freedom)` when above 1, else 1.
-    pub std_scale: f64,
+    /// Extra: the factors the standard errors and the covariance's square root carry beyond the dwell noise,
+    /// gyro terms and the others: `sqrt(chi_square / degrees_of_freedom)` of that sensor's channels when above
+    /// 1, else 1.
+    pub std_scale: [f64; 2],
     /// Extra: the determined parameters again without the suspect positions (channel method, when some are).
     #[serde(skip_serializing_if = "Option::is_none")]
     pub without_suspect: Option<WithoutSuspectJson>,
@@ -577,11 +578,12 @@ fn fit(out: &mut String, e: &Estimates) {
                 ratio.sqrt()
             );
         }
-        if e.std_scale > 1.0 {
+        if e.std_scale != [1.0; 2] {
             let _ = write!(
                 out,
-                "\n  Standard errors above are {:.2} times those of the dwell noise alone (sqrt of the ratio).",
-                e.std_scale
+                "\n  Standard errors above are {:.2} (gyro terms) and {:.2} (accelerometer terms) times those of the \
+                 dwell noise alone: the fit scale of each sensor's channels.",
+                e.std_scale[0], e.std_scale[1]
             );
         }
     }
