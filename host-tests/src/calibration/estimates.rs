@@ -49,7 +49,7 @@ pub struct Estimates {
     pub degrees_of_freedom: u32,
     /// The factors the standard errors (and the covariance's square root) carry beyond the dwell noise, for the
     /// gyro terms and for the others: `S = sqrt(chi_square / degrees_of_freedom)` of that sensor's channels when
-    /// above 1, else 1 (docs/method.md#fit-scale). The angle method's are 1.
+    /// their chi-square is beyond its 95 % point, else 1 (docs/method.md#fit-scale). The angle method's are 1.
     pub std_scale: [f64; 2],
 }
 
@@ -103,9 +103,14 @@ impl Estimates {
         }
         e.std_scale = core::array::from_fn(|g| {
             let dof = rows[g] - params[g] - nuisance[g];
-            let ratio = if dof > 0 { chi[g] / dof as f64 } else { 0.0 };
-            if ratio.is_finite() && ratio > 1.0 {
-                ratio.sqrt()
+            if dof <= 0 || !chi[g].is_finite() {
+                return 1.0;
+            }
+            // Only a chi-square beyond its 95 % point says the sensor's dwell means scatter more than their noise:
+            // below it, a ratio above 1 is the noise's own fluctuation and scaling by it would overstate errors.
+            let p_value = 1.0 - crate::stats::noise::chi_square_cdf(chi[g], dof as f64);
+            if p_value < FIT_SCALE_LEVEL {
+                (chi[g] / dof as f64).sqrt()
             } else {
                 1.0
             }
@@ -193,6 +198,9 @@ impl Estimates {
         Term::ALL.iter().filter(|t| self.model.contains(**t)).map(|t| t.name()).collect()
     }
 }
+
+/// The significance level below which a sensor's chi-square scales its terms' errors (docs/method.md#fit-scale).
+pub const FIT_SCALE_LEVEL: f64 = 0.05;
 
 /// 0 for a gyro term's parameter, 1 for the accelerometers' and the reference offset's (seen through the tilt).
 fn sensor_of(index: usize) -> usize {

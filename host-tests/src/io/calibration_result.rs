@@ -117,8 +117,8 @@ pub struct CalibrationJson {
     /// Its degrees of freedom.
     pub degrees_of_freedom: u32,
     /// Extra: the factors the standard errors and the covariance's square root carry beyond the dwell noise,
-    /// gyro terms and the others: `sqrt(chi_square / degrees_of_freedom)` of that sensor's channels when above
-    /// 1, else 1.
+    /// gyro terms and the others: `sqrt(chi_square / degrees_of_freedom)` of that sensor's channels when that
+    /// chi-square is beyond its 95 % point, else 1.
     pub std_scale: [f64; 2],
     /// Extra: the determined parameters again without the suspect positions (channel method, when some are).
     #[serde(skip_serializing_if = "Option::is_none")]
