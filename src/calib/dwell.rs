@@ -252,6 +252,17 @@ fn exp2_capped(y: f32) -> f32 {
 /// dwells' mean length. The prefilter's start term is the dwells' average white-equivalent one; the
 /// white fallback pools the per-sample variances. No allocation; an empty session gives zeros.
 pub fn pool_mean_noise(summaries: impl Iterator<Item = DwellSummary>) -> [MeanNoise; 6] {
+    pool(summaries, true)
+}
+
+/// [`pool_mean_noise`] without the prefilter's start term: the pooled noise of the raw dwell mean, for a caller
+/// that adds each dwell's own start term ([`DwellAllan::prefilter_start_var`]).
+pub fn pool_raw_mean_noise(summaries: impl Iterator<Item = DwellSummary>) -> [MeanNoise; 6] {
+    pool(summaries, false)
+}
+
+/// The pooling of [`pool_mean_noise`], with the dwells' average start term or without it.
+fn pool(summaries: impl Iterator<Item = DwellSummary>, with_start: bool) -> [MeanNoise; 6] {
     let mut avar_sum = [[0.0f32; ALLAN_LEVELS]; 6];
     let mut diffs = [0u32; ALLAN_LEVELS];
     let mut var_sum = [0.0f32; 6];
@@ -287,7 +298,8 @@ pub fn pool_mean_noise(summaries: impl Iterator<Item = DwellSummary>) -> [MeanNo
         });
         let fallback = (if dof > 0 { var_sum[i] / dof as f32 } else { 0.0 }, dof as f32);
         let dwells = dwells as f32;
-        mean_noise_from_levels(&levels, fallback, start_q_sum[i] / dwells, samples / dwells)
+        let start_q = if with_start { start_q_sum[i] / dwells } else { 0.0 };
+        mean_noise_from_levels(&levels, fallback, start_q, samples / dwells)
     })
 }
 

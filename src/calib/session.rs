@@ -3,7 +3,7 @@
 //! dwells give the same estimator input, bit for bit, on either machine.
 //!
 //! Each dwell contributes its mean (or the prefilter's settled value) and the variance of that mean: the
-//! session's pooled honest noise of the raw mean ([`pool_mean_noise`], docs/method.md#honest-errors) over the
+//! session's pooled honest noise of the raw mean ([`pool_raw_mean_noise`], docs/method.md#honest-errors) over the
 //! dwell's number of samples, plus the dwell's own prefilter start term (it follows the dwell's own per-sample
 //! scatter and length: a quantised channel whose input sits on a step scatters little, one between two steps by
 //! up to half a step; docs/method.md#coloured-noise-monte-carlo), never below the f32 resolution of a mean
@@ -11,7 +11,7 @@
 
 use crate::calib::align::DwellValue;
 use crate::calib::channels::{ChannelDwell, ChannelError, ChannelEstimator, ChannelSettings, Model, Term};
-use crate::calib::dwell::{pool_mean_noise, DwellSummary};
+use crate::calib::dwell::{pool_raw_mean_noise, DwellSummary};
 use crate::nav::earth::{Site, EARTH_RATE_RADPS};
 use crate::nav::frames::Attitude;
 
@@ -54,17 +54,9 @@ pub fn session_estimator<'a, I>(
 where
     I: Iterator<Item = SessionDwell<'a>> + Clone,
 {
-    let pooled = pool_mean_noise(dwells.clone().map(|d| *d.summary)).map(|m| m.white_equivalent_var);
-    // pool_mean_noise adds the dwells' average prefilter start term (white-equivalent); it is replaced by each
-    // dwell's own, which follows that dwell's per-sample scatter and length.
-    let (mut start_q, mut count) = ([0.0f32; 6], 0.0f32);
-    for d in dwells.clone() {
-        for (i, q) in start_q.iter_mut().enumerate() {
-            *q += d.summary.allan[i].prefilter_start_var * d.summary.samples as f32;
-        }
-        count += 1.0;
-    }
-    let raw_q: [f32; 6] = core::array::from_fn(|i| (pooled[i] - start_q[i] / count.max(1.0)).max(0.0));
+    // The pooled noise of the raw mean; each dwell adds its own prefilter start term, which follows that dwell's
+    // per-sample scatter and length.
+    let raw_q = pool_raw_mean_noise(dwells.clone().map(|d| *d.summary)).map(|m| m.white_equivalent_var);
     let (rate_floor, force_floor) = (resolution_floor(EARTH_RATE_RADPS), resolution_floor(site.gravity_mps2));
     let mut estimator = ChannelEstimator::new(site, settings);
     for d in dwells {
