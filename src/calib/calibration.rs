@@ -13,7 +13,7 @@
 use crate::calib::align::{position_angles, AlignError, DwellValue};
 use crate::calib::dwell::DwellSummary;
 use crate::calib::solve::{BiasSolution, BiasSolver, Estimate, SolveError, SolverSettings};
-use crate::math::linalg::{rotation, Mat3};
+use crate::math::linalg::{norm, rotation, Mat3};
 use crate::nav::earth::Site;
 
 /// One position: the turntable's attitude and the dwell's statistics.
@@ -59,14 +59,14 @@ pub enum CalibrationError {
     /// The solution failed.
     Solve(SolveError),
     /// The first pass's alignment of a position differs from its reference attitude by more than
-    /// [`MAX_LEVEL_MISALIGNMENT_RAD`] in level or [`MAX_HEADING_MISALIGNMENT_RAD`] in heading: the reference
+    /// [`MAX_LEVEL_MISALIGNMENT_RAD`] in level or [`MAX_HEADING_MISALIGNMENT_RAD`] in heading, at any angle: the reference
     /// or the axes do not match the data (a wrong face down, a heading a half turn off).
     Implausible {
         /// Which position.
         index: usize,
-        /// Larger of |phi_e| and |phi_n|, rad.
+        /// Angle between the computed and the reference up axes, rad ([`attitude_difference_rad`]).
         level_rad: f32,
-        /// phi_u, rad.
+        /// Heading of the computed attitude less the reference's, rad, in (-pi, pi], of the sign of phi_u.
         heading_rad: f32,
     },
     /// The dwell's |f| differs from g by more than [`MAX_FORCE_MAGNITUDE_ERROR`] (relative): an accelerometer
@@ -172,14 +172,15 @@ pub fn calibrate_positions(
                 s.force_settled_b_mps2[i] -= accel_bias_b_mps2[i];
             }
             let c_b_n = correct_reference.mul(&p.c_b_n);
-            let f = p.summary.force_mean_b_mps2;
-            let ratio = libm::sqrtf(f[0] * f[0] + f[1] * f[1] + f[2] * f[2]) / site.gravity_mps2;
-            if passes == 1 && ((ratio - 1.0).abs() > MAX_FORCE_MAGNITUDE_ERROR || ratio.is_nan()) {
-                return Err(CalibrationError::ForceMagnitude { index, ratio });
+            // Plausibility first: checked on the data as measured (the first pass), not after corrections.
+            if passes == 1 {
+                let ratio = norm(p.summary.force_mean_b_mps2) / site.gravity_mps2;
+                if (ratio - 1.0).abs() > MAX_FORCE_MAGNITUDE_ERROR || ratio.is_nan() {
+                    return Err(CalibrationError::ForceMagnitude { index, ratio });
+                }
             }
             let angles = position_angles(&s, settings.dwell_value, &c_b_n, site)
                 .map_err(|error| CalibrationError::Align { index, error })?;
-            // Plausibility first: checked on the data as measured (the first pass), not after corrections.
             if passes == 1 {
                 let (level_rad, heading_rad) = attitude_difference_rad(&angles.c_hat_b_n, &c_b_n);
                 let too_far =

@@ -287,7 +287,7 @@ impl Default for ChannelSettings {
             max_iterations: 12,
             rank_tolerance: 1e-4,
             share_tolerance: 1e-3,
-            max_force_magnitude_error: 0.2,
+            max_force_magnitude_error: crate::calib::calibration::MAX_FORCE_MAGNITUDE_ERROR,
             max_gravity_angle_rad: 0.1745,
             attitude: AttitudeKnowledge::Reference,
             earth_rate_resolved: true,
