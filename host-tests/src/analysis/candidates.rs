@@ -4,7 +4,7 @@
 
 use crate::model::catalogue::{EffectKind, Sensor};
 use crate::model::sensor::Term;
-use crate::model::synth::mul_t_vec;
+use crate::model::synth::{cross, mul_t_vec};
 
 use super::observations::{BlockObs, Blocks, Session};
 use super::{AXES, ENU};
@@ -95,11 +95,6 @@ pub(super) fn sensor_terms(gyros: bool) -> Vec<SensorTerm> {
             SensorTerm { effect: term.effect, axes, channel: term.channel(), term }
         })
         .collect()
-}
-
-/// `a x b`.
-pub(super) fn cross(a: [f64; 3], b: [f64; 3]) -> [f64; 3] {
-    [a[1] * b[2] - a[2] * b[1], a[2] * b[0] - a[0] * b[2], a[0] * b[1] - a[1] * b[0]]
 }
 
 /// Unit vector along axis `k`.

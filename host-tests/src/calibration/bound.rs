@@ -32,7 +32,7 @@ use sinscal::calib::channels::PARAMETERS;
 use crate::io::recording::Recording;
 use crate::model::sensor::Triad;
 use crate::model::simulator::{ScenarioFile, TriadModel};
-use crate::model::synth::{c_b_n, earth_rate_n_radps, mul, mul_t_vec, rotation};
+use crate::model::synth::{c_b_n, cross, earth_rate_n_radps, mul, mul_t_vec, mul_vec, rotation};
 use crate::stats::solve::solve_spd;
 
 /// The noise of one channel, in the channel's SI unit (rad/s for gyros, m/s^2 for accelerometers).
@@ -252,9 +252,6 @@ pub fn design(session: &Session, theta_si: &[f64; PARAMETERS]) -> Vec<[[f64; PAR
     };
     let (t_a, t_g) = (matrix(6, 9), matrix(15, 18));
     let g = [0, 1, 2].map(|i| [0, 1, 2].map(|j| theta_si[24 + 3 * i + j]));
-    let apply = |m: &[[f64; 3]; 3], v: [f64; 3]| [0, 1, 2].map(|i| (0..3).map(|j| m[i][j] * v[j]).sum::<f64>());
-    let cross =
-        |a: [f64; 3], b: [f64; 3]| [a[1] * b[2] - a[2] * b[1], a[2] * b[0] - a[0] * b[2], a[0] * b[1] - a[1] * b[0]];
     let offset = [-theta_si[33], -theta_si[34], -theta_si[35]];
     session
         .positions_deg
@@ -286,7 +283,7 @@ pub fn design(session: &Session, theta_si: &[f64; PARAMETERS]) -> Vec<[[f64; PAR
                 let mut e = [0.0; 3];
                 e[m] = 1.0;
                 let (dw_b, df_b) = (mul_t_vec(&c, cross(e, w_n)), mul_t_vec(&c, cross(e, f_n)));
-                let (dg, dgf, da) = (apply(&t_g, dw_b), apply(&g, df_b), apply(&t_a, df_b));
+                let (dg, dgf, da) = (mul_vec(&t_g, dw_b), mul_vec(&g, df_b), mul_vec(&t_a, df_b));
                 for i in 0..3 {
                     rows[i][33 + m] = dg[i] + dgf[i];
                     rows[3 + i][33 + m] = da[i];

@@ -42,6 +42,11 @@ pub fn transpose(a: &M3) -> M3 {
     [0, 1, 2].map(|i| [0, 1, 2].map(|j| a[j][i]))
 }
 
+/// `a x b`.
+pub fn cross(a: [f64; 3], b: [f64; 3]) -> [f64; 3] {
+    [a[1] * b[2] - a[2] * b[1], a[2] * b[0] - a[0] * b[2], a[0] * b[1] - a[1] * b[0]]
+}
+
 /// `a * v`.
 pub fn mul_vec(a: &M3, v: [f64; 3]) -> [f64; 3] {
     [0, 1, 2].map(|i| (0..3).map(|k| a[i][k] * v[k]).sum())

@@ -14,17 +14,13 @@
 use sinscal::nav::earth::{WGS84_A_M, WGS84_E2};
 
 use crate::io::calibration_model::CalibrationModel;
-use crate::model::synth::{mul, mul_vec, rotation, transpose, EARTH_RATE_RADPS, M3};
+use crate::model::synth::{cross, mul, mul_vec, rotation, transpose, EARTH_RATE_RADPS, M3};
 
 /// Meridian and prime-vertical radii of curvature of WGS-84 at a latitude, m.
 pub fn radii_m(latitude_rad: f64) -> (f64, f64) {
     let s2 = latitude_rad.sin().powi(2);
     let w = 1.0 - WGS84_E2 * s2;
     (WGS84_A_M * (1.0 - WGS84_E2) / w.powf(1.5), WGS84_A_M / w.sqrt())
-}
-
-fn cross(a: [f64; 3], b: [f64; 3]) -> [f64; 3] {
-    [a[1] * b[2] - a[2] * b[1], a[2] * b[0] - a[0] * b[2], a[0] * b[1] - a[1] * b[0]]
 }
 
 /// Misalignment `phi` (e, n, u), rad, of `c_hat` against `c`: `c_hat = (I - [phi x]) c` (docs/conventions.md#misalignment).
