@@ -11,14 +11,11 @@ mod common;
 use common::held_out::{accelerometer_model, held_out_rms_mps2, unlabelled_static_intervals};
 use sinscal::calib::channels::{Model, Term};
 use sinscal_host::calibration::{calibrate, site_of, Options, PrefilterKind};
-use sinscal_host::io::import::import_imucal;
 
 #[test]
 fn ferraris_held_out_static_intervals() {
     let Some(dir) = common::data_dir() else { return };
-    let csv = common::data_file(&dir, "imucal-ferraris/example_ferraris_session.csv");
-    let labels = common::data_file(&dir, "imucal-ferraris/example_ferraris_session_list.json");
-    let rec = import_imucal(&csv, &labels, None).expect("import").recording;
+    let rec = common::ferraris_session(&dir);
     let intervals = unlabelled_static_intervals(&rec, 102.4);
     println!("Ferraris session: {} unlabelled static intervals (held out)", intervals.len());
     assert!(intervals.len() >= 5, "the session rests between its turns: {} intervals found", intervals.len());

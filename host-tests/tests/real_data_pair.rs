@@ -11,7 +11,6 @@ mod common;
 
 use sinscal::calib::channels::{parameter_name, Model, Term};
 use sinscal_host::calibration::{calibrate, site_of, Options, PrefilterKind};
-use sinscal_host::io::import::import_imucal;
 use sinscal_host::io::recording::Recording;
 
 /// Mean of channel `f` over the rows of dwell `pos`.
@@ -23,9 +22,7 @@ fn mean(rec: &Recording, pos: u32, f: impl Fn(&sinscal_host::io::recording::Row)
 #[test]
 fn ferraris_x_up_x_down_pair_with_unknown_headings() {
     let Some(dir) = common::data_dir() else { return };
-    let csv = common::data_file(&dir, "imucal-ferraris/example_ferraris_session.csv");
-    let labels = common::data_file(&dir, "imucal-ferraris/example_ferraris_session_list.json");
-    let session = import_imucal(&csv, &labels, None).expect("import").recording;
+    let session = common::ferraris_session(&dir);
     // x_p is pos 1 (roll -90: body x up), x_a pos 2 (roll 90: body x down); the headings are left unknown.
     let mut pair = session.clone();
     pair.rows.retain(|r| r.pos == 1 || r.pos == 2);

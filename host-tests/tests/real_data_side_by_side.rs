@@ -16,7 +16,7 @@ use sinscal::nav::earth::normal_gravity_mps2;
 use sinscal_host::calibration::{calibrate, site_of, Calibration, Options, DEFAULT_MODEL};
 use sinscal_host::io::calibration_result::summary;
 use sinscal_host::io::import::{
-    import_imucal, import_imutk, import_psins, StaticDetection, FERRARIS_POSES, IMUTK_ACCEL_GAIN_COUNTS_PER_MPS2,
+    import_imutk, import_psins, StaticDetection, FERRARIS_POSES, IMUTK_ACCEL_GAIN_COUNTS_PER_MPS2,
     IMUTK_GYRO_GAIN_COUNTS_PER_RADPS, IMUTK_OFFSET_COUNTS,
 };
 use sinscal_host::io::recording::Recording;
@@ -304,9 +304,7 @@ impl FerrarisRuns {
 #[test]
 fn ferraris_beside_imucal_formulas_and_the_held_out_rests() {
     let Some(dir) = common::data_dir() else { return };
-    let csv = common::data_file(&dir, "imucal-ferraris/example_ferraris_session.csv");
-    let labels = common::data_file(&dir, "imucal-ferraris/example_ferraris_session_list.json");
-    let rec = import_imucal(&csv, &labels, None).expect("import").recording;
+    let rec = common::ferraris_session(&dir);
     let g = site_of(&rec.header).0.gravity_mps2 as f64;
     println!("imucal Ferraris session, six labelled poses, g = {g:.6} m/s^2 (normal gravity at 49.6 N):");
     let runs = FerrarisRuns::new(&rec);

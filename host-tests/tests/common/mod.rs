@@ -33,3 +33,10 @@ pub fn data_file(dir: &Path, relative: &str) -> PathBuf {
     assert!(path.is_file(), "SINSCAL_DATA is set but {} is missing", path.display());
     path
 }
+
+/// The imucal Ferraris session of the data directory, imported with its labels (latitude: the importer's default).
+pub fn ferraris_session(dir: &Path) -> sinscal_host::io::recording::Recording {
+    let csv = data_file(dir, "imucal-ferraris/example_ferraris_session.csv");
+    let labels = data_file(dir, "imucal-ferraris/example_ferraris_session_list.json");
+    sinscal_host::io::import::import_imucal(&csv, &labels, None).expect("import").recording
+}
