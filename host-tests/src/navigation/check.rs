@@ -18,9 +18,7 @@ use crate::navigation::strapdown::{linear_error_model, navigate_runs, NavError, 
 /// compensate with, and the covariance of its parameters to predict the calibrated run's error.
 #[derive(Clone, Debug, PartialEq)]
 pub struct NavCalibration {
-    /// File name.
-    pub source: String,
-    /// The sensor model (every term the file gives).
+    /// The sensor model (every term the file gives; its `source` is the file name).
     pub model: CalibrationModel,
     /// The parameters the covariance is of (`gyro_bias_x`, `accel_scale_factor_z`, ...): version 2's
     /// `parameters`; for version 1, the biases with a standard error.
@@ -33,9 +31,10 @@ pub struct NavCalibration {
 impl NavCalibration {
     /// Reads a calibration JSON file.
     pub fn read(path: &Path) -> Result<NavCalibration, InputError> {
-        let model = CalibrationModel::read(path)?;
         let name = path.display().to_string();
         let text = std::fs::read_to_string(path).map_err(|e| InputError::io(path, e))?;
+        let mut model = CalibrationModel::parse(&text, &name)?;
+        model.source = path.file_name().map_or_else(|| name.clone(), |f| f.to_string_lossy().into_owned());
         let v: serde_json::Value =
             serde_json::from_str(&text).map_err(|e| InputError::at(&name, e.line(), format!("not JSON: {e}")))?;
         // A version 2 file without `parameters` and `covariance` (written by another tool) gives its bias
@@ -43,7 +42,7 @@ impl NavCalibration {
         let has_covariance = !(v["parameters"].is_null() && v["covariance"].is_null());
         let (parameters, covariance_si) =
             if model.version == 2 && has_covariance { covariance_of(&v, &name)? } else { version_1_variances(&v) };
-        Ok(NavCalibration { source: model.source.clone(), model, parameters, covariance_si })
+        Ok(NavCalibration { model, parameters, covariance_si })
     }
 }
 
@@ -205,7 +204,7 @@ pub fn navigate(
     Ok(NavReport {
         schema: "sinscal-navigation/1",
         source: source.to_string(),
-        calibrations: std::iter::once(calibration.source.clone()).chain(second.map(|s| s.source.clone())).collect(),
+        calibrations: std::iter::once(calibration).chain(second).map(|c| c.model.source.clone()).collect(),
         simulated,
         hours,
         rate_hz,
@@ -254,7 +253,7 @@ fn runs_to_compare(
     truth: Option<&SimulationTruth>,
 ) -> Vec<Run> {
     let calibrated = |c: &NavCalibration| Run {
-        name: format!("calibrated ({})", c.source),
+        name: format!("calibrated ({})", c.model.source),
         compensation: c.model.clone(),
         history: Vec::new(),
     };
