@@ -5,8 +5,8 @@
 use sinscal::calib::align::{position_angles, DwellValue};
 use sinscal::calib::dwell::Prefilter;
 use sinscal::rig::replay::{
-    decode_outcome, encode_outcome, read_header, run_replay, terms_bits, ReplayOutcome, MAGIC, MAX_OUTCOME_BYTES,
-    VERSION,
+    decode_outcome, encode_outcome, estimator_code, read_header, run_replay, terms_bits, ReplayOutcome, MAGIC,
+    MAX_OUTCOME_BYTES, VERSION,
 };
 use sinscal::run::sequence::{SequenceFailure, SequenceSolution};
 use sinscal::sensor::adis::{encode_burst, Burst, Model, BURST32_LEN, I16F16};
@@ -17,6 +17,7 @@ use crate::calibration::{
 };
 use crate::io::error::InputError;
 use crate::io::recording::{DwellAttitude, Recording};
+use sinscal::calib::channels::ChannelSettings;
 use sinscal::calib::session::session_estimator;
 use sinscal::run::sequence::Estimator;
 
@@ -52,9 +53,12 @@ pub fn replay_file(rec: &Recording, options: &Options) -> Result<(Vec<u8>, Vec<D
     }
     let (site, _) = site_of(&rec.header);
     let estimator = match options.method {
-        Method::Angles => 0u8,
-        Method::Channels if rec.has_gyro => 1,
-        Method::Channels => 2,
+        Method::Angles => Estimator::Angles,
+        Method::Channels => Estimator::Channels(ChannelSettings {
+            model: options.model,
+            use_gyro: rec.has_gyro,
+            ..ChannelSettings::default()
+        }),
     };
     let (prefilter_code, [a_gyro, a_accel]) = match prefilter_of(options, &dwells[0], source)? {
         Prefilter::None => (0u8, [1.0f32, 1.0]),
@@ -64,7 +68,7 @@ pub fn replay_file(rec: &Recording, options: &Options) -> Result<(Vec<u8>, Vec<D
     out.extend_from_slice(&MAGIC);
     out.extend_from_slice(&VERSION.to_le_bytes());
     out.push(1); // ADIS16505-2
-    out.push(estimator);
+    out.push(estimator_code(&estimator));
     out.extend_from_slice(&site.latitude_rad.to_le_bytes());
     out.extend_from_slice(&site.gravity_mps2.to_le_bytes());
     out.extend_from_slice(&(dwells.len() as u16).to_le_bytes());
