@@ -5,12 +5,12 @@ use embedded_hal::spi;
 use heapless::Vec;
 
 use super::run::ReplayOutcome;
-use crate::calib::align::DwellValue;
+use crate::calib::align::{AlignError, DwellValue};
 use crate::calib::calibration::{CalibrationError, CalibrationResult, CalibrationSettings, PositionInput};
 use crate::calib::channels::{AttitudeKnowledge, ChannelError, ChannelSettings, ChannelSolution, Model as Terms, Term};
 use crate::calib::dwell::{Prefilter, MIN_DWELL_SAMPLES};
 use crate::calib::prefilter::PrefilterSettings;
-use crate::calib::solve::MAX_POSITIONS;
+use crate::calib::solve::{SolveError, MAX_POSITIONS};
 use crate::nav::earth::Site;
 use crate::nav::frames::Attitude;
 use crate::run::sampling::SamplingStats;
@@ -289,8 +289,11 @@ fn failure_code(f: &Option<SequenceFailure>) -> [u32; 5] {
         None => (0, 0, 0, [0, 0]),
         Some(SequenceFailure::PositionAborted { index, reason }) => (1, index, reason.code() as u32, [0, 0]),
         Some(SequenceFailure::Calibration(e)) => match e {
-            CalibrationError::Align { index, error } => (2, index, 1 + error as u32, [0, 0]),
-            CalibrationError::Solve(e) => (2, 0, 3 + e as u32, [0, 0]),
+            CalibrationError::Align { index, error: AlignError::Degenerate } => (2, index, 1, [0, 0]),
+            CalibrationError::Align { index, error: AlignError::NotFinite } => (2, index, 2, [0, 0]),
+            CalibrationError::Solve(SolveError::TooManyPositions) => (2, 0, 3, [0, 0]),
+            CalibrationError::Solve(SolveError::NoPositions) => (2, 0, 4, [0, 0]),
+            CalibrationError::Solve(SolveError::BadInput) => (2, 0, 5, [0, 0]),
             CalibrationError::Implausible { index, level_rad, heading_rad } => {
                 (2, index, 6, bits(level_rad, heading_rad))
             }
@@ -311,8 +314,6 @@ fn failure_code(f: &Option<SequenceFailure>) -> [u32; 5] {
 
 /// The failure of [`failure_code`]'s words.
 fn failure_of_code(words: [u32; 5]) -> Result<Option<SequenceFailure>, ReplayError> {
-    use crate::calib::align::AlignError;
-    use crate::calib::solve::SolveError;
     let [kind, index, code, x, y] = words;
     let (index, x, y) = (index as usize, f32::from_bits(x), f32::from_bits(y));
     let calibration = |e| Some(SequenceFailure::Calibration(e));
