@@ -93,6 +93,38 @@ fn general_estimator_on_the_firmware_path_matches_the_direct_one() {
     }
 }
 
+/// The capacity of the calibration sequence: 64 positions (the six of Table 1 at eleven headings, less two),
+/// 3-s dwells. SIMULATION. The firmware path solves them all, as the direct path does, and the outcome file
+/// holds them.
+#[test]
+fn sixty_four_positions_fit_the_firmware_path() {
+    let capacity = sinscal::calib::solve::MAX_POSITIONS;
+    assert_eq!(capacity, sinscal::calib::channels::MAX_DWELLS);
+    let positions_deg: Vec<[f64; 3]> = (0..capacity)
+        .map(|k| {
+            let [p, r, h] = sinscal_host::model::synth::TABLE1_DEG[k % 6];
+            [p, r, h + 30.0 * (k / 6) as f64]
+        })
+        .collect();
+    let rec = Scenario { dwell_s: 3.0, positions_deg, ..Scenario::example() }.recording(9, "64.csv");
+    let direct = calibrate(&rec, &Options::default()).unwrap();
+    let replayed = calibrate_on_host(&rec, &Options::default()).unwrap();
+    let (d, r) = (direct.channels.as_ref().unwrap(), replayed.channels.as_ref().unwrap());
+    assert_eq!((d.dwells, r.dwells), (capacity, capacity));
+    assert_eq!(replayed.positions.len(), capacity);
+    for i in 0..sinscal::calib::channels::PARAMETERS {
+        if let (Some((dv, ds)), Some((rv, _))) = (d.estimate(i), r.estimate(i)) {
+            assert!((dv - rv).abs() < 0.02 * ds, "{}", sinscal::calib::channels::parameter_name(i));
+        }
+    }
+    // One more position is refused with the limit named.
+    let mut positions_deg = Scenario::example().positions_deg;
+    positions_deg.extend((0..capacity - 5).map(|k| [0.0, 0.0, k as f64]));
+    let rec = Scenario { dwell_s: 1.0, positions_deg, ..Scenario::example() }.recording(9, "65.csv");
+    let e = calibrate_on_host(&rec, &Options::default()).unwrap_err().to_string();
+    assert!(e.contains("more than 64"), "{e}");
+}
+
 #[test]
 fn corrupted_frames_are_counted_and_the_dwell_survives_a_few() {
     let rec = example(20.0);

@@ -17,8 +17,9 @@
 use crate::math::linalg::{Mat3, Vec3};
 use crate::nav::earth::Site;
 
-/// Most positions one solution takes.
-pub const MAX_POSITIONS: usize = 24;
+/// Most positions one solution takes: the general estimator's capacity, so that a session either estimator
+/// takes fits the calibration sequence (the imu_tk session has 37 poses).
+pub const MAX_POSITIONS: usize = crate::calib::channels::MAX_DWELLS;
 /// Parameters: gyro bias x, y, z; accelerometer bias x, y, z; reference offset e, n, u.
 pub const MAX_PARAMETERS: usize = 9;
 

@@ -221,9 +221,10 @@ pub fn read_header<R: ByteSource>(source: &mut R) -> Result<ReplayHeader, Replay
 
 /// Magic of an encoded outcome.
 pub const OUTCOME_MAGIC: [u8; 4] = *b"SSRO";
-/// Largest encoded outcome, bytes: 24 positions of 424 bytes (10,176), the general estimator's solution
-/// (6,568 for 24 dwells; the angle method's is 808) and the counters and failure (68): 16,812.
-pub const MAX_OUTCOME_BYTES: usize = 16_896;
+/// Largest encoded outcome, bytes: the counters and failure (68), [`MAX_POSITIONS`] positions of 424 bytes,
+/// and the general estimator's solution (5,416 and 48 per dwell; the angle method's, 520 and 12 per position,
+/// is smaller). For 64 positions: 35,692.
+pub const MAX_OUTCOME_BYTES: usize = 68 + MAX_POSITIONS * 424 + 5_416 + crate::calib::channels::MAX_DWELLS * 48;
 
 struct Writer<'a> {
     out: &'a mut [u8],
