@@ -54,7 +54,7 @@ fn json_report_and_verdict_none_on_a_clean_session() {
 }
 
 #[test]
-fn effects_have_the_spec_fields_strongest_first_and_the_verdict_is_the_first() {
+fn effects_have_the_spec_fields_ranked_by_consequence_and_the_verdict_is_the_first() {
     let mut s: ScenarioFile = clean_scenario();
     s.accel.scale_factor = [3.0e-4, 0.0, 0.0];
     s.gyro.drift_radps_per_s = [0.0, 0.0, 2.0e-9];
@@ -79,7 +79,14 @@ fn effects_have_the_spec_fields_strongest_first_and_the_verdict_is_the_first() {
         assert!(e["delta_bic"].as_f64().unwrap() < 0.0);
         assert!(e["residual_rms_after"].as_f64().unwrap() <= e["residual_rms_before"].as_f64().unwrap());
     }
-    let bics: Vec<f64> = effects.iter().map(|e| e["delta_bic"].as_f64().unwrap()).collect();
+    // Ranked by consequence: the effects that move a bias by a standard error or more when left out,
+    // largest first, then the others by BIC gain (docs/analysis.md#verdict).
+    let moves = |e: &Value| e["consequence"]["in_std_errors"].as_f64().filter(|&z| z >= 1.0);
+    let split = effects.iter().position(|e| moves(e).is_none()).unwrap_or(effects.len());
+    let z: Vec<f64> = effects[..split].iter().map(|e| moves(e).unwrap()).collect();
+    assert!(z.windows(2).all(|w| w[0] >= w[1]), "{z:?}");
+    assert!(effects[split..].iter().all(|e| moves(e).is_none()));
+    let bics: Vec<f64> = effects[split..].iter().map(|e| e["delta_bic"].as_f64().unwrap()).collect();
     assert!(bics.windows(2).all(|w| w[0] <= w[1]), "{bics:?}");
     assert_eq!(v["verdict"], effects[0]["effect"]);
     let sf = effects.iter().find(|e| e["effect"] == "accel_scale_factor").expect("scale factor found");

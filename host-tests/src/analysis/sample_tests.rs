@@ -132,6 +132,8 @@ impl<'a> ChannelTests<'a> {
             parameters: 0,
             p_value: 0.0,
             aliases: Vec::new(),
+            consequence: None,
+            at_grid_edge: false,
         }
     }
 
