@@ -112,6 +112,9 @@ fn measured_data_give_plausible_effects_and_name_what_they_cannot_tell_apart() {
 
 const ARCSEC: f64 = std::f64::consts::PI / 648_000.0;
 
+/// What a planted effect adds to angle `k` of position `p`, given the position's design row and body force.
+type Planted = Box<dyn Fn(usize, usize, &[f32; 9], [f64; 3]) -> f64>;
+
 /// A six-position angles table as papers publish it (no standard errors): Table 1 at latitude 45.7796,
 /// biases through the core's alignment equations, a small deterministic scatter (1 arcsec level, 20 arcsec
 /// heading), plus `planted(position index, angle, body force)`.
@@ -145,7 +148,7 @@ fn published_table(planted: impl Fn(usize, usize, &[f32; 9], [f64; 3]) -> f64) -
 fn published_angles_tables_without_errors_give_the_planted_effect() {
     use sinscal_host::analysis::{analyze_angles, AnglesFile};
     let misalignment = 1.0e-4;
-    let cases: [(&str, &str, Option<u32>, f64, Box<dyn Fn(usize, usize, &[f32; 9], [f64; 3]) -> f64>); 3] = [
+    let cases: [(&str, &str, Option<u32>, f64, Planted); 3] = [
         // Accelerometer y senses 1e-4 of the force along x: an error m f_x on channel ay (index 4).
         (
             "accel_misalignment",
