@@ -66,7 +66,7 @@ fn white_noise_alone_names_white_noise_only() {
 #[test]
 fn quantisation_white_and_gauss_markov_are_each_recovered() {
     // Output step 1.5e-4 rad/s of the integrated output: Q = q dt / sqrt(12).
-    let (q_radps, n, gm_sigma, gm_tau_s) = (5.0e-5, 5.0e-6, 2.0e-6, 20.0);
+    let (q_radps, n, gm_sigma, gm_tau_s) = (1.0e-4, 5.0e-6, 2.0e-6, 20.0);
     let gyro = format!(
         "angle_random_walk_rad_per_sqrt_s = {n}\nquantization_radps = [{q_radps}, {q_radps}, {q_radps}]\n\
          bias_instability = {{ sigma_radps = [{gm_sigma}, {gm_sigma}, {gm_sigma}], tau_s = {gm_tau_s} }}"
@@ -94,9 +94,7 @@ fn quantisation_white_and_gauss_markov_are_each_recovered() {
 #[test]
 fn rate_random_walk_and_rate_ramp_are_recovered() {
     let (n, k) = (5.0e-4, 4.0e-6);
-    let accel = format!(
-        "velocity_random_walk_mps_per_sqrt_s = {n}\nacceleration_random_walk_mps2_per_sqrt_s = {k}"
-    );
+    let accel = format!("velocity_random_walk_mps_per_sqrt_s = {n}\nacceleration_random_walk_mps2_per_sqrt_s = {k}");
     let y = simulated("", &accel, 2.0, 3, 4);
     let m = noise_model("ay_mps2", false, &y, 100.0).expect("model");
     check("N + K", &m, &[(Term::White, n), (Term::RateRandomWalk, k)], 3.0);

@@ -25,6 +25,12 @@ pub fn summary(a: &Analysis) -> String {
             effect_line(&mut s, e);
         }
     }
+    if !a.noise_model.is_empty() {
+        let _ = writeln!(s, "noise (terms named from the Allan variance of the longest dwell):");
+        for m in &a.noise_model {
+            let _ = writeln!(s, "  {}", m.text());
+        }
+    }
     if !a.unobservable.is_empty() {
         let _ = writeln!(s, "unobservable with this data: {}", a.unobservable.join(", "));
     }
