@@ -57,6 +57,7 @@ mod angles;
 mod candidates;
 mod correlated_noise;
 pub mod hidden;
+pub mod noise_terms;
 mod observations;
 mod recording;
 mod result;
@@ -290,6 +291,9 @@ pub struct Analysis {
     /// Per-channel diagnostics (recordings).
     #[serde(skip_serializing_if = "Vec::is_empty")]
     pub diagnostics: Vec<ChannelDiagnostics>,
+    /// Per channel: the noise terms named from the Allan variance of the longest dwell (recordings).
+    #[serde(skip_serializing_if = "Vec::is_empty")]
+    pub noise_model: Vec<noise_terms::NoiseModel>,
     /// Data for the report's figures (not written to JSON).
     #[serde(skip)]
     pub figures: FigureData,

@@ -204,6 +204,7 @@ pub(super) fn assemble(
         candidates_tested: m as usize,
         tested: selection.tested,
         diagnostics: findings.diagnostics,
+        noise_model: super::noise_terms::noise_models(&findings.figures),
         figures: findings.figures,
     }
 }

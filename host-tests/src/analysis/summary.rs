@@ -46,6 +46,12 @@ pub fn summary(a: &Analysis) -> String {
             c.candidate, c.likelihood_ratio, c.likelihood_ratio_within_poses
         );
     }
+    if !a.noise_model.is_empty() {
+        let _ = writeln!(s, "noise (terms named from the Allan variance of the longest dwell):");
+        for m in &a.noise_model {
+            let _ = writeln!(s, "  {}", m.text());
+        }
+    }
     if !a.unobservable.is_empty() {
         let _ = writeln!(s, "unobservable with this data: {}", a.unobservable.join(", "));
     }
