@@ -253,6 +253,10 @@ pub struct NoiseModel {
     pub samples: usize,
     /// Sample rate, Hz.
     pub rate_hz: f64,
+    /// What white noise would make the error of this dwell's mean (its samples' standard deviation over
+    /// `sqrt(samples)`), over what the named model says it is (its Allan deviation at the dwell's length):
+    /// above 1 the white-noise standard errors are too large, below 1 too small.
+    pub white_error_factor: f64,
     /// The named terms' symbols joined by " + " ("Q + N + GM").
     pub named: String,
     /// The named terms.
@@ -303,7 +307,14 @@ impl NoiseModel {
         let lag1 = self
             .lag1_difference_autocorrelation
             .map_or("-".to_string(), |r| format!("{r:+.3} +- {:.3} (white: -0.5)", self.lag1_std_error));
-        format!("{}: {}; {compare}; lag-1 correlation of the differences {lag1}", self.channel, terms.join(", "))
+        format!(
+            "{}: {}; {compare}; lag-1 correlation of the differences {lag1}; white-noise error of a {:.0}-s mean \
+             {}x the named model's",
+            self.channel,
+            terms.join(", "),
+            self.samples as f64 / self.rate_hz,
+            sig(self.white_error_factor)
+        )
     }
 }
 
@@ -480,10 +491,14 @@ pub fn noise_model(channel: &str, gyro: bool, samples: &[f64], rate_hz: f64) -> 
     let terms = named_terms(&curve, &chosen, &fits, s2, gyro)?;
     let white_only = named_terms(&curve, &white.0, &fits, s2, gyro)?.pop()?;
     let k = chosen.k;
+    let mean = samples.iter().sum::<f64>() / n as f64;
+    let sample_std = (samples.iter().map(|v| (v - mean).powi(2)).sum::<f64>() / (n - 1).max(1) as f64).sqrt();
+    let named_adev_record: f64 = terms.iter().map(|t| t.allan_variance(record_s)).sum::<f64>().sqrt();
     Some(NoiseModel {
         channel: channel.into(),
         samples: n,
         rate_hz,
+        white_error_factor: sample_std / (n as f64).sqrt() / named_adev_record.max(f64::MIN_POSITIVE),
         named: chosen.terms.iter().map(|t| t.symbol()).collect::<Vec<_>>().join(" + "),
         terms,
         points: curve.tau.len(),
