@@ -16,7 +16,7 @@ use std::time::Instant;
 
 use sinscal_host::analysis::planted::{
     carried, draw, effect_table, false_alarm_table, imutk_constructions, plant, prepare, psins_constructions, trial,
-    Construction, Prepared, Source, Trial,
+    Construction, Prepared, Source, Trial, Verdict,
 };
 use sinscal_host::io::import::{import_imutk, import_psins, StaticDetection};
 use sinscal_host::io::recording::{Recording, Row};
@@ -175,6 +175,22 @@ fn campaign_on_measured_noise() {
         for (effect, _) in carried(&prepared[0]) {
             let jobs: Vec<(usize, u64)> = (0..runs).map(|k| (k as usize % n, 100 + k)).collect();
             let trials = parallel(jobs, |i, seed| trial(&prepared[i], effect, seed).expect("trial"));
+            for t in trials.iter().filter(|t| t.verdict > Verdict::RightNotFirst) {
+                let h = &t.hidden;
+                eprintln!(
+                    "  {:?}: planted {} {} {} {:?} {:+.4e} (tau {:?}, f {:?}); found there {:?}; first {:?}",
+                    t.verdict,
+                    h.effect,
+                    h.sensor,
+                    h.axes,
+                    h.pos,
+                    h.value,
+                    h.tau_s,
+                    h.frequency_hz,
+                    t.found_estimate,
+                    t.first
+                );
+            }
             eprintln!("{} {effect}: {:.0} s", source.name(), start.elapsed().as_secs_f64());
             rows.push((effect, trials));
         }

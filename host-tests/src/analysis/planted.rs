@@ -674,6 +674,12 @@ pub struct Trial {
     pub verdict: Verdict,
     /// The first effect found, as "effect:sensor:axes".
     pub first: Option<String>,
+    /// The first effect found that the untouched construction does not report (or that sits where the
+    /// effect was planted) is the planted one, fully right: the verdict with the measured noise's own
+    /// findings set aside.
+    pub first_new_right: bool,
+    /// The estimate of the effect found where it was planted (effect, sensor, axes, position), SI.
+    pub found_estimate: Option<f64>,
     /// The planted candidate fitted with the base model alone (the linear effects, from the analysis's
     /// `tested`): estimate and standard error, SI.
     pub fitted: Option<(f64, f64)>,
@@ -722,7 +728,15 @@ pub fn judge(analysis: &Analysis, untouched: &Analysis, h: &Hidden) -> Trial {
         .iter()
         .find(|t| t.name == name && h.effect != EffectKind::BiasWarmup)
         .map(|t| (t.estimate, t.std_error));
-    Trial { hidden: h.clone(), verdict, first: found.first().map(effect_label), fitted }
+    let first_new = found.iter().find(|e| same_place(e) || !in_untouched(e));
+    Trial {
+        hidden: h.clone(),
+        verdict,
+        first: found.first().map(effect_label),
+        first_new_right: first_new.is_some_and(right),
+        found_estimate: found.iter().find(|e| same_place(e)).map(|e| e.estimate),
+        fitted,
+    }
 }
 
 /// One trial: draw, plant, analyse, judge.
@@ -741,8 +755,10 @@ pub fn effect_table(rows: &[(EffectKind, Vec<Trial>)]) -> String {
     for v in Verdict::ALL {
         out.push_str(&format!(" {} |", v.name()));
     }
-    out.push_str(" fitted alone, within 3 SE | first effect otherwise (most often) |\n|---|---|");
-    out.push_str(&"---|".repeat(Verdict::ALL.len() + 2));
+    out.push_str(
+        " first new effect right | fitted alone, within 3 SE | first effect otherwise (most often) |\n|---|---|",
+    );
+    out.push_str(&"---|".repeat(Verdict::ALL.len() + 3));
     out.push('\n');
     for (effect, trials) in rows {
         let n = trials.len().max(1) as f64;
@@ -751,6 +767,8 @@ pub fn effect_table(rows: &[(EffectKind, Vec<Trial>)]) -> String {
             let k = trials.iter().filter(|t| t.verdict == v).count();
             out.push_str(&format!(" {:.0} % |", 100.0 * k as f64 / n));
         }
+        let new_right = trials.iter().filter(|t| t.first_new_right).count();
+        out.push_str(&format!(" {:.0} % |", 100.0 * new_right as f64 / n));
         let fits: Vec<f64> = trials.iter().filter_map(|t| t.fit_error_se()).collect();
         let within = fits.iter().filter(|z| z.abs() <= 3.0).count();
         let fit = if fits.is_empty() { "-".to_string() } else { format!("{within}/{}", fits.len()) };
@@ -764,16 +782,21 @@ pub fn effect_table(rows: &[(EffectKind, Vec<Trial>)]) -> String {
     out
 }
 
-/// The false alarms of untouched constructions: how many report any effect, and every effect reported with
-/// the number of constructions that report it, its median estimate and median delta BIC, most frequent
-/// first.
+/// The false alarms of untouched constructions: how many report any effect, how many an effect of the
+/// block means (the static and slow effects, not the noise models of the samples), and every effect
+/// reported with the number of constructions that report it, its median estimate and median delta BIC,
+/// most frequent first.
 pub fn false_alarm_table(prepared: &[&Prepared]) -> String {
-    let alarms = prepared.iter().filter(|p| !p.untouched.effects.is_empty()).count();
+    let count = |f: &dyn Fn(&Effect) -> bool| prepared.iter().filter(|p| p.untouched.effects.iter().any(f)).count();
+    let (alarms, block_alarms) = (count(&|_| true), count(&|e| e.residual_of == "block means"));
+    let share = |k: usize| 100.0 * k as f64 / prepared.len().max(1) as f64;
     let mut out = format!(
-        "false alarms: {alarms}/{} untouched constructions report an effect ({:.0} %)\n\n| effect reported \
-         on the untouched construction | constructions | median estimate | unit | median delta BIC |\n|---|---|---|---|---|\n",
-        prepared.len(),
-        100.0 * alarms as f64 / prepared.len().max(1) as f64
+        "false alarms: {alarms}/{n} untouched constructions report an effect ({:.0} %); {block_alarms}/{n} an \
+         effect of the block means ({:.0} %)\n\n| effect reported on the untouched construction | constructions | \
+         median estimate | unit | median delta BIC |\n|---|---|---|---|---|\n",
+        share(alarms),
+        share(block_alarms),
+        n = prepared.len(),
     );
     let mut seen: BTreeMap<String, (Vec<f64>, Vec<f64>, String)> = BTreeMap::new();
     for p in prepared {
