@@ -69,6 +69,8 @@ fn assert_noise_kept(c: &Construction, record: &Recording) {
         pairs += 1;
     }
     assert!(pairs > rows.len() / 2, "{}: only {pairs} sample pairs compared", c.recording.source);
+    // Times run from the session's first row (the warm-up's origin).
+    assert_eq!(rows.first().map(|r| r.t_s), Some(0.0), "{}", c.recording.source);
 }
 
 /// The untouched construction keeps the record's quantisation: the analysis finds the record's step on every
@@ -101,7 +103,8 @@ fn constructions_keep_the_measured_noise_and_carry_planted_effects() {
     let Some(dir) = common::data_dir() else { return };
     let start = Instant::now();
     for (source, record) in records(&dir) {
-        let c = constructions(source, &record, 1).remove(0);
+        // PSINS: the last of three start offsets (a session that does not start with the record).
+        let c = constructions(source, &record, 3).pop().expect("a construction");
         assert_noise_kept(&c, &record);
         let p = prepare(c).expect("the untouched construction analyses");
         assert_quantisation_kept(&p);

@@ -202,7 +202,7 @@ fn construct(record: &Recording, source: Source, segmentation: String, pieces: &
     let bias = biases_si();
     let dwell_rows = || pieces.iter().filter(|p| p.pos != 0).flat_map(|p| p.rows.iter().copied());
     let session_mean = mean_of(record, dwell_rows());
-    let t_start = pieces.first().and_then(|p| p.rows.first()).map_or(0.0, |&i| record.rows[i].t_s);
+    let t_start = pieces.iter().find_map(|p| p.rows.first()).map_or(0.0, |&i| record.rows[i].t_s);
     let (mut rows, mut source_rows) = (Vec::new(), Vec::new());
     for piece in pieces {
         let [pitch, roll, heading] = piece.pose_deg;
