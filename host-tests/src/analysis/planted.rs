@@ -572,7 +572,7 @@ fn moving_signal(rec: &Recording, planted: &Planted) -> Vec<f64> {
     let h = &planted.hidden;
     let dt = 1.0 / rec.header.rate_hz.unwrap_or(100.0);
     let tau = h.tau_s.unwrap_or(1.0);
-    let mut markov_rng = ChaCha8Rng::seed_from_u64(planted.seed ^ 0x5EED_0F_6A55);
+    let mut markov_rng = ChaCha8Rng::seed_from_u64(planted.seed ^ 0x5E_ED0F_6A55);
     let mut x = h.value * normal(&mut markov_rng);
     let mut last_t = rec.rows.first().map_or(0.0, |r| r.t_s);
     rec.rows
