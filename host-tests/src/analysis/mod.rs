@@ -59,6 +59,7 @@ mod correlated_noise;
 pub mod hidden;
 pub mod noise_terms;
 mod observations;
+pub mod planted;
 mod recording;
 mod result;
 mod sample_tests;
