@@ -49,7 +49,9 @@ fn effect_of(problem: &Problem, selection: &Selection, index: usize) -> Effect {
         axes: cand.axes.clone(),
         pos: cand.pos,
         estimate: selection.final_fit.beta[j],
-        std_error: selection.final_fit.std_error(j),
+        // The fit's standard error assumes independent block means; correlated ones widen it.
+        std_error: selection.final_fit.std_error(j)
+            * cand.groups.iter().map(|&g| selection.inflation[g]).fold(1.0, f64::max).sqrt(),
         unit: cand.unit().to_string(),
         delta_bic: c.delta_bic,
         residual_rms_before: c.rms_before,
@@ -128,18 +130,27 @@ fn misfits_and_confounded(problem: &Problem, selection: &Selection) -> (Vec<Misf
     (misfits, confounded)
 }
 
-/// Effects ranked by consequence: those that move a bias by at least one standard error when left out,
-/// largest first; then the others (the noise effects, and the effects the schedule keeps apart from the
-/// biases) by their BIC gain; the time terms confounded with pose order after all of them.
+/// Effects ranked by consequence: the column effects that move a bias by at least one standard error when
+/// left out, largest first; then the other column effects (a symmetric schedule keeps scale factors and
+/// misalignments apart from the biases) by their BIC gain; then the noise effects, which move no estimate, by
+/// their BIC gain; the time terms confounded with pose order after all of them.
 fn rank(effects: &mut [Effect]) {
     let moves = |e: &Effect| e.consequence.as_ref().map(|c| c.in_std_errors).filter(|&z| z >= 1.0);
-    let confounded = |e: &Effect| e.aliases.iter().any(|a| a == POSE_ORDER);
+    let class = |e: &Effect| {
+        if e.aliases.iter().any(|a| a == POSE_ORDER) {
+            3
+        } else if e.consequence.is_none() {
+            2
+        } else if moves(e).is_none() {
+            1
+        } else {
+            0
+        }
+    };
     effects.sort_by(|a, b| {
-        confounded(a).cmp(&confounded(b)).then_with(|| match (moves(a), moves(b)) {
+        class(a).cmp(&class(b)).then_with(|| match (moves(a), moves(b)) {
             (Some(x), Some(y)) => y.total_cmp(&x),
-            (Some(_), None) => std::cmp::Ordering::Less,
-            (None, Some(_)) => std::cmp::Ordering::Greater,
-            (None, None) => a.delta_bic.total_cmp(&b.delta_bic),
+            _ => a.delta_bic.total_cmp(&b.delta_bic),
         })
     });
 }

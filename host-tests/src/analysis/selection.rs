@@ -68,6 +68,8 @@ pub(super) struct Selection {
     pub misfits: Vec<Misfit>,
     /// Time terms the data want only through the differences between poses: confounded with pose order.
     pub confounded: Vec<Confounded>,
+    /// Per group: the variance inflation of correlated block residuals ([`block_inflation`]).
+    pub inflation: Vec<f64>,
 }
 
 /// A candidate that passes the criterion at an implausible value: the model misses something there.
@@ -128,6 +130,7 @@ pub(super) fn select(problem: &mut Problem, extra_tests: usize) -> Result<Select
         observable: screen.observable.len(),
         misfits: forward.misfits,
         confounded: forward.confounded,
+        inflation: forward.inflation,
     })
 }
 
@@ -209,6 +212,57 @@ struct Forward<'a> {
     confounded: Vec<Confounded>,
     /// Candidates set aside (misfit, alias, confounded): not tried again.
     set_aside: Vec<usize>,
+    /// Per group: the variance inflation of a sum of neighbouring block residuals ([`block_inflation`]).
+    inflation: Vec<f64>,
+}
+
+/// Most the likelihood ratios are deflated for correlated block residuals.
+const MAX_INFLATION: f64 = 10.0;
+
+/// Fewest blocks a dwell needs to show the correlation of its block residuals.
+const MIN_RUN_BLOCKS: usize = 8;
+
+/// Per observation group: `(1 + rho) / (1 - rho)` (at least 1, at most [`MAX_INFLATION`]), with `rho` the
+/// lag-1 correlation between neighbouring blocks of a dwell of the residuals about each dwell's own mean
+/// (what the dwells show within themselves, whatever the model misses between poses). Block means of noise
+/// slower than a block (a vehicle's sway, bias instability) are correlated: a sum of `B` of them varies
+/// `(1 + rho) / (1 - rho)` times more than white block means would (first-order autoregression), so a
+/// likelihood ratio computed as if they were independent is that much too large. Only dwells of at least
+/// [`MIN_RUN_BLOCKS`] blocks count; `rho` is corrected for the dwell mean removed (`E rho_hat = rho - (1 +
+/// 3 rho) / B`). Angles, or no dwell long enough: 1.
+fn block_inflation(problem: &Problem, residual: &[f64]) -> Vec<f64> {
+    let groups = problem.obs.groups;
+    if problem.obs_pose.is_none() {
+        return vec![1.0; groups];
+    }
+    let g = &problem.obs.group;
+    let (mut lag0, mut lag1, mut blocks, mut runs) =
+        (vec![0.0; groups], vec![0.0; groups], vec![0.0; groups], vec![0.0; groups]);
+    let mut start = 0;
+    while start < residual.len() {
+        let same = |i: usize| g[i] == g[start] && problem.obs_pos[i] == problem.obs_pos[start];
+        let end = (start..residual.len()).find(|&i| !same(i)).unwrap_or(residual.len());
+        if end - start >= MIN_RUN_BLOCKS {
+            let run = &residual[start..end];
+            let mean = run.iter().sum::<f64>() / run.len() as f64;
+            let k = g[start];
+            lag0[k] += run.iter().map(|r| (r - mean).powi(2)).sum::<f64>();
+            lag1[k] += run.windows(2).map(|w| (w[0] - mean) * (w[1] - mean)).sum::<f64>();
+            blocks[k] += run.len() as f64;
+            runs[k] += 1.0;
+        }
+        start = end;
+    }
+    (0..groups)
+        .map(|k| {
+            if lag0[k] <= 0.0 || runs[k] == 0.0 {
+                return 1.0;
+            }
+            let b = blocks[k] / runs[k];
+            let rho = ((lag1[k] / lag0[k] * b + 1.0) / (b - 3.0)).clamp(0.0, 0.9);
+            ((1.0 + rho) / (1.0 - rho)).clamp(1.0, MAX_INFLATION)
+        })
+        .collect()
 }
 
 /// Why a candidate that passes the criterion is not added.
@@ -237,7 +291,9 @@ impl<'a> Forward<'a> {
             misfits: Vec::new(),
             confounded: Vec::new(),
             set_aside: Vec::new(),
+            inflation: Vec::new(),
         };
+        f.inflation = block_inflation(problem, &f.current.residual);
         for step in 0..=MAX_EFFECTS {
             let ranked = f.ranked_additions(observable, step == 0);
             if step == MAX_EFFECTS || !f.add_first_acceptable(ranked, m) {
@@ -368,7 +424,8 @@ impl<'a> Forward<'a> {
         for &ci in observable.iter().filter(|ci| open(ci)) {
             let c = &problem.candidates[ci];
             let Some((vi, f)) = self.best_variant(c) else { continue };
-            let lr = 2.0 * (f.log_likelihood - self.current.log_likelihood);
+            let inflation = c.groups.iter().map(|&g| self.inflation[g]).fold(1.0, f64::max);
+            let lr = 2.0 * (f.log_likelihood - self.current.log_likelihood) / inflation;
             if record {
                 let j = f.beta.len() - 1;
                 self.tested.push(Tested {
