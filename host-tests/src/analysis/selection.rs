@@ -219,17 +219,29 @@ struct Forward<'a> {
 /// Most the likelihood ratios are deflated for correlated block residuals.
 const MAX_INFLATION: f64 = 10.0;
 
+/// `v` less its least-squares line over the index.
+fn detrended(v: &[f64]) -> Vec<f64> {
+    let n = v.len() as f64;
+    let mid = (n - 1.0) / 2.0;
+    let mean = v.iter().sum::<f64>() / n;
+    let sxx: f64 = (0..v.len()).map(|i| (i as f64 - mid).powi(2)).sum();
+    let sxy: f64 = v.iter().enumerate().map(|(i, y)| (i as f64 - mid) * (y - mean)).sum();
+    let slope = if sxx > 0.0 { sxy / sxx } else { 0.0 };
+    v.iter().enumerate().map(|(i, y)| y - mean - slope * (i as f64 - mid)).collect()
+}
+
 /// Fewest blocks a dwell needs to show the correlation of its block residuals.
 const MIN_RUN_BLOCKS: usize = 8;
 
 /// Per observation group: `(1 + rho) / (1 - rho)` (at least 1, at most [`MAX_INFLATION`]), with `rho` the
-/// lag-1 correlation between neighbouring blocks of a dwell of the residuals about each dwell's own mean
-/// (what the dwells show within themselves, whatever the model misses between poses). Block means of noise
+/// lag-1 correlation between neighbouring blocks of a dwell of the residuals about each dwell's own line
+/// (what the dwells show within themselves, whatever the model misses between poses, and free of a smooth
+/// drift or warm-up within a dwell that a candidate is there to explain). Block means of noise
 /// slower than a block (a vehicle's sway, bias instability) are correlated: a sum of `B` of them varies
 /// `(1 + rho) / (1 - rho)` times more than white block means would (first-order autoregression), so a
 /// likelihood ratio computed as if they were independent is that much too large. Only dwells of at least
-/// [`MIN_RUN_BLOCKS`] blocks count; `rho` is corrected for the dwell mean removed (`E rho_hat = rho - (1 +
-/// 3 rho) / B`). Angles, or no dwell long enough: 1.
+/// [`MIN_RUN_BLOCKS`] blocks count; `rho` is corrected for the line removed (`E rho_hat = rho - (2 + 4 rho)
+/// / B`). Angles, or no dwell long enough: 1.
 fn block_inflation(problem: &Problem, residual: &[f64]) -> Vec<f64> {
     let groups = problem.obs.groups;
     if problem.obs_pose.is_none() {
@@ -243,11 +255,10 @@ fn block_inflation(problem: &Problem, residual: &[f64]) -> Vec<f64> {
         let same = |i: usize| g[i] == g[start] && problem.obs_pos[i] == problem.obs_pos[start];
         let end = (start..residual.len()).find(|&i| !same(i)).unwrap_or(residual.len());
         if end - start >= MIN_RUN_BLOCKS {
-            let run = &residual[start..end];
-            let mean = run.iter().sum::<f64>() / run.len() as f64;
+            let run = detrended(&residual[start..end]);
             let k = g[start];
-            lag0[k] += run.iter().map(|r| (r - mean).powi(2)).sum::<f64>();
-            lag1[k] += run.windows(2).map(|w| (w[0] - mean) * (w[1] - mean)).sum::<f64>();
+            lag0[k] += run.iter().map(|r| r * r).sum::<f64>();
+            lag1[k] += run.windows(2).map(|w| w[0] * w[1]).sum::<f64>();
             blocks[k] += run.len() as f64;
             runs[k] += 1.0;
         }
@@ -259,7 +270,7 @@ fn block_inflation(problem: &Problem, residual: &[f64]) -> Vec<f64> {
                 return 1.0;
             }
             let b = blocks[k] / runs[k];
-            let rho = ((lag1[k] / lag0[k] * b + 1.0) / (b - 3.0)).clamp(0.0, 0.9);
+            let rho = ((lag1[k] / lag0[k] * b + 2.0) / (b - 4.0)).clamp(0.0, 0.9);
             ((1.0 + rho) / (1.0 - rho)).clamp(1.0, MAX_INFLATION)
         })
         .collect()
