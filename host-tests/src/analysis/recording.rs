@@ -16,15 +16,28 @@ use super::{Analysis, ChannelDiagnostics, CHANNELS, CHANNEL_UNITS};
 
 /// Analyses a recording.
 pub fn analyze_recording(recording: &Recording) -> Result<Analysis, InputError> {
-    let source = recording.source.as_str();
     recording.require_gyro("analyze")?;
-    let session = Session::read(recording)?;
-    let blocks = Blocks::cut(&session);
-    let mut problem = problem(&session, &blocks);
+    analyze_session(&Session::read(recording)?, &recording.source)
+}
+
+/// Analyses a recording that is not needed afterwards: its rows are dropped once the dwells are read, so
+/// that the rows and the analysis' working data are not held at once (docs/analysis.md#speed-and-memory).
+pub(super) fn analyze_recording_owned(recording: Recording) -> Result<Analysis, InputError> {
+    recording.require_gyro("analyze")?;
+    let session = Session::read(&recording)?;
+    let source = recording.source.clone();
+    drop(recording);
+    analyze_session(&session, &source)
+}
+
+/// The analysis of a session read from `source`.
+fn analyze_session(session: &Session, source: &str) -> Result<Analysis, InputError> {
+    let blocks = Blocks::cut(session);
+    let mut problem = problem(session, &blocks);
     let selection = select(&mut problem, SAMPLE_TESTS).map_err(|e| InputError::file(source, e))?;
     let m = (selection.observable + SAMPLE_TESTS) as f64;
     let mut effects = effects_of(&problem, &selection);
-    let SampleFindings { effects: sample_effects, diagnostics, mut figures } = test_samples(&session, m);
+    let SampleFindings { effects: sample_effects, diagnostics, mut figures } = test_samples(session, m);
     effects.extend(sample_effects);
     let (residual_rms, block_residual_rms) = residual_rms(&blocks, &selection, &diagnostics);
     figures.residual_names = CHANNELS.iter().map(|s| s.to_string()).collect();

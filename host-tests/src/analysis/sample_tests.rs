@@ -3,9 +3,12 @@
 //! (`vibration`) and correlated noise (`correlated_noise`); and the channel diagnostics (detrended RMS,
 //! whiteness, trends) with the data of the report's noise figures.
 
+use std::sync::atomic::{AtomicUsize, Ordering};
+use std::sync::Mutex;
+
 use crate::model::catalogue::{EffectKind, Sensor};
 use crate::stats::linfit::{chi_square_quantile_upper, chi_square_upper};
-use crate::stats::noise::{detect_quantization, ljung_box, GRID_TOLERANCE};
+use crate::stats::noise::{detect_quantization_joined, joined_pairs, ljung_box, GRID_TOLERANCE};
 
 use super::candidates::axis_of;
 use super::correlated_noise::gauss_markov_test;
@@ -49,7 +52,8 @@ fn detrend(t: &[f64], y: &[f64]) -> Trend {
     Trend { slope_per_s: b, slope_std_error_per_s: (s2 / stt).sqrt(), residual }
 }
 
-/// Runs the sample tests on every channel of `session`, each against `alpha / m`.
+/// Runs the sample tests on every channel of `session`, each against `alpha / m`; the channels in parallel
+/// on the available cores (docs/analysis.md#speed-and-memory).
 pub(super) fn test_samples(session: &Session, m: f64) -> SampleFindings {
     let mut out = SampleFindings {
         effects: Vec::new(),
@@ -57,11 +61,50 @@ pub(super) fn test_samples(session: &Session, m: f64) -> SampleFindings {
         figures: FigureData { rate_hz: session.rate_hz, ..FigureData::default() },
     };
     let longest = session.longest();
-    for c in 0..6 {
-        let trends: Vec<Trend> = session.dwells.iter().map(|d| detrend(&d.t, &d.y[c])).collect();
-        ChannelTests::new(session, c, &trends, m).run(&trends[longest], &mut out);
+    for outcome in on_cores(6, |c| ChannelTests::new(session, c, m).run(longest)) {
+        out.effects.extend(outcome.effects);
+        let figures = &mut out.figures;
+        figures.base_sigma.push(outcome.diagnostics.detrended_rms);
+        out.diagnostics.push(outcome.diagnostics);
+        figures.longest_dwell.push(outcome.longest_dwell);
+        figures.correlated.push(outcome.correlated);
+        figures.quantization.push(outcome.quantization);
+        figures.vibration.push(outcome.vibration);
     }
     out
+}
+
+/// `f(0)`, ..., `f(count - 1)` in that order, computed on the available cores (at most `count` threads).
+pub(super) fn on_cores<T: Send>(count: usize, f: impl Fn(usize) -> T + Sync) -> Vec<T> {
+    let workers = std::thread::available_parallelism().map_or(1, |n| n.get()).clamp(1, count.max(1));
+    let next = AtomicUsize::new(0);
+    let results: Mutex<Vec<Option<T>>> = Mutex::new((0..count).map(|_| None).collect());
+    std::thread::scope(|scope| {
+        for _ in 0..workers {
+            scope.spawn(|| loop {
+                let i = next.fetch_add(1, Ordering::Relaxed);
+                if i >= count {
+                    break;
+                }
+                let value = f(i);
+                if let Ok(mut r) = results.lock() {
+                    r[i] = Some(value);
+                }
+            });
+        }
+    });
+    results.into_inner().unwrap_or_default().into_iter().flatten().collect()
+}
+
+/// What the tests of one channel found.
+struct ChannelOutcome {
+    effects: Vec<Effect>,
+    diagnostics: ChannelDiagnostics,
+    /// The detrended samples of the longest dwell.
+    longest_dwell: Vec<f64>,
+    correlated: Option<(f64, f64)>,
+    quantization: Option<f64>,
+    vibration: Option<(f64, f64)>,
 }
 
 /// One channel's detrended samples and what its tests share.
@@ -80,34 +123,37 @@ struct ChannelTests<'a> {
 }
 
 impl<'a> ChannelTests<'a> {
-    fn new(session: &'a Session, c: usize, trends: &[Trend], m: f64) -> ChannelTests<'a> {
-        let series: Vec<Vec<f64>> = trends.iter().map(|t| t.residual.clone()).collect();
-        let all: Vec<f64> = series.iter().flatten().copied().collect();
-        let rms = (all.iter().map(|v| v * v).sum::<f64>() / all.len() as f64).sqrt();
+    fn new(session: &'a Session, c: usize, m: f64) -> ChannelTests<'a> {
+        let trends: Vec<Trend> = session.dwells.iter().map(|d| detrend(&d.t, &d.y[c])).collect();
         let max_trend_z = trends.iter().map(|t| (t.slope_per_s / t.slope_std_error_per_s).abs()).fold(0.0, f64::max);
-        ChannelTests { session, c, m, series, n_all: all.len(), rms, max_trend_z }
+        let series: Vec<Vec<f64>> = trends.into_iter().map(|t| t.residual).collect();
+        let n_all = series.iter().map(Vec::len).sum::<usize>();
+        let rms = (series.iter().flatten().map(|v| v * v).sum::<f64>() / n_all as f64).sqrt();
+        ChannelTests { session, c, m, series, n_all, rms, max_trend_z }
     }
 
     /// Quantisation, vibration, correlated noise, in that order; the diagnostics and figure data with the
-    /// detrended samples of the longest dwell `long`.
-    fn run(mut self, long: &Trend, out: &mut SampleFindings) {
-        let q_step = self.quantization(&mut out.effects);
-        let vib = self.vibration(&mut out.effects);
-        let corr_found = self.correlated_noise(&mut out.effects);
-        let long = &long.residual;
-        out.diagnostics.push(ChannelDiagnostics {
-            channel: CHANNELS[self.c].into(),
-            detrended_rms: self.rms,
-            whiteness_p_value: ljung_box(long, 20).map(|l| l.p_value).unwrap_or(f64::NAN),
-            max_trend_z: self.max_trend_z,
-            quantization_step: q_step,
-        });
-        let figures = &mut out.figures;
-        figures.longest_dwell.push(long.clone());
-        figures.base_sigma.push(self.rms);
-        figures.correlated.push(corr_found);
-        figures.quantization.push(q_step);
-        figures.vibration.push(vib);
+    /// detrended samples of the longest dwell (index `longest`).
+    fn run(mut self, longest: usize) -> ChannelOutcome {
+        let long = self.series.get(longest).cloned().unwrap_or_default();
+        let mut effects = Vec::new();
+        let q_step = self.quantization(&mut effects);
+        let vib = self.vibration(&mut effects);
+        let corr_found = self.correlated_noise(&mut effects);
+        ChannelOutcome {
+            effects,
+            diagnostics: ChannelDiagnostics {
+                channel: CHANNELS[self.c].into(),
+                detrended_rms: self.rms,
+                whiteness_p_value: ljung_box(&long, 20).map(|l| l.p_value).unwrap_or(f64::NAN),
+                max_trend_z: self.max_trend_z,
+                quantization_step: q_step,
+            },
+            longest_dwell: long,
+            correlated: corr_found,
+            quantization: q_step,
+            vibration: vib,
+        }
     }
 
     /// An effect of this channel found on its samples, before its numbers are set.
@@ -138,8 +184,8 @@ impl<'a> ChannelTests<'a> {
     /// The lattice of the raw samples' differences against the fraction on it that continuous data give
     /// (binomial likelihood ratio); the step if found.
     fn quantization(&self, effects: &mut Vec<Effect>) -> Option<f64> {
-        let raw: Vec<f64> = self.session.dwells.iter().flat_map(|d| d.y[self.c].iter().copied()).collect();
-        let q = detect_quantization(&raw).ok()?;
+        let raw: Vec<&[f64]> = self.session.dwells.iter().map(|d| &d.y[self.c][..]).collect();
+        let q = detect_quantization_joined(&raw).ok()?;
         let n = q.nonzero_differences as f64;
         let k = (q.fraction_on_grid * n).round();
         let p0 = 2.0 * GRID_TOLERANCE;
@@ -196,9 +242,10 @@ impl<'a> ChannelTests<'a> {
         Some((v.amplitude_seen, v.frequency_hz))
     }
 
-    /// Gauss-Markov plus white noise against white noise alone; returns (sigma, tau) if found.
-    fn correlated_noise(&self, effects: &mut Vec<Effect>) -> Option<(f64, f64)> {
-        let gm = gauss_markov_test(&self.series, self.session.dt)?;
+    /// Gauss-Markov plus white noise against white noise alone (the last test: it takes the series);
+    /// returns (sigma, tau) if found.
+    fn correlated_noise(&mut self, effects: &mut Vec<Effect>) -> Option<(f64, f64)> {
+        let gm = gauss_markov_test(std::mem::take(&mut self.series), self.session.dt)?;
         let delta_bic = -gm.lr + 2.0 * (self.n_all as f64).ln();
         if !(gm.lr > chi_square_quantile_upper(ALPHA / self.m, 2.0) && delta_bic < 0.0) {
             return None;
@@ -219,11 +266,12 @@ impl<'a> ChannelTests<'a> {
     }
 }
 
-/// Standard error of a quantisation step: least squares of the on-grid differences `d_i = n_i q`.
-fn quantization_std_error(raw: &[f64], step: f64) -> f64 {
+/// Standard error of a quantisation step: least squares of the on-grid differences `d_i = n_i q` (of the
+/// dwells `raw` joined).
+fn quantization_std_error(raw: &[&[f64]], step: f64) -> f64 {
     let (mut snn, mut see, mut k) = (0.0, 0.0, 0.0);
-    for w in raw.windows(2) {
-        let d = (w[1] - w[0]).abs();
+    for (a, b) in joined_pairs(raw) {
+        let d = (b - a).abs();
         let n = (d / step).round();
         if n >= 1.0 && (d / step - n).abs() <= GRID_TOLERANCE {
             snn += n * n;

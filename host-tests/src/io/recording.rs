@@ -2,6 +2,8 @@
 //! and grouping rows into dwells.
 
 use std::fmt::Write as _;
+use std::fs::File;
+use std::io::{BufRead, BufReader};
 use std::path::Path;
 
 use crate::io::error::InputError;
@@ -99,18 +101,65 @@ const COLUMNS: [&str; 11] = [
 ];
 
 impl Recording {
-    /// Reads a recording file.
+    /// Reads a recording file, line by line: the file's text is never held whole (a recording of an hour at
+    /// 1 kHz is half a gigabyte of text).
     pub fn read(path: &Path) -> Result<Recording, InputError> {
-        let text = std::fs::read_to_string(path).map_err(|e| InputError::io(path, e))?;
-        Recording::parse(&text, &path.display().to_string())
+        let source = path.display().to_string();
+        let io = |e| InputError::io(path, e);
+        let mut reader = BufReader::with_capacity(1 << 20, File::open(path).map_err(io)?);
+        // The header, up to and including the column line (the first line that is neither blank nor `#`).
+        let mut head: Vec<String> = Vec::new();
+        loop {
+            let mut line = String::new();
+            if reader.read_line(&mut line).map_err(io)? == 0 {
+                break;
+            }
+            let line = strip_line_end(&line).to_string();
+            let is_column_line = !line.trim().is_empty() && !line.starts_with('#');
+            head.push(line);
+            if is_column_line {
+                break;
+            }
+        }
+        let mut lines = head.iter().enumerate().map(|(i, l)| (i + 1, l.as_str()));
+        let (header, header_line, column_line, rate_line) = parse_header(&mut lines, &|| head.len(), &source)?;
+        let columns = parse_columns(column_line, header_line, &source)?;
+        let mut rows = RowParser::new(&columns, &source);
+        let mut buffer = String::new();
+        let mut n = head.len();
+        loop {
+            buffer.clear();
+            if reader.read_line(&mut buffer).map_err(io)? == 0 {
+                break;
+            }
+            n += 1;
+            rows.line(n, strip_line_end(&buffer))?;
+        }
+        Recording::assemble(header, header_line, &columns, rows.rows, rate_line, &source)
     }
 
     /// Parses the text of a recording; `source` names it in errors.
     pub fn parse(text: &str, source: &str) -> Result<Recording, InputError> {
         let mut lines = text.lines().enumerate().map(|(i, l)| (i + 1, l.trim_end_matches('\r')));
-        let (header, header_line, column_line, rate_line) = parse_header(&mut lines, text, source)?;
+        let (header, header_line, column_line, rate_line) =
+            parse_header(&mut lines, &|| text.lines().count().max(1), source)?;
         let columns = parse_columns(column_line, header_line, source)?;
-        let rows = parse_rows(lines, &columns, source)?;
+        let mut rows = RowParser::new(&columns, source);
+        for (n, line) in lines {
+            rows.line(n, line)?;
+        }
+        Recording::assemble(header, header_line, &columns, rows.rows, rate_line, source)
+    }
+
+    /// The recording from its parts, after the checks that need every row.
+    fn assemble(
+        header: Header,
+        header_line: usize,
+        columns: &Columns,
+        rows: Vec<Row>,
+        rate_line: Option<usize>,
+        source: &str,
+    ) -> Result<Recording, InputError> {
         if rows.is_empty() {
             return Err(InputError::at(source, header_line, "no data rows"));
         }
@@ -373,7 +422,7 @@ fn is_key(key: &str) -> bool {
 /// line of `rate_hz` (for the rate check).
 fn parse_header<'t>(
     lines: &mut impl Iterator<Item = (usize, &'t str)>,
-    text: &str,
+    line_count: &dyn Fn() -> usize,
     source: &str,
 ) -> Result<(Header, usize, &'t str, Option<usize>), InputError> {
     let bad = |line: usize, reason: String| InputError::at(source, line, reason);
@@ -388,7 +437,7 @@ fn parse_header<'t>(
     let mut seen: Vec<(String, usize)> = Vec::new();
     let (header_line, column_line) = loop {
         let Some((n, line)) = lines.next() else {
-            return Err(bad(text.lines().count().max(1), "no column line after the header".into()));
+            return Err(bad(line_count().max(1), "no column line after the header".into()));
         };
         if line.trim().is_empty() {
             continue;
@@ -481,63 +530,105 @@ fn check_rate(rate_hz: f64, rows: &[Row]) -> Result<(), String> {
     Ok(())
 }
 
-/// The data rows after the column line.
-fn parse_rows<'t>(
-    lines: impl Iterator<Item = (usize, &'t str)>,
-    columns: &Columns,
-    source: &str,
-) -> Result<Vec<Row>, InputError> {
-    let bad = |line: usize, reason: String| InputError::at(source, line, reason);
-    let (names, index) = (&columns.names, &columns.index);
-    let mut rows = Vec::new();
-    let mut previous_t: Option<f64> = None;
-    for (n, line) in lines {
-        if line.trim().is_empty() || line.starts_with('#') {
-            continue;
-        }
-        let cells: Vec<&str> = line.split(',').map(str::trim).collect();
-        if cells.len() != names.len() {
-            return Err(bad(n, format!("{} cells, the column line has {}", cells.len(), names.len())));
-        }
-        let num = |col: usize| -> Result<f64, InputError> {
-            parse_finite(cells[col])
-                .ok_or_else(|| bad(n, format!("column '{}': '{}' is not a finite number", names[col], cells[col])))
-        };
-        let t_s = num(index[0])?;
-        if let Some(prev) = previous_t {
-            if t_s <= prev {
-                return Err(bad(n, format!("time {t_s} s does not increase (previous row: {prev} s)")));
+/// A line without its end: `\n`, then any `\r` (LF or CRLF files).
+fn strip_line_end(line: &str) -> &str {
+    line.strip_suffix('\n').unwrap_or(line).trim_end_matches('\r')
+}
+
+/// The cells of a data row that the reader uses, by slot: the eight of [`Columns::index`], then the gyros,
+/// then `temp_c`.
+const SLOTS: usize = 12;
+/// Slot of `temp_c`.
+const TEMP_SLOT: usize = 11;
+
+/// Reads the data rows after the column line, one line at a time, without allocating per line.
+struct RowParser<'c> {
+    columns: &'c Columns<'c>,
+    source: &'c str,
+    /// Per column of the file: its slot, if the reader uses it.
+    slot_of: Vec<Option<usize>>,
+    /// Per slot: its column of the file.
+    column_of: [usize; SLOTS],
+    previous_t: Option<f64>,
+    rows: Vec<Row>,
+}
+
+impl<'c> RowParser<'c> {
+    fn new(columns: &'c Columns<'c>, source: &'c str) -> RowParser<'c> {
+        let mut slot_of = vec![None; columns.names.len()];
+        let mut column_of = [0; SLOTS];
+        let used = columns
+            .index
+            .iter()
+            .copied()
+            .map(Some)
+            .chain(columns.gyro.map_or([None; 3], |g| g.map(Some)))
+            .chain([columns.temp]);
+        for (slot, column) in used.enumerate() {
+            if let Some(c) = column {
+                slot_of[c] = Some(slot);
+                column_of[slot] = c;
             }
         }
-        previous_t = Some(t_s);
-        let pos_cell = cells[index[1]];
-        let pos: u32 = pos_cell
-            .parse()
-            .map_err(|_| bad(n, format!("column 'pos': '{pos_cell}' is not a non-negative integer")))?;
-        let heading_deg = if cells[index[4]].is_empty() { None } else { Some(num(index[4])?) };
-        let pitch_deg = num(index[2])?;
-        let roll_deg = num(index[3])?;
-        let rate_b_radps = match columns.gyro {
-            Some([x, y, z]) => [num(x)?, num(y)?, num(z)?],
+        RowParser { columns, source, slot_of, column_of, previous_t: None, rows: Vec::new() }
+    }
+
+    /// Line `n` of the file (its end removed): a data row, or a blank or `#` line (skipped).
+    fn line(&mut self, n: usize, line: &str) -> Result<(), InputError> {
+        if line.trim().is_empty() || line.starts_with('#') {
+            return Ok(());
+        }
+        let bad = |reason: String| InputError::at(self.source, n, reason);
+        let names = &self.columns.names;
+        let mut cells = [""; SLOTS];
+        let mut count = 0;
+        for cell in line.split(',') {
+            if let Some(&Some(slot)) = self.slot_of.get(count) {
+                cells[slot] = cell.trim();
+            }
+            count += 1;
+        }
+        if count != names.len() {
+            return Err(bad(format!("{count} cells, the column line has {}", names.len())));
+        }
+        let num = |slot: usize| -> Result<f64, InputError> {
+            parse_finite(cells[slot]).ok_or_else(|| {
+                bad(format!("column '{}': '{}' is not a finite number", names[self.column_of[slot]], cells[slot]))
+            })
+        };
+        let t_s = num(0)?;
+        if let Some(prev) = self.previous_t {
+            if t_s <= prev {
+                return Err(bad(format!("time {t_s} s does not increase (previous row: {prev} s)")));
+            }
+        }
+        self.previous_t = Some(t_s);
+        let pos: u32 =
+            cells[1].parse().map_err(|_| bad(format!("column 'pos': '{}' is not a non-negative integer", cells[1])))?;
+        let heading_deg = if cells[4].is_empty() { None } else { Some(num(4)?) };
+        let pitch_deg = num(2)?;
+        let roll_deg = num(3)?;
+        let rate_b_radps = match self.columns.gyro {
+            Some(_) => [num(8)?, num(9)?, num(10)?],
             None => [0.0; 3],
         };
-        let temp_c = match columns.temp {
-            Some(i) if !cells[i].is_empty() => Some(num(i)?),
+        let temp_c = match self.columns.temp {
+            Some(_) if !cells[TEMP_SLOT].is_empty() => Some(num(TEMP_SLOT)?),
             _ => None,
         };
-        rows.push(Row {
+        self.rows.push(Row {
             t_s,
             pos,
             pitch_deg,
             roll_deg,
             heading_deg,
             rate_b_radps,
-            force_b_mps2: [num(index[5])?, num(index[6])?, num(index[7])?],
+            force_b_mps2: [num(5)?, num(6)?, num(7)?],
             temp_c,
             line: n,
         });
+        Ok(())
     }
-    Ok(rows)
 }
 
 #[cfg(test)]
