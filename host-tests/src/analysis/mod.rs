@@ -56,6 +56,7 @@ mod candidates;
 mod correlated_noise;
 pub mod hidden;
 mod observations;
+mod parallel;
 mod recording;
 mod result;
 mod sample_tests;

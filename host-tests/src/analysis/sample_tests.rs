@@ -3,9 +3,6 @@
 //! (`vibration`) and correlated noise (`correlated_noise`); and the channel diagnostics (detrended RMS,
 //! whiteness, trends) with the data of the report's noise figures.
 
-use std::sync::atomic::{AtomicUsize, Ordering};
-use std::sync::Mutex;
-
 use crate::model::catalogue::{EffectKind, Sensor};
 use crate::stats::linfit::{chi_square_quantile_upper, chi_square_upper};
 use crate::stats::noise::{detect_quantization_joined, joined_pairs, ljung_box, GRID_TOLERANCE};
@@ -13,6 +10,7 @@ use crate::stats::noise::{detect_quantization_joined, joined_pairs, ljung_box, G
 use super::candidates::axis_of;
 use super::correlated_noise::gauss_markov_test;
 use super::observations::Session;
+use super::parallel::on_cores;
 use super::vibration::{remove_line, sinc, vibration_test};
 use super::{ChannelDiagnostics, Effect, FigureData, ALPHA, CHANNELS, CHANNEL_UNITS};
 
@@ -72,28 +70,6 @@ pub(super) fn test_samples(session: &Session, m: f64) -> SampleFindings {
         figures.vibration.push(outcome.vibration);
     }
     out
-}
-
-/// `f(0)`, ..., `f(count - 1)` in that order, computed on the available cores (at most `count` threads).
-pub(super) fn on_cores<T: Send>(count: usize, f: impl Fn(usize) -> T + Sync) -> Vec<T> {
-    let workers = std::thread::available_parallelism().map_or(1, |n| n.get()).clamp(1, count.max(1));
-    let next = AtomicUsize::new(0);
-    let results: Mutex<Vec<Option<T>>> = Mutex::new((0..count).map(|_| None).collect());
-    std::thread::scope(|scope| {
-        for _ in 0..workers {
-            scope.spawn(|| loop {
-                let i = next.fetch_add(1, Ordering::Relaxed);
-                if i >= count {
-                    break;
-                }
-                let value = f(i);
-                if let Ok(mut r) = results.lock() {
-                    r[i] = Some(value);
-                }
-            });
-        }
-    });
-    results.into_inner().unwrap_or_default().into_iter().flatten().collect()
 }
 
 /// What the tests of one channel found.
