@@ -10,7 +10,7 @@ use crate::stats::linfit::Observations;
 use super::candidates::RecordingColumns;
 use super::observations::{Blocks, Session};
 use super::result::{assemble, effects_of, residuals_by_group, Findings, RECORDING};
-use super::sample_tests::{test_samples, SampleFindings, SAMPLE_TESTS};
+use super::sample_tests::{measure_samples, test_samples, SampleFindings, SAMPLE_TESTS};
 use super::selection::{select, Problem, Selection};
 use super::{Analysis, ChannelDiagnostics, CHANNELS, CHANNEL_UNITS};
 
@@ -32,12 +32,19 @@ pub(super) fn analyze_recording_owned(recording: Recording) -> Result<Analysis, 
 
 /// The analysis of a session read from `source`.
 fn analyze_session(session: &Session, source: &str) -> Result<Analysis, InputError> {
-    let blocks = Blocks::cut(session);
-    let mut problem = problem(session, &blocks);
-    let selection = select(&mut problem, SAMPLE_TESTS).map_err(|e| InputError::file(source, e))?;
+    // The sample statistics are measured while the block observations are fitted (docs/analysis.md#speed-and-memory).
+    let (blocks, problem, selection, measures) = std::thread::scope(|scope| {
+        let measuring = scope.spawn(|| measure_samples(session));
+        let blocks = Blocks::cut(session);
+        let mut problem = problem(session, &blocks);
+        let selection = select(&mut problem, SAMPLE_TESTS);
+        let measures = measuring.join().unwrap_or_else(|e| std::panic::resume_unwind(e));
+        (blocks, problem, selection, measures)
+    });
+    let selection = selection.map_err(|e| InputError::file(source, e))?;
     let m = (selection.observable + SAMPLE_TESTS) as f64;
     let mut effects = effects_of(&problem, &selection);
-    let SampleFindings { effects: sample_effects, diagnostics, mut figures } = test_samples(session, m);
+    let SampleFindings { effects: sample_effects, diagnostics, mut figures } = test_samples(session, &measures, m);
     effects.extend(sample_effects);
     let (residual_rms, block_residual_rms) = residual_rms(&blocks, &selection, &diagnostics);
     figures.residual_names = CHANNELS.iter().map(|s| s.to_string()).collect();
