@@ -3,8 +3,10 @@
 
 use std::fmt::Write as _;
 use std::fs::File;
-use std::io::{BufRead, BufReader};
+use std::io::{BufRead, BufReader, Read};
 use std::path::Path;
+use std::sync::atomic::{AtomicBool, Ordering};
+use std::sync::{mpsc, Mutex};
 
 use crate::io::error::InputError;
 
@@ -101,9 +103,15 @@ const COLUMNS: [&str; 11] = [
 ];
 
 impl Recording {
-    /// Reads a recording file, line by line: the file's text is never held whole (a recording of an hour at
-    /// 1 kHz is half a gigabyte of text).
+    /// Reads a recording file, in chunks of lines parsed on the available cores: the file's text is never
+    /// held whole (a recording of an hour at 1 kHz is half a gigabyte of text). Errors are those of
+    /// [`Recording::parse`], the first in file order.
     pub fn read(path: &Path) -> Result<Recording, InputError> {
+        Recording::read_in_chunks(path, CHUNK_BYTES)
+    }
+
+    /// [`Recording::read`] with chunks of `chunk_bytes` (then to the end of a line).
+    fn read_in_chunks(path: &Path, chunk_bytes: u64) -> Result<Recording, InputError> {
         let source = path.display().to_string();
         let io = |e| InputError::io(path, e);
         let mut reader = BufReader::with_capacity(1 << 20, File::open(path).map_err(io)?);
@@ -124,18 +132,8 @@ impl Recording {
         let mut lines = head.iter().enumerate().map(|(i, l)| (i + 1, l.as_str()));
         let (header, header_line, column_line, rate_line) = parse_header(&mut lines, &|| head.len(), &source)?;
         let columns = parse_columns(column_line, header_line, &source)?;
-        let mut rows = RowParser::new(&columns, &source);
-        let mut buffer = String::new();
-        let mut n = head.len();
-        loop {
-            buffer.clear();
-            if reader.read_line(&mut buffer).map_err(io)? == 0 {
-                break;
-            }
-            n += 1;
-            rows.line(n, strip_line_end(&buffer))?;
-        }
-        Recording::assemble(header, header_line, &columns, rows.rows, rate_line, &source)
+        let rows = read_rows(&mut reader, (head.len(), chunk_bytes), &columns, &source, path)?;
+        Recording::assemble(header, header_line, &columns, rows, rate_line, &source)
     }
 
     /// Parses the text of a recording; `source` names it in errors.
@@ -530,6 +528,130 @@ fn check_rate(rate_hz: f64, rows: &[Row]) -> Result<(), String> {
     Ok(())
 }
 
+/// The error of a time that does not increase, at line `n`.
+fn time_does_not_increase(source: &str, n: usize, t_s: f64, previous_t: f64) -> InputError {
+    InputError::at(source, n, format!("time {t_s} s does not increase (previous row: {previous_t} s)"))
+}
+
+/// Bytes of a chunk of data lines (then to the end of its last line).
+const CHUNK_BYTES: u64 = 4 << 20;
+
+/// The rows of one chunk of lines, parsed on its own: its first row's time is not checked (`first_t`
+/// keeps it for the check against the previous chunk), and parsing stops at the first error.
+struct ChunkRows {
+    rows: Vec<Row>,
+    first_t: Option<(usize, f64)>,
+    error: Option<InputError>,
+}
+
+/// Parses the lines of `bytes`, the first being line `first_line` of the file `path`.
+fn parse_chunk(bytes: &[u8], first_line: usize, columns: &Columns, source: &str, path: &Path) -> ChunkRows {
+    let mut parser = RowParser::new(columns, source);
+    let error = match std::str::from_utf8(bytes) {
+        Err(_) => Some(InputError::io(
+            path,
+            std::io::Error::new(std::io::ErrorKind::InvalidData, "stream did not contain valid UTF-8"),
+        )),
+        Ok(text) => {
+            text.lines().enumerate().find_map(|(i, l)| parser.line(first_line + i, l.trim_end_matches('\r')).err())
+        }
+    };
+    ChunkRows { rows: parser.rows, first_t: parser.first_t, error }
+}
+
+/// The next chunk of whole lines of `reader` (empty at the end of the file).
+fn read_chunk(reader: &mut impl BufRead, chunk_bytes: u64) -> std::io::Result<Vec<u8>> {
+    let mut bytes = Vec::with_capacity(chunk_bytes as usize + 4096);
+    reader.by_ref().take(chunk_bytes).read_to_end(&mut bytes)?;
+    if bytes.len() as u64 == chunk_bytes {
+        reader.read_until(b'\n', &mut bytes)?;
+    }
+    Ok(bytes)
+}
+
+/// The data rows of `reader`, whose last line read was line `line`: chunks of `chunk_bytes` (then to the end
+/// of a line) are read here, parsed
+/// on the available cores and joined in file order (docs/analysis.md#speed-and-memory). The first error in
+/// file order is returned, as [`Recording::parse`] would.
+fn read_rows(
+    reader: &mut (impl BufRead + Send),
+    (line, chunk_bytes): (usize, u64),
+    columns: &Columns,
+    source: &str,
+    path: &Path,
+) -> Result<Vec<Row>, InputError> {
+    let workers = std::thread::available_parallelism().map_or(1, |n| n.get()).clamp(1, 4);
+    let (work_tx, work_rx) = mpsc::sync_channel::<(usize, usize, Vec<u8>)>(2 * workers);
+    let work_rx = Mutex::new(work_rx);
+    let (done_tx, done_rx) = mpsc::channel::<(usize, ChunkRows)>();
+    let stop = AtomicBool::new(false);
+    let (joined, read) = std::thread::scope(|scope| {
+        let stop = &stop;
+        let producer = scope.spawn(move || -> std::io::Result<()> {
+            let (mut index, mut line) = (0, line);
+            while !stop.load(Ordering::Relaxed) {
+                let bytes = read_chunk(reader, chunk_bytes)?;
+                if bytes.is_empty() {
+                    break;
+                }
+                let lines = bytes.iter().filter(|&&b| b == b'\n').count();
+                if work_tx.send((index, line + 1, bytes)).is_err() {
+                    break;
+                }
+                (index, line) = (index + 1, line + lines);
+            }
+            Ok(())
+        });
+        for _ in 0..workers {
+            let (done_tx, work_rx) = (done_tx.clone(), &work_rx);
+            // After an error the chunks still queued are taken and dropped, so that the reader is never left
+            // blocked on a full queue.
+            scope.spawn(move || {
+                while let Some((index, first, bytes)) = work_rx.lock().ok().and_then(|rx| rx.recv().ok()) {
+                    if !stop.load(Ordering::Relaxed) {
+                        let _ = done_tx.send((index, parse_chunk(&bytes, first, columns, source, path)));
+                    }
+                }
+            });
+        }
+        drop(done_tx);
+        let joined = join_chunks(done_rx, source);
+        if joined.is_err() {
+            stop.store(true, Ordering::Relaxed);
+        }
+        (joined, producer.join())
+    });
+    let rows = joined?;
+    match read {
+        Ok(Ok(())) => Ok(rows),
+        Ok(Err(e)) => Err(InputError::io(path, e)),
+        Err(panic) => std::panic::resume_unwind(panic),
+    }
+}
+
+/// The chunks' rows in file order, with the time check across chunks; the first error in file order.
+fn join_chunks(done: mpsc::Receiver<(usize, ChunkRows)>, source: &str) -> Result<Vec<Row>, InputError> {
+    let mut pending = std::collections::BTreeMap::new();
+    let (mut next, mut rows, mut previous_t) = (0, Vec::<Row>::new(), None);
+    for (index, chunk) in done {
+        pending.insert(index, chunk);
+        while let Some(chunk) = pending.remove(&next) {
+            next += 1;
+            if let (Some((n, t_s)), Some(prev)) = (chunk.first_t, previous_t) {
+                if t_s <= prev {
+                    return Err(time_does_not_increase(source, n, t_s, prev));
+                }
+            }
+            if let Some(e) = chunk.error {
+                return Err(e);
+            }
+            previous_t = chunk.rows.last().map(|r| r.t_s).or(previous_t);
+            rows.extend(chunk.rows);
+        }
+    }
+    Ok(rows)
+}
+
 /// A line without its end: `\n`, then any `\r` (LF or CRLF files).
 fn strip_line_end(line: &str) -> &str {
     line.strip_suffix('\n').unwrap_or(line).trim_end_matches('\r')
@@ -550,6 +672,8 @@ struct RowParser<'c> {
     /// Per slot: its column of the file.
     column_of: [usize; SLOTS],
     previous_t: Option<f64>,
+    /// The line and time of the first row (whose time is not checked against an earlier one).
+    first_t: Option<(usize, f64)>,
     rows: Vec<Row>,
 }
 
@@ -570,7 +694,7 @@ impl<'c> RowParser<'c> {
                 column_of[slot] = c;
             }
         }
-        RowParser { columns, source, slot_of, column_of, previous_t: None, rows: Vec::new() }
+        RowParser { columns, source, slot_of, column_of, previous_t: None, first_t: None, rows: Vec::new() }
     }
 
     /// Line `n` of the file (its end removed): a data row, or a blank or `#` line (skipped).
@@ -597,10 +721,10 @@ impl<'c> RowParser<'c> {
             })
         };
         let t_s = num(0)?;
-        if let Some(prev) = self.previous_t {
-            if t_s <= prev {
-                return Err(bad(format!("time {t_s} s does not increase (previous row: {prev} s)")));
-            }
+        match self.previous_t {
+            Some(prev) if t_s <= prev => return Err(time_does_not_increase(self.source, n, t_s, prev)),
+            Some(_) => {}
+            None => self.first_t = Some((n, t_s)),
         }
         self.previous_t = Some(t_s);
         let pos: u32 =
@@ -658,6 +782,32 @@ mod tests {
             r.rows.iter().map(|x| x.force_b_mps2).collect::<Vec<_>>()
         );
         assert_eq!(again.rows[0].rate_b_radps, r.rows[0].rate_b_radps);
+    }
+
+    #[test]
+    fn reading_a_file_in_chunks_gives_what_parsing_its_text_gives() {
+        let mut good = GOOD.to_string();
+        for k in 2..40 {
+            good.push_str(&format!("{},1,0,0,0,{k}e-6,0,0,0,0,9.8\r\n\n# note\n", 0.01 * k as f64));
+        }
+        let texts = [
+            good.clone(),
+            good.replace("0.15,1,", "0.05,1,"),
+            good.replace("0.2,1,0,0,0,20e-6", "0.2,1,0,0,0,x"),
+            good.replace("0.3,1,0,0,0,30e-6,0,0,", "0.3,1,0,0,0,30e-6,0,"),
+            good.replace("0.25,1,", "0.25,y,").replace("0.36,1,", "0.01,1,"),
+        ];
+        let dir = tempfile::tempdir().unwrap();
+        let path = dir.path().join("r.csv");
+        for text in texts {
+            std::fs::write(&path, &text).unwrap();
+            let source = path.display().to_string();
+            let parsed = Recording::parse(&text, &source).map_err(|e| e.to_string());
+            for chunk_bytes in [1, 7, 40, 64, 100, 333, 1 << 20] {
+                let read = Recording::read_in_chunks(&path, chunk_bytes).map_err(|e| e.to_string());
+                assert_eq!(read, parsed, "chunks of {chunk_bytes} bytes");
+            }
+        }
     }
 
     #[test]
