@@ -54,7 +54,7 @@ fn json_report_and_verdict_none_on_a_clean_session() {
 }
 
 #[test]
-fn effects_have_the_spec_fields_strongest_first_and_the_verdict_is_the_first() {
+fn effects_have_the_spec_fields_ranked_by_consequence_and_the_verdict_is_the_first() {
     let mut s: ScenarioFile = clean_scenario();
     s.accel.scale_factor = [3.0e-4, 0.0, 0.0];
     s.gyro.drift_radps_per_s = [0.0, 0.0, 2.0e-9];
@@ -79,8 +79,27 @@ fn effects_have_the_spec_fields_strongest_first_and_the_verdict_is_the_first() {
         assert!(e["delta_bic"].as_f64().unwrap() < 0.0);
         assert!(e["residual_rms_after"].as_f64().unwrap() <= e["residual_rms_before"].as_f64().unwrap());
     }
-    let bics: Vec<f64> = effects.iter().map(|e| e["delta_bic"].as_f64().unwrap()).collect();
-    assert!(bics.windows(2).all(|w| w[0] <= w[1]), "{bics:?}");
+    // Ranked by consequence (docs/analysis.md#verdict): the column effects that move a bias by a standard
+    // error or more when left out, largest first; the other column effects by BIC gain; the noise effects
+    // (no consequence) by BIC gain.
+    let moves = |e: &Value| e["consequence"]["in_std_errors"].as_f64().filter(|&z| z >= 1.0);
+    let class = |e: &Value| match (e["consequence"].is_null(), moves(e)) {
+        (true, _) => 2,
+        (false, None) => 1,
+        (false, Some(_)) => 0,
+    };
+    let classes: Vec<u8> = effects.iter().map(class).collect();
+    assert!(classes.windows(2).all(|w| w[0] <= w[1]), "{classes:?}");
+    for c in 0..3 {
+        let group: Vec<&Value> = effects.iter().filter(|e| class(e) == c).collect();
+        if c == 0 {
+            let z: Vec<f64> = group.iter().map(|e| moves(e).unwrap()).collect();
+            assert!(z.windows(2).all(|w| w[0] >= w[1]), "{z:?}");
+        } else {
+            let bics: Vec<f64> = group.iter().map(|e| e["delta_bic"].as_f64().unwrap()).collect();
+            assert!(bics.windows(2).all(|w| w[0] <= w[1]), "{bics:?}");
+        }
+    }
     assert_eq!(v["verdict"], effects[0]["effect"]);
     let sf = effects.iter().find(|e| e["effect"] == "accel_scale_factor").expect("scale factor found");
     assert_eq!(

@@ -10,10 +10,10 @@ use sinscal::nav::earth::Site;
 use crate::calibration::site_of;
 use crate::io::error::InputError;
 use crate::model::catalogue::{EffectKind, Sensor};
-use crate::model::synth::{c_b_n, earth_rate_n_radps, mul_t_vec};
+use crate::model::synth::{c_b_n, earth_rate_n_radps};
 use crate::stats::linfit::Observations;
 
-use super::candidates::{sensor_terms, Candidate};
+use super::candidates::{in_body, sensor_terms, Candidate};
 use super::result::{assemble, effects_of, residuals_by_group, Findings, ANGLES};
 use super::selection::{select, Problem};
 use super::{Analysis, FigureData, ENU};
@@ -269,7 +269,7 @@ impl AngleObservations {
                 o.sigma.push(r.phi_std_rad.map_or(1.0, |s| s[k]));
                 o.obs_pos.push(r.pos);
                 o.design.push(std::array::from_fn::<f64, 6, _>(|j| rows[k][j] as f64));
-                o.predicted.push((mul_t_vec(&c, w_n), mul_t_vec(&c, f_n)));
+                o.predicted.push((in_body(&c, w_n), in_body(&c, f_n)));
                 o.which.push((pi, k));
             }
         }
@@ -298,6 +298,7 @@ impl AngleObservations {
             group_names: vec!["phi_en_rad".into(), "phi_u_rad".into()],
             group_units: vec!["rad", "rad"],
             obs_pos: self.obs_pos,
+            obs_pose: None,
             candidates,
             unobservable: Vec::new(),
             residual_of: "angles",
@@ -344,6 +345,8 @@ impl AngleObservations {
                 });
             }
         }
+        // No time terms in angles: the session's length does not enter.
+        Candidate::set_limits(&mut candidates, 1.0, 1.0);
         candidates
     }
 }

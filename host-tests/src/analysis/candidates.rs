@@ -4,7 +4,7 @@
 
 use crate::model::catalogue::{EffectKind, Sensor};
 use crate::model::sensor::Term;
-use crate::model::synth::{cross, mul_t_vec};
+use crate::model::synth::{cross, mul_t_vec, M3};
 
 use super::observations::{BlockObs, Blocks, Session};
 use super::{AXES, ENU};
@@ -24,12 +24,22 @@ pub(super) struct Candidate {
     pub variants: Vec<(Option<f64>, Vec<f64>)>,
     /// Observation groups (channels, angle groups) the effect acts on.
     pub groups: Vec<usize>,
+    /// Largest plausible magnitude of the estimate, SI ([`EffectKind::plausible_limit`]).
+    pub limit: Option<f64>,
 }
 
 impl Candidate {
     /// A candidate of one column, not tied to a position.
     pub fn single(effect: EffectKind, sensor: Sensor, axes: String, col: Vec<f64>, groups: Vec<usize>) -> Candidate {
-        Candidate { effect, sensor, axes, pos: None, variants: vec![(None, col)], groups }
+        Candidate { effect, sensor, axes, pos: None, variants: vec![(None, col)], groups, limit: None }
+    }
+
+    /// Sets the plausible limit of every candidate, for a session of `span_s` seconds whose temperature
+    /// spans `temperature_span_k`.
+    pub fn set_limits(candidates: &mut [Candidate], span_s: f64, temperature_span_k: f64) {
+        for c in candidates {
+            c.limit = c.effect.plausible_limit(c.sensor, &c.axes, span_s, temperature_span_k);
+        }
     }
 
     /// "effect:axes", with the position of a position error ("position_error:e:pos3") and the sensor of
@@ -97,6 +107,18 @@ pub(super) fn sensor_terms(gyros: bool) -> Vec<SensorTerm> {
         .collect()
 }
 
+/// Below this fraction of a vector's magnitude, a component of it rotated into the body is rounding, not
+/// signal (a component of 1e-12 of gravity is an attitude of 1e-12 rad).
+pub(super) const ROUNDING: f64 = 1e-12;
+
+/// `C^T v`: the navigation-frame vector `v` in the body, with the components below [`ROUNDING`] of its
+/// magnitude set to exactly zero, so that a column the attitude makes zero is absent, not a column of
+/// rounding errors (which a fit would scale to an estimate of 1e13).
+pub(super) fn in_body(c_b_n: &M3, v_n: [f64; 3]) -> [f64; 3] {
+    let scale = (v_n[0] * v_n[0] + v_n[1] * v_n[1] + v_n[2] * v_n[2]).sqrt();
+    mul_t_vec(c_b_n, v_n).map(|x| if x.abs() <= ROUNDING * scale { 0.0 } else { x })
+}
+
 /// Unit vector along axis `k`.
 pub(super) fn unit(k: usize) -> [f64; 3] {
     let mut e = [0.0; 3];
@@ -142,6 +164,7 @@ impl<'a> RecordingColumns<'a> {
         let t0 = self.session.t0;
         let shapes: Vec<_> = tau_grid.iter().map(|&tau| move |t: f64| (-(t - t0) / tau).exp()).collect();
         let warmup_means = self.blocks.time_means(self.session, &shapes);
+        let span_s = tau_grid.last().copied().unwrap_or(1.0);
         for c in (0..6).filter(|&c| self.blocks.present[c]) {
             candidates.push(self.drift(c));
             candidates.push(self.warmup(c, &tau_grid, &warmup_means));
@@ -156,15 +179,27 @@ impl<'a> RecordingColumns<'a> {
                 ));
             }
         }
+        Candidate::set_limits(&mut candidates, span_s, self.temperature_span_k());
         candidates
+    }
+
+    /// The range of the temperatures of the session, K (0 without temperatures).
+    fn temperature_span_k(&self) -> f64 {
+        let temps = self.session.dwells.iter().filter_map(|d| d.temp.as_ref()).flatten();
+        let (lo, hi) = temps.fold((f64::INFINITY, f64::NEG_INFINITY), |(lo, hi), &t| (lo.min(t), hi.max(t)));
+        if hi >= lo {
+            hi - lo
+        } else {
+            0.0
+        }
     }
 
     /// The true body rate (`v_n` = Earth rate, needs the heading) or force (tilt suffices) at a block.
     fn body(&self, b: &BlockObs, v_n: [f64; 3], gyro_needs_heading: bool) -> Option<[f64; 3]> {
         let d = &self.session.dwells[b.dwell];
         match d.c_b_n {
-            Some(c) => Some(mul_t_vec(&c, v_n)),
-            None if !gyro_needs_heading => Some(mul_t_vec(&d.c_tilt, v_n)),
+            Some(c) => Some(in_body(&c, v_n)),
+            None if !gyro_needs_heading => Some(in_body(&d.c_tilt, v_n)),
             None => None,
         }
     }
@@ -196,9 +231,9 @@ impl<'a> RecordingColumns<'a> {
             }
             let c = dwells[b.dwell].c_b_n.unwrap_or(dwells[b.dwell].c_tilt);
             if b.channel < 3 {
-                mul_t_vec(&c, cross(unit(k), w_n))[b.channel]
+                in_body(&c, cross(unit(k), w_n))[b.channel]
             } else {
-                mul_t_vec(&c, cross(unit(k), f_n))[b.channel - 3]
+                in_body(&c, cross(unit(k), f_n))[b.channel - 3]
             }
         })
     }
@@ -277,6 +312,7 @@ impl<'a> RecordingColumns<'a> {
             pos: None,
             variants,
             groups: vec![c],
+            limit: None,
         }
     }
 

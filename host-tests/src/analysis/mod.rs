@@ -29,7 +29,7 @@
 //!    - quantisation: the fraction of sample differences on a lattice
 //!      ([`crate::stats::noise::detect_quantization`]), against the fraction continuous data give, as a
 //!      binomial likelihood ratio.
-//! 5. `result`: the effects found, strongest first, the base model, the verdict and the criterion in words
+//! 5. `result`: the effects found, ranked by consequence, the base model, the verdict and the criterion in words
 //!    make the [`Analysis`]; `summary` ([`summary()`]) is its human text, [`crate::io::analysis_report`] its
 //!    report directory.
 //!
@@ -38,10 +38,12 @@
 //! the one with the largest likelihood-ratio statistic `LR = 2 (ln L1 - ln L0)` is added if its p-value
 //! (chi-square with the candidate's number of parameters) is below `alpha / m` (Bonferroni over the `m`
 //! candidates tested, family-wise `alpha` = [`ALPHA`]) and its `delta_bic = -LR + k ln n` is negative.
-//! Effects are reported strongest (most negative `delta_bic`) first. Candidates that the base model explains
-//! completely (a zero or dependent column) are `unobservable`; candidates whose columns are indistinguishable
-//! in this data (correlation above [`ALIAS_CORRELATION`] once the base model is removed) are named as
-//! `aliases` of the effect found.
+//! A candidate the criterion admits at a value no plausible instrument has is a misfit, not an effect; one
+//! whose estimate correlates beyond [`ALIAS_CORRELATION`] with a chosen one's is named as that one's alias;
+//! a time term that only the differences between poses support carries "pose order" as an alias
+//! (docs/analysis.md#plausibility, #confounding). Candidates that the base model explains completely (a zero
+//! or dependent column) are `unobservable`. Effects are ranked by consequence: the error that leaving them
+//! out induces in the biases, in standard errors (docs/analysis.md#verdict).
 //!
 //! # Angles files ([`analyze_angles`], `angles`)
 //! The observations are the per-position angles (docs/formats.md#angles); the base model is the six biases
@@ -55,8 +57,10 @@ mod angles;
 mod candidates;
 mod correlated_noise;
 pub mod hidden;
+pub mod noise_terms;
 mod observations;
 mod parallel;
+pub mod planted;
 mod recording;
 mod result;
 mod sample_tests;
@@ -78,8 +82,9 @@ pub use summary::summary;
 
 /// Family-wise significance level of the effect search.
 pub const ALPHA: f64 = 0.01;
-/// Candidates whose base-free columns correlate above this are indistinguishable (aliases).
-pub const ALIAS_CORRELATION: f64 = 0.999;
+/// Candidates whose estimates (or base-free columns) correlate beyond this are indistinguishable in the
+/// data: aliases, reported as one effect, not two.
+pub const ALIAS_CORRELATION: f64 = 0.95;
 /// Target block length, samples (6 s at 100 Hz).
 pub const BLOCK_SAMPLES: usize = 600;
 /// Most blocks per dwell.
@@ -139,6 +144,56 @@ pub struct Effect {
     pub p_value: f64,
     /// Other candidates this data set cannot tell apart from this one.
     pub aliases: Vec<String>,
+    /// What the effect does to the calibration if it is left out (block effects; the noise effects move
+    /// no estimate).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub consequence: Option<Consequence>,
+    /// The profiled time constant sits at an end of its grid: it is not determined by the data.
+    #[serde(skip_serializing_if = "std::ops::Not::not")]
+    pub at_grid_edge: bool,
+}
+
+/// The error an effect induces in the base model's biases when it is left out (docs/analysis.md#verdict).
+#[derive(Clone, Debug, Serialize)]
+pub struct Consequence {
+    /// The bias it moves most ("accel_bias_z").
+    pub bias: String,
+    /// By how much, SI.
+    pub bias_error: f64,
+    /// The same in units of that bias's standard error.
+    pub in_std_errors: f64,
+}
+
+/// A catalogue effect the criterion admits only at a value no plausible instrument has: the model misses
+/// something there (docs/analysis.md#plausibility).
+#[derive(Clone, Debug, Serialize)]
+pub struct Misfit {
+    /// The candidate ("position_error:e:pos3").
+    pub candidate: String,
+    /// The value the fit needs, SI.
+    pub estimate: f64,
+    /// Its standard error, SI.
+    pub std_error: f64,
+    /// The plausible limit it exceeds, SI.
+    pub limit: f64,
+    /// Unit of the three.
+    pub unit: String,
+    /// Where the fit puts it most: position label.
+    pub pos: u32,
+    /// ... and channel (or angle group).
+    pub channel: String,
+}
+
+/// A time term (drift, warm-up, temperature) that the criterion admits but that a pose-by-pose offset
+/// explains as well: time and pose order are confounded in this data (docs/analysis.md#confounding).
+#[derive(Clone, Debug, Serialize)]
+pub struct Confounded {
+    /// The candidate ("bias_drift:x (accel)").
+    pub candidate: String,
+    /// Its likelihood ratio against the model chosen so far.
+    pub likelihood_ratio: f64,
+    /// Its likelihood ratio once every pose has its own offsets.
+    pub likelihood_ratio_within_poses: f64,
 }
 
 impl Effect {
@@ -217,10 +272,14 @@ pub struct Analysis {
     pub input: String,
     /// The base model.
     pub base_model: BaseModel,
-    /// Effects found, strongest first.
+    /// Effects found, ranked by consequence.
     pub effects: Vec<Effect>,
     /// Catalogue entries this data set cannot see.
     pub unobservable: Vec<String>,
+    /// Effects the data want at impossible values.
+    pub misfits: Vec<Misfit>,
+    /// Time terms confounded with the order of the poses.
+    pub confounded: Vec<Confounded>,
     /// `effects[0].effect` or "none".
     pub verdict: String,
     /// The criterion, in words, with its numbers.
@@ -234,6 +293,9 @@ pub struct Analysis {
     /// Per-channel diagnostics (recordings).
     #[serde(skip_serializing_if = "Vec::is_empty")]
     pub diagnostics: Vec<ChannelDiagnostics>,
+    /// Per channel: the noise terms named from the Allan variance of the longest dwell (recordings).
+    #[serde(skip_serializing_if = "Vec::is_empty")]
+    pub noise_model: Vec<noise_terms::NoiseModel>,
     /// Data for the report's figures (not written to JSON).
     #[serde(skip)]
     pub figures: FigureData,

@@ -3,9 +3,11 @@
 
 use std::collections::BTreeMap;
 
+use crate::calibration::attitude_knowledge;
 use crate::io::error::InputError;
 use crate::io::recording::Recording;
 use crate::stats::linfit::Observations;
+use sinscal::calib::channels::AttitudeKnowledge;
 
 use super::candidates::RecordingColumns;
 use super::observations::{Blocks, Session};
@@ -17,75 +19,210 @@ use super::{Analysis, ChannelDiagnostics, CHANNELS, CHANNEL_UNITS};
 /// Analyses a recording.
 pub fn analyze_recording(recording: &Recording) -> Result<Analysis, InputError> {
     recording.require_gyro("analyze")?;
-    analyze_session(&Session::read(recording)?, &recording.source)
+    let levelled = attitude_knowledge(&recording.header) == AttitudeKnowledge::Unknown;
+    analyze_session(Session::read(recording)?, levelled, &recording.source)
 }
 
 /// Analyses a recording that is not needed afterwards: its rows are dropped once the dwells are read, so
 /// that the rows and the analysis' working data are not held at once (docs/analysis.md#speed-and-memory).
 pub(super) fn analyze_recording_owned(recording: Recording) -> Result<Analysis, InputError> {
     recording.require_gyro("analyze")?;
+    let levelled = attitude_knowledge(&recording.header) == AttitudeKnowledge::Unknown;
     let session = Session::read(&recording)?;
     let source = recording.source.clone();
     drop(recording);
-    analyze_session(&session, &source)
+    analyze_session(session, levelled, &source)
 }
 
-/// The analysis of a session read from `source`.
-fn analyze_session(session: &Session, source: &str) -> Result<Analysis, InputError> {
+/// The analysis of a session read from `source`; `levelled`: its attitudes were levelled from its own
+/// accelerometers.
+fn analyze_session(mut session: Session, levelled: bool, source: &str) -> Result<Analysis, InputError> {
+    let accel_bias_mps2 = if levelled { relevel(&mut session) } else { [0.0; 3] };
+    let session = &session;
     // The sample statistics are measured while the block observations are fitted (docs/analysis.md#speed-and-memory).
-    let (blocks, problem, selection, measures) = std::thread::scope(|scope| {
+    let (problem, selection, measures) = std::thread::scope(|scope| {
         let measuring = scope.spawn(|| measure_samples(session));
         let blocks = Blocks::cut(session);
-        let mut problem = problem(session, &blocks);
+        let mut problem = problem(session, &blocks, levelled.then_some(accel_bias_mps2));
         let selection = select(&mut problem, SAMPLE_TESTS);
         let measures = measuring.join().unwrap_or_else(|e| std::panic::resume_unwind(e));
-        (blocks, problem, selection, measures)
+        (problem, selection, measures)
     });
     let selection = selection.map_err(|e| InputError::file(source, e))?;
     let m = (selection.observable + SAMPLE_TESTS) as f64;
     let mut effects = effects_of(&problem, &selection);
     let SampleFindings { effects: sample_effects, diagnostics, mut figures } = test_samples(session, &measures, m);
     effects.extend(sample_effects);
-    let (residual_rms, block_residual_rms) = residual_rms(&blocks, &selection, &diagnostics);
-    figures.residual_names = CHANNELS.iter().map(|s| s.to_string()).collect();
+    let (residual_rms, block_residual_rms) = residual_rms(&problem, &selection, &diagnostics);
+    figures.residual_names = problem.group_names.clone();
     figures.residuals = residuals_by_group(&problem, &selection);
     let findings = Findings { effects, residual_rms, block_residual_rms, m, diagnostics, figures };
-    Ok(assemble(problem, selection, findings, RECORDING, source))
+    let mut analysis = assemble(problem, selection, findings, RECORDING, source);
+    for (k, axis) in ["x", "y", "z"].iter().enumerate() {
+        if let Some(b) = analysis.base_model.biases.get_mut(&format!("accel_bias_{axis}")) {
+            *b += accel_bias_mps2[k];
+        }
+    }
+    Ok(analysis)
 }
 
-/// The block means, the base model's bias columns and the catalogue's candidates.
-fn problem(session: &Session, blocks: &Blocks) -> Problem {
+/// Levels every dwell again from its accelerometer mean less the accelerometer biases, and returns the
+/// biases: the fit along gravity is linear in the biases only near them (a bias of 1 m/s^2 across gravity
+/// changes `|f|` by 0.05 m/s^2), so the biases are found by Gauss-Newton on the base model, four passes.
+fn relevel(session: &mut Session) -> [f64; 3] {
+    let means: Vec<[f64; 3]> = session
+        .dwells
+        .iter()
+        .map(|d| std::array::from_fn(|c| d.y[3 + c].iter().sum::<f64>() / d.y[3 + c].len().max(1) as f64))
+        .collect();
+    let mut bias = [0.0; 3];
+    for _ in 0..4 {
+        for (d, m) in session.dwells.iter_mut().zip(&means) {
+            let v = [m[0] - bias[0], m[1] - bias[1], m[2] - bias[2]];
+            let n = (v[0] * v[0] + v[1] * v[1] + v[2] * v[2]).sqrt().max(f64::MIN_POSITIVE);
+            let pitch_deg = (v[1] / n).clamp(-1.0, 1.0).asin().to_degrees();
+            let roll_deg = (-v[0]).atan2(v[2]).to_degrees();
+            d.c_tilt = crate::model::synth::c_b_n(pitch_deg, roll_deg, 0.0);
+        }
+        let blocks = Blocks::cut(session);
+        let mut p = problem(session, &blocks, Some(bias));
+        p.candidates.clear();
+        let base: Vec<&[f64]> = p.base.iter().map(|c| c.as_slice()).collect();
+        let Some(fit) = crate::stats::linfit::fit(&p.obs, &base) else { break };
+        for (j, name) in p.base_names.iter().enumerate() {
+            if let Some(k) = ["accel_bias_x", "accel_bias_y", "accel_bias_z"].iter().position(|b| b == name) {
+                bias[k] += fit.beta[j];
+            }
+        }
+    }
+    bias
+}
+
+/// The block means, the base model's bias columns and the catalogue's candidates. With attitudes levelled
+/// from the recording's own accelerometers (`levelled`: the accelerometer biases they were levelled with),
+/// the accelerometer rows become one row per block: the force along the gravity direction
+/// ([`along_gravity`]).
+fn problem(session: &Session, blocks: &Blocks, levelled: Option<[f64; 3]>) -> Problem {
     let mut unobservable = Vec::new();
     let (base, base_names) = blocks.base_columns(&mut unobservable);
     let candidates = RecordingColumns::new(session, blocks).candidates(&mut unobservable);
-    Problem {
+    let problem = Problem {
         obs: Observations { y: blocks.y.clone(), group: blocks.group.clone(), groups: 6, sigma: None },
         base,
         base_names,
         group_names: CHANNELS.iter().map(|s| s.to_string()).collect(),
         group_units: CHANNEL_UNITS.to_vec(),
         obs_pos: blocks.obs_pos.clone(),
+        obs_pose: Some(poses(session, blocks)),
         candidates,
         unobservable,
         residual_of: "block means",
+    };
+    match levelled {
+        Some(bias) => along_gravity(problem, session, blocks, bias),
+        None => problem,
     }
+}
+
+/// Name of the accelerometer group once projected on gravity.
+pub(super) const ALONG_GRAVITY: &str = "f_along_gravity_mps2";
+
+/// A recording whose attitudes were levelled from its own accelerometers predicts gravity along the
+/// measured direction: the accelerometer residuals across it carry the levelling, not the sensor. Each
+/// block's three accelerometer rows (residual and every column) are replaced by their component along the
+/// dwell's gravity direction `u` (`sum_c u_c row_c`, group 3, named [`ALONG_GRAVITY`]): what `|f| = g`
+/// tests, free of every dwell's level. The residual is taken about the accelerometer biases `bias` the
+/// dwells were levelled with (`u . (mean - bias) - g`), so the base model's biases are corrections to them.
+/// Gyro rows stay.
+fn along_gravity(mut p: Problem, session: &Session, blocks: &Blocks, bias: [f64; 3]) -> Problem {
+    use std::collections::BTreeMap;
+    let mut triads: BTreeMap<(usize, usize), [Option<usize>; 3]> = BTreeMap::new();
+    let mut keep: Vec<usize> = Vec::new();
+    for (i, b) in blocks.list.iter().enumerate() {
+        if b.channel < 3 {
+            keep.push(i);
+        } else {
+            triads.entry((b.dwell, b.range.0)).or_default()[b.channel - 3] = Some(i);
+        }
+    }
+    let rows: Vec<(usize, [usize; 3])> =
+        triads.into_iter().filter_map(|((dwell, _), t)| Some((dwell, [t[0]?, t[1]?, t[2]?]))).collect();
+    let up = |dwell: usize| {
+        let c = &session.dwells[dwell].c_tilt;
+        [c[2][0], c[2][1], c[2][2]]
+    };
+    let project = |v: &[f64]| -> Vec<f64> {
+        let mut out: Vec<f64> = keep.iter().map(|&i| v[i]).collect();
+        out.extend(rows.iter().map(|(d, r)| (0..3).map(|c| up(*d)[c] * v[r[c]]).sum::<f64>()));
+        out
+    };
+    let project_idx = |v: &[usize], accel: usize| -> Vec<usize> {
+        let mut out: Vec<usize> = keep.iter().map(|&i| v[i]).collect();
+        out.extend(rows.iter().map(|(_, r)| if accel == usize::MAX { v[r[0]] } else { accel }));
+        out
+    };
+    p.obs.y = project(&p.obs.y);
+    for (k, (d, _)) in rows.iter().enumerate() {
+        p.obs.y[keep.len() + k] -= (0..3).map(|c| up(*d)[c] * bias[c]).sum::<f64>();
+    }
+    p.obs.group = project_idx(&p.obs.group, 3);
+    p.obs_pose = p.obs_pose.as_ref().map(|poses| project_idx(poses, usize::MAX));
+    let pos: Vec<usize> = p.obs_pos.iter().map(|&x| x as usize).collect();
+    p.obs_pos = project_idx(&pos, usize::MAX).into_iter().map(|x| x as u32).collect();
+    p.base = p.base.iter().map(|c| project(c)).collect();
+    for cand in p.candidates.iter_mut() {
+        for (_, col) in cand.variants.iter_mut() {
+            *col = project(col);
+        }
+        for g in cand.groups.iter_mut().filter(|g| **g >= 3) {
+            *g = 3;
+        }
+        cand.groups.dedup();
+    }
+    p.group_names[3] = ALONG_GRAVITY.into();
+    p.unobservable
+        .push("accelerometer terms across gravity: the attitudes are levelled from the accelerometers".into());
+    p
+}
+
+/// The pose of every observation: dwells whose reference attitudes agree (to 1e-9) share a pose.
+fn poses(session: &Session, blocks: &Blocks) -> Vec<usize> {
+    let mut attitudes: Vec<[[f64; 3]; 3]> = Vec::new();
+    let pose_of_dwell: Vec<usize> = session
+        .dwells
+        .iter()
+        .map(|d| {
+            let c = d.c_b_n.unwrap_or(d.c_tilt);
+            let same = |a: &[[f64; 3]; 3]| (0..9).all(|k| (a[k / 3][k % 3] - c[k / 3][k % 3]).abs() < 1e-9);
+            attitudes.iter().position(same).unwrap_or_else(|| {
+                attitudes.push(c);
+                attitudes.len() - 1
+            })
+        })
+        .collect();
+    blocks.list.iter().map(|b| pose_of_dwell[b.dwell]).collect()
 }
 
 /// Per channel present: the RMS residual of the samples after the base model, and of its block means.
 fn residual_rms(
-    blocks: &Blocks,
+    problem: &Problem,
     selection: &Selection,
     diagnostics: &[ChannelDiagnostics],
 ) -> (BTreeMap<String, f64>, BTreeMap<String, f64>) {
     let mut residual_rms = BTreeMap::new();
     let mut block_rms = BTreeMap::new();
-    for c in (0..6).filter(|&c| blocks.present[c]) {
+    for c in (0..6).filter(|c| problem.obs.group.contains(c)) {
         // Samples minus the base model: the dwell's deviation from the fitted bias (block level) plus the
-        // detrended part (diagnostics).
+        // detrended part (diagnostics; along gravity, the accelerometers' mean square).
         let block = selection.base_fit.rms[c];
-        block_rms.insert(CHANNELS[c].to_string(), block);
-        let detrended_rms = diagnostics[c].detrended_rms;
-        residual_rms.insert(CHANNELS[c].to_string(), (detrended_rms * detrended_rms + block * block).sqrt());
+        let name = problem.group_names[c].clone();
+        let detrended_sq = if name == ALONG_GRAVITY {
+            diagnostics[3..6].iter().map(|d| d.detrended_rms * d.detrended_rms).sum::<f64>() / 3.0
+        } else {
+            diagnostics[c].detrended_rms * diagnostics[c].detrended_rms
+        };
+        block_rms.insert(name.clone(), block);
+        residual_rms.insert(name, (detrended_sq + block * block).sqrt());
     }
     (residual_rms, block_rms)
 }

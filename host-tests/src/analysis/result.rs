@@ -1,13 +1,15 @@
 //! The [`Analysis`] assembled from a front end's selection and findings: the effects chosen as public
-//! [`Effect`]s, strongest first, the base model, the verdict, the criterion in words and the residuals of the
+//! [`Effect`]s, ranked by consequence, the base model, the verdict, the criterion in words and the residuals of the
 //! report's figure.
 
 use std::collections::BTreeMap;
 
 use crate::model::catalogue::EffectKind;
 
-use super::selection::{Problem, Selection};
-use super::{Analysis, BaseModel, ChannelDiagnostics, Effect, FigureData, ALPHA};
+use super::selection::{Problem, Selection, POSE_ORDER};
+use crate::stats::linfit::solve_spd;
+
+use super::{Analysis, BaseModel, ChannelDiagnostics, Confounded, Consequence, Effect, FigureData, Misfit, ALPHA};
 
 /// The input kinds (the `input` field).
 pub(super) const RECORDING: &str = "recording";
@@ -47,7 +49,9 @@ fn effect_of(problem: &Problem, selection: &Selection, index: usize) -> Effect {
         axes: cand.axes.clone(),
         pos: cand.pos,
         estimate: selection.final_fit.beta[j],
-        std_error: selection.final_fit.std_error(j),
+        // The fit's standard error assumes independent block means; correlated ones widen it.
+        std_error: selection.final_fit.std_error(j)
+            * cand.groups.iter().map(|&g| selection.inflation[g]).fold(1.0, f64::max).sqrt(),
         unit: cand.unit().to_string(),
         delta_bic: c.delta_bic,
         residual_rms_before: c.rms_before,
@@ -60,7 +64,104 @@ fn effect_of(problem: &Problem, selection: &Selection, index: usize) -> Effect {
         parameters: cand.parameters(),
         p_value: c.p_value,
         aliases: selection.aliases[index].clone(),
+        consequence: consequence(problem, selection, index),
+        at_grid_edge: cand.variants.len() > 1 && (c.variant == 0 || c.variant + 1 == cand.variants.len()),
     }
+}
+
+/// What leaving chosen effect `index` out does to the base model's biases: the error it induces, `(X' W
+/// X)^-1 X' W (column * estimate)` with `X` the bias columns and `W` the final fit's weights, and that error
+/// over the biases' standard errors; the bias it moves most.
+fn consequence(problem: &Problem, selection: &Selection, index: usize) -> Option<Consequence> {
+    let c = &selection.chosen[index];
+    let column = &problem.candidates[c.candidate].variants[c.variant].1;
+    let fit = &selection.final_fit;
+    let theta = fit.beta[problem.base.len() + index];
+    let k = problem.base.len();
+    let weight = |i: usize| match &problem.obs.sigma {
+        Some(s) => 1.0 / (s[i] * s[i]),
+        None => 1.0 / fit.variance[problem.obs.group[i]],
+    };
+    let mut a = vec![vec![0.0; k]; k];
+    let mut b = vec![0.0; k];
+    for i in 0..problem.obs.y.len() {
+        let w = weight(i);
+        for p in 0..k {
+            b[p] += w * problem.base[p][i] * column[i] * theta;
+            for q in 0..k {
+                a[p][q] += w * problem.base[p][i] * problem.base[q][i];
+            }
+        }
+    }
+    let (delta, inverse) = solve_spd(&a, &b)?;
+    let z = |p: usize| delta[p].abs() / inverse[p][p].max(f64::MIN_POSITIVE).sqrt();
+    let biases = (0..k).filter(|&p| problem.base_names[p].contains("_bias_"));
+    let worst = biases.max_by(|&p, &q| z(p).total_cmp(&z(q)))?;
+    Some(Consequence { bias: problem.base_names[worst].clone(), bias_error: delta[worst], in_std_errors: z(worst) })
+}
+
+/// The set-aside candidates as public records.
+fn misfits_and_confounded(problem: &Problem, selection: &Selection) -> (Vec<Misfit>, Vec<Confounded>) {
+    let misfits = selection
+        .misfits
+        .iter()
+        .map(|m| {
+            let cand = &problem.candidates[m.candidate];
+            Misfit {
+                candidate: cand.name(),
+                estimate: m.estimate,
+                std_error: m.std_error,
+                limit: m.limit,
+                unit: cand.unit().to_string(),
+                pos: m.pos,
+                channel: problem.group_names.get(m.group).cloned().unwrap_or_default(),
+            }
+        })
+        .collect();
+    let confounded = selection
+        .confounded
+        .iter()
+        .map(|c| Confounded {
+            candidate: problem.candidates[c.candidate].name(),
+            likelihood_ratio: c.lr,
+            likelihood_ratio_within_poses: c.lr_within,
+        })
+        .collect();
+    (misfits, confounded)
+}
+
+/// Effects ranked by consequence: the column effects that move a bias by at least one standard error when
+/// left out, largest first; then the other column effects (a symmetric schedule keeps scale factors and
+/// misalignments apart from the biases) by their BIC gain; then the noise effects, which move no estimate, by
+/// their BIC gain; the time terms confounded with pose order after all of them.
+fn rank(effects: &mut [Effect]) {
+    let moves = |e: &Effect| e.consequence.as_ref().map(|c| c.in_std_errors).filter(|&z| z >= 1.0);
+    let class = |e: &Effect| {
+        if e.aliases.iter().any(|a| a == POSE_ORDER) {
+            3
+        } else if e.consequence.is_none() {
+            2
+        } else if moves(e).is_none() {
+            1
+        } else {
+            0
+        }
+    };
+    effects.sort_by(|a, b| {
+        class(a).cmp(&class(b)).then_with(|| match (moves(a), moves(b)) {
+            (Some(x), Some(y)) => y.total_cmp(&x),
+            _ => a.delta_bic.total_cmp(&b.delta_bic),
+        })
+    });
+}
+
+/// The verdict: the first ranked effect, except a quantisation whose error (step / sqrt(12)) is below half
+/// the noise it sits in, which is reported but never the verdict.
+fn verdict(effects: &[Effect]) -> String {
+    let below_noise = |e: &Effect| {
+        e.effect == EffectKind::Quantization.name() && e.estimate / 12f64.sqrt() < 0.5 * e.residual_rms_before
+    };
+    effects.iter().find(|e| !below_noise(e)).map_or("none".to_string(), |e| e.effect.clone())
 }
 
 /// Per observation group: (position, base residual, final residual) of each observation.
@@ -84,8 +185,9 @@ pub(super) fn assemble(
     input: &str,
     source: &str,
 ) -> Analysis {
-    findings.effects.sort_by(|a, b| a.delta_bic.total_cmp(&b.delta_bic));
-    let verdict = findings.effects.first().map_or("none".to_string(), |e| e.effect.clone());
+    rank(&mut findings.effects);
+    let verdict = verdict(&findings.effects);
+    let (misfits, confounded) = misfits_and_confounded(&problem, &selection);
     let mut unobservable = problem.unobservable.clone();
     if input == ANGLES {
         // The per-channel time and noise effects (no single sensor in the catalogue) need samples.
@@ -100,6 +202,8 @@ pub(super) fn assemble(
         base_model: base_model(&problem, &selection, findings.residual_rms, findings.block_residual_rms),
         effects: findings.effects,
         unobservable,
+        misfits,
+        confounded,
         verdict,
         criterion: format!(
             "forward selection; an effect is added when its likelihood-ratio p-value is below alpha/m = {:.3e} \
@@ -111,6 +215,7 @@ pub(super) fn assemble(
         candidates_tested: m as usize,
         tested: selection.tested,
         diagnostics: findings.diagnostics,
+        noise_model: super::noise_terms::noise_models(&findings.figures),
         figures: findings.figures,
     }
 }

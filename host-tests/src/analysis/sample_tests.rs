@@ -207,6 +207,8 @@ impl ChannelMeasures {
             parameters: 0,
             p_value: 0.0,
             aliases: Vec::new(),
+            consequence: None,
+            at_grid_edge: false,
         }
     }
 

@@ -21,6 +21,9 @@ pub(super) struct Problem {
     pub group_units: Vec<&'static str>,
     /// Position label of each observation.
     pub obs_pos: Vec<u32>,
+    /// Pose of each observation (dwells of one reference attitude share a pose), for the time terms'
+    /// confounding test; `None` when the observations have no time (angles).
+    pub obs_pose: Option<Vec<usize>>,
     /// The candidates, in test order.
     pub candidates: Vec<Candidate>,
     /// What this data cannot see (the selection adds the candidates the base model explains).
@@ -61,6 +64,40 @@ pub(super) struct Selection {
     pub aliases: Vec<Vec<String>>,
     /// Observable candidates.
     pub observable: usize,
+    /// Candidates the data want (they pass the criterion) at a value no plausible instrument has.
+    pub misfits: Vec<Misfit>,
+    /// Time terms the data want only through the differences between poses: confounded with pose order.
+    pub confounded: Vec<Confounded>,
+    /// Per group: the variance inflation of correlated block residuals ([`block_inflation`]).
+    pub inflation: Vec<f64>,
+}
+
+/// A candidate that passes the criterion at an implausible value: the model misses something there.
+pub(super) struct Misfit {
+    /// Index in the problem's candidates.
+    pub candidate: usize,
+    /// The value the fit needs, SI.
+    pub estimate: f64,
+    /// Its standard error, SI.
+    pub std_error: f64,
+    /// The plausible limit it exceeds, SI.
+    pub limit: f64,
+    /// Where the fit puts it most: the observation of the largest contribution (its position label and
+    /// group).
+    pub pos: u32,
+    /// See `pos`.
+    pub group: usize,
+}
+
+/// A time term the criterion admits that a pose-by-pose offset explains as well.
+pub(super) struct Confounded {
+    /// Index in the problem's candidates.
+    pub candidate: usize,
+    /// Its likelihood ratio against the current model.
+    pub lr: f64,
+    /// Its likelihood ratio once every pose has its own offsets (what the dwells show within themselves
+    /// and across repeated poses).
+    pub lr_within: f64,
 }
 
 /// Forward selection over the problem's candidates; the Bonferroni `m` counts the observable candidates and
@@ -73,7 +110,17 @@ pub(super) fn select(problem: &mut Problem, extra_tests: usize) -> Result<Select
     let screen = Screen::new(&problem.candidates, &base_cols, &weights, &mut problem.unobservable);
     let m = (screen.observable.len() + extra_tests).max(1) as f64;
     let forward = Forward::run(problem, &screen.observable, base_fit.clone(), m);
-    let aliases = forward.chosen.iter().map(|c| screen.aliases(problem, &weights, c)).collect();
+    let chosen: Vec<usize> = forward.chosen.iter().map(|c| c.candidate).collect();
+    let aliases = forward
+        .chosen
+        .iter()
+        .zip(&forward.correlated)
+        .map(|(c, correlated)| {
+            let mut names = screen.aliases(problem, &weights, c, &chosen);
+            names.extend(correlated.iter().filter(|n| !names.contains(n)).cloned().collect::<Vec<_>>());
+            names
+        })
+        .collect();
     Ok(Selection {
         base_fit,
         final_fit: forward.current,
@@ -81,6 +128,9 @@ pub(super) fn select(problem: &mut Problem, extra_tests: usize) -> Result<Select
         tested: forward.tested,
         aliases,
         observable: screen.observable.len(),
+        misfits: forward.misfits,
+        confounded: forward.confounded,
+        inflation: forward.inflation,
     })
 }
 
@@ -124,11 +174,11 @@ impl Screen {
     }
 
     /// Aliases of a chosen effect: other observable candidates with (nearly) the same base-free column.
-    fn aliases(&self, problem: &Problem, weights: &[f64], c: &Chosen) -> Vec<String> {
+    fn aliases(&self, problem: &Problem, weights: &[f64], c: &Chosen, chosen: &[usize]) -> Vec<String> {
         let own = &self.remainders[c.candidate][c.variant];
         let own_norm = weighted_norm(weights, own);
         let mut names = Vec::new();
-        for &oi in self.observable.iter().filter(|&&oi| oi != c.candidate) {
+        for &oi in self.observable.iter().filter(|&&oi| oi != c.candidate && !chosen.contains(&oi)) {
             let similar = self.remainders[oi].iter().any(|rem| {
                 let nrm = weighted_norm(weights, rem);
                 nrm > 0.0 && (weighted_dot(weights, own, rem) / (own_norm * nrm)).abs() > ALIAS_CORRELATION
@@ -155,7 +205,86 @@ struct Forward<'a> {
     current: LinearFit,
     chosen: Vec<Chosen>,
     tested: Vec<Tested>,
+    /// Per chosen candidate: the candidates whose estimate correlates with its beyond
+    /// [`ALIAS_CORRELATION`] (set aside, named as its aliases).
+    correlated: Vec<Vec<String>>,
+    misfits: Vec<Misfit>,
+    confounded: Vec<Confounded>,
+    /// Candidates set aside (misfit, alias, confounded): not tried again.
+    set_aside: Vec<usize>,
+    /// Per group: the variance inflation of a sum of neighbouring block residuals ([`block_inflation`]).
+    inflation: Vec<f64>,
 }
+
+/// Most the likelihood ratios are deflated for correlated block residuals.
+const MAX_INFLATION: f64 = 10.0;
+
+/// `v` less its least-squares line over the index.
+fn detrended(v: &[f64]) -> Vec<f64> {
+    let n = v.len() as f64;
+    let mid = (n - 1.0) / 2.0;
+    let mean = v.iter().sum::<f64>() / n;
+    let sxx: f64 = (0..v.len()).map(|i| (i as f64 - mid).powi(2)).sum();
+    let sxy: f64 = v.iter().enumerate().map(|(i, y)| (i as f64 - mid) * (y - mean)).sum();
+    let slope = if sxx > 0.0 { sxy / sxx } else { 0.0 };
+    v.iter().enumerate().map(|(i, y)| y - mean - slope * (i as f64 - mid)).collect()
+}
+
+/// Fewest blocks a dwell needs to show the correlation of its block residuals.
+const MIN_RUN_BLOCKS: usize = 8;
+
+/// Per observation group: `(1 + rho) / (1 - rho)` (at least 1, at most [`MAX_INFLATION`]), with `rho` the
+/// lag-1 correlation between neighbouring blocks of a dwell of the residuals about each dwell's own line
+/// (what the dwells show within themselves, whatever the model misses between poses, and free of a smooth
+/// drift or warm-up within a dwell that a candidate is there to explain). Block means of noise
+/// slower than a block (a vehicle's sway, bias instability) are correlated: a sum of `B` of them varies
+/// `(1 + rho) / (1 - rho)` times more than white block means would (first-order autoregression), so a
+/// likelihood ratio computed as if they were independent is that much too large. Only dwells of at least
+/// [`MIN_RUN_BLOCKS`] blocks count; `rho` is corrected for the line removed (`E rho_hat = rho - (2 + 4 rho)
+/// / B`). Angles, or no dwell long enough: 1.
+fn block_inflation(problem: &Problem, residual: &[f64]) -> Vec<f64> {
+    let groups = problem.obs.groups;
+    if problem.obs_pose.is_none() {
+        return vec![1.0; groups];
+    }
+    let g = &problem.obs.group;
+    let (mut lag0, mut lag1, mut blocks, mut runs) =
+        (vec![0.0; groups], vec![0.0; groups], vec![0.0; groups], vec![0.0; groups]);
+    let mut start = 0;
+    while start < residual.len() {
+        let same = |i: usize| g[i] == g[start] && problem.obs_pos[i] == problem.obs_pos[start];
+        let end = (start..residual.len()).find(|&i| !same(i)).unwrap_or(residual.len());
+        if end - start >= MIN_RUN_BLOCKS {
+            let run = detrended(&residual[start..end]);
+            let k = g[start];
+            lag0[k] += run.iter().map(|r| r * r).sum::<f64>();
+            lag1[k] += run.windows(2).map(|w| w[0] * w[1]).sum::<f64>();
+            blocks[k] += run.len() as f64;
+            runs[k] += 1.0;
+        }
+        start = end;
+    }
+    (0..groups)
+        .map(|k| {
+            if lag0[k] <= 0.0 || runs[k] == 0.0 {
+                return 1.0;
+            }
+            let b = blocks[k] / runs[k];
+            let rho = ((lag1[k] / lag0[k] * b + 2.0) / (b - 4.0)).clamp(0.0, 0.9);
+            ((1.0 + rho) / (1.0 - rho)).clamp(1.0, MAX_INFLATION)
+        })
+        .collect()
+}
+
+/// Why a candidate that passes the criterion is not added.
+enum Vetoed {
+    Implausible(Misfit),
+    /// Its estimate correlates with that of the chosen candidate of this index.
+    Alias(usize),
+}
+
+/// The alias of a time term that only the differences between poses support.
+pub(super) const POSE_ORDER: &str = "pose order (the poses are not revisited)";
 
 impl<'a> Forward<'a> {
     /// Adds candidates of `observable` while the best passes the criterion (at most [`MAX_EFFECTS`]); the
@@ -169,30 +298,145 @@ impl<'a> Forward<'a> {
             current: base_fit,
             chosen: Vec::new(),
             tested: Vec::new(),
+            correlated: Vec::new(),
+            misfits: Vec::new(),
+            confounded: Vec::new(),
+            set_aside: Vec::new(),
+            inflation: Vec::new(),
         };
+        f.inflation = block_inflation(problem, &f.current.residual);
         for step in 0..=MAX_EFFECTS {
-            let best = f.best_addition(observable, step == 0);
-            if step == MAX_EFFECTS {
-                break;
-            }
-            let Some(best) = best else { break };
-            if !f.add(best, m) {
+            let ranked = f.ranked_additions(observable, step == 0);
+            if step == MAX_EFFECTS || !f.add_first_acceptable(ranked, m) {
                 break;
             }
         }
         f
     }
 
-    /// Every candidate not yet chosen, fitted with the current model; the one of the best BIC gain. Ranked
-    /// by the BIC gain: of two candidates that explain the data equally well, the one with fewer parameters
-    /// (a temperature coefficient rather than a warm-up of free time constant).
-    fn best_addition(&mut self, observable: &[usize], record: bool) -> Option<Addition> {
+    /// Adds the first of `ranked` that passes the criterion and is not vetoed; the vetoed ones are set
+    /// aside with their reason. False when none is added.
+    fn add_first_acceptable(&mut self, ranked: Vec<Addition>, m: f64) -> bool {
+        for addition in ranked {
+            let (ci, _, _, lr) = &addition;
+            let k = self.problem.candidates[*ci].parameters() as f64;
+            if !(*lr > chi_square_quantile_upper(ALPHA / m, k) && -lr + k * self.ln_n < 0.0) {
+                continue;
+            }
+            match self.veto(&addition) {
+                None => {
+                    let confounded = self.pose_order(&addition, m);
+                    self.add(addition);
+                    if let Some(c) = confounded {
+                        let q = self.chosen.len() - 1;
+                        self.correlated[q].push(POSE_ORDER.to_string());
+                        self.confounded.push(c);
+                    }
+                    return true;
+                }
+                Some(reason) => {
+                    self.set_aside.push(*ci);
+                    let name = self.problem.candidates[*ci].name();
+                    match reason {
+                        Vetoed::Implausible(misfit) => self.misfits.push(misfit),
+                        Vetoed::Alias(q) => self.correlated[q].push(name),
+                    }
+                }
+            }
+        }
+        false
+    }
+
+    /// Why `addition`, which passes the criterion, must not be added: an implausible value, or an estimate
+    /// correlated beyond [`ALIAS_CORRELATION`] with a chosen one's.
+    fn veto(&self, (ci, vi, f, _): &Addition) -> Option<Vetoed> {
         let problem = self.problem;
-        let mut best: Option<Addition> = None;
-        for &ci in observable.iter().filter(|&&ci| !self.chosen.iter().any(|c| c.candidate == ci)) {
+        let candidate = &problem.candidates[*ci];
+        let j = f.beta.len() - 1;
+        let estimate = f.beta[j];
+        if let Some(limit) = candidate.limit.filter(|l| estimate.abs() > *l) {
+            let col = &candidate.variants[*vi].1;
+            let at = (0..col.len()).max_by(|&a, &b| col[a].abs().total_cmp(&col[b].abs())).unwrap_or(0);
+            let misfit = Misfit {
+                candidate: *ci,
+                estimate,
+                std_error: f.std_error(j),
+                limit,
+                pos: problem.obs_pos.get(at).copied().unwrap_or(0),
+                group: problem.obs.group.get(at).copied().unwrap_or(0),
+            };
+            return Some(Vetoed::Implausible(misfit));
+        }
+        let correlation = |a: usize, b: usize| {
+            let c = &f.covariance;
+            c[a][b] / (c[a][a] * c[b][b]).sqrt().max(f64::MIN_POSITIVE)
+        };
+        let base = problem.base.len();
+        if let Some(q) = (0..self.chosen.len()).find(|&q| correlation(j, base + q).abs() > ALIAS_CORRELATION) {
+            return Some(Vetoed::Alias(q));
+        }
+        None
+    }
+
+    /// A time term that passes the criterion only through the differences between poses: once every pose
+    /// has its own offsets its likelihood ratio fails the criterion. It is added (in a schedule that visits
+    /// each pose once, a drift and a pose-dependent term are equally possible), with [`POSE_ORDER`] as
+    /// its alias.
+    fn pose_order(&self, (ci, vi, _, lr): &Addition, m: f64) -> Option<Confounded> {
+        let candidate = &self.problem.candidates[*ci];
+        if !candidate.effect.is_time_term() {
+            return None;
+        }
+        let k = candidate.parameters() as f64;
+        let lr_within = self.lr_within_poses(&candidate.variants[*vi].1)?;
+        (lr_within <= chi_square_quantile_upper(ALPHA / m, k)).then_some(Confounded {
+            candidate: *ci,
+            lr: *lr,
+            lr_within,
+        })
+    }
+
+    /// The likelihood ratio of `column` once every pose has its own offset per group (which absorbs the
+    /// biases and every term that depends on the pose alone), with the time terms chosen so far. `None`
+    /// without poses or when the columns are dependent (then no veto).
+    fn lr_within_poses(&self, column: &[f64]) -> Option<f64> {
+        let problem = self.problem;
+        let poses = problem.obs_pose.as_ref()?;
+        let n_poses = poses.iter().max().map_or(0, |m| m + 1);
+        let mut cols: Vec<Vec<f64>> = Vec::new();
+        for g in 0..problem.obs.groups {
+            for p in 0..n_poses {
+                let col: Vec<f64> =
+                    (0..poses.len()).map(|i| f64::from(u8::from(poses[i] == p && problem.obs.group[i] == g))).collect();
+                if col.iter().any(|&v| v != 0.0) {
+                    cols.push(col);
+                }
+            }
+        }
+        for (q, c) in self.chosen.iter().enumerate() {
+            if problem.candidates[c.candidate].effect.is_time_term() {
+                cols.push(self.columns[problem.base.len() + q].clone());
+            }
+        }
+        let without: Vec<&[f64]> = cols.iter().map(|c| c.as_slice()).collect();
+        let mut with = without.clone();
+        with.push(column);
+        let (f0, f1) = (fit(&problem.obs, &without)?, fit(&problem.obs, &with)?);
+        Some(2.0 * (f1.log_likelihood - f0.log_likelihood))
+    }
+
+    /// Every candidate not yet chosen nor set aside, fitted with the current model, best BIC gain first:
+    /// of two candidates that explain the data equally well, the one with fewer parameters (a temperature
+    /// coefficient rather than a warm-up of free time constant).
+    fn ranked_additions(&mut self, observable: &[usize], record: bool) -> Vec<Addition> {
+        let problem = self.problem;
+        let mut ranked: Vec<(f64, Addition)> = Vec::new();
+        let open = |ci: &usize| !self.chosen.iter().any(|c| c.candidate == *ci) && !self.set_aside.contains(ci);
+        for &ci in observable.iter().filter(|ci| open(ci)) {
             let c = &problem.candidates[ci];
             let Some((vi, f)) = self.best_variant(c) else { continue };
-            let lr = 2.0 * (f.log_likelihood - self.current.log_likelihood);
+            let inflation = c.groups.iter().map(|&g| self.inflation[g]).fold(1.0, f64::max);
+            let lr = 2.0 * (f.log_likelihood - self.current.log_likelihood) / inflation;
             if record {
                 let j = f.beta.len() - 1;
                 self.tested.push(Tested {
@@ -203,14 +447,10 @@ impl<'a> Forward<'a> {
                 });
             }
             let gain = lr - c.parameters() as f64 * self.ln_n;
-            if best
-                .as_ref()
-                .is_none_or(|(bi, _, _, b)| gain > *b - problem.candidates[*bi].parameters() as f64 * self.ln_n)
-            {
-                best = Some((ci, vi, f, lr));
-            }
+            ranked.push((gain, (ci, vi, f, lr)));
         }
-        best
+        ranked.sort_by(|a, b| b.0.total_cmp(&a.0));
+        ranked.into_iter().map(|(_, a)| a).collect()
     }
 
     /// The variant of `c` of the highest likelihood together with the current columns.
@@ -228,15 +468,13 @@ impl<'a> Forward<'a> {
         best_variant
     }
 
-    /// Adds `best` if its likelihood ratio passes `alpha / m` and its BIC change is negative.
-    fn add(&mut self, (ci, vi, f, lr): Addition, m: f64) -> bool {
+    /// Adds a candidate that passed the criterion and the vetoes.
+    fn add(&mut self, (ci, vi, f, lr): Addition) {
         let candidate = &self.problem.candidates[ci];
         let k = candidate.parameters() as f64;
         let p_value = chi_square_upper(lr, k);
         let delta_bic = -lr + k * self.ln_n;
-        if !(lr > chi_square_quantile_upper(ALPHA / m, k) && delta_bic < 0.0) {
-            return false;
-        }
+        self.correlated.push(Vec::new());
         self.chosen.push(Chosen {
             candidate: ci,
             variant: vi,
@@ -248,7 +486,6 @@ impl<'a> Forward<'a> {
         });
         self.columns.push(candidate.variants[vi].1.clone());
         self.current = f;
-        true
     }
 }
 

@@ -17,12 +17,39 @@ pub fn summary(a: &Analysis) -> String {
         let _ = writeln!(s, "  residual RMS {k}: {v:.4e}");
     }
     let _ = writeln!(s, "criterion: {}", a.criterion);
+    let _ = writeln!(
+        s,
+        "ranking: by consequence, the bias error an effect causes when left out, in standard errors; then the \
+         noise effects by BIC gain"
+    );
     if a.effects.is_empty() {
         let _ = writeln!(s, "verdict: none (the base model is adequate)");
     } else {
         let _ = writeln!(s, "verdict: {}", a.verdict);
         for e in &a.effects {
             effect_line(&mut s, e);
+        }
+    }
+    for m in &a.misfits {
+        let _ = writeln!(
+            s,
+            "  misfit: {} would need {:+.4e} +- {:.2e} {}, beyond the plausible {:.1e} (mostly at pos {}, {}): \
+             the model misses something there",
+            m.candidate, m.estimate, m.std_error, m.unit, m.limit, m.pos, m.channel
+        );
+    }
+    for c in &a.confounded {
+        let _ = writeln!(
+            s,
+            "  confounded with pose order: {} (likelihood ratio {:.1}; {:.1} once every pose has its own offset: \
+             a pose-dependent term explains it as well)",
+            c.candidate, c.likelihood_ratio, c.likelihood_ratio_within_poses
+        );
+    }
+    if !a.noise_model.is_empty() {
+        let _ = writeln!(s, "noise (terms named from the Allan variance of the longest dwell):");
+        for m in &a.noise_model {
+            let _ = writeln!(s, "  {}", m.text());
         }
     }
     if !a.unobservable.is_empty() {
@@ -51,6 +78,12 @@ fn effect_line(s: &mut String, e: &Effect) {
     let extras = e.extras();
     if !extras.is_empty() {
         let _ = write!(s, "  {extras}");
+    }
+    if e.at_grid_edge {
+        let _ = write!(s, " (at the edge of its grid: not determined)");
+    }
+    if let Some(c) = &e.consequence {
+        let _ = write!(s, "  moves {} by {:.1} standard errors", c.bias, c.in_std_errors);
     }
     if !e.aliases.is_empty() {
         let _ = write!(s, "  (indistinguishable here from: {})", e.aliases.join(", "));

@@ -150,6 +150,49 @@ impl EffectKind {
     }
 }
 
+/// Largest gyro bias a plausible instrument has, rad/s (5.7 deg/s: consumer MEMS gyros reach 1 to 3 deg/s).
+pub const MAX_GYRO_BIAS_RADPS: f64 = 0.1;
+/// Largest accelerometer bias a plausible instrument has, m/s^2 (0.2 g: the raw counts of a consumer MEMS
+/// read with its nominal offset are 0.1 g off).
+pub const MAX_ACCEL_BIAS_MPS2: f64 = 2.0;
+/// Largest scale factor error and misalignment, 1 (5 %, 2.9 degrees).
+pub const MAX_SCALE_OR_MISALIGNMENT: f64 = 0.05;
+/// Largest gyro g-sensitivity, (rad/s)/(m/s^2) (0.56 (deg/s)/g; MEMS gyros are specified at 0.01 to 0.1).
+pub const MAX_G_SENSITIVITY: f64 = 1e-3;
+/// Largest level error of a reference attitude, rad (2.9 degrees: a face placed by hand on a cube).
+pub const MAX_LEVEL_ERROR_RAD: f64 = 0.05;
+/// Largest heading error of a reference attitude, rad (29 degrees).
+pub const MAX_HEADING_ERROR_RAD: f64 = 0.5;
+
+impl EffectKind {
+    /// The largest magnitude of this effect's estimate that a plausible instrument and turntable show
+    /// (docs/analysis.md#plausibility), SI; `None` for the noise effects, whose size the data themselves
+    /// show. Time effects are bounded by what they add to the bias over the session: a drift by the largest
+    /// bias over `span_s`, a temperature coefficient by the largest bias over `temperature_span_k`.
+    pub fn plausible_limit(self, sensor: Sensor, axes: &str, span_s: f64, temperature_span_k: f64) -> Option<f64> {
+        let bias = if sensor == Sensor::Gyro { MAX_GYRO_BIAS_RADPS } else { MAX_ACCEL_BIAS_MPS2 };
+        match self {
+            EffectKind::ReferenceOffset | EffectKind::PositionError if axes == "u" => Some(MAX_HEADING_ERROR_RAD),
+            EffectKind::ReferenceOffset | EffectKind::PositionError => Some(MAX_LEVEL_ERROR_RAD),
+            EffectKind::AccelScaleFactor
+            | EffectKind::AccelMisalignment
+            | EffectKind::GyroScaleFactor
+            | EffectKind::GyroMisalignment => Some(MAX_SCALE_OR_MISALIGNMENT),
+            EffectKind::GyroGSensitivity => Some(MAX_G_SENSITIVITY),
+            EffectKind::BiasDrift => Some(bias / span_s.max(1.0)),
+            EffectKind::BiasWarmup => Some(bias),
+            EffectKind::TemperatureBias => Some(bias / temperature_span_k.max(1.0)),
+            EffectKind::CorrelatedNoise | EffectKind::Vibration | EffectKind::Quantization => None,
+        }
+    }
+
+    /// A function of time (drift, warm-up, temperature): what it explains across dwells is confounded with
+    /// the order of the poses unless poses repeat or it shows within the dwells.
+    pub fn is_time_term(self) -> bool {
+        matches!(self, EffectKind::BiasDrift | EffectKind::BiasWarmup | EffectKind::TemperatureBias)
+    }
+}
+
 impl fmt::Display for EffectKind {
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
         f.write_str(self.name())

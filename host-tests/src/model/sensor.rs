@@ -130,6 +130,45 @@ impl Term {
 mod tests {
     use super::*;
 
+    /// One catalogue: every term the analysis tests is a parameter of the calibration estimator
+    /// (`sinscal calibrate --model`) of the same name, whose output error in the core's sensor model is the
+    /// term's column, sign included.
+    #[test]
+    fn analysis_terms_are_the_calibration_estimators_parameters() {
+        use sinscal::calib::channels::{g_sensitivity_radps_per_mps2, parameter_name, sensor_matrix, PARAMETERS};
+        let (rate, force) = ([0.3f32, -1.2, 2.5], [-4.0f32, 1.5, 9.0]);
+        let axes = ["x", "y", "z"];
+        for term in Term::all(true) {
+            let name = match term.effect {
+                EffectKind::AccelScaleFactor | EffectKind::GyroScaleFactor => {
+                    format!("{}_{}", term.effect, axes[term.axis])
+                }
+                _ => format!("{}_{}{}", term.effect, axes[term.axis], axes[term.along]),
+            };
+            let index = (0..PARAMETERS).find(|&i| parameter_name(i) == name).unwrap_or_else(|| panic!("{name}"));
+            let mut theta = [0.0f32; PARAMETERS];
+            theta[index] = 1.0;
+            // The core's output error: (T - I) source for the scale and misalignment terms (accelerometer
+            // T from index 6 and 9, gyro from 15 and 18), G f for the g-sensitivity.
+            let error: [f32; 3] = match term.effect {
+                EffectKind::GyroGSensitivity => g_sensitivity_radps_per_mps2(&theta).mul_vec(force),
+                EffectKind::AccelScaleFactor | EffectKind::AccelMisalignment => {
+                    let t = sensor_matrix(&theta, 6, 9).mul_vec(force);
+                    std::array::from_fn(|i| t[i] - force[i])
+                }
+                _ => {
+                    let t = sensor_matrix(&theta, 15, 18).mul_vec(rate);
+                    std::array::from_fn(|i| t[i] - rate[i])
+                }
+            };
+            let column = term.per_unit(rate.map(f64::from), force.map(f64::from));
+            for (i, e) in error.iter().enumerate() {
+                let want = if i == term.axis { column } else { 0.0 };
+                assert!((*e as f64 - want).abs() < 1e-6, "{name}: axis {i}: core {e}, analysis {want}");
+            }
+        }
+    }
+
     /// The columns of the terms are the derivatives of the triads' measurements, with the gain and cross
     /// matrices written out independently of [`Term`].
     #[test]

@@ -78,13 +78,38 @@ pub fn rotation(v: [f64; 3]) -> M3 {
 
 /// `C_b^n` from turntable angles in degrees: heading clockwise from north is a rotation by -heading about
 /// up, pitch a rotation about body x, roll about body y (docs/conventions.md).
+///
+/// At multiples of 90 degrees (where turntable positions usually are) the sines and cosines are exact, as in
+/// the core's frames: roll 270 and roll -90 give the same matrix, with exact zeros, not `cos = -1.8e-16`.
 pub fn c_b_n(pitch_deg: f64, roll_deg: f64, heading_deg: f64) -> M3 {
-    let about = |axis: usize, deg: f64| {
-        let mut v = [0.0; 3];
-        v[axis] = deg.to_radians();
-        rotation(v)
+    let about = |axis: usize, deg: f64| -> M3 {
+        let (s, c) = sin_cos_deg(deg);
+        let (i, j) = ((axis + 1) % 3, (axis + 2) % 3);
+        let mut r = [[0.0; 3]; 3];
+        r[axis][axis] = 1.0;
+        r[i][i] = c;
+        r[j][j] = c;
+        r[i][j] = -s;
+        r[j][i] = s;
+        r
     };
     mul(&mul(&about(2, -heading_deg), &about(0, pitch_deg)), &about(1, roll_deg))
+}
+
+/// sin and cos of an angle in degrees, exact at multiples of 90 degrees.
+pub fn sin_cos_deg(deg: f64) -> (f64, f64) {
+    let quarter = deg / 90.0;
+    let nearest = quarter.round();
+    if (quarter - nearest).abs() < 1e-12 {
+        match (nearest as i64).rem_euclid(4) {
+            0 => (0.0, 1.0),
+            1 => (1.0, 0.0),
+            2 => (0.0, -1.0),
+            _ => (-1.0, 0.0),
+        }
+    } else {
+        deg.to_radians().sin_cos()
+    }
 }
 
 /// A simulated multi-position session with constant biases and white noise.
@@ -274,6 +299,29 @@ mod tests {
         let x = mul_vec(&c, [1.0, 0.0, 0.0]);
         let z = mul_vec(&c, [0.0, 0.0, 1.0]);
         assert!((x[2] + 1.0).abs() < 1e-15 && (z[0] - 1.0).abs() < 1e-15);
+    }
+
+    #[test]
+    fn quarter_turns_are_exact_and_agree_with_the_axis_angle_rotation() {
+        // Roll 270 and roll -90 are one attitude: the same matrix, bit for bit, with exact zeros.
+        assert_eq!(c_b_n(0.0, 270.0, 0.0), c_b_n(0.0, -90.0, 0.0));
+        assert_eq!(c_b_n(0.0, 270.0, 0.0)[0][0], 0.0);
+        assert_eq!(c_b_n(180.0, 0.0, 450.0), c_b_n(-180.0, 0.0, 90.0));
+        // Elsewhere the matrix is the product of axis-angle rotations (heading -psi about up).
+        for [p, r, h] in [[12.5, -33.0, 250.0], [90.0, 45.0, 10.0], [0.3, 179.9, -0.1]] {
+            let about = |axis: usize, deg: f64| {
+                let mut v = [0.0; 3];
+                v[axis] = deg.to_radians();
+                rotation(v)
+            };
+            let want = mul(&mul(&about(2, -h), &about(0, p)), &about(1, r));
+            let got = c_b_n(p, r, h);
+            for i in 0..3 {
+                for j in 0..3 {
+                    assert!((got[i][j] - want[i][j]).abs() < 1e-15, "{p} {r} {h}");
+                }
+            }
+        }
     }
 
     #[test]

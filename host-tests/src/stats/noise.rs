@@ -777,6 +777,66 @@ pub fn gauss_markov_allan_variance(sigma: f64, tau_c_s: f64, tau_s: f64) -> f64 
     sigma * sigma * (tau_c_s / tau_s).powi(2) * (2.0 * x - 3.0 + 4.0 * (-x).exp() - (-2.0 * x).exp())
 }
 
+/// The power-law noise types of an Allan variance, in the terms of a rate sensor (IEEE Std 952-1997 Annex C),
+/// with the names of the frequency-standards literature in brackets: they set the equivalent degrees of
+/// freedom of an Allan point ([`overlapping_allan_edf`]).
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum AllanNoiseKind {
+    /// Quantisation of an integrated output (white phase noise), Allan slope -1.
+    Quantization,
+    /// White rate noise, angle/velocity random walk (white frequency noise), slope -1/2.
+    White,
+    /// Bias instability (flicker frequency noise), slope 0.
+    BiasInstability,
+    /// Rate random walk (random-walk frequency noise), slope +1/2; used for the rate ramp too.
+    RateRandomWalk,
+}
+
+/// Equivalent degrees of freedom of the overlapping Allan variance at cluster size `m` of `n_samples` rate
+/// samples for one noise type: the variance estimate is distributed as `sigma^2 chi^2_edf / edf`, so its
+/// relative standard deviation is `sqrt(2 / edf)`. The approximations of Howe, Allan & Barnes (Proc. 35th
+/// Frequency Control Symposium, 1981), as tabulated in NIST Special Publication 1065 (Riley 2008, section
+/// 5.3), with `N = n_samples + 1` phase (angle) points. At least 1; 0 when `m` is 0 or `2 m > n_samples`.
+pub fn overlapping_allan_edf(kind: AllanNoiseKind, n_samples: usize, m: usize) -> f64 {
+    if m == 0 || 2 * m > n_samples {
+        return 0.0;
+    }
+    let (n, m) = (n_samples as f64 + 1.0, m as f64);
+    let edf = match kind {
+        AllanNoiseKind::Quantization => (n + 1.0) * (n - 2.0 * m) / (2.0 * (n - m)),
+        AllanNoiseKind::White => {
+            (3.0 * (n - 1.0) / (2.0 * m) - 2.0 * (n - 2.0) / n) * 4.0 * m * m / (4.0 * m * m + 5.0)
+        }
+        AllanNoiseKind::BiasInstability if m < 1.5 => 2.0 * (n - 2.0).powi(2) / (2.3 * n - 4.9),
+        AllanNoiseKind::BiasInstability => 5.0 * n * n / (4.0 * m * (n + 3.0 * m)),
+        AllanNoiseKind::RateRandomWalk => {
+            (n - 2.0) / m * ((n - 1.0).powi(2) - 3.0 * m * (n - 1.0) + 4.0 * m * m) / (n - 3.0).powi(2)
+        }
+    };
+    if edf.is_finite() {
+        edf.max(1.0)
+    } else {
+        1.0
+    }
+}
+
+/// Lag-1 autocorrelation of the first differences `d_k = x_{k+1} - x_k` of `samples` (dimensionless), the
+/// signature of the noise at the highest frequencies: -1/2 for white noise, -2/3 for the quantisation of an
+/// integrated output (white angle noise), towards -1 for an alternating component (the dither of a
+/// ring-laser gyro, a line near the Nyquist frequency), above -1/2 for low-pass (correlated) noise. Its
+/// standard error is about `1 / sqrt(n)` for `n` differences. `None` with fewer than 3 samples, a non-finite
+/// sample or constant differences.
+pub fn difference_lag1_autocorrelation(samples: &[f64]) -> Option<f64> {
+    if samples.len() < 3 || samples.iter().any(|v| !v.is_finite()) {
+        return None;
+    }
+    let d: Vec<f64> = samples.windows(2).map(|w| w[1] - w[0]).collect();
+    let mean = compensated_sum(d.iter().copied()) / d.len() as f64;
+    let c0: f64 = d.iter().map(|v| (v - mean) * (v - mean)).sum();
+    let c1: f64 = d.windows(2).map(|w| (w[0] - mean) * (w[1] - mean)).sum();
+    (c0 > 0.0).then(|| c1 / c0)
+}
+
 // ---------------------------------------------------------------------------------------------------
 // Quantization
 // ---------------------------------------------------------------------------------------------------

@@ -40,3 +40,12 @@ pub fn ferraris_session(dir: &Path) -> sinscal_host::io::recording::Recording {
     let labels = data_file(dir, "imucal-ferraris/example_ferraris_session_list.json");
     sinscal_host::io::import::import_imucal(&csv, &labels, None).expect("import").recording
 }
+
+/// The imu_tk xsens session of the data directory, imported with the default static detection (attitudes
+/// levelled from the accelerometers).
+pub fn imutk_session(dir: &Path) -> sinscal_host::io::recording::Recording {
+    let acc = data_file(dir, "imu-tk-xsens/xsens_acc.mat");
+    let gyro = data_file(dir, "imu-tk-xsens/xsens_gyro.mat");
+    let detection = sinscal_host::io::import::StaticDetection::default();
+    sinscal_host::io::import::import_imutk(&acc, &gyro, None, &detection).expect("import").recording
+}

@@ -1,0 +1,194 @@
+//! The analysis's numerics (docs/analysis.md#plausibility): one attitude written two ways gives one analysis,
+//! a column the attitude makes zero is absent (not a column of rounding errors), a fit that needs an
+//! impossible value is a misfit with where it sits, and estimates that the data cannot tell apart are
+//! aliases, not two effects. SIMULATION data, then the measured data sets (skipped without SINSCAL_DATA).
+
+mod common;
+
+use sinscal_host::analysis::hidden::clean_scenario;
+use sinscal_host::analysis::{analyze_recording, Analysis};
+use sinscal_host::model::catalogue::EffectKind;
+use sinscal_host::model::simulator::{simulate, PositionError, ScenarioFile};
+
+/// The analysis of the scenario with its positions `positions_deg`.
+fn analysis(positions_deg: &[[f64; 3]], seed: u64) -> Analysis {
+    let mut s: ScenarioFile = clean_scenario();
+    s.schedule.positions_deg = positions_deg.to_vec();
+    s.accel.scale_factor = [3.0e-4, 0.0, -2.0e-4];
+    analyze_recording(&simulate(&s, seed, "numerics")).unwrap()
+}
+
+/// Every estimate the analysis reports, with the limit of its catalogue entry.
+fn assert_plausible(a: &Analysis) {
+    for e in &a.effects {
+        let kind: EffectKind = e.effect.parse().unwrap();
+        let sensor = match e.sensor.as_str() {
+            "gyro" => sinscal_host::model::catalogue::Sensor::Gyro,
+            "accel" => sinscal_host::model::catalogue::Sensor::Accel,
+            _ => sinscal_host::model::catalogue::Sensor::Reference,
+        };
+        if let Some(limit) = kind.plausible_limit(sensor, &e.axes, 1.0, 1.0) {
+            assert!(e.estimate.abs() <= limit, "{} {} = {:e} beyond {limit:e}", e.effect, e.axes, e.estimate);
+        }
+        assert!(e.std_error.is_finite() && e.std_error > 0.0, "{} {}: std {:e}", e.effect, e.axes, e.std_error);
+    }
+}
+
+#[test]
+fn roll_270_and_roll_minus_90_are_one_analysis() {
+    // Table 1 (its last position is roll 270) and an x-up / x-down pair, each written both ways.
+    let table1 = [[0.0, 0.0, 0.0], [0.0, 0.0, 180.0], [0.0, 0.0, 90.0], [0.0, 0.0, 270.0], [0.0, 90.0, 0.0]];
+    let pair_270 = vec![[0.0, 270.0, 0.0], [0.0, 90.0, 0.0]];
+    let pair_minus_90 = vec![[0.0, -90.0, 0.0], [0.0, 90.0, 0.0]];
+    let mut t_270 = table1.to_vec();
+    t_270.push([0.0, 270.0, 0.0]);
+    let mut t_minus_90 = table1.to_vec();
+    t_minus_90.push([0.0, -90.0, 0.0]);
+    for (a, b) in [(t_270, t_minus_90), (pair_270, pair_minus_90)] {
+        let (x, y) = (analysis(&a, 7), analysis(&b, 7));
+        let json = |a: &Analysis| {
+            let mut v = serde_json::to_value(a).unwrap();
+            v["source"] = serde_json::Value::Null;
+            v
+        };
+        assert_eq!(json(&x), json(&y), "{} positions", a.len());
+        assert_plausible(&x);
+    }
+    // In the pair, accelerometer z sees no gravity at either position: its scale factor is absent, not a
+    // column of rounding errors (cos 270 deg = -1.8e-16 in floating point).
+    let pair = analysis(&[[0.0, 270.0, 0.0], [0.0, 90.0, 0.0]], 7);
+    assert!(pair.unobservable.iter().any(|u| u == "accel_scale_factor:z"), "{:?}", pair.unobservable);
+}
+
+#[test]
+fn a_wrong_face_is_a_misfit_at_its_position_not_an_effect() {
+    // Position 3 is 9 degrees off about north (a face placed wrong): the position error the fit wants,
+    // 0.157 rad, is beyond any turntable's, so it is reported as a misfit at position 3.
+    let mut s: ScenarioFile = clean_scenario();
+    s.schedule.position_error = vec![PositionError { pos: 3, enu_rad: [0.0, 9f64.to_radians(), 0.0] }];
+    let a = analyze_recording(&simulate(&s, 11, "wrong face")).unwrap();
+    assert_plausible(&a);
+    let m = a.misfits.iter().find(|m| m.candidate.starts_with("position_error:n:pos3")).unwrap_or_else(|| {
+        panic!("no misfit at position 3: {:?} {:?}", a.misfits, a.effects.iter().map(|e| &e.effect).collect::<Vec<_>>())
+    });
+    assert_eq!(m.pos, 3);
+    assert!(m.estimate.abs() > m.limit && (m.estimate.abs() / 9f64.to_radians() - 1.0).abs() < 0.2, "{m:?}");
+}
+
+#[test]
+fn measured_data_give_plausible_effects_and_name_what_they_cannot_tell_apart() {
+    let Some(dir) = common::data_dir() else {
+        eprintln!("SKIPPED: SINSCAL_DATA unset (measured data sets)");
+        return;
+    };
+    // imu_tk: attitudes levelled from the accelerometers; the analysis works along gravity. Its scale
+    // factors agree with the imu_tk-style calibration (fitted gains 414.42, 412.13, 414.48 counts/(m/s^2)
+    // against the nominal 415, 413, 415 used by the import: -0.14 %, -0.21 %, -0.12 %), and the two
+    // halves of a misalignment pair, which gravity alone cannot tell apart, are one effect with an alias.
+    let imutk = common::imutk_session(&dir);
+    let a = analyze_recording(&imutk).unwrap();
+    assert_plausible(&a);
+    assert!(a.misfits.is_empty(), "{:?}", a.misfits);
+    for (axis, want) in [("x", 414.42 / 415.0 - 1.0), ("y", 412.13 / 413.0 - 1.0), ("z", 414.48 / 415.0 - 1.0)] {
+        let e = a.effects.iter().find(|e| e.effect == "accel_scale_factor" && e.axes == axis).expect("scale factor");
+        assert!((e.estimate - want).abs() < 3e-4, "{axis}: {:e} vs {want:e}", e.estimate);
+    }
+    let yz = a.effects.iter().find(|e| e.effect == "accel_misalignment" && e.axes == "yz").expect("yz");
+    assert!(yz.aliases.contains(&"accel_misalignment:zy".to_string()), "{:?}", yz.aliases);
+    assert!(!a.effects.iter().any(|e| e.effect == "accel_misalignment" && e.axes == "zy"));
+    // Ferraris: each face is visited once, so a drift over the session and a pose-dependent term explain
+    // the same thing; the time terms carry "pose order" as an alias and are not the verdict.
+    let ferraris = common::ferraris_session(&dir);
+    let a = analyze_recording(&ferraris).unwrap();
+    assert_plausible(&a);
+    let time_terms: Vec<_> = a.effects.iter().filter(|e| e.effect.starts_with("bias_")).collect();
+    assert!(!time_terms.is_empty());
+    for e in &time_terms {
+        assert!(e.aliases.iter().any(|a| a.starts_with("pose order")), "{} {}: {:?}", e.effect, e.axes, e.aliases);
+    }
+    assert!(!a.verdict.starts_with("bias_"), "{}", a.verdict);
+    assert_eq!(a.confounded.len(), time_terms.len());
+}
+
+const ARCSEC: f64 = std::f64::consts::PI / 648_000.0;
+
+/// What a planted effect adds to angle `k` of position `p`, given the position's design row and body force.
+type Planted = Box<dyn Fn(usize, usize, &[f32; 9], [f64; 3]) -> f64>;
+
+/// A six-position angles table as papers publish it (no standard errors): Table 1 at latitude 45.7796,
+/// biases through the core's alignment equations, a small deterministic scatter (1 arcsec level, 20 arcsec
+/// heading), plus `planted(position index, angle, body force)`.
+fn published_table(planted: impl Fn(usize, usize, &[f32; 9], [f64; 3]) -> f64) -> String {
+    use sinscal_host::model::synth::{c_b_n, TABLE1_DEG};
+    let site = sinscal::nav::earth::Site::with_normal_gravity(45.7796f32.to_radians(), 0.0);
+    let g = site.gravity_mps2 as f64;
+    let biases = [2.4e-7, -1.5e-7, 1.0e-7, 1.0e-3, -8.0e-4, 5.0e-4];
+    let scatter = [0.3, -0.5, 0.2, 0.6, -0.1, -0.4, 0.5, 0.1, -0.6, -0.2, 0.4, -0.3, 0.1, 0.5, -0.5, -0.4, 0.3, 0.2];
+    let mut text = String::from("# sinscal-angles: 1\n# latitude_deg: 45.7796\n");
+    text += "pos,pitch_deg,roll_deg,heading_deg,phi_e_rad,phi_n_rad,phi_u_rad\n";
+    for (p, att) in TABLE1_DEG.iter().enumerate() {
+        let c = c_b_n(att[0], att[1], att[2]);
+        let c32 = sinscal::math::linalg::Mat3(std::array::from_fn(|i| std::array::from_fn(|j| c[i][j] as f32)));
+        let rows = sinscal::calib::solve::design_rows_si(&c32, &site);
+        let force_b = [c[2][0] * g, c[2][1] * g, c[2][2] * g];
+        let phi: Vec<f64> = (0..3)
+            .map(|k| {
+                let sd = if k == 2 { 20.0 * ARCSEC } else { ARCSEC };
+                (0..6).map(|j| rows[k][j] as f64 * biases[j]).sum::<f64>()
+                    + scatter[3 * p + k] * sd
+                    + planted(p, k, &rows[k], force_b)
+            })
+            .collect();
+        text += &format!("{},{},{},{},{:e},{:e},{:e}\n", p + 1, att[0], att[1], att[2], phi[0], phi[1], phi[2]);
+    }
+    text
+}
+
+#[test]
+fn published_angles_tables_without_errors_give_the_planted_effect() {
+    use sinscal_host::analysis::{analyze_angles, AnglesFile};
+    let misalignment = 1.0e-4;
+    let cases: [(&str, &str, Option<u32>, f64, Planted); 3] = [
+        // Accelerometer y senses 1e-4 of the force along x: an error m f_x on channel ay (index 4).
+        (
+            "accel_misalignment",
+            "yx",
+            None,
+            misalignment,
+            Box::new(move |_, _, row, f| row[4] as f64 * misalignment * f[0]),
+        ),
+        // Position 3 is 30 arcsec off about north.
+        (
+            "position_error",
+            "n",
+            Some(3),
+            -30.0 * ARCSEC,
+            Box::new(|p, k, _, _| if p == 2 && k == 1 { -30.0 * ARCSEC } else { 0.0 }),
+        ),
+        // The whole table is 15 arcsec off about east.
+        ("reference_offset", "e", None, 15.0 * ARCSEC, Box::new(|_, k, _, _| if k == 0 { 15.0 * ARCSEC } else { 0.0 })),
+    ];
+    for (effect, axes, pos, value, planted) in cases {
+        let a = analyze_angles(&AnglesFile::parse(&published_table(planted), "published.csv").unwrap()).unwrap();
+        assert_plausible(&a);
+        assert!(a.misfits.is_empty(), "{effect}: {:?}", a.misfits);
+        let e = &a.effects[0];
+        eprintln!(
+            "{effect} {axes}: verdict {} {} {:?} {:+.3e} +- {:.1e} (planted {value:+.3e}), aliases {:?}",
+            e.effect, e.axes, e.pos, e.estimate, e.std_error, e.aliases
+        );
+        let named = e.effect == effect && e.axes == axes
+            || e.aliases.iter().any(|n| n.starts_with(&format!("{effect}:{axes}")));
+        assert!(
+            named && e.pos == pos.or(e.pos),
+            "{effect} {axes}: found {} {} {:?} {:?}",
+            e.effect,
+            e.axes,
+            e.pos,
+            e.aliases
+        );
+        if e.effect == effect {
+            assert!((e.estimate / value - 1.0).abs() < 0.3, "{effect}: {:e} vs {value:e}", e.estimate);
+        }
+    }
+}
