@@ -161,10 +161,13 @@ impl<'a> RecordingColumns<'a> {
             }
         }
         let tau_grid = self.tau_grid();
+        let t0 = self.session.t0;
+        let shapes: Vec<_> = tau_grid.iter().map(|&tau| move |t: f64| (-(t - t0) / tau).exp()).collect();
+        let warmup_means = self.blocks.time_means(self.session, &shapes);
         let span_s = tau_grid.last().copied().unwrap_or(1.0);
         for c in (0..6).filter(|&c| self.blocks.present[c]) {
             candidates.push(self.drift(c));
-            candidates.push(self.warmup(c, &tau_grid));
+            candidates.push(self.warmup(c, &tau_grid, &warmup_means));
             if self.session.has_temp() {
                 candidates.push(self.temperature(c));
             } else {
@@ -298,17 +301,10 @@ impl<'a> RecordingColumns<'a> {
         Candidate::single(EffectKind::BiasDrift, Sensor::of_channel(c), axis_of(c).into(), col, vec![c])
     }
 
-    /// Bias warm-up of channel `c`: the block mean of `exp(-(t - t0)/tau)`, one variant per time constant.
-    fn warmup(&self, c: usize, tau_grid: &[f64]) -> Candidate {
-        let t0 = self.session.t0;
-        let variants = tau_grid
-            .iter()
-            .map(|&tau| {
-                let col = self
-                    .channel_column(c, |_, t| t.iter().map(|t| (-(t - t0) / tau).exp()).sum::<f64>() / t.len() as f64);
-                (Some(tau), col)
-            })
-            .collect();
+    /// Bias warm-up of channel `c`: the block mean of `exp(-(t - t0)/tau)` (`means`, per time constant and
+    /// block), one variant per time constant.
+    fn warmup(&self, c: usize, tau_grid: &[f64], means: &[Vec<f64>]) -> Candidate {
+        let variants = tau_grid.iter().zip(means).map(|(&tau, m)| (Some(tau), self.blocks.on_channel(c, m))).collect();
         Candidate {
             effect: EffectKind::BiasWarmup,
             sensor: Sensor::of_channel(c),

@@ -59,6 +59,7 @@ mod correlated_noise;
 pub mod hidden;
 pub mod noise_terms;
 mod observations;
+mod parallel;
 pub mod planted;
 mod recording;
 mod result;
@@ -322,14 +323,19 @@ pub struct FigureData {
     pub residual_names: Vec<String>,
 }
 
-/// Reads `path` as an angles file when it starts with `# sinscal-angles`, otherwise as a recording, and
-/// analyses it.
+/// Reads `path` as an angles file when it starts with `# sinscal-angles`, otherwise as a recording (line by
+/// line, docs/analysis.md#speed-and-memory), and analyses it.
 pub fn analyze_path(path: &Path) -> Result<Analysis, InputError> {
-    let text = std::fs::read_to_string(path).map_err(|e| InputError::io(path, e))?;
-    let source = path.display().to_string();
-    if text.lines().take(20).any(|l| l.trim_start().starts_with("# sinscal-angles")) {
-        analyze_angles(&AnglesFile::parse(&text, &source)?)
+    use std::io::BufRead;
+    let file = std::fs::File::open(path).map_err(|e| InputError::io(path, e))?;
+    let mut is_angles = false;
+    for line in std::io::BufReader::new(file).lines().take(20) {
+        is_angles |= line.map_err(|e| InputError::io(path, e))?.trim_start().starts_with("# sinscal-angles");
+    }
+    if is_angles {
+        let text = std::fs::read_to_string(path).map_err(|e| InputError::io(path, e))?;
+        analyze_angles(&AnglesFile::parse(&text, &path.display().to_string())?)
     } else {
-        analyze_recording(&Recording::parse(&text, &source)?)
+        recording::analyze_recording_owned(Recording::read(path)?)
     }
 }

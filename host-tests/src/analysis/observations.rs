@@ -2,11 +2,14 @@
 //! means, minus what the reference attitude predicts, are the observations; and the base model's columns
 //! (one bias per channel).
 
+use std::collections::HashMap;
+
 use crate::calibration::site_of;
 use crate::io::error::InputError;
 use crate::io::recording::{Dwell, Recording};
 use crate::model::synth::{c_b_n, earth_rate_n_radps, mul_t_vec, M3};
 
+use super::parallel::on_cores;
 use super::{AXES, BLOCK_SAMPLES, MAX_BLOCKS_PER_DWELL, MIN_DWELL_SAMPLES};
 
 /// One dwell's samples and reference attitude.
@@ -172,6 +175,39 @@ impl Blocks {
     /// `f` of every block.
     pub fn column(&self, f: impl Fn(&BlockObs) -> f64) -> Vec<f64> {
         self.list.iter().map(f).collect()
+    }
+
+    /// Per function of `fs`, per block: the mean of `f(t)` over the block's rows (`t` in s). The channels'
+    /// blocks share their dwell's rows, so each mean is computed once per row range (the same sum as over
+    /// each block), and the functions are spread over the available cores.
+    pub fn time_means<F: Fn(f64) -> f64 + Sync>(&self, session: &Session, fs: &[F]) -> Vec<Vec<f64>> {
+        let mut ranges: Vec<(usize, (usize, usize))> = Vec::new();
+        let mut seen: HashMap<(usize, (usize, usize)), usize> = HashMap::new();
+        let range_of: Vec<usize> = self
+            .list
+            .iter()
+            .map(|b| {
+                *seen.entry((b.dwell, b.range)).or_insert_with(|| {
+                    ranges.push((b.dwell, b.range));
+                    ranges.len() - 1
+                })
+            })
+            .collect();
+        on_cores(fs.len(), |i| {
+            let means: Vec<f64> = ranges
+                .iter()
+                .map(|&(d, (a, b))| {
+                    let t = &session.dwells[d].t[a..b];
+                    t.iter().map(|&t| fs[i](t)).sum::<f64>() / t.len() as f64
+                })
+                .collect();
+            range_of.iter().map(|&r| means[r]).collect()
+        })
+    }
+
+    /// The column that is `values` (one per block) on the blocks of channel `c` and zero elsewhere.
+    pub fn on_channel(&self, c: usize, values: &[f64]) -> Vec<f64> {
+        self.list.iter().zip(values).map(|(b, &v)| if b.channel == c { v } else { 0.0 }).collect()
     }
 
     /// The base model: one bias column per channel present, with its name ("gyro_bias_x"); the biases of

@@ -12,23 +12,46 @@ use sinscal::calib::channels::AttitudeKnowledge;
 use super::candidates::RecordingColumns;
 use super::observations::{Blocks, Session};
 use super::result::{assemble, effects_of, residuals_by_group, Findings, RECORDING};
-use super::sample_tests::{test_samples, SampleFindings, SAMPLE_TESTS};
+use super::sample_tests::{measure_samples, test_samples, SampleFindings, SAMPLE_TESTS};
 use super::selection::{select, Problem, Selection};
 use super::{Analysis, ChannelDiagnostics, CHANNELS, CHANNEL_UNITS};
 
 /// Analyses a recording.
 pub fn analyze_recording(recording: &Recording) -> Result<Analysis, InputError> {
-    let source = recording.source.as_str();
     recording.require_gyro("analyze")?;
-    let mut session = Session::read(recording)?;
     let levelled = attitude_knowledge(&recording.header) == AttitudeKnowledge::Unknown;
+    analyze_session(Session::read(recording)?, levelled, &recording.source)
+}
+
+/// Analyses a recording that is not needed afterwards: its rows are dropped once the dwells are read, so
+/// that the rows and the analysis' working data are not held at once (docs/analysis.md#speed-and-memory).
+pub(super) fn analyze_recording_owned(recording: Recording) -> Result<Analysis, InputError> {
+    recording.require_gyro("analyze")?;
+    let levelled = attitude_knowledge(&recording.header) == AttitudeKnowledge::Unknown;
+    let session = Session::read(&recording)?;
+    let source = recording.source.clone();
+    drop(recording);
+    analyze_session(session, levelled, &source)
+}
+
+/// The analysis of a session read from `source`; `levelled`: its attitudes were levelled from its own
+/// accelerometers.
+fn analyze_session(mut session: Session, levelled: bool, source: &str) -> Result<Analysis, InputError> {
     let accel_bias_mps2 = if levelled { relevel(&mut session) } else { [0.0; 3] };
-    let blocks = Blocks::cut(&session);
-    let mut problem = problem(&session, &blocks, levelled.then_some(accel_bias_mps2));
-    let selection = select(&mut problem, SAMPLE_TESTS).map_err(|e| InputError::file(source, e))?;
+    let session = &session;
+    // The sample statistics are measured while the block observations are fitted (docs/analysis.md#speed-and-memory).
+    let (problem, selection, measures) = std::thread::scope(|scope| {
+        let measuring = scope.spawn(|| measure_samples(session));
+        let blocks = Blocks::cut(session);
+        let mut problem = problem(session, &blocks, levelled.then_some(accel_bias_mps2));
+        let selection = select(&mut problem, SAMPLE_TESTS);
+        let measures = measuring.join().unwrap_or_else(|e| std::panic::resume_unwind(e));
+        (problem, selection, measures)
+    });
+    let selection = selection.map_err(|e| InputError::file(source, e))?;
     let m = (selection.observable + SAMPLE_TESTS) as f64;
     let mut effects = effects_of(&problem, &selection);
-    let SampleFindings { effects: sample_effects, diagnostics, mut figures } = test_samples(&session, m);
+    let SampleFindings { effects: sample_effects, diagnostics, mut figures } = test_samples(session, &measures, m);
     effects.extend(sample_effects);
     let (residual_rms, block_residual_rms) = residual_rms(&problem, &selection, &diagnostics);
     figures.residual_names = problem.group_names.clone();

@@ -7,8 +7,6 @@ use std::collections::BTreeMap;
 use crate::model::catalogue::EffectKind;
 
 use super::selection::{Problem, Selection, POSE_ORDER};
-use crate::stats::linfit::solve_spd;
-
 use super::{Analysis, BaseModel, ChannelDiagnostics, Confounded, Consequence, Effect, FigureData, Misfit, ALPHA};
 
 /// The input kinds (the `input` field).
@@ -69,35 +67,22 @@ fn effect_of(problem: &Problem, selection: &Selection, index: usize) -> Effect {
     }
 }
 
-/// What leaving chosen effect `index` out does to the base model's biases: the error it induces, `(X' W
-/// X)^-1 X' W (column * estimate)` with `X` the bias columns and `W` the final fit's weights, and that error
-/// over the biases' standard errors; the bias it moves most.
+/// What leaving chosen effect `index` out of the final model does to the biases: refitting without it moves
+/// bias `k` by `-C_kj / C_jj * theta_j` (`C` the final fit's covariance, `j` the effect), exactly, with every
+/// other effect kept; in units of the bias's standard error in the final fit. The bias it moves most.
 fn consequence(problem: &Problem, selection: &Selection, index: usize) -> Option<Consequence> {
-    let c = &selection.chosen[index];
-    let column = &problem.candidates[c.candidate].variants[c.variant].1;
     let fit = &selection.final_fit;
-    let theta = fit.beta[problem.base.len() + index];
-    let k = problem.base.len();
-    let weight = |i: usize| match &problem.obs.sigma {
-        Some(s) => 1.0 / (s[i] * s[i]),
-        None => 1.0 / fit.variance[problem.obs.group[i]],
-    };
-    let mut a = vec![vec![0.0; k]; k];
-    let mut b = vec![0.0; k];
-    for i in 0..problem.obs.y.len() {
-        let w = weight(i);
-        for p in 0..k {
-            b[p] += w * problem.base[p][i] * column[i] * theta;
-            for q in 0..k {
-                a[p][q] += w * problem.base[p][i] * problem.base[q][i];
-            }
-        }
+    let j = problem.base.len() + index;
+    let c = &fit.covariance;
+    if c[j][j].is_nan() || c[j][j] <= 0.0 {
+        return None;
     }
-    let (delta, inverse) = solve_spd(&a, &b)?;
-    let z = |p: usize| delta[p].abs() / inverse[p][p].max(f64::MIN_POSITIVE).sqrt();
-    let biases = (0..k).filter(|&p| problem.base_names[p].contains("_bias_"));
+    let theta = fit.beta[j];
+    let delta = |k: usize| -c[k][j] / c[j][j] * theta;
+    let z = |k: usize| delta(k).abs() / c[k][k].max(f64::MIN_POSITIVE).sqrt();
+    let biases = (0..problem.base.len()).filter(|&k| problem.base_names[k].contains("_bias_"));
     let worst = biases.max_by(|&p, &q| z(p).total_cmp(&z(q)))?;
-    Some(Consequence { bias: problem.base_names[worst].clone(), bias_error: delta[worst], in_std_errors: z(worst) })
+    Some(Consequence { bias: problem.base_names[worst].clone(), bias_error: delta(worst), in_std_errors: z(worst) })
 }
 
 /// The set-aside candidates as public records.
@@ -130,27 +115,29 @@ fn misfits_and_confounded(problem: &Problem, selection: &Selection) -> (Vec<Misf
     (misfits, confounded)
 }
 
-/// Effects ranked by consequence: the column effects that move a bias by at least one standard error when
-/// left out, largest first; then the other column effects (a symmetric schedule keeps scale factors and
-/// misalignments apart from the biases) by their BIC gain; then the noise effects, which move no estimate, by
-/// their BIC gain; the time terms confounded with pose order after all of them.
+/// Effects ranked: the column effects (what a calibration must model) in the order the forward selection
+/// chose them; then the noise effects, which move no estimate, by their BIC gain; the time terms confounded with pose order after all of
+/// them. Each column effect carries its consequence; the ranking does not sort by it (a small partial alias
+/// of a strong effect can move a bias more than the effect itself: docs/analysis.md#verdict).
 fn rank(effects: &mut [Effect]) {
-    let moves = |e: &Effect| e.consequence.as_ref().map(|c| c.in_std_errors).filter(|&z| z >= 1.0);
     let class = |e: &Effect| {
         if e.aliases.iter().any(|a| a == POSE_ORDER) {
-            3
-        } else if e.consequence.is_none() {
             2
-        } else if moves(e).is_none() {
+        } else if e.consequence.is_none() {
             1
         } else {
             0
         }
     };
+    // Stable: the column effects stay in the order the forward selection chose them (each the best against
+    // the model before it); the noise effects by BIC gain.
     effects.sort_by(|a, b| {
-        class(a).cmp(&class(b)).then_with(|| match (moves(a), moves(b)) {
-            (Some(x), Some(y)) => y.total_cmp(&x),
-            _ => a.delta_bic.total_cmp(&b.delta_bic),
+        class(a).cmp(&class(b)).then_with(|| {
+            if class(a) == 1 {
+                a.delta_bic.total_cmp(&b.delta_bic)
+            } else {
+                std::cmp::Ordering::Equal
+            }
         })
     });
 }

@@ -2,15 +2,23 @@
 //! quantisation (a binomial likelihood ratio on the lattice of the sample differences), vibration
 //! (`vibration`) and correlated noise (`correlated_noise`); and the channel diagnostics (detrended RMS,
 //! whiteness, trends) with the data of the report's noise figures.
+//!
+//! The tests run in two steps, so that the costly one can run while the block selection gives the
+//! Bonferroni `m` (docs/analysis.md#speed-and-memory): [`measure_samples`] computes every statistic, and
+//! [`test_samples`] decides against `alpha / m`. The correlated-noise test runs on the samples after a
+//! vibration found is removed; [`measure_samples`] fits it on the series that the smallest possible `m`
+//! leaves, and [`test_samples`] fits it again on the other series in the rare case the decision at the true
+//! `m` differs.
 
 use crate::model::catalogue::{EffectKind, Sensor};
 use crate::stats::linfit::{chi_square_quantile_upper, chi_square_upper};
-use crate::stats::noise::{detect_quantization, ljung_box, GRID_TOLERANCE};
+use crate::stats::noise::{detect_quantization_joined, joined_pairs, ljung_box, Quantization, GRID_TOLERANCE};
 
 use super::candidates::axis_of;
-use super::correlated_noise::gauss_markov_test;
+use super::correlated_noise::{gauss_markov_test, GaussMarkovResult};
 use super::observations::Session;
-use super::vibration::{remove_line, sinc, vibration_test};
+use super::parallel::on_cores;
+use super::vibration::{remove_line, sinc, vibration_test, VibrationResult};
 use super::{ChannelDiagnostics, Effect, FigureData, ALPHA, CHANNELS, CHANNEL_UNITS};
 
 /// Tests on the samples, counted in the Bonferroni `m`: quantisation, vibration, correlated noise on every
@@ -49,65 +57,132 @@ fn detrend(t: &[f64], y: &[f64]) -> Trend {
     Trend { slope_per_s: b, slope_std_error_per_s: (s2 / stt).sqrt(), residual }
 }
 
-/// Runs the sample tests on every channel of `session`, each against `alpha / m`.
-pub(super) fn test_samples(session: &Session, m: f64) -> SampleFindings {
+/// What the sample tests measured on every channel, before `m` is known.
+pub(super) struct SampleMeasures {
+    channels: Vec<ChannelMeasures>,
+}
+
+/// Measures every channel of `session`, the channels in parallel on the available cores.
+pub(super) fn measure_samples(session: &Session) -> SampleMeasures {
+    let longest = session.longest();
+    SampleMeasures { channels: on_cores(6, |c| ChannelMeasures::measure(session, c, longest)) }
+}
+
+/// Decides the sample tests of `measures` (of `session`), each against `alpha / m`.
+pub(super) fn test_samples(session: &Session, measures: &SampleMeasures, m: f64) -> SampleFindings {
     let mut out = SampleFindings {
         effects: Vec::new(),
         diagnostics: Vec::new(),
         figures: FigureData { rate_hz: session.rate_hz, ..FigureData::default() },
     };
-    let longest = session.longest();
-    for c in 0..6 {
-        let trends: Vec<Trend> = session.dwells.iter().map(|d| detrend(&d.t, &d.y[c])).collect();
-        ChannelTests::new(session, c, &trends, m).run(&trends[longest], &mut out);
+    let channels = &measures.channels;
+    for outcome in on_cores(channels.len(), |c| channels[c].judge(session, m)) {
+        out.effects.extend(outcome.effects);
+        let figures = &mut out.figures;
+        figures.base_sigma.push(outcome.diagnostics.detrended_rms);
+        out.diagnostics.push(outcome.diagnostics);
+        figures.longest_dwell.push(outcome.longest_dwell);
+        figures.correlated.push(outcome.correlated);
+        figures.quantization.push(outcome.quantization);
+        figures.vibration.push(outcome.vibration);
     }
     out
 }
 
-/// One channel's detrended samples and what its tests share.
-struct ChannelTests<'a> {
-    session: &'a Session,
+/// What the tests of one channel found.
+struct ChannelOutcome {
+    effects: Vec<Effect>,
+    diagnostics: ChannelDiagnostics,
+    /// The detrended samples of the longest dwell.
+    longest_dwell: Vec<f64>,
+    correlated: Option<(f64, f64)>,
+    quantization: Option<f64>,
+    vibration: Option<(f64, f64)>,
+}
+
+/// One channel's statistics.
+struct ChannelMeasures {
     c: usize,
-    m: f64,
-    /// Per dwell: the detrended samples (a vibration found is removed before the correlated-noise test).
-    series: Vec<Vec<f64>>,
     /// Samples in all.
     n_all: usize,
+    /// Dwells.
+    dwells: usize,
     /// RMS of the detrended samples.
     rms: f64,
     /// Largest within-dwell slope over its standard error.
     max_trend_z: f64,
+    /// The detrended samples of the longest dwell.
+    long: Vec<f64>,
+    /// The lattice of the raw samples' differences, with the step's standard error.
+    quantization: Option<(Quantization, f64)>,
+    /// The strongest spectral line.
+    vibration: Option<VibrationResult>,
+    /// The correlated-noise fit, on the series with the line of `vibration` removed when `line_removed`.
+    correlated: Option<GaussMarkovResult>,
+    line_removed: bool,
 }
 
-impl<'a> ChannelTests<'a> {
-    fn new(session: &'a Session, c: usize, trends: &[Trend], m: f64) -> ChannelTests<'a> {
-        let series: Vec<Vec<f64>> = trends.iter().map(|t| t.residual.clone()).collect();
-        let all: Vec<f64> = series.iter().flatten().copied().collect();
-        let rms = (all.iter().map(|v| v * v).sum::<f64>() / all.len() as f64).sqrt();
+impl ChannelMeasures {
+    fn measure(session: &Session, c: usize, longest: usize) -> ChannelMeasures {
+        let trends: Vec<Trend> = session.dwells.iter().map(|d| detrend(&d.t, &d.y[c])).collect();
         let max_trend_z = trends.iter().map(|t| (t.slope_per_s / t.slope_std_error_per_s).abs()).fold(0.0, f64::max);
-        ChannelTests { session, c, m, series, n_all: all.len(), rms, max_trend_z }
+        let mut series: Vec<Vec<f64>> = trends.into_iter().map(|t| t.residual).collect();
+        let n_all = series.iter().map(Vec::len).sum::<usize>();
+        let rms = (series.iter().flatten().map(|v| v * v).sum::<f64>() / n_all as f64).sqrt();
+        let long = series.get(longest).cloned().unwrap_or_default();
+        let raw: Vec<&[f64]> = session.dwells.iter().map(|d| &d.y[c][..]).collect();
+        let quantization = detect_quantization_joined(&raw).ok().map(|q| {
+            let std_error = if q.quantized { quantization_std_error(&raw, q.step) } else { f64::NAN };
+            (q, std_error)
+        });
+        let vibration = vibration_test(&series, session.dt);
+        // The line can be accepted only if it passes at the smallest m (no block candidate observable).
+        let line_removed = vibration
+            .as_ref()
+            .is_some_and(|v| vibration_criterion(v, series.len(), n_all, SAMPLE_TESTS as f64).accepted);
+        if let (true, Some(v)) = (line_removed, &vibration) {
+            remove_line(&mut series, v, session.dt);
+        }
+        let correlated = gauss_markov_test(series, session.dt);
+        let dwells = session.dwells.len();
+        ChannelMeasures { c, n_all, dwells, rms, max_trend_z, long, quantization, vibration, correlated, line_removed }
     }
 
-    /// Quantisation, vibration, correlated noise, in that order; the diagnostics and figure data with the
-    /// detrended samples of the longest dwell `long`.
-    fn run(mut self, long: &Trend, out: &mut SampleFindings) {
-        let q_step = self.quantization(&mut out.effects);
-        let vib = self.vibration(&mut out.effects);
-        let corr_found = self.correlated_noise(&mut out.effects);
-        let long = &long.residual;
-        out.diagnostics.push(ChannelDiagnostics {
-            channel: CHANNELS[self.c].into(),
-            detrended_rms: self.rms,
-            whiteness_p_value: ljung_box(long, 20).map(|l| l.p_value).unwrap_or(f64::NAN),
-            max_trend_z: self.max_trend_z,
-            quantization_step: q_step,
-        });
-        let figures = &mut out.figures;
-        figures.longest_dwell.push(long.clone());
-        figures.base_sigma.push(self.rms);
-        figures.correlated.push(corr_found);
-        figures.quantization.push(q_step);
-        figures.vibration.push(vib);
+    /// Quantisation, vibration, correlated noise, in that order, against `alpha / m`; the diagnostics and
+    /// figure data.
+    fn judge(&self, session: &Session, m: f64) -> ChannelOutcome {
+        let mut effects = Vec::new();
+        let q_step = self.quantization(m, &mut effects);
+        let vib = self.vibration(m, session.dt, &mut effects);
+        let refitted;
+        let correlated = if vib.is_some() == self.line_removed {
+            self.correlated.as_ref()
+        } else {
+            // The decision at this m differs from the one at the smallest m: fit the other series.
+            let mut series: Vec<Vec<f64>> =
+                session.dwells.iter().map(|d| detrend(&d.t, &d.y[self.c]).residual).collect();
+            if let (Some(_), Some(v)) = (vib, &self.vibration) {
+                remove_line(&mut series, v, session.dt);
+            }
+            refitted = gauss_markov_test(series, session.dt);
+            refitted.as_ref()
+        };
+        let corr_found = self.correlated_noise(correlated, m, &mut effects);
+        let long = self.long.clone();
+        ChannelOutcome {
+            effects,
+            diagnostics: ChannelDiagnostics {
+                channel: CHANNELS[self.c].into(),
+                detrended_rms: self.rms,
+                whiteness_p_value: ljung_box(&long, 20).map(|l| l.p_value).unwrap_or(f64::NAN),
+                max_trend_z: self.max_trend_z,
+                quantization_step: q_step,
+            },
+            longest_dwell: long,
+            correlated: corr_found,
+            quantization: q_step,
+            vibration: vib,
+        }
     }
 
     /// An effect of this channel found on its samples, before its numbers are set.
@@ -139,9 +214,8 @@ impl<'a> ChannelTests<'a> {
 
     /// The lattice of the raw samples' differences against the fraction on it that continuous data give
     /// (binomial likelihood ratio); the step if found.
-    fn quantization(&self, effects: &mut Vec<Effect>) -> Option<f64> {
-        let raw: Vec<f64> = self.session.dwells.iter().flat_map(|d| d.y[self.c].iter().copied()).collect();
-        let q = detect_quantization(&raw).ok()?;
+    fn quantization(&self, m: f64, effects: &mut Vec<Effect>) -> Option<f64> {
+        let (q, std_error) = self.quantization?;
         let n = q.nonzero_differences as f64;
         let k = (q.fraction_on_grid * n).round();
         let p0 = 2.0 * GRID_TOLERANCE;
@@ -152,13 +226,13 @@ impl<'a> ChannelTests<'a> {
             0.0
         };
         let delta_bic = -lr + n.ln();
-        if !(q.quantized && lr > chi_square_quantile_upper(ALPHA / self.m, 1.0) && delta_bic < 0.0) {
+        if !(q.quantized && lr > chi_square_quantile_upper(ALPHA / m, 1.0) && delta_bic < 0.0) {
             return None;
         }
         let rms = self.rms;
         effects.push(Effect {
             estimate: q.step,
-            std_error: quantization_std_error(&raw, q.step),
+            std_error,
             delta_bic,
             residual_rms_after: (rms * rms - q.step * q.step / 12.0).max(0.0).sqrt(),
             likelihood_ratio: lr,
@@ -169,16 +243,11 @@ impl<'a> ChannelTests<'a> {
         Some(q.step)
     }
 
-    /// The strongest spectral line; if found, removed from the series. Returns (amplitude seen, frequency).
-    fn vibration(&mut self, effects: &mut Vec<Effect>) -> Option<(f64, f64)> {
-        let dt = self.session.dt;
-        let v = vibration_test(&self.series, dt)?;
-        // Parameters: amplitude, frequency, a phase per dwell. The statistic is tested as chi-square
-        // with one degree per phase and one for the amplitude, Bonferroni over the frequencies searched.
-        let dof = self.series.len() as f64 + 1.0;
-        let threshold = chi_square_quantile_upper(ALPHA / (self.m * v.independent_frequencies), dof);
-        let delta_bic = -v.lr + (dof + 1.0) * (self.n_all as f64).ln();
-        if !(v.lr > threshold && delta_bic < 0.0) {
+    /// The strongest spectral line, if it passes. Returns (amplitude seen, frequency).
+    fn vibration(&self, m: f64, dt: f64, effects: &mut Vec<Effect>) -> Option<(f64, f64)> {
+        let v = self.vibration.as_ref()?;
+        let criterion = vibration_criterion(v, self.dwells, self.n_all, m);
+        if !criterion.accepted {
             return None;
         }
         let corr = sinc(v.frequency_hz * dt);
@@ -186,23 +255,27 @@ impl<'a> ChannelTests<'a> {
         effects.push(Effect {
             estimate: v.amplitude_seen / corr,
             std_error: v.amplitude_std / corr,
-            delta_bic,
+            delta_bic: criterion.delta_bic,
             residual_rms_after: (rms * rms - 0.5 * v.amplitude_seen * v.amplitude_seen).max(0.0).sqrt(),
             frequency_hz: Some(v.frequency_hz),
             likelihood_ratio: v.lr,
-            parameters: dof as usize + 1,
-            p_value: chi_square_upper(v.lr, dof),
+            parameters: criterion.dof as usize + 1,
+            p_value: chi_square_upper(v.lr, criterion.dof),
             ..self.effect(EffectKind::Vibration, "samples")
         });
-        remove_line(&mut self.series, &v, dt);
         Some((v.amplitude_seen, v.frequency_hz))
     }
 
-    /// Gauss-Markov plus white noise against white noise alone; returns (sigma, tau) if found.
-    fn correlated_noise(&self, effects: &mut Vec<Effect>) -> Option<(f64, f64)> {
-        let gm = gauss_markov_test(&self.series, self.session.dt)?;
+    /// Gauss-Markov plus white noise (the fit `gm`) against white noise alone; returns (sigma, tau) if found.
+    fn correlated_noise(
+        &self,
+        gm: Option<&GaussMarkovResult>,
+        m: f64,
+        effects: &mut Vec<Effect>,
+    ) -> Option<(f64, f64)> {
+        let gm = gm?;
         let delta_bic = -gm.lr + 2.0 * (self.n_all as f64).ln();
-        if !(gm.lr > chi_square_quantile_upper(ALPHA / self.m, 2.0) && delta_bic < 0.0) {
+        if !(gm.lr > chi_square_quantile_upper(ALPHA / m, 2.0) && delta_bic < 0.0) {
             return None;
         }
         effects.push(Effect {
@@ -221,11 +294,29 @@ impl<'a> ChannelTests<'a> {
     }
 }
 
-/// Standard error of a quantisation step: least squares of the on-grid differences `d_i = n_i q`.
-fn quantization_std_error(raw: &[f64], step: f64) -> f64 {
+/// The vibration test's decision against `alpha / m`.
+struct VibrationCriterion {
+    accepted: bool,
+    /// Degrees of freedom of the statistic.
+    dof: f64,
+    delta_bic: f64,
+}
+
+/// Parameters: amplitude, frequency, a phase per dwell (`dwells`). The statistic is tested as chi-square with
+/// one degree per phase and one for the amplitude, Bonferroni over the frequencies searched; `n_all` samples.
+fn vibration_criterion(v: &VibrationResult, dwells: usize, n_all: usize, m: f64) -> VibrationCriterion {
+    let dof = dwells as f64 + 1.0;
+    let threshold = chi_square_quantile_upper(ALPHA / (m * v.independent_frequencies), dof);
+    let delta_bic = -v.lr + (dof + 1.0) * (n_all as f64).ln();
+    VibrationCriterion { accepted: v.lr > threshold && delta_bic < 0.0, dof, delta_bic }
+}
+
+/// Standard error of a quantisation step: least squares of the on-grid differences `d_i = n_i q` (of the
+/// dwells `raw` joined).
+fn quantization_std_error(raw: &[&[f64]], step: f64) -> f64 {
     let (mut snn, mut see, mut k) = (0.0, 0.0, 0.0);
-    for w in raw.windows(2) {
-        let d = (w[1] - w[0]).abs();
+    for (a, b) in joined_pairs(raw) {
+        let d = (b - a).abs();
         let n = (d / step).round();
         if n >= 1.0 && (d / step - n).abs() <= GRID_TOLERANCE {
             snn += n * n;

@@ -241,7 +241,7 @@ const MIN_RUN_BLOCKS: usize = 8;
 /// `(1 + rho) / (1 - rho)` times more than white block means would (first-order autoregression), so a
 /// likelihood ratio computed as if they were independent is that much too large. Only dwells of at least
 /// [`MIN_RUN_BLOCKS`] blocks count; `rho` is corrected for the line removed (`E rho_hat = rho - (2 + 4 rho)
-/// / B`). Angles, or no dwell long enough: 1.
+/// / B`) and counted only beyond four standard errors. Angles, or no dwell long enough: 1.
 fn block_inflation(problem: &Problem, residual: &[f64]) -> Vec<f64> {
     let groups = problem.obs.groups;
     if problem.obs_pose.is_none() {
@@ -271,6 +271,12 @@ fn block_inflation(problem: &Problem, residual: &[f64]) -> Vec<f64> {
             }
             let b = blocks[k] / runs[k];
             let rho = ((lag1[k] / lag0[k] * b + 2.0) / (b - 4.0)).clamp(0.0, 0.9);
+            // Only a correlation the data show beyond doubt, four standard errors (`1 / sqrt(blocks)` for the
+            // raw estimate, times `B / (B - 4)` for the correction): white block means keep their likelihood
+            // ratios as they are, in every channel of every session (two standard errors let one white
+            // channel in twenty through, measured in the hidden-effect trials).
+            let rho_se = b / (b - 4.0) / blocks[k].sqrt();
+            let rho = if rho > 4.0 * rho_se { rho } else { 0.0 };
             ((1.0 + rho) / (1.0 - rho)).clamp(1.0, MAX_INFLATION)
         })
         .collect()

@@ -2,7 +2,7 @@
 //! trend removed), against the median of its neighbourhood (a line, not a coloured background), its
 //! frequency refined within a bin, one amplitude and a phase per dwell.
 
-use crate::stats::noise::fft_in_place;
+use crate::stats::noise::FftPlan;
 
 use super::MIN_DWELL_SAMPLES;
 
@@ -31,26 +31,57 @@ pub(super) fn sinc(x: f64) -> f64 {
     }
 }
 
-/// Direct DFT of `x` at `cycles_per_sample`: sum x_i e^{-i w i}.
+/// Samples between exact evaluations of the phasor in [`dft_at`] (a recurrence in between).
+const PHASOR_BLOCK: usize = 256;
+/// Blocks of [`dft_at`] summed in lock step (independent chains for the processor).
+const DFT_LANES: usize = 4;
+
+/// Direct DFT of `x` at `cycles_per_sample`: sum x_i e^{-i w i}. The phasor is evaluated exactly at every
+/// [`PHASOR_BLOCK`]-th sample and rotated by a recurrence in between; [`DFT_LANES`] blocks are summed side by
+/// side, so the sum is that of the block-by-block order up to its rounding.
 fn dft_at(x: &[f64], cycles_per_sample: f64) -> (f64, f64) {
     let w = std::f64::consts::TAU * cycles_per_sample;
     let (c, s) = (w.cos(), w.sin());
-    let (mut cr, mut ci) = (1.0f64, 0.0f64);
-    let (mut re, mut im) = (0.0, 0.0);
-    for (i, v) in x.iter().enumerate() {
-        if i % 256 == 0 {
-            let ph = w * i as f64;
-            cr = ph.cos();
-            ci = -ph.sin();
+    let phasor = |i: usize| {
+        let ph = w * i as f64;
+        (ph.cos(), -ph.sin())
+    };
+    let (mut re, mut im) = ([0.0f64; DFT_LANES], [0.0f64; DFT_LANES]);
+    let chunks = x.chunks_exact(PHASOR_BLOCK * DFT_LANES);
+    let tail_start = x.len() - chunks.remainder().len();
+    for (n, chunk) in chunks.enumerate() {
+        let start = n * PHASOR_BLOCK * DFT_LANES;
+        let (mut cr, mut ci) = ([0.0f64; DFT_LANES], [0.0f64; DFT_LANES]);
+        for l in 0..DFT_LANES {
+            (cr[l], ci[l]) = phasor(start + l * PHASOR_BLOCK);
         }
-        re += v * cr;
-        im += v * ci;
+        let blocks: [&[f64]; DFT_LANES] = std::array::from_fn(|l| &chunk[l * PHASOR_BLOCK..(l + 1) * PHASOR_BLOCK]);
+        for i in 0..PHASOR_BLOCK {
+            for l in 0..DFT_LANES {
+                let v = blocks[l][i];
+                re[l] += v * cr[l];
+                im[l] += v * ci[l];
+                let nr = cr[l] * c + ci[l] * s;
+                let ni = ci[l] * c - cr[l] * s;
+                cr[l] = nr;
+                ci[l] = ni;
+            }
+        }
+    }
+    let (mut tr, mut ti) = (0.0, 0.0);
+    let (mut cr, mut ci) = (1.0f64, 0.0f64);
+    for (i, v) in x.iter().enumerate().skip(tail_start) {
+        if i % PHASOR_BLOCK == 0 {
+            (cr, ci) = phasor(i);
+        }
+        tr += v * cr;
+        ti += v * ci;
         let nr = cr * c + ci * s;
         let ni = ci * c - cr * s;
         cr = nr;
         ci = ni;
     }
-    (re, im)
+    (re.iter().sum::<f64>() + tr, im.iter().sum::<f64>() + ti)
 }
 
 /// The strongest spectral line of the dwells' detrended samples against the local background.
@@ -67,18 +98,43 @@ pub(super) fn vibration_test(dwells: &[Vec<f64>], dt: f64) -> Option<VibrationRe
     Some(fit_line(dwells, f, background, n_min, dt))
 }
 
-/// The periodograms of the dwells (zero-padded to `len`, each over its length), summed; bins 0..len/2.
+/// The periodograms of the dwells (zero-padded to `len`, each over its length), summed; bins 0..len/2. Two
+/// real dwells share one complex transform (`a + i b`), separated by the symmetry of real transforms.
 fn summed_periodogram(dwells: &[Vec<f64>], len: usize) -> Option<Vec<f64>> {
+    let plan = FftPlan::new(len).ok()?;
     let mut power = vec![0.0; len / 2];
-    for d in dwells {
-        let (mut re, mut im) = (vec![0.0; len], vec![0.0; len]);
+    let (mut re, mut im) = (vec![0.0; len], vec![0.0; len]);
+    let fill = |out: &mut [f64], d: &[f64]| {
+        out.fill(0.0);
         let step = if d.len() > len { d.len() / len + 1 } else { 1 };
-        for (i, v) in d.iter().step_by(step).enumerate().take(len) {
-            re[i] = *v;
+        for (o, v) in out.iter_mut().zip(d.iter().step_by(step)) {
+            *o = *v;
         }
-        fft_in_place(&mut re, &mut im).ok()?;
-        for k in 0..len / 2 {
-            power[k] += (re[k] * re[k] + im[k] * im[k]) / d.len() as f64;
+    };
+    for pair in dwells.chunks(2) {
+        fill(&mut re, &pair[0]);
+        let n_a = pair[0].len() as f64;
+        match pair.get(1) {
+            None => {
+                im.fill(0.0);
+                plan.run(&mut re, &mut im).ok()?;
+                for k in 0..len / 2 {
+                    power[k] += (re[k] * re[k] + im[k] * im[k]) / n_a;
+                }
+            }
+            Some(b) => {
+                fill(&mut im, b);
+                plan.run(&mut re, &mut im).ok()?;
+                let n_b = b.len() as f64;
+                for k in 0..len / 2 {
+                    // Z_k = A_k + i B_k and Z_{L-k}^* = A_k - i B_k for real a, b.
+                    let m = (len - k) % len;
+                    let (a_re, a_im) = (0.5 * (re[k] + re[m]), 0.5 * (im[k] - im[m]));
+                    let (b_re, b_im) = (0.5 * (im[k] + im[m]), 0.5 * (re[m] - re[k]));
+                    power[k] += (a_re * a_re + a_im * a_im) / n_a;
+                    power[k] += (b_re * b_re + b_im * b_im) / n_b;
+                }
+            }
         }
     }
     Some(power)

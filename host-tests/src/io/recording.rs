@@ -2,7 +2,11 @@
 //! and grouping rows into dwells.
 
 use std::fmt::Write as _;
+use std::fs::File;
+use std::io::{BufRead, BufReader, Read};
 use std::path::Path;
+use std::sync::atomic::{AtomicBool, Ordering};
+use std::sync::{mpsc, Mutex};
 
 use crate::io::error::InputError;
 
@@ -99,18 +103,61 @@ const COLUMNS: [&str; 11] = [
 ];
 
 impl Recording {
-    /// Reads a recording file.
+    /// Reads a recording file, in chunks of lines parsed on the available cores: the file's text is never
+    /// held whole (a recording of an hour at 1 kHz is half a gigabyte of text). Errors are those of
+    /// [`Recording::parse`], the first in file order.
     pub fn read(path: &Path) -> Result<Recording, InputError> {
-        let text = std::fs::read_to_string(path).map_err(|e| InputError::io(path, e))?;
-        Recording::parse(&text, &path.display().to_string())
+        Recording::read_in_chunks(path, CHUNK_BYTES)
+    }
+
+    /// [`Recording::read`] with chunks of `chunk_bytes` (then to the end of a line).
+    fn read_in_chunks(path: &Path, chunk_bytes: u64) -> Result<Recording, InputError> {
+        let source = path.display().to_string();
+        let io = |e| InputError::io(path, e);
+        let mut reader = BufReader::with_capacity(1 << 20, File::open(path).map_err(io)?);
+        // The header, up to and including the column line (the first line that is neither blank nor `#`).
+        let mut head: Vec<String> = Vec::new();
+        loop {
+            let mut line = String::new();
+            if reader.read_line(&mut line).map_err(io)? == 0 {
+                break;
+            }
+            let line = strip_line_end(&line).to_string();
+            let is_column_line = !line.trim().is_empty() && !line.starts_with('#');
+            head.push(line);
+            if is_column_line {
+                break;
+            }
+        }
+        let mut lines = head.iter().enumerate().map(|(i, l)| (i + 1, l.as_str()));
+        let (header, header_line, column_line, rate_line) = parse_header(&mut lines, &|| head.len(), &source)?;
+        let columns = parse_columns(column_line, header_line, &source)?;
+        let rows = read_rows(&mut reader, (head.len(), chunk_bytes), &columns, &source, path)?;
+        Recording::assemble(header, header_line, &columns, rows, rate_line, &source)
     }
 
     /// Parses the text of a recording; `source` names it in errors.
     pub fn parse(text: &str, source: &str) -> Result<Recording, InputError> {
         let mut lines = text.lines().enumerate().map(|(i, l)| (i + 1, l.trim_end_matches('\r')));
-        let (header, header_line, column_line, rate_line) = parse_header(&mut lines, text, source)?;
+        let (header, header_line, column_line, rate_line) =
+            parse_header(&mut lines, &|| text.lines().count().max(1), source)?;
         let columns = parse_columns(column_line, header_line, source)?;
-        let rows = parse_rows(lines, &columns, source)?;
+        let mut rows = RowParser::new(&columns, source);
+        for (n, line) in lines {
+            rows.line(n, line)?;
+        }
+        Recording::assemble(header, header_line, &columns, rows.rows, rate_line, source)
+    }
+
+    /// The recording from its parts, after the checks that need every row.
+    fn assemble(
+        header: Header,
+        header_line: usize,
+        columns: &Columns,
+        rows: Vec<Row>,
+        rate_line: Option<usize>,
+        source: &str,
+    ) -> Result<Recording, InputError> {
         if rows.is_empty() {
             return Err(InputError::at(source, header_line, "no data rows"));
         }
@@ -373,7 +420,7 @@ fn is_key(key: &str) -> bool {
 /// line of `rate_hz` (for the rate check).
 fn parse_header<'t>(
     lines: &mut impl Iterator<Item = (usize, &'t str)>,
-    text: &str,
+    line_count: &dyn Fn() -> usize,
     source: &str,
 ) -> Result<(Header, usize, &'t str, Option<usize>), InputError> {
     let bad = |line: usize, reason: String| InputError::at(source, line, reason);
@@ -388,7 +435,7 @@ fn parse_header<'t>(
     let mut seen: Vec<(String, usize)> = Vec::new();
     let (header_line, column_line) = loop {
         let Some((n, line)) = lines.next() else {
-            return Err(bad(text.lines().count().max(1), "no column line after the header".into()));
+            return Err(bad(line_count().max(1), "no column line after the header".into()));
         };
         if line.trim().is_empty() {
             continue;
@@ -481,63 +528,231 @@ fn check_rate(rate_hz: f64, rows: &[Row]) -> Result<(), String> {
     Ok(())
 }
 
-/// The data rows after the column line.
-fn parse_rows<'t>(
-    lines: impl Iterator<Item = (usize, &'t str)>,
+/// The error of a time that does not increase, at line `n`.
+fn time_does_not_increase(source: &str, n: usize, t_s: f64, previous_t: f64) -> InputError {
+    InputError::at(source, n, format!("time {t_s} s does not increase (previous row: {previous_t} s)"))
+}
+
+/// Bytes of a chunk of data lines (then to the end of its last line).
+const CHUNK_BYTES: u64 = 4 << 20;
+
+/// The rows of one chunk of lines, parsed on its own: its first row's time is not checked (`first_t`
+/// keeps it for the check against the previous chunk), and parsing stops at the first error.
+struct ChunkRows {
+    rows: Vec<Row>,
+    first_t: Option<(usize, f64)>,
+    error: Option<InputError>,
+}
+
+/// Parses the lines of `bytes`, the first being line `first_line` of the file `path`.
+fn parse_chunk(bytes: &[u8], first_line: usize, columns: &Columns, source: &str, path: &Path) -> ChunkRows {
+    let mut parser = RowParser::new(columns, source);
+    let error = match std::str::from_utf8(bytes) {
+        Err(_) => Some(InputError::io(
+            path,
+            std::io::Error::new(std::io::ErrorKind::InvalidData, "stream did not contain valid UTF-8"),
+        )),
+        Ok(text) => {
+            text.lines().enumerate().find_map(|(i, l)| parser.line(first_line + i, l.trim_end_matches('\r')).err())
+        }
+    };
+    ChunkRows { rows: parser.rows, first_t: parser.first_t, error }
+}
+
+/// The next chunk of whole lines of `reader` (empty at the end of the file).
+fn read_chunk(reader: &mut impl BufRead, chunk_bytes: u64) -> std::io::Result<Vec<u8>> {
+    let mut bytes = Vec::with_capacity(chunk_bytes as usize + 4096);
+    reader.by_ref().take(chunk_bytes).read_to_end(&mut bytes)?;
+    if bytes.len() as u64 == chunk_bytes {
+        reader.read_until(b'\n', &mut bytes)?;
+    }
+    Ok(bytes)
+}
+
+/// The data rows of `reader`, whose last line read was line `line`: chunks of `chunk_bytes` (then to the end
+/// of a line) are read here, parsed
+/// on the available cores and joined in file order (docs/analysis.md#speed-and-memory). The first error in
+/// file order is returned, as [`Recording::parse`] would.
+fn read_rows(
+    reader: &mut (impl BufRead + Send),
+    (line, chunk_bytes): (usize, u64),
     columns: &Columns,
     source: &str,
+    path: &Path,
 ) -> Result<Vec<Row>, InputError> {
-    let bad = |line: usize, reason: String| InputError::at(source, line, reason);
-    let (names, index) = (&columns.names, &columns.index);
-    let mut rows = Vec::new();
-    let mut previous_t: Option<f64> = None;
-    for (n, line) in lines {
-        if line.trim().is_empty() || line.starts_with('#') {
-            continue;
+    let workers = std::thread::available_parallelism().map_or(1, |n| n.get()).clamp(1, 4);
+    let (work_tx, work_rx) = mpsc::sync_channel::<(usize, usize, Vec<u8>)>(2 * workers);
+    let work_rx = Mutex::new(work_rx);
+    let (done_tx, done_rx) = mpsc::channel::<(usize, ChunkRows)>();
+    let stop = AtomicBool::new(false);
+    let (joined, read) = std::thread::scope(|scope| {
+        let stop = &stop;
+        let producer = scope.spawn(move || -> std::io::Result<()> {
+            let (mut index, mut line) = (0, line);
+            while !stop.load(Ordering::Relaxed) {
+                let bytes = read_chunk(reader, chunk_bytes)?;
+                if bytes.is_empty() {
+                    break;
+                }
+                let lines = bytes.iter().filter(|&&b| b == b'\n').count();
+                if work_tx.send((index, line + 1, bytes)).is_err() {
+                    break;
+                }
+                (index, line) = (index + 1, line + lines);
+            }
+            Ok(())
+        });
+        for _ in 0..workers {
+            let (done_tx, work_rx) = (done_tx.clone(), &work_rx);
+            // After an error the chunks still queued are taken and dropped, so that the reader is never left
+            // blocked on a full queue.
+            scope.spawn(move || {
+                while let Some((index, first, bytes)) = work_rx.lock().ok().and_then(|rx| rx.recv().ok()) {
+                    if !stop.load(Ordering::Relaxed) {
+                        let _ = done_tx.send((index, parse_chunk(&bytes, first, columns, source, path)));
+                    }
+                }
+            });
         }
-        let cells: Vec<&str> = line.split(',').map(str::trim).collect();
-        if cells.len() != names.len() {
-            return Err(bad(n, format!("{} cells, the column line has {}", cells.len(), names.len())));
+        drop(done_tx);
+        let joined = join_chunks(done_rx, source);
+        if joined.is_err() {
+            stop.store(true, Ordering::Relaxed);
         }
-        let num = |col: usize| -> Result<f64, InputError> {
-            parse_finite(cells[col])
-                .ok_or_else(|| bad(n, format!("column '{}': '{}' is not a finite number", names[col], cells[col])))
-        };
-        let t_s = num(index[0])?;
-        if let Some(prev) = previous_t {
-            if t_s <= prev {
-                return Err(bad(n, format!("time {t_s} s does not increase (previous row: {prev} s)")));
+        (joined, producer.join())
+    });
+    let rows = joined?;
+    match read {
+        Ok(Ok(())) => Ok(rows),
+        Ok(Err(e)) => Err(InputError::io(path, e)),
+        Err(panic) => std::panic::resume_unwind(panic),
+    }
+}
+
+/// The chunks' rows in file order, with the time check across chunks; the first error in file order.
+fn join_chunks(done: mpsc::Receiver<(usize, ChunkRows)>, source: &str) -> Result<Vec<Row>, InputError> {
+    let mut pending = std::collections::BTreeMap::new();
+    let (mut next, mut rows, mut previous_t) = (0, Vec::<Row>::new(), None);
+    for (index, chunk) in done {
+        pending.insert(index, chunk);
+        while let Some(chunk) = pending.remove(&next) {
+            next += 1;
+            if let (Some((n, t_s)), Some(prev)) = (chunk.first_t, previous_t) {
+                if t_s <= prev {
+                    return Err(time_does_not_increase(source, n, t_s, prev));
+                }
+            }
+            if let Some(e) = chunk.error {
+                return Err(e);
+            }
+            previous_t = chunk.rows.last().map(|r| r.t_s).or(previous_t);
+            rows.extend(chunk.rows);
+        }
+    }
+    Ok(rows)
+}
+
+/// A line without its end: `\n`, then any `\r` (LF or CRLF files).
+fn strip_line_end(line: &str) -> &str {
+    line.strip_suffix('\n').unwrap_or(line).trim_end_matches('\r')
+}
+
+/// The cells of a data row that the reader uses, by slot: the eight of [`Columns::index`], then the gyros,
+/// then `temp_c`.
+const SLOTS: usize = 12;
+/// Slot of `temp_c`.
+const TEMP_SLOT: usize = 11;
+
+/// Reads the data rows after the column line, one line at a time, without allocating per line.
+struct RowParser<'c> {
+    columns: &'c Columns<'c>,
+    source: &'c str,
+    /// Per column of the file: its slot, if the reader uses it.
+    slot_of: Vec<Option<usize>>,
+    /// Per slot: its column of the file.
+    column_of: [usize; SLOTS],
+    previous_t: Option<f64>,
+    /// The line and time of the first row (whose time is not checked against an earlier one).
+    first_t: Option<(usize, f64)>,
+    rows: Vec<Row>,
+}
+
+impl<'c> RowParser<'c> {
+    fn new(columns: &'c Columns<'c>, source: &'c str) -> RowParser<'c> {
+        let mut slot_of = vec![None; columns.names.len()];
+        let mut column_of = [0; SLOTS];
+        let used = columns
+            .index
+            .iter()
+            .copied()
+            .map(Some)
+            .chain(columns.gyro.map_or([None; 3], |g| g.map(Some)))
+            .chain([columns.temp]);
+        for (slot, column) in used.enumerate() {
+            if let Some(c) = column {
+                slot_of[c] = Some(slot);
+                column_of[slot] = c;
             }
         }
-        previous_t = Some(t_s);
-        let pos_cell = cells[index[1]];
-        let pos: u32 = pos_cell
-            .parse()
-            .map_err(|_| bad(n, format!("column 'pos': '{pos_cell}' is not a non-negative integer")))?;
-        let heading_deg = if cells[index[4]].is_empty() { None } else { Some(num(index[4])?) };
-        let pitch_deg = num(index[2])?;
-        let roll_deg = num(index[3])?;
-        let rate_b_radps = match columns.gyro {
-            Some([x, y, z]) => [num(x)?, num(y)?, num(z)?],
+        RowParser { columns, source, slot_of, column_of, previous_t: None, first_t: None, rows: Vec::new() }
+    }
+
+    /// Line `n` of the file (its end removed): a data row, or a blank or `#` line (skipped).
+    fn line(&mut self, n: usize, line: &str) -> Result<(), InputError> {
+        if line.trim().is_empty() || line.starts_with('#') {
+            return Ok(());
+        }
+        let bad = |reason: String| InputError::at(self.source, n, reason);
+        let names = &self.columns.names;
+        let mut cells = [""; SLOTS];
+        let mut count = 0;
+        for cell in line.split(',') {
+            if let Some(&Some(slot)) = self.slot_of.get(count) {
+                cells[slot] = cell.trim();
+            }
+            count += 1;
+        }
+        if count != names.len() {
+            return Err(bad(format!("{count} cells, the column line has {}", names.len())));
+        }
+        let num = |slot: usize| -> Result<f64, InputError> {
+            parse_finite(cells[slot]).ok_or_else(|| {
+                bad(format!("column '{}': '{}' is not a finite number", names[self.column_of[slot]], cells[slot]))
+            })
+        };
+        let t_s = num(0)?;
+        match self.previous_t {
+            Some(prev) if t_s <= prev => return Err(time_does_not_increase(self.source, n, t_s, prev)),
+            Some(_) => {}
+            None => self.first_t = Some((n, t_s)),
+        }
+        self.previous_t = Some(t_s);
+        let pos: u32 =
+            cells[1].parse().map_err(|_| bad(format!("column 'pos': '{}' is not a non-negative integer", cells[1])))?;
+        let heading_deg = if cells[4].is_empty() { None } else { Some(num(4)?) };
+        let pitch_deg = num(2)?;
+        let roll_deg = num(3)?;
+        let rate_b_radps = match self.columns.gyro {
+            Some(_) => [num(8)?, num(9)?, num(10)?],
             None => [0.0; 3],
         };
-        let temp_c = match columns.temp {
-            Some(i) if !cells[i].is_empty() => Some(num(i)?),
+        let temp_c = match self.columns.temp {
+            Some(_) if !cells[TEMP_SLOT].is_empty() => Some(num(TEMP_SLOT)?),
             _ => None,
         };
-        rows.push(Row {
+        self.rows.push(Row {
             t_s,
             pos,
             pitch_deg,
             roll_deg,
             heading_deg,
             rate_b_radps,
-            force_b_mps2: [num(index[5])?, num(index[6])?, num(index[7])?],
+            force_b_mps2: [num(5)?, num(6)?, num(7)?],
             temp_c,
             line: n,
         });
+        Ok(())
     }
-    Ok(rows)
 }
 
 #[cfg(test)]
@@ -567,6 +782,32 @@ mod tests {
             r.rows.iter().map(|x| x.force_b_mps2).collect::<Vec<_>>()
         );
         assert_eq!(again.rows[0].rate_b_radps, r.rows[0].rate_b_radps);
+    }
+
+    #[test]
+    fn reading_a_file_in_chunks_gives_what_parsing_its_text_gives() {
+        let mut good = GOOD.to_string();
+        for k in 2..40 {
+            good.push_str(&format!("{},1,0,0,0,{k}e-6,0,0,0,0,9.8\r\n\n# note\n", 0.01 * k as f64));
+        }
+        let texts = [
+            good.clone(),
+            good.replace("0.15,1,", "0.05,1,"),
+            good.replace("0.2,1,0,0,0,20e-6", "0.2,1,0,0,0,x"),
+            good.replace("0.3,1,0,0,0,30e-6,0,0,", "0.3,1,0,0,0,30e-6,0,"),
+            good.replace("0.25,1,", "0.25,y,").replace("0.36,1,", "0.01,1,"),
+        ];
+        let dir = tempfile::tempdir().unwrap();
+        let path = dir.path().join("r.csv");
+        for text in texts {
+            std::fs::write(&path, &text).unwrap();
+            let source = path.display().to_string();
+            let parsed = Recording::parse(&text, &source).map_err(|e| e.to_string());
+            for chunk_bytes in [1, 7, 40, 64, 100, 333, 1 << 20] {
+                let read = Recording::read_in_chunks(&path, chunk_bytes).map_err(|e| e.to_string());
+                assert_eq!(read, parsed, "chunks of {chunk_bytes} bytes");
+            }
+        }
     }
 
     #[test]

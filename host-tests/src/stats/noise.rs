@@ -419,55 +419,79 @@ pub fn fit_noise_terms(points: &[AllanPoint]) -> Result<NoiseFit, NoiseError> {
 
 /// In-place iterative radix-2 decimation-in-time FFT, X_k = sum_n x_n exp(-2 pi i k n / L), of the
 /// complex sequence (`re`, `im`) of length L, a power of two (L = 1 is the identity). Twiddle factors are
-/// computed directly (not by recurrence), so the error grows as log2 L.
+/// computed directly (not by recurrence), so the error grows as log2 L. For many transforms of one length,
+/// [`FftPlan`] computes the twiddle factors once (the same numbers).
 ///
 /// Errors: lengths that differ, or that are not a power of two.
 pub fn fft_in_place(re: &mut [f64], im: &mut [f64]) -> Result<(), NoiseError> {
-    let n = re.len();
-    if im.len() != n {
+    if im.len() != re.len() {
         return Err(NoiseError::Invalid("FFT: real and imaginary parts of different lengths"));
     }
-    if !n.is_power_of_two() {
-        return Err(NoiseError::Invalid("FFT: length not a power of two"));
-    }
-    // Bit-reversal permutation.
-    let mut j = 0usize;
-    for i in 1..n {
-        let mut bit = n >> 1;
-        while j & bit != 0 {
-            j ^= bit;
-            bit >>= 1;
+    FftPlan::new(re.len())?.run(re, im)
+}
+
+/// The radix-2 FFT of [`fft_in_place`] for one length, with its twiddle factors.
+#[derive(Debug, Clone)]
+pub struct FftPlan {
+    /// exp(-2 pi i k / L), k = 0..L/2, as (cos, sin).
+    twiddles: Vec<(f64, f64)>,
+    len: usize,
+}
+
+impl FftPlan {
+    /// The plan for length `len`. Errors: a length that is not a power of two.
+    pub fn new(len: usize) -> Result<FftPlan, NoiseError> {
+        if !len.is_power_of_two() {
+            return Err(NoiseError::Invalid("FFT: length not a power of two"));
         }
-        j |= bit;
-        if i < j {
-            re.swap(i, j);
-            im.swap(i, j);
-        }
+        let twiddles = (0..len / 2)
+            .map(|k| {
+                let (s, c) = (-2.0 * PI * k as f64 / len as f64).sin_cos();
+                (c, s)
+            })
+            .collect();
+        Ok(FftPlan { twiddles, len })
     }
-    let twiddles: Vec<(f64, f64)> = (0..n / 2)
-        .map(|k| {
-            let (s, c) = (-2.0 * PI * k as f64 / n as f64).sin_cos();
-            (c, s)
-        })
-        .collect();
-    let mut len = 2;
-    while len <= n {
-        let (half, stride) = (len / 2, n / len);
-        for start in (0..n).step_by(len) {
-            for k in 0..half {
-                let (wr, wi) = twiddles[k * stride];
-                let (a, b) = (start + k, start + k + half);
-                let tr = re[b] * wr - im[b] * wi;
-                let ti = re[b] * wi + im[b] * wr;
-                re[b] = re[a] - tr;
-                im[b] = im[a] - ti;
-                re[a] += tr;
-                im[a] += ti;
+
+    /// The transform of (`re`, `im`) in place, as [`fft_in_place`]. Errors: lengths other than the plan's.
+    pub fn run(&self, re: &mut [f64], im: &mut [f64]) -> Result<(), NoiseError> {
+        let n = self.len;
+        if re.len() != n || im.len() != n {
+            return Err(NoiseError::Invalid("FFT: data length differs from the plan's"));
+        }
+        // Bit-reversal permutation.
+        let mut j = 0usize;
+        for i in 1..n {
+            let mut bit = n >> 1;
+            while j & bit != 0 {
+                j ^= bit;
+                bit >>= 1;
+            }
+            j |= bit;
+            if i < j {
+                re.swap(i, j);
+                im.swap(i, j);
             }
         }
-        len <<= 1;
+        let mut len = 2;
+        while len <= n {
+            let (half, stride) = (len / 2, n / len);
+            for start in (0..n).step_by(len) {
+                for k in 0..half {
+                    let (wr, wi) = self.twiddles[k * stride];
+                    let (a, b) = (start + k, start + k + half);
+                    let tr = re[b] * wr - im[b] * wi;
+                    let ti = re[b] * wi + im[b] * wr;
+                    re[b] = re[a] - tr;
+                    im[b] = im[a] - ti;
+                    re[a] += tr;
+                    im[a] += ti;
+                }
+            }
+            len <<= 1;
+        }
+        Ok(())
     }
-    Ok(())
 }
 
 /// A one-sided power spectral density.
@@ -534,6 +558,7 @@ pub fn welch_psd(samples: &[f64], rate_hz: f64, segment_len: usize) -> Result<Ps
     let bins = l / 2 + 1;
     let mut acc = vec![0.0; bins];
     let (mut re, mut im) = (vec![0.0; l], vec![0.0; l]);
+    let plan = FftPlan::new(l)?;
     for s in 0..segments {
         let seg = &samples[s * hop..s * hop + l];
         let mean = compensated_sum(seg.iter().copied()) / l as f64;
@@ -541,7 +566,7 @@ pub fn welch_psd(samples: &[f64], rate_hz: f64, segment_len: usize) -> Result<Ps
             re[i] = (seg[i] - mean) * window[i];
             im[i] = 0.0;
         }
-        fft_in_place(&mut re, &mut im)?;
+        plan.run(&mut re, &mut im)?;
         for k in 0..bins {
             acc[k] += re[k] * re[k] + im[k] * im[k];
         }
@@ -840,6 +865,13 @@ impl Quantization {
     }
 }
 
+/// The consecutive pairs `(x_i, x_{i+1})` of the concatenation of `parts`.
+pub fn joined_pairs<'a>(parts: &'a [&'a [f64]]) -> impl Iterator<Item = (f64, f64)> + 'a {
+    let mut values = parts.iter().flat_map(|p| p.iter().copied());
+    let first = values.next();
+    values.scan(first, |previous, v| previous.replace(v).map(|p| (p, v)))
+}
+
 /// Tolerance, in steps, for a difference to count as an integer multiple of the step.
 pub const GRID_TOLERANCE: f64 = 0.05;
 /// Fraction of on-grid differences above which data are called quantized.
@@ -860,15 +892,22 @@ const MAX_DIVISOR: usize = 8;
 ///
 /// Errors: fewer than 8 non-zero differences (e.g. constant, empty or non-finite data).
 pub fn detect_quantization(samples: &[f64]) -> Result<Quantization, NoiseError> {
+    detect_quantization_joined(&[samples])
+}
+
+/// [`detect_quantization`] of the concatenation of `parts`, without copying them (the difference across each
+/// join counts, as in the concatenated samples).
+pub fn detect_quantization_joined(parts: &[&[f64]]) -> Result<Quantization, NoiseError> {
     const MIN_DIFFS: usize = 8;
-    let scale = samples.iter().filter(|v| v.is_finite()).fold(0.0f64, |m, v| m.max(v.abs()));
+    let scale = parts.iter().flat_map(|p| p.iter()).filter(|v| v.is_finite()).fold(0.0f64, |m, v| m.max(v.abs()));
     let zero = 1e-12 * scale;
     let mut d: Vec<f64> =
-        samples.windows(2).map(|w| (w[1] - w[0]).abs()).filter(|v| v.is_finite() && *v > zero).collect();
+        joined_pairs(parts).map(|(a, b)| (b - a).abs()).filter(|v| v.is_finite() && *v > zero).collect();
     if d.len() < MIN_DIFFS {
         return Err(NoiseError::TooShort { what: "non-zero sample differences", needed: MIN_DIFFS, got: d.len() });
     }
-    d.sort_by(f64::total_cmp);
+    // Values equal under total_cmp are the same bits: the unstable sort gives the stable one's order.
+    d.sort_unstable_by(f64::total_cmp);
     let min_count = (d.len() / 1000).max(2);
     let mut base = d[0];
     let mut i = 0;
