@@ -29,7 +29,7 @@
 //!    - quantisation: the fraction of sample differences on a lattice
 //!      ([`crate::stats::noise::detect_quantization`]), against the fraction continuous data give, as a
 //!      binomial likelihood ratio.
-//! 5. `result`: the effects found, ranked by consequence, the base model, the verdict and the criterion in words
+//! 5. `result`: the effects found, ranked, the base model, the verdict and the criterion in words
 //!    make the [`Analysis`]; `summary` ([`summary()`]) is its human text, [`crate::io::analysis_report`] its
 //!    report directory.
 //!
@@ -42,8 +42,9 @@
 //! whose estimate correlates beyond [`ALIAS_CORRELATION`] with a chosen one's is named as that one's alias;
 //! a time term that only the differences between poses support carries "pose order" as an alias
 //! (docs/analysis.md#plausibility, #confounding). Candidates that the base model explains completely (a zero
-//! or dependent column) are `unobservable`. Effects are ranked by consequence: the error that leaving them
-//! out induces in the biases, in standard errors (docs/analysis.md#verdict).
+//! or dependent column) are `unobservable`. Column effects carry their consequence, the error that leaving
+//! them out induces in the biases, in standard errors; they rank before the noise effects
+//! (docs/analysis.md#verdict).
 //!
 //! # Angles files ([`analyze_angles`], `angles`)
 //! The observations are the per-position angles (docs/formats.md#angles); the base model is the six biases
@@ -272,7 +273,7 @@ pub struct Analysis {
     pub input: String,
     /// The base model.
     pub base_model: BaseModel,
-    /// Effects found, ranked by consequence.
+    /// Effects found, ranked (docs/analysis.md#verdict).
     pub effects: Vec<Effect>,
     /// Catalogue entries this data set cannot see.
     pub unobservable: Vec<String>,

@@ -1,5 +1,5 @@
 //! The [`Analysis`] assembled from a front end's selection and findings: the effects chosen as public
-//! [`Effect`]s, ranked by consequence, the base model, the verdict, the criterion in words and the residuals of the
+//! [`Effect`]s, ranked, the base model, the verdict, the criterion in words and the residuals of the
 //! report's figure.
 
 use std::collections::BTreeMap;

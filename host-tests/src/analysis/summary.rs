@@ -19,8 +19,9 @@ pub fn summary(a: &Analysis) -> String {
     let _ = writeln!(s, "criterion: {}", a.criterion);
     let _ = writeln!(
         s,
-        "ranking: by consequence, the bias error an effect causes when left out, in standard errors; then the \
-         noise effects by BIC gain"
+        "ranking: the column effects in the order chosen, each with its consequence (how many standard errors \
+         leaving it out moves a bias); then the noise effects by BIC gain; time terms confounded with pose order \
+         last"
     );
     if a.effects.is_empty() {
         let _ = writeln!(s, "verdict: none (the base model is adequate)");

@@ -60,10 +60,10 @@ fn base_model_md(md: &mut String, a: &Analysis) {
     }
 }
 
-/// `summary.md`: the effects found, ranked by consequence, then the misfits and the time terms confounded
+/// `summary.md`: the effects found, ranked (docs/analysis.md#verdict), then the misfits and the time terms confounded
 /// with pose order.
 fn effects_md(md: &mut String, a: &Analysis) {
-    let _ = writeln!(md, "\n## Effects found (ranked by consequence)\n");
+    let _ = writeln!(md, "\n## Effects found (column effects in the order chosen, then noise effects)\n");
     if a.effects.is_empty() {
         let _ = writeln!(md, "None: no candidate passes the criterion.\n");
     } else {
