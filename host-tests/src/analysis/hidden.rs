@@ -70,6 +70,13 @@ pub struct Hidden {
     pub frequency_hz: Option<f64>,
 }
 
+impl Hidden {
+    /// An effect of `sensor` at `axes`, its value and extras not set yet.
+    pub fn new(effect: EffectKind, sensor: Sensor, axes: &str) -> Hidden {
+        Hidden { effect, sensor, axes: axes.to_string(), pos: None, value: 0.0, tau_s: None, frequency_hz: None }
+    }
+}
+
 /// Standard errors of every linear candidate in a clean session, by the analysis's name
 /// ("accel_scale_factor:x", "position_error:e:pos3", ...), and the white-noise standard deviation per
 /// channel (gx..az).
@@ -158,15 +165,7 @@ impl<'a> Draw<'a> {
         let (gyro, ax) = (axes.starts_with('g'), axes.chars().last().map_or(0, axis));
         let sensor = effect.sensor().unwrap_or(if gyro { Sensor::Gyro } else { Sensor::Accel });
         let hidden_axes = if effect.sensor().is_none() { ["x", "y", "z"][ax] } else { axes };
-        let hidden = Hidden {
-            effect,
-            sensor,
-            axes: hidden_axes.to_string(),
-            pos: None,
-            value: 0.0,
-            tau_s: None,
-            frequency_hz: None,
-        };
+        let hidden = Hidden::new(effect, sensor, hidden_axes);
         let noise = if gyro { reference.noise[0] } else { reference.noise[1] };
         Draw { rng, reference, axes, sign, snr, s: clean_scenario(), hidden, gyro, ax, noise }
     }

@@ -434,15 +434,7 @@ pub fn draw(p: &Prepared, effect: EffectKind, seed: u64) -> Result<Planted, Stri
         Some(s) => (s, axes),
         None => (Sensor::of_channel(ch), AXES[ch % 3]),
     };
-    let mut h = Hidden {
-        effect,
-        sensor,
-        axes: hidden_axes.to_string(),
-        pos: None,
-        value: 0.0,
-        tau_s: None,
-        frequency_hz: None,
-    };
+    let mut h = Hidden::new(effect, sensor, hidden_axes);
     if effect == EffectKind::PositionError {
         h.pos = Some(r.positions[rng.random_range(0..r.positions.len())]);
     }
