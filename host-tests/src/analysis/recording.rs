@@ -85,8 +85,7 @@ fn relevel(session: &mut Session) -> [f64; 3] {
             d.c_tilt = crate::model::synth::c_b_n(pitch_deg, roll_deg, 0.0);
         }
         let blocks = Blocks::cut(session);
-        let mut p = problem(session, &blocks, Some(bias));
-        p.candidates.clear();
+        let p = problem_with(session, &blocks, Some(bias), false);
         let base: Vec<&[f64]> = p.base.iter().map(|c| c.as_slice()).collect();
         let Some(fit) = crate::stats::linfit::fit(&p.obs, &base) else { break };
         for (j, name) in p.base_names.iter().enumerate() {
@@ -103,9 +102,16 @@ fn relevel(session: &mut Session) -> [f64; 3] {
 /// the accelerometer rows become one row per block: the force along the gravity direction
 /// ([`along_gravity`]).
 fn problem(session: &Session, blocks: &Blocks, levelled: Option<[f64; 3]>) -> Problem {
+    problem_with(session, blocks, levelled, true)
+}
+
+/// [`problem`], with the catalogue's candidates only when `with_candidates` (the levelling passes need the
+/// base model alone).
+fn problem_with(session: &Session, blocks: &Blocks, levelled: Option<[f64; 3]>, with_candidates: bool) -> Problem {
     let mut unobservable = Vec::new();
     let (base, base_names) = blocks.base_columns(&mut unobservable);
-    let candidates = RecordingColumns::new(session, blocks).candidates(&mut unobservable);
+    let candidates =
+        if with_candidates { RecordingColumns::new(session, blocks).candidates(&mut unobservable) } else { Vec::new() };
     let problem = Problem {
         obs: Observations { y: blocks.y.clone(), group: blocks.group.clone(), groups: 6, sigma: None },
         base,
