@@ -158,7 +158,7 @@ pub const MAX_ACCEL_BIAS_MPS2: f64 = 2.0;
 /// Largest scale factor error and misalignment, 1 (5 %, 2.9 degrees).
 pub const MAX_SCALE_OR_MISALIGNMENT: f64 = 0.05;
 /// Largest gyro g-sensitivity, (rad/s)/(m/s^2) (0.56 (deg/s)/g; MEMS gyros are specified at 0.01 to 0.1).
-pub const MAX_G_SENSITIVITY: f64 = 1e-3;
+pub const MAX_G_SENSITIVITY_RADPS_PER_MPS2: f64 = 1e-3;
 /// Largest level error of a reference attitude, rad (2.9 degrees: a face placed by hand on a cube).
 pub const MAX_LEVEL_ERROR_RAD: f64 = 0.05;
 /// Largest heading error of a reference attitude, rad (29 degrees).
@@ -178,7 +178,7 @@ impl EffectKind {
             | EffectKind::AccelMisalignment
             | EffectKind::GyroScaleFactor
             | EffectKind::GyroMisalignment => Some(MAX_SCALE_OR_MISALIGNMENT),
-            EffectKind::GyroGSensitivity => Some(MAX_G_SENSITIVITY),
+            EffectKind::GyroGSensitivity => Some(MAX_G_SENSITIVITY_RADPS_PER_MPS2),
             EffectKind::BiasDrift => Some(bias / span_s.max(1.0)),
             EffectKind::BiasWarmup => Some(bias),
             EffectKind::TemperatureBias => Some(bias / temperature_span_k.max(1.0)),
