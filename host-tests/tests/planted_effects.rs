@@ -15,8 +15,8 @@ use std::path::Path;
 use std::time::Instant;
 
 use sinscal_host::analysis::planted::{
-    carried, draw, effect_table, false_alarm_table, imutk_constructions, plant, prepare, psins_constructions, trial,
-    Construction, Prepared, Source, Trial, Verdict,
+    carried, constant_pose_stretches, draw, effect_table, false_alarm_table, imutk_constructions, plant, prepare,
+    psins_constructions, trial, Construction, Prepared, Source, Trial, Verdict,
 };
 use sinscal_host::io::import::{import_imutk, import_psins, StaticDetection};
 use sinscal_host::io::recording::{Recording, Row};
@@ -47,8 +47,9 @@ fn value(row: &Row, c: usize) -> f64 {
     }
 }
 
-/// Within every dwell, the construction's sample-to-sample differences are the measured record's: the noise
-/// is kept, and only a constant per dwell (the pose's prediction, the biases, the record's mean) changes.
+/// Within every dwell, the construction's sample-to-sample differences are the measured record's less the
+/// record's own drift over the session: the noise is kept, and only a constant per dwell (the pose's
+/// prediction, the biases, the record's mean) and that drift change.
 fn assert_noise_kept(c: &Construction, record: &Recording) {
     let rows = &c.recording.rows;
     let mut pairs = 0;
@@ -58,7 +59,9 @@ fn assert_noise_kept(c: &Construction, record: &Recording) {
         }
         let (a, b) = (&record.rows[c.source_rows[i - 1]], &record.rows[c.source_rows[i]]);
         for ch in 0..6 {
-            let (measured, built) = (value(b, ch) - value(a, ch), value(&rows[i], ch) - value(&rows[i - 1], ch));
+            let removed = c.drift_removed_si[i][ch] - c.drift_removed_si[i - 1][ch];
+            let (measured, built) =
+                (value(b, ch) - value(a, ch) - removed, value(&rows[i], ch) - value(&rows[i - 1], ch));
             let scale = value(a, ch).abs().max(value(&rows[i], ch).abs()).max(1e-3);
             assert!(
                 (measured - built).abs() <= 1e-12 * scale,
@@ -103,6 +106,13 @@ fn constructions_keep_the_measured_noise_and_carry_planted_effects() {
     let Some(dir) = common::data_dir() else { return };
     let start = Instant::now();
     for (source, record) in records(&dir) {
+        if source == Source::Psins {
+            // The parked vehicle's tilt steps leave two stretches of constant pose long enough for a session:
+            // 540 to 990 s and 1020 to 1530 s (docs/analysis.md#hidden-effects-in-measured-noise).
+            let long: Vec<(usize, usize)> =
+                constant_pose_stretches(&record).into_iter().filter(|(a, b)| b - a >= 39_100).collect();
+            assert_eq!(long, vec![(54_000, 99_000), (102_000, 153_000)]);
+        }
         // PSINS: the last of three start offsets (a session that does not start with the record).
         let c = constructions(source, &record, 3).pop().expect("a construction");
         assert_noise_kept(&c, &record);

@@ -1,15 +1,17 @@
 //! Hidden effects in MEASURED noise (docs/analysis.md#hidden-effects-in-measured-noise): the trials of
 //! [`crate::analysis::hidden`] with the simulated white noise replaced by the noise of a real recording.
 //!
-//! **Construction** ([`Construction`]). One static stretch of a measured record (one real pose: the whole
-//! PSINS record, the first static interval of the imu_tk record) is cut into the dwells of a schedule of
-//! known poses, the paper's Table 1 ([`Layout`]). Every sample becomes its measured value minus the mean of
-//! the session's dwell samples, plus what its pose predicts (the Earth rate and gravity through the pose's
-//! `C_b^n`) plus the clean scenario's constant biases. One constant per channel is removed and one constant
-//! per dwell added: the sample-to-sample values, the dwell-to-dwell wander, and with them the Allan curve,
-//! the correlation and the quantisation lattice of the differences are the measured ones. (Centring each
-//! stretch of a different real pose on its own mean would leave dwell means without noise; the
-//! multi-pose records are therefore used through one static stretch only.)
+//! **Construction** ([`Construction`]). One static stretch of a measured record (one real pose: a stretch of
+//! the PSINS record over which its vehicle does not tilt, [`constant_pose_stretches`]; the first static
+//! interval of the imu_tk record) is cut into the dwells of a schedule of known poses, the paper's Table 1
+//! ([`Layout`]). Every sample becomes its measured value minus the session's own straight line (the
+//! record's slow drift over the session, removed through its quantiser: [`session_drift`]), plus what its
+//! pose predicts (the Earth rate and gravity through the pose's `C_b^n`) plus the clean scenario's constant
+//! biases. One line per channel is removed and one constant per dwell added: the sample-to-sample values,
+//! the dwell-to-dwell wander, and with them the Allan curve, the correlation and the quantisation lattice of
+//! the differences are the measured ones. (Centring each stretch of a different real pose on its own mean
+//! would leave dwell means without noise; the multi-pose records are therefore used through one static
+//! stretch only.)
 //!
 //! **Planting** ([`plant`]). One effect of the catalogue, by the sensor model of docs/conventions.md (the
 //! same as the simulator's): effects constant within a dwell (scale factors, misalignments, g-sensitivity,
@@ -78,6 +80,9 @@ pub struct Construction {
     pub recording: Recording,
     /// Per row of `recording`: the row of the measured record it came from.
     pub source_rows: Vec<usize>,
+    /// Per row of `recording`, per channel (gx..az): the record's own drift over the session removed from it,
+    /// SI ([`session_drift`]).
+    pub drift_removed_si: Vec<[f64; 6]>,
     /// Per channel (gx..az): the measured record's quantisation step, SI, when its samples are quantised.
     pub steps_si: [Option<f64>; 6],
     /// Earth rate in the navigation frame, rad/s.
@@ -155,18 +160,69 @@ fn session(
     Some(construct(record, source, segmentation, &pieces))
 }
 
-/// Sessions of the one-pose PSINS record ([`PSINS_LAYOUT`]) at `count` start times spread evenly from its
-/// start to its end (the sessions overlap when `count` exceeds the record's length over the session's).
+/// Largest change of the horizontal specific force between successive [`TILT_WINDOW_S`] means within one
+/// pose, m/s^2: 2e-3 m/s^2 is a tilt of 0.2 mrad. The parked vehicle of the PSINS record tilts in steps of 1
+/// to 3 mrad (someone moving in or around it; docs/analysis.md#hidden-effects-in-measured-noise): a session
+/// across such a step carries a real attitude change, not noise.
+pub const TILT_STEP_MPS2: f64 = 2e-3;
+
+/// Window of the means that [`TILT_STEP_MPS2`] compares, s.
+pub const TILT_WINDOW_S: f64 = 10.0;
+
+/// The stretches of `record` (row ranges, half-open) over which its pose is constant: maximal runs of
+/// [`TILT_WINDOW_S`] windows whose horizontal accelerometer means (x and y) change by at most
+/// [`TILT_STEP_MPS2`] from one window to the next.
+pub fn constant_pose_stretches(record: &Recording) -> Vec<(usize, usize)> {
+    let rate_hz = record.header.rate_hz.unwrap_or(100.0);
+    let w = ((TILT_WINDOW_S * rate_hz).round() as usize).max(1);
+    let means: Vec<[f64; 2]> = record
+        .rows
+        .chunks_exact(w)
+        .map(|rows| {
+            let m = |c: usize| rows.iter().map(|r| r.force_b_mps2[c]).sum::<f64>() / w as f64;
+            [m(0), m(1)]
+        })
+        .collect();
+    let mut stretches = Vec::new();
+    let mut first = 0;
+    for k in 1..=means.len() {
+        let step = k == means.len() || (0..2).any(|c| (means[k][c] - means[k - 1][c]).abs() > TILT_STEP_MPS2);
+        if step {
+            stretches.push((first * w, k * w));
+            first = k;
+        }
+    }
+    stretches
+}
+
+/// Sessions of the one-pose PSINS record ([`PSINS_LAYOUT`]) at `count` start times spread evenly over the
+/// start times that keep the whole session inside one stretch of constant pose
+/// ([`constant_pose_stretches`]); the sessions overlap when `count` exceeds what those stretches hold.
 pub fn psins_constructions(record: &Recording, count: usize) -> Vec<Construction> {
     let all: Vec<usize> = (0..record.rows.len()).collect();
     let rate_hz = record.header.rate_hz.unwrap_or(100.0);
     let l = PSINS_LAYOUT;
-    let session_rows = (6.0 * (l.dwell_s + l.settle_s) + 5.0 * l.move_s) * rate_hz;
-    let last_start = all.len().saturating_sub(session_rows.round() as usize);
+    let session_rows = ((6.0 * (l.dwell_s + l.settle_s) + 5.0 * l.move_s) * rate_hz).round() as usize;
+    let starts: Vec<(usize, usize)> = constant_pose_stretches(record)
+        .into_iter()
+        .filter(|(a, b)| b - a >= session_rows)
+        .map(|(a, b)| (a, b - session_rows))
+        .collect();
+    let span: usize = starts.iter().map(|(a, b)| b - a).sum();
+    // The k-th of `count` evenly spread points of the concatenated ranges of start rows.
+    let start_at = |mut offset: usize| {
+        for &(a, b) in &starts {
+            if offset <= b - a {
+                return Some(a + offset);
+            }
+            offset -= b - a + 1;
+        }
+        None
+    };
     (0..count)
         .filter_map(|k| {
-            let start = if count > 1 { k * last_start / (count - 1) } else { 0 };
-            session(record, Source::Psins, &all, start, l, 0)
+            let offset = if count > 1 { k * span / (count - 1) } else { 0 };
+            session(record, Source::Psins, &all, start_at(offset)?, l, 0)
         })
         .collect()
 }
@@ -203,6 +259,12 @@ fn construct(record: &Recording, source: Source, segmentation: String, pieces: &
     let dwell_rows = || pieces.iter().filter(|p| p.pos != 0).flat_map(|p| p.rows.iter().copied());
     let session_mean = mean_of(record, dwell_rows());
     let t_start = pieces.iter().find_map(|p| p.rows.first()).map_or(0.0, |&i| record.rows[i].t_s);
+    let steps_si: [Option<f64>; 6] = std::array::from_fn(|c| {
+        let raw: Vec<f64> = dwell_rows().map(|i| channel(&record.rows[i], c)).collect();
+        detect_quantization(&raw).ok().filter(|q| q.quantized).map(|q| q.step)
+    });
+    let all_rows: Vec<usize> = pieces.iter().flat_map(|p| p.rows.iter().copied()).collect();
+    let drift = session_drift(record, &dwell_rows().collect::<Vec<_>>(), &all_rows, &steps_si);
     let (mut rows, mut source_rows) = (Vec::new(), Vec::new());
     for piece in pieces {
         let [pitch, roll, heading] = piece.pose_deg;
@@ -211,7 +273,9 @@ fn construct(record: &Recording, source: Source, segmentation: String, pieces: &
         let predicted: [f64; 6] = std::array::from_fn(|k| if k < 3 { w_b[k] } else { f_b[k - 3] });
         for &i in &piece.rows {
             let r = &record.rows[i];
-            let out: [f64; 6] = std::array::from_fn(|k| channel(r, k) - session_mean[k] + predicted[k] + bias[k]);
+            let removed = drift[rows.len()];
+            let out: [f64; 6] =
+                std::array::from_fn(|k| channel(r, k) - session_mean[k] - removed[k] + predicted[k] + bias[k]);
             rows.push(Row {
                 t_s: r.t_s - t_start,
                 pos: piece.pos,
@@ -226,10 +290,6 @@ fn construct(record: &Recording, source: Source, segmentation: String, pieces: &
             source_rows.push(i);
         }
     }
-    let steps_si = std::array::from_fn(|c| {
-        let raw: Vec<f64> = dwell_rows().map(|i| channel(&record.rows[i], c)).collect();
-        detect_quantization(&raw).ok().filter(|q| q.quantized).map(|q| q.step)
-    });
     let header = Header {
         latitude_deg: record.header.latitude_deg,
         height_m: record.header.height_m,
@@ -248,10 +308,45 @@ fn construct(record: &Recording, source: Source, segmentation: String, pieces: &
         segmentation,
         recording: Recording { source: source_name, header, rows, has_gyro: true },
         source_rows,
+        drift_removed_si: drift,
         steps_si,
         w_n_radps,
         f_n_mps2,
     }
+}
+
+/// The record's own drift over a session, removed from every row of it (`rows`, in order): per channel the
+/// least-squares line of the session's dwell samples (`dwell_rows`) against time, less its value at their
+/// mean time, so that the session mean stays. A quantised channel (`steps_si`) has the line removed through
+/// the quantiser that carries its remainder, so that the channel stays on its lattice. A measured record is
+/// not free of slow effects (the PSINS vehicle's tilt drifts by about 0.5 urad/s on its quiet stretches;
+/// docs/analysis.md#hidden-effects-in-measured-noise): without this the untouched construction carries a
+/// bias drift that the analysis rightly finds.
+fn session_drift(
+    record: &Recording,
+    dwell_rows: &[usize],
+    rows: &[usize],
+    steps_si: &[Option<f64>; 6],
+) -> Vec<[f64; 6]> {
+    let n = dwell_rows.len().max(1) as f64;
+    let t_mean = dwell_rows.iter().map(|&i| record.rows[i].t_s).sum::<f64>() / n;
+    let stt: f64 = dwell_rows.iter().map(|&i| (record.rows[i].t_s - t_mean).powi(2)).sum();
+    let mut removed = vec![[0.0; 6]; rows.len()];
+    for c in 0..6 {
+        let mean = dwell_rows.iter().map(|&i| channel(&record.rows[i], c)).sum::<f64>() / n;
+        let sty: f64 =
+            dwell_rows.iter().map(|&i| (record.rows[i].t_s - t_mean) * (channel(&record.rows[i], c) - mean)).sum();
+        let slope = if stt > 0.0 { sty / stt } else { 0.0 };
+        let line: Vec<f64> = rows.iter().map(|&i| slope * (record.rows[i].t_s - t_mean)).collect();
+        let line = match steps_si[c] {
+            Some(q) => carry_quantised(&line, q),
+            None => line,
+        };
+        for (r, v) in removed.iter_mut().zip(line) {
+            r[c] = v;
+        }
+    }
+    removed
 }
 
 /// The blocks of a dwell of `n` samples, as the analysis cuts them (docs/analysis.md#observations).
@@ -814,4 +909,72 @@ pub fn false_alarm_table(prepared: &[&Prepared]) -> String {
         ));
     }
     out
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// A static record at 100 Hz, `n` rows, accelerometer x as `ax(i)`, the rest constant.
+    fn record(n: usize, ax: impl Fn(usize) -> f64) -> Recording {
+        let header = Header {
+            latitude_deg: 45.0,
+            height_m: 0.0,
+            rate_hz: Some(100.0),
+            gravity_mps2: Some(9.8),
+            comments: Vec::new(),
+            truth: None,
+        };
+        let rows = (0..n)
+            .map(|i| Row {
+                t_s: i as f64 * 0.01,
+                pos: 1,
+                pitch_deg: 0.0,
+                roll_deg: 0.0,
+                heading_deg: Some(0.0),
+                rate_b_radps: [0.0; 3],
+                force_b_mps2: [ax(i), 0.0, 9.8],
+                temp_c: None,
+                line: i + 2,
+            })
+            .collect();
+        Recording { source: "synthetic".into(), header, rows, has_gyro: true }
+    }
+
+    #[test]
+    fn a_tilt_step_splits_the_record_into_constant_pose_stretches() {
+        // A tilt of 0.5 mrad (4.9e-3 m/s^2 on accelerometer x) at 100 s; a ramp below the threshold after it.
+        let rec = record(30_000, |i| if i < 10_000 { 0.0 } else { 4.9e-3 + 1e-8 * i as f64 });
+        assert_eq!(constant_pose_stretches(&rec), vec![(0, 10_000), (10_000, 30_000)]);
+        // The step exactly at the threshold does not split; just beyond it does.
+        let at = record(4_000, |i| if i < 2_000 { 0.0 } else { TILT_STEP_MPS2 * 0.999 });
+        assert_eq!(constant_pose_stretches(&at), vec![(0, 4_000)]);
+        let beyond = record(4_000, |i| if i < 2_000 { 0.0 } else { TILT_STEP_MPS2 * 1.001 });
+        assert_eq!(constant_pose_stretches(&beyond), vec![(0, 2_000), (2_000, 4_000)]);
+    }
+
+    #[test]
+    fn the_session_drift_is_removed_and_a_quantised_channel_stays_on_its_lattice() {
+        // Accelerometer x: a drift of 1e-4 (m/s^2)/s on a lattice of 0.1 m/s^2 (the counts carried).
+        let q = 0.1;
+        let clean: Vec<f64> = (0..2_000).map(|i| 1e-4 * i as f64 * 0.01).collect();
+        let on_lattice = carry_quantised(&clean, q);
+        let rec = record(2_000, |i| on_lattice[i] + 3.0 * q);
+        let rows: Vec<usize> = (0..2_000).collect();
+        let steps = [None, None, None, Some(q), None, None];
+        let removed = session_drift(&rec, &rows, &rows, &steps);
+        let left: Vec<f64> = rows.iter().map(|&i| rec.rows[i].force_b_mps2[0] - removed[i][3]).collect();
+        for v in &left {
+            assert!(((v / q) - (v / q).round()).abs() < 1e-9, "{v} is off the lattice");
+        }
+        // What is left has no drift: its least-squares slope is below 2 % of the one removed (the lattice's
+        // rounding is all that remains).
+        let n = left.len() as f64;
+        let (tm, ym) = (rows.iter().map(|&i| rec.rows[i].t_s).sum::<f64>() / n, left.iter().sum::<f64>() / n);
+        let sxy: f64 = rows.iter().map(|&i| (rec.rows[i].t_s - tm) * (left[i] - ym)).sum();
+        let sxx: f64 = rows.iter().map(|&i| (rec.rows[i].t_s - tm).powi(2)).sum();
+        assert!((sxy / sxx).abs() < 2e-6, "slope left {:e}", sxy / sxx);
+        // An unquantised channel (accelerometer z) with no drift is left alone.
+        assert!(removed.iter().all(|r| r[5].abs() < 1e-15));
+    }
 }
