@@ -18,6 +18,9 @@ pub(super) struct GaussMarkovResult {
     pub rms_white: f64,
     /// RMS of the filter's innovations.
     pub rms_innovation: f64,
+    /// The time constant sits at an end of its search range (within 1 %): not determined by the data (a
+    /// process faster than two samples, or slower than a quarter of the shortest dwell).
+    pub tau_at_edge: bool,
 }
 
 /// Concentrated restricted log-likelihood of AR(1) (stationary variance `q`, coefficient `phi`) plus unit
@@ -307,7 +310,9 @@ impl Profile {
                 break;
             }
             let centre = [(simplex[0].0[0] + simplex[1].0[0]) / 2.0, (simplex[0].0[1] + simplex[1].0[1]) / 2.0];
-            let towards = |t: f64| clamp([centre[0] + t * (simplex[2].0[0] - centre[0]), centre[1] + t * (simplex[2].0[1] - centre[1])]);
+            let towards = |t: f64| {
+                clamp([centre[0] + t * (simplex[2].0[0] - centre[0]), centre[1] + t * (simplex[2].0[1] - centre[1])])
+            };
             let reflected = towards(-1.0);
             let r = value(reflected);
             if r > simplex[0].1 {
@@ -379,6 +384,7 @@ pub(super) fn gauss_markov_test(mut dwells: Vec<Vec<f64>>, dt: f64) -> Option<Ga
         lr,
         rms_white: s2.sqrt(),
         rms_innovation: e2.sqrt() * scale,
+        tau_at_edge: (lt - profile.tau.0).abs() < 0.01 || (lt - profile.tau.1).abs() < 0.01,
     })
 }
 

@@ -198,6 +198,16 @@ pub struct Confounded {
 }
 
 impl Effect {
+    /// The standard error as printed: "exact" for 0 (a quantisation step on which every difference lies),
+    /// otherwise three significant digits.
+    pub fn std_error_text(&self) -> String {
+        if self.std_error == 0.0 {
+            "exact".to_string()
+        } else {
+            format!("{:.2e}", self.std_error)
+        }
+    }
+
     /// The extra fields in words: "pos 3", "tau 1.234 s", "f 7.3000 Hz" (comma-separated, empty if none).
     pub fn extras(&self) -> String {
         let mut parts = Vec::new();
@@ -315,8 +325,8 @@ pub struct FigureData {
     pub correlated: Vec<Option<(f64, f64)>>,
     /// Per channel: quantisation step found, if any.
     pub quantization: Vec<Option<f64>>,
-    /// Per channel: vibration (amplitude as seen, frequency) found, if any.
-    pub vibration: Vec<Option<(f64, f64)>>,
+    /// Per channel: the vibration lines found (amplitude as seen, frequency), strongest first.
+    pub vibration: Vec<Vec<(f64, f64)>>,
     /// Per observation group (channel or angle): (position label, base residual, final residual) of each
     /// observation.
     pub residuals: Vec<Vec<(u32, f64, f64)>>,

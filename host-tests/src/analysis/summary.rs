@@ -63,12 +63,12 @@ pub fn summary(a: &Analysis) -> String {
 fn effect_line(s: &mut String, e: &Effect) {
     let _ = write!(
         s,
-        "  {:<20} {:<9} {:<4} estimate {:+.4e} +- {:.2e} {}  delta BIC {:.1}  residual RMS {:.3e} -> {:.3e} {} ({})",
+        "  {:<20} {:<9} {:<4} estimate {:+.4e} +- {} {}  delta BIC {:.1}  residual RMS {:.3e} -> {:.3e} {} ({})",
         e.effect,
         e.sensor,
         e.axes,
         e.estimate,
-        e.std_error,
+        e.std_error_text(),
         e.unit,
         e.delta_bic,
         e.residual_rms_before,

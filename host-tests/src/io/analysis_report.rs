@@ -77,12 +77,12 @@ fn effects_md(md: &mut String, a: &Analysis) {
         let extras = if e.at_grid_edge { format!("{} (tau at its grid edge)", e.extras()) } else { e.extras() };
         let _ = writeln!(
             md,
-            "| {} | {} | {} | {:+.4e} | {:.2e} | {} | {} | {:.1} | {:.3e} -> {:.3e} {} ({}) | {} | {} |",
+            "| {} | {} | {} | {:+.4e} | {} | {} | {} | {:.1} | {:.3e} -> {:.3e} {} ({}) | {} | {} |",
             e.effect,
             e.sensor,
             e.axes,
             e.estimate,
-            e.std_error,
+            e.std_error_text(),
             e.unit,
             moves,
             e.delta_bic,
@@ -527,7 +527,7 @@ fn psd_panel(area: &Area, a: &Analysis, c: usize, samples: &[f64]) -> anyhow::Re
         .map_err(|x| e(&x))?
         .label(format!("white level of the base model (N = {} {n_unit})", sig(n_white / n_per)))
         .legend(legend_line(RED, 2));
-    if let Some((amp, f)) = a.figures.vibration[c] {
+    for &(amp, f) in &a.figures.vibration[c] {
         chart
             .draw_series(LineSeries::new([(f, lo), (f, hi)], BLUE.stroke_width(2)))
             .map_err(|x| e(&x))?
