@@ -370,24 +370,13 @@ fn allan_panel(area: &Area, model: &NoiseModel, samples: &[f64], rate_hz: f64) -
         let mid = (hi * lo).sqrt();
         (lo, hi) = (mid / 3.2, mid * 3.2);
     }
-    let mut chart = ChartBuilder::on(area)
-        .caption(panel_caption(model), ("sans-serif", 17))
-        .margin(10)
-        .x_label_area_size(40)
-        .y_label_area_size(80)
-        .build_cartesian_2d(
-            (t0..t1).log_scale().with_key_points(log_ticks(t0, t1)),
-            (lo..hi).log_scale().with_key_points(log_ticks(lo, hi)),
-        )
-        .map_err(|x| e(&x))?;
-    chart
-        .configure_mesh()
-        .x_label_formatter(&|v| tick_label(*v))
-        .y_label_formatter(&|v| tick_label(*v))
-        .x_desc("averaging time tau [s]")
-        .y_desc(format!("Allan deviation [{unit}]"))
-        .draw()
-        .map_err(|x| e(&x))?;
+    let axes = LogAxes {
+        x: (t0, t1),
+        y: (lo, hi),
+        x_desc: "averaging time tau [s]".into(),
+        y_desc: format!("Allan deviation [{unit}]"),
+    };
+    let mut chart = log_log_chart(area, &panel_caption(model), &axes)?;
     let taus: Vec<f64> = (0..=120).map(|i| t0 * (t1 / t0).powf(i as f64 / 120.0)).collect();
     let clip = |v: f64| (v / per >= lo && v / per <= hi).then_some(v / per);
     for term in &model.terms {
@@ -431,6 +420,42 @@ fn allan_panel(area: &Area, model: &NoiseModel, samples: &[f64], rate_hz: f64) -
 
 type LogChart<'a, 'b> =
     ChartContext<'a, BitMapBackend<'b>, Cartesian2d<WithKeyPoints<LogCoord<f64>>, WithKeyPoints<LogCoord<f64>>>>;
+
+/// The ranges and descriptions of a log-log panel.
+struct LogAxes {
+    /// x range (both positive).
+    x: (f64, f64),
+    /// y range (both positive).
+    y: (f64, f64),
+    x_desc: String,
+    y_desc: String,
+}
+
+/// A log-log panel of `area` with its caption, ticks at the decades (labels readable: `tick_label`) and axis
+/// descriptions.
+fn log_log_chart<'a, 'b>(area: &'a Area<'b>, caption: &str, axes: &LogAxes) -> anyhow::Result<LogChart<'a, 'b>> {
+    let e = |e: &dyn std::fmt::Display| anyhow::anyhow!("{e}");
+    let ((x0, x1), (y0, y1)) = (axes.x, axes.y);
+    let mut chart = ChartBuilder::on(area)
+        .caption(caption, ("sans-serif", 17))
+        .margin(10)
+        .x_label_area_size(40)
+        .y_label_area_size(80)
+        .build_cartesian_2d(
+            (x0..x1).log_scale().with_key_points(log_ticks(x0, x1)),
+            (y0..y1).log_scale().with_key_points(log_ticks(y0, y1)),
+        )
+        .map_err(|x| e(&x))?;
+    chart
+        .configure_mesh()
+        .x_label_formatter(&|v| tick_label(*v))
+        .y_label_formatter(&|v| tick_label(*v))
+        .x_desc(axes.x_desc.as_str())
+        .y_desc(axes.y_desc.as_str())
+        .draw()
+        .map_err(|x| e(&x))?;
+    Ok(chart)
+}
 
 /// The measured Allan deviation: the dense curve (thin) and the fitted octave points with 1-sigma bars.
 fn allan_data(chart: &mut LogChart, dense: &[(f64, f64)], fit: &[FitPoint], per: f64) -> anyhow::Result<()> {
@@ -497,24 +522,9 @@ fn psd_panel(area: &Area, a: &Analysis, c: usize, samples: &[f64]) -> anyhow::Re
     let lo = pts.iter().map(|p| p.1).fold(f64::INFINITY, f64::min).min(white) * 0.5;
     let hi = pts.iter().map(|p| p.1).fold(0.0, f64::max).max(white) * 2.0;
     let (f0, f1) = (pts[0].0, pts[pts.len() - 1].0);
-    let mut chart = ChartBuilder::on(area)
-        .caption(short_name(CHANNELS[c]), ("sans-serif", 17))
-        .margin(10)
-        .x_label_area_size(40)
-        .y_label_area_size(80)
-        .build_cartesian_2d(
-            (f0..f1).log_scale().with_key_points(log_ticks(f0, f1)),
-            (lo..hi).log_scale().with_key_points(log_ticks(lo, hi)),
-        )
-        .map_err(|x| e(&x))?;
-    chart
-        .configure_mesh()
-        .x_label_formatter(&|v| tick_label(*v))
-        .y_label_formatter(&|v| tick_label(*v))
-        .x_desc("frequency [Hz]")
-        .y_desc(format!("PSD [({unit})^2/Hz]"))
-        .draw()
-        .map_err(|x| e(&x))?;
+    let axes =
+        LogAxes { x: (f0, f1), y: (lo, hi), x_desc: "frequency [Hz]".into(), y_desc: format!("PSD [({unit})^2/Hz]") };
+    let mut chart = log_log_chart(area, short_name(CHANNELS[c]), &axes)?;
     chart
         .draw_series(LineSeries::new(pts.iter().copied(), BLACK.stroke_width(1)))
         .map_err(|x| e(&x))?
