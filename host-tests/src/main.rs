@@ -64,6 +64,12 @@ fn main() -> ExitCode {
     };
     match result {
         Ok(()) => ExitCode::SUCCESS,
+        // The reader of standard output closed it (`sinscal ... | head`): it wanted no more.
+        Err(e)
+            if e.downcast_ref::<cmd::StdoutError>().is_some_and(|o| o.0.kind() == std::io::ErrorKind::BrokenPipe) =>
+        {
+            ExitCode::SUCCESS
+        }
         Err(e) => {
             // Bad input and failures: one line on stderr, exit 1 (usage errors exit 2 through clap).
             let chain: Vec<String> = e.chain().map(|c| c.to_string()).collect();

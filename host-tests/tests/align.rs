@@ -267,7 +267,7 @@ fn short_dwells_and_bad_files_are_refused() {
         })
         .collect();
     let path = dir.path().join("short.csv");
-    std::fs::write(&path, short.join("\n")).unwrap();
+    std::fs::write(&path, short.join("\n") + "\n").unwrap();
     let e = stderr_of_failure(&path);
     assert!(e.contains("short.csv:") && e.contains("dwell 2: 5 rows, align needs at least 10"), "{e}");
     // Bad recordings are refused by the reader with the line and the reason.

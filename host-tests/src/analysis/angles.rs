@@ -175,19 +175,35 @@ impl Cells<'_> {
             return Err(InputError::at(self.source, self.n, format!("pos {pos} is not a positive integer")));
         }
         let stds = [self.get("phi_e_std_rad")?, self.get("phi_n_std_rad")?, self.get("phi_u_std_rad")?];
+        // An angle of the alignment is a small misalignment: beyond a radian (or a standard deviation beyond
+        // one) it is not a measurement, and its square overflows the fit's sums.
+        let angle = |x: f64| x.abs() <= MAX_ANGLE_RAD;
         let phi_std_rad = match stds {
-            [Some(a), Some(b), Some(c)] if a > 0.0 && b > 0.0 && c > 0.0 => Some([a, b, c]),
+            [Some(a), Some(b), Some(c)] if [a, b, c].iter().all(|&s| s > 0.0 && angle(s)) => Some([a, b, c]),
             [None, None, None] => None,
-            _ => return Err(InputError::at(self.source, self.n, "phi_*_std_rad: all three, positive, or none")),
+            _ => {
+                return Err(InputError::at(
+                    self.source,
+                    self.n,
+                    format!("phi_*_std_rad: all three, positive and at most {MAX_ANGLE_RAD} rad, or none"),
+                ))
+            }
         };
+        let phi_rad = [self.need("phi_e_rad")?, self.need("phi_n_rad")?, self.need("phi_u_rad")?];
+        if !phi_rad.iter().all(|&p| angle(p)) {
+            return Err(InputError::at(self.source, self.n, format!("phi_*_rad: beyond {MAX_ANGLE_RAD} rad")));
+        }
         Ok(AnglesRow {
             pos: pos as u32,
             attitude_deg: [self.need("pitch_deg")?, self.need("roll_deg")?, self.need("heading_deg")?],
-            phi_rad: [self.need("phi_e_rad")?, self.need("phi_n_rad")?, self.need("phi_u_rad")?],
+            phi_rad,
             phi_std_rad,
         })
     }
 }
+
+/// Largest angle (and standard deviation) an angles file may hold, rad.
+pub const MAX_ANGLE_RAD: f64 = 1.0;
 
 /// Analyses an angles file.
 pub fn analyze_angles(file: &AnglesFile) -> Result<Analysis, InputError> {

@@ -92,7 +92,16 @@ pub fn replay_file(rec: &Recording, options: &Options) -> Result<(Vec<u8>, Vec<D
         for v in [att.pitch_deg, att.roll_deg, att.heading_deg.unwrap_or(0.0)] {
             out.extend_from_slice(&(v as f32).to_radians().to_le_bytes());
         }
-        out.extend_from_slice(&(d.pos.min(u16::MAX as u32) as u16).to_le_bytes());
+        // The replay file holds a label in 16 bits: a larger one would be clipped and two labels could
+        // collide.
+        let label = u16::try_from(d.pos).map_err(|_| {
+            InputError::at(
+                source,
+                d.first_line(),
+                format!("position label {} does not fit the firmware path's 16 bits (at most 65535)", d.pos),
+            )
+        })?;
+        out.extend_from_slice(&label.to_le_bytes());
         out.extend_from_slice(&u16::from(att.heading_deg.is_none()).to_le_bytes());
         attitudes.push(att);
     }

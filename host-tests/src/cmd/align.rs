@@ -23,7 +23,7 @@ pub fn run(args: Args) -> anyhow::Result<()> {
     let rec = Recording::read(&recording)?;
     let report = align(&rec)?;
     if !json_to_stdout(json.as_deref()) {
-        print!("{}", summary(&report));
+        super::out(&summary(&report))?;
     }
     if let Some(path) = json {
         write_json(&path, &report)?;

@@ -25,12 +25,12 @@ pub fn run(args: Args) -> anyhow::Result<()> {
     eprintln!("sinscal analyze: reading {}", input.display());
     let analysis = crate::analysis::analyze_path(&input)?;
     if !quiet {
-        print!("{}", crate::analysis::summary(&analysis));
+        super::out(&crate::analysis::summary(&analysis))?;
     }
     if let Some(dir) = report {
         let files = crate::io::analysis_report::write_report(&analysis, &dir)?;
         if !quiet {
-            println!("report: {} ({})", dir.display(), files.join(", "));
+            super::out(&format!("report: {} ({})\n", dir.display(), files.join(", ")))?;
         }
     }
     if let Some(path) = json {

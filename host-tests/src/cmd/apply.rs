@@ -38,7 +38,7 @@ pub fn run(args: Args) -> anyhow::Result<()> {
     let model = CalibrationModel::read(&calibration)?;
     let compensated = apply(&rec, &model);
     compensated.write(&out)?;
-    print!("{}", summary(&rec, &model, &out));
+    super::out(&summary(&rec, &model, &out))?;
     Ok(())
 }
 

@@ -73,8 +73,8 @@ pub struct Args {
     #[arg(long, value_enum, default_value = "hmmkf")]
     prefilter: PrefilterArg,
     /// The prefilter's coefficient a in [0, 1], or 'auto' to identify it from the first dwell.
-    #[arg(long, default_value = "1")]
-    prefilter_a: String,
+    #[arg(long, default_value = "1", value_parser = parse_prefilter_a)]
+    prefilter_a: Coefficient,
     /// Which dwell value the alignment uses.
     #[arg(long, value_enum, default_value = "mean")]
     dwell_value: DwellValueArg,
@@ -96,17 +96,21 @@ pub struct Args {
     on: Option<OnArg>,
 }
 
+/// `--prefilter-a`: 'auto' or a number in [0, 1] (a bad value is a usage error, exit 2).
+fn parse_prefilter_a(text: &str) -> Result<Coefficient, String> {
+    if text == "auto" {
+        return Ok(Coefficient::Identify);
+    }
+    match text.parse::<f32>() {
+        Ok(a) if (0.0..=1.0).contains(&a) => Ok(Coefficient::Fixed(a)),
+        _ => Err(format!("'{text}' is neither 'auto' nor a number in [0, 1]")),
+    }
+}
+
 impl Args {
     /// The calibration options these arguments ask for.
     fn options(&self) -> anyhow::Result<Options> {
-        let coefficient = if self.prefilter_a == "auto" {
-            Coefficient::Identify
-        } else {
-            match self.prefilter_a.parse::<f32>() {
-                Ok(a) if (0.0..=1.0).contains(&a) => Coefficient::Fixed(a),
-                _ => anyhow::bail!("--prefilter-a: '{}' is neither 'auto' nor a number in [0, 1]", self.prefilter_a),
-            }
-        };
+        let coefficient = self.prefilter_a;
         let usage = |text: &str| -> ! {
             clap::Error::raw(clap::error::ErrorKind::ArgumentConflict, format!("{text}\n")).exit()
         };
@@ -164,11 +168,11 @@ pub fn finish(cal: &Calibration, json: Option<&Path>) -> anyhow::Result<()> {
     match json {
         Some(path) if path == Path::new("-") => write_json(path, &CalibrationJson::new(cal)),
         Some(path) => {
-            print!("{}", summary(cal));
+            super::out(&summary(cal))?;
             write_json(path, &CalibrationJson::new(cal))
         }
         None => {
-            print!("{}", summary(cal));
+            super::out(&summary(cal))?;
             Ok(())
         }
     }

@@ -1,6 +1,7 @@
 //! `sinscal demo`: writes the built-in example (a SIMULATION of the paper's Table 1 with known biases) and
 //! calibrates it, with the truth printed beside the estimates.
 
+use std::fmt::Write as _;
 use std::path::PathBuf;
 
 use anyhow::Context as _;
@@ -32,20 +33,19 @@ pub fn run(args: Args) -> anyhow::Result<()> {
     let scenario = Scenario::example();
     let rec = scenario.recording(1, &out.display().to_string());
     rec.write(out)?;
-    println!(
-        "Built-in example: {} (SIMULATION of the paper's Table 1, 60 s per position at 100 Hz, seed 1)\n",
+    super::out(&format!(
+        "Built-in example: {} (SIMULATION of the paper's Table 1, 60 s per position at 100 Hz, seed 1)\n\n",
         out.display()
-    );
+    ))?;
     let rec = Recording::read(out)?;
     let cal = calibrate(&rec, &Options::default()).map_err(|e: InputError| anyhow::anyhow!(e))?;
     finish(&cal, json)?;
-    print_truth(&scenario, &cal);
-    Ok(())
+    super::out(&truth_table(&scenario, &cal))
 }
 
 /// The truth of the simulation beside each estimate, and the error in standard errors.
-fn print_truth(scenario: &Scenario, cal: &Calibration) {
-    println!("\nTruth of the simulation, and (estimate - truth) / standard error:");
+fn truth_table(scenario: &Scenario, cal: &Calibration) -> String {
+    let mut text = String::from("\nTruth of the simulation, and (estimate - truth) / standard error:\n");
     let e = &cal.estimates;
     let rows: [(&str, usize, f64, f64, &str); 9] = [
         ("gyro x", 0, scenario.gyro_bias_b_radps[0], DEG_PER_HOUR, "deg/h"),
@@ -59,17 +59,19 @@ fn print_truth(scenario: &Scenario, cal: &Calibration) {
         ("offset u", 35, scenario.reference_offset_n_rad[2], 1.0 / ARCSEC_PER_RAD, "arcsec"),
     ];
     for (name, index, truth, unit, unit_name) in rows {
-        match (e.value_si[index], e.std_si[index]) {
-            (Some(v), Some(sd)) => println!(
+        let _ = match (e.value_si[index], e.std_si[index]) {
+            (Some(v), Some(sd)) => writeln!(
+                text,
                 "  {name:<8} truth {:>+10.5} {unit_name:<6} estimate {:>+10.5}  ({:+.2} sigma)",
                 truth / unit,
                 v / unit,
                 (v - truth) / sd
             ),
             _ if e.unobservable.contains(&index) => {
-                println!("  {name:<8} truth {:>+10.5} {unit_name:<6} unobservable", truth / unit)
+                writeln!(text, "  {name:<8} truth {:>+10.5} {unit_name:<6} unobservable", truth / unit)
             }
-            _ => println!("  {name:<8} truth {:>+10.5} {unit_name:<6} not in the model", truth / unit),
-        }
+            _ => writeln!(text, "  {name:<8} truth {:>+10.5} {unit_name:<6} not in the model", truth / unit),
+        };
     }
+    text
 }

@@ -20,6 +20,10 @@ pub fn run(args: Args) -> anyhow::Result<()> {
     let Args { out, seed } = args;
     let rec = Scenario::example().recording(seed, &out.display().to_string());
     rec.write(&out)?;
-    println!("wrote {} ({} rows, SIMULATION of Table 1 with known biases, seed {seed})", out.display(), rec.rows.len());
+    super::out(&format!(
+        "wrote {} ({} rows, SIMULATION of Table 1 with known biases, seed {seed})\n",
+        out.display(),
+        rec.rows.len()
+    ))?;
     Ok(())
 }

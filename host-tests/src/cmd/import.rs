@@ -8,6 +8,6 @@ pub fn run(args: Args) -> anyhow::Result<()> {
     if let Err(usage) = args.validate() {
         usage.exit();
     }
-    print!("{}", crate::io::import::run(&args)?);
+    super::out(&crate::io::import::run(&args)?)?;
     Ok(())
 }

@@ -10,9 +10,9 @@ use crate::model::synth::{Scenario, DEG_PER_HOUR, MICRO_G};
 /// Arguments of `sinscal montecarlo`.
 #[derive(clap::Args)]
 pub struct Args {
-    /// Number of runs.
-    #[arg(long, default_value_t = 200)]
-    runs: usize,
+    /// Number of runs (at least 2).
+    #[arg(long, default_value_t = 200, value_parser = clap::value_parser!(u32).range(2..))]
+    runs: u32,
     /// First seed (run i uses seed + i).
     #[arg(long, default_value_t = 1000)]
     seed: u64,
@@ -27,7 +27,7 @@ pub struct Args {
 /// Runs `sinscal montecarlo`.
 pub fn run(args: Args) -> anyhow::Result<()> {
     let Args { runs, seed, json, passes } = args;
-    anyhow::ensure!(runs >= 2, "--runs must be at least 2");
+    let runs = runs as usize;
     let scenario = Scenario::example();
     let step = (runs / 10).max(1);
     let report = montecarlo::run(&scenario, runs, seed, passes, |done| {
@@ -35,7 +35,7 @@ pub fn run(args: Args) -> anyhow::Result<()> {
             eprintln!("montecarlo: {done}/{runs} runs");
         }
     });
-    print!("{}", montecarlo_table(&report));
+    super::out(&montecarlo_table(&report))?;
     if let Some(path) = json {
         write_json(&path, &report)?;
     }

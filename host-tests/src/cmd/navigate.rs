@@ -21,8 +21,8 @@ pub struct Args {
     /// A second calibration to compare.
     #[arg(long)]
     compare: Option<PathBuf>,
-    /// Length of a simulated static run, hours (needs a simulated recording).
-    #[arg(long)]
+    /// Length of a simulated static run, hours, in (0, 48] (needs a simulated recording).
+    #[arg(long, value_parser = parse_hours)]
     hours: Option<f64>,
     /// The dwell (pos label) whose attitude and samples are used.
     #[arg(long)]
@@ -62,12 +62,12 @@ pub fn run(args: Args) -> anyhow::Result<()> {
     })?;
     let elapsed = started.elapsed().as_secs_f64();
     if !quiet {
-        print!("{}", navigation_summary(&report, elapsed));
+        super::out(&navigation_summary(&report, elapsed))?;
     }
     if let Some(path) = plot {
         navigation_plot(&report, &path)?;
         if !quiet {
-            println!("figure: {}", path.display());
+            super::out(&format!("figure: {}\n", path.display()))?;
         }
     }
     if let Some(path) = json {
@@ -134,4 +134,13 @@ fn navigation_summary(r: &NavReport, elapsed_s: f64) -> String {
     }
     let _ = writeln!(out, "  computed in {elapsed_s:.2} s");
     out
+}
+
+/// `--hours`: a finite number in (0, 48] (otherwise a usage error, exit 2).
+fn parse_hours(text: &str) -> Result<f64, String> {
+    use crate::navigation::check::MAX_HOURS;
+    match text.parse::<f64>() {
+        Ok(h) if h > 0.0 && h <= MAX_HOURS => Ok(h),
+        _ => Err(format!("'{text}' is not a number of hours in (0, {MAX_HOURS}]")),
+    }
 }

@@ -24,14 +24,13 @@ pub fn run(args: Args) -> anyhow::Result<()> {
     let rec = simulate(&file, seed, &scenario.display().to_string());
     rec.write(&out)?;
     let s = &file.schedule;
-    println!(
-        "wrote {} ({} rows, {:.1} s at {} Hz, {} positions; SIMULATION of {}, seed {seed})",
+    super::out(&format!(
+        "wrote {} ({} rows, {:.1} s at {} Hz, {} positions; SIMULATION of {}, seed {seed})\n",
         out.display(),
         rec.rows.len(),
         rec.rows.len() as f64 / s.rate_hz,
         s.rate_hz,
         s.positions_deg.len(),
         scenario.display()
-    );
-    Ok(())
+    ))
 }

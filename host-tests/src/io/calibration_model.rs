@@ -161,6 +161,7 @@ impl CalibrationModel {
         for (t, sensor) in [(&model.accel_t, "accel"), (&model.gyro_t, "gyro")] {
             check_t(t, sensor).map_err(bad)?;
         }
+        check_plausible(&model).map_err(bad)?;
         Ok(model)
     }
 
@@ -296,6 +297,33 @@ fn check_t(t: &M3, sensor: &str) -> Result<(), String> {
             "T_{} = I + S + M is singular (det {d:e}, at least {MIN_T_DETERMINANT:e} is needed): it cannot be inverted",
             &sensor[..1]
         ));
+    }
+    Ok(())
+}
+
+/// The biases and the g-sensitivity within the plausible limits of the effect catalogue
+/// ([`crate::model::catalogue`], the limits `analyze` holds its effects to): a value beyond them is not a
+/// calibration of any instrument, and compensating with it gives numbers that mean nothing (a bias of 1e308
+/// rad/s navigates to NaN).
+fn check_plausible(model: &CalibrationModel) -> Result<(), String> {
+    use crate::model::catalogue::{MAX_ACCEL_BIAS_MPS2, MAX_GYRO_BIAS_RADPS, MAX_G_SENSITIVITY_RADPS_PER_MPS2};
+    let limits: [(&str, Vec<f64>, f64, &str); 3] = [
+        ("gyro_bias_radps", model.gyro_bias_radps.to_vec(), MAX_GYRO_BIAS_RADPS, "rad/s"),
+        ("accel_bias_mps2", model.accel_bias_mps2.to_vec(), MAX_ACCEL_BIAS_MPS2, "m/s^2"),
+        (
+            "gyro_g_sensitivity_radps_per_mps2",
+            model.gyro_g_sensitivity_radps_per_mps2.iter().flatten().copied().collect(),
+            MAX_G_SENSITIVITY_RADPS_PER_MPS2,
+            "(rad/s)/(m/s^2)",
+        ),
+    ];
+    for (field, values, limit, unit) in limits {
+        if let Some((k, v)) = values.iter().enumerate().find(|(_, v)| v.is_nan() || v.abs() > limit) {
+            return Err(format!(
+                "{field}[{k}] = {} {unit} is beyond the plausible {limit:e} {unit} of any instrument",
+                crate::io::recording::shown(*v)
+            ));
+        }
     }
     Ok(())
 }

@@ -45,6 +45,10 @@ pub struct SimulationTruth {
     pub reference_offset_n_rad: [f64; 3],
 }
 
+/// Largest latitude a recording may have, degrees: at 89.9 deg the horizontal Earth rate that gives north is
+/// 0.026 deg/h, and at a pole there is no north (the heading's standard error divides by `cos L`).
+pub const MAX_LATITUDE_DEG: f64 = 89.9;
+
 /// One row (sample) of a recording.
 #[derive(Clone, Debug, PartialEq)]
 pub struct Row {
@@ -118,11 +122,14 @@ impl Recording {
         // The header, up to and including the column line (the first line that is neither blank nor `#`).
         let mut head: Vec<String> = Vec::new();
         loop {
-            let mut line = String::new();
-            if reader.read_line(&mut line).map_err(io)? == 0 {
+            let mut bytes = Vec::new();
+            if reader.read_until(b'\n', &mut bytes).map_err(io)? == 0 {
                 break;
             }
-            let line = strip_line_end(&line).to_string();
+            let line = utf8_line(&bytes, head.len() + 1, &source)?;
+            // A byte-order mark (some editors write one) is not part of the first line.
+            let line = if head.is_empty() { line.strip_prefix('\u{feff}').unwrap_or(line) } else { line };
+            let line = strip_line_end(line).to_string();
             let is_column_line = !line.trim().is_empty() && !line.starts_with('#');
             head.push(line);
             if is_column_line {
@@ -133,11 +140,15 @@ impl Recording {
         let (header, header_line, column_line, rate_line) = parse_header(&mut lines, &|| head.len(), &source)?;
         let columns = parse_columns(column_line, header_line, &source)?;
         let rows = read_rows(&mut reader, (head.len(), chunk_bytes), &columns, &source, path)?;
+        if let Some(last) = rows.last() {
+            require_final_line_end(path, last.line, &source)?;
+        }
         Recording::assemble(header, header_line, &columns, rows, rate_line, &source)
     }
 
     /// Parses the text of a recording; `source` names it in errors.
     pub fn parse(text: &str, source: &str) -> Result<Recording, InputError> {
+        let text = text.strip_prefix('\u{feff}').unwrap_or(text);
         let mut lines = text.lines().enumerate().map(|(i, l)| (i + 1, l.trim_end_matches('\r')));
         let (header, header_line, column_line, rate_line) =
             parse_header(&mut lines, &|| text.lines().count().max(1), source)?;
@@ -227,18 +238,71 @@ impl Recording {
 
     /// Writes the recording to a file.
     pub fn write(&self, path: &Path) -> Result<(), InputError> {
+        self.check_writable().map_err(|reason| {
+            InputError::file(&path.display().to_string(), format!("not written, its reader would refuse it: {reason}"))
+        })?;
         std::fs::write(path, self.to_csv()).map_err(|e| InputError::io(path, e))
+    }
+
+    /// The reader's rules on what would be written (docs/formats.md#bad-input): the header's numbers within
+    /// their bounds, every value finite, times strictly increasing, and `rate_hz` agreeing with them. The
+    /// reason of the first rule broken.
+    pub fn check_writable(&self) -> Result<(), String> {
+        let h = &self.header;
+        if h.latitude_deg.is_nan() || h.latitude_deg.abs() > MAX_LATITUDE_DEG {
+            return Err(format!(
+                "latitude_deg {} outside [-{MAX_LATITUDE_DEG}, {MAX_LATITUDE_DEG}]",
+                shown(h.latitude_deg)
+            ));
+        }
+        if !h.height_m.is_finite() {
+            return Err(format!("height_m {} is not a finite number", h.height_m));
+        }
+        if let Some(r) = h.rate_hz.filter(|r| !(*r > 0.0 && *r <= MAX_RATE_HZ)) {
+            return Err(format!("rate_hz {} is not a rate in (0, {MAX_RATE_HZ}] Hz", shown(r)));
+        }
+        if let Some(g) = h.gravity_mps2.filter(|g| !(9.7..=9.9).contains(g)) {
+            return Err(format!("gravity_mps2 {} is not a gravity on Earth (9.7..9.9)", shown(g)));
+        }
+        if self.rows.is_empty() {
+            return Err("no data rows".into());
+        }
+        let mut previous = f64::NEG_INFINITY;
+        for (k, r) in self.rows.iter().enumerate() {
+            let values = r.rate_b_radps.iter().chain(&r.force_b_mps2).chain(r.temp_c.iter());
+            let angles = [r.pitch_deg, r.roll_deg, r.heading_deg.unwrap_or(0.0)];
+            if !r.t_s.is_finite() || values.chain(&angles).any(|v| !v.is_finite()) {
+                return Err(format!("row {}: a value is not a finite number", k + 1));
+            }
+            if r.t_s <= previous {
+                return Err(format!(
+                    "row {}: time {} s does not increase (the previous is {} s)",
+                    k + 1,
+                    shown(r.t_s),
+                    shown(previous)
+                ));
+            }
+            previous = r.t_s;
+        }
+        match h.rate_hz {
+            Some(rate_hz) => check_rate(rate_hz, &self.rows),
+            None => Ok(()),
+        }
     }
 
     /// The dwells, in order of first appearance of their label. Rows with the same non-zero label form
     /// one dwell (docs/formats.md#recording); label 0 rows are skipped.
     pub fn dwells(&self) -> Vec<Dwell<'_>> {
         let mut dwells: Vec<Dwell<'_>> = Vec::new();
+        // Label -> index: one look-up per row, whatever the number of labels.
+        let mut index: std::collections::HashMap<u32, usize> = std::collections::HashMap::new();
         for row in self.rows.iter().filter(|r| r.pos != 0) {
-            match dwells.iter_mut().find(|d| d.pos == row.pos) {
-                Some(d) => d.rows.push(row),
-                None => dwells.push(Dwell { pos: row.pos, rows: vec![row] }),
+            let next = dwells.len();
+            let i = *index.entry(row.pos).or_insert(next);
+            if i == next {
+                dwells.push(Dwell { pos: row.pos, rows: Vec::new() });
             }
+            dwells[i].rows.push(row);
         }
         dwells
     }
@@ -467,8 +531,8 @@ fn parse_header<'t>(
             "height_m" => height_m = number("height_m")?,
             "rate_hz" => {
                 let r = number("rate_hz")?;
-                if r <= 0.0 {
-                    return Err(bad(n, format!("header rate_hz: {r} is not a positive rate")));
+                if !(r > 0.0 && r <= MAX_RATE_HZ) {
+                    return Err(bad(n, format!("header rate_hz: {} is not a rate in (0, {MAX_RATE_HZ}] Hz", shown(r))));
                 }
                 rate_hz = Some(r);
                 rate_line = Some(n);
@@ -484,12 +548,19 @@ fn parse_header<'t>(
         None => return Err(bad(1, "not a sinscal recording: no '# sinscal-recording: 1' header line".into())),
     }
     let latitude_deg = latitude.ok_or_else(|| bad(header_line, "header has no 'latitude_deg'".into()))?;
-    if !(-90.0..=90.0).contains(&latitude_deg) {
-        return Err(bad(header_line, format!("latitude_deg {latitude_deg} outside [-90, 90]")));
+    if !(-MAX_LATITUDE_DEG..=MAX_LATITUDE_DEG).contains(&latitude_deg) {
+        return Err(bad(
+            header_line,
+            format!(
+                "latitude_deg {} outside [-{MAX_LATITUDE_DEG}, {MAX_LATITUDE_DEG}]: nearer a pole the \
+                 horizontal Earth rate that gives north vanishes",
+                shown(latitude_deg)
+            ),
+        ));
     }
     if let Some(g) = gravity {
         if !(9.7..=9.9).contains(&g) {
-            return Err(bad(header_line, format!("gravity_mps2 {g} is not a gravity on Earth (9.7..9.9)")));
+            return Err(bad(header_line, format!("gravity_mps2 {} is not a gravity on Earth (9.7..9.9)", shown(g))));
         }
     }
     let truth = parse_truth(&truth_keys, source)?;
@@ -509,6 +580,28 @@ pub fn median_time_step_s(rows: &[Row]) -> Option<f64> {
     Some(if dt.len() % 2 == 1 { dt[m] } else { 0.5 * (dt[m - 1] + dt[m]) })
 }
 
+/// Highest sample rate a recording may state, Hz: no IMU samples faster, and every size that follows from
+/// the rate (samples per dwell, navigation steps) stays bounded.
+pub const MAX_RATE_HZ: f64 = 1e6;
+
+/// `x` for a message: six significant digits, in exponent form when it is large or small (`1e300` is not
+/// printed as 301 digits, nor 0.009999999999990905 as it falls out of a subtraction).
+pub fn shown(x: f64) -> String {
+    if x == 0.0 || !x.is_finite() {
+        return x.to_string();
+    }
+    if (1e-4..1e7).contains(&x.abs()) {
+        format!("{:.5e}", x).parse::<f64>().map_or(x.to_string(), |r| r.to_string())
+    } else {
+        let e = format!("{x:.5e}");
+        // 1.00000e300 -> 1e300, 2.50000e-7 -> 2.5e-7
+        match e.split_once('e') {
+            Some((m, p)) => format!("{}e{p}", m.trim_end_matches('0').trim_end_matches('.')),
+            None => e,
+        }
+    }
+}
+
 /// The header's `rate_hz` against the time column: the median time step must be `1 / rate_hz` within
 /// [`RATE_TOLERANCE`] (docs/formats.md#rate-check). The error is the reason.
 fn check_rate(rate_hz: f64, rows: &[Row]) -> Result<(), String> {
@@ -516,10 +609,11 @@ fn check_rate(rate_hz: f64, rows: &[Row]) -> Result<(), String> {
     let nominal_dt = 1.0 / rate_hz;
     if (median_dt - nominal_dt).abs() > RATE_TOLERANCE * nominal_dt {
         // Six significant digits: the float noise of the time column (0.009999999999990905 s) is not news.
-        let short = |x: f64| format!("{:.5e}", x).parse::<f64>().map_or(x.to_string(), |r| r.to_string());
+        let short = shown;
         return Err(format!(
-            "rate_hz {rate_hz} disagrees with the time column: the median time step is {} s ({} Hz), \
+            "rate_hz {} disagrees with the time column: the median time step is {} s ({} Hz), \
              1/rate_hz is {} s (more than 1 % apart)",
+            short(rate_hz),
             short(median_dt),
             short(1.0 / median_dt),
             short(nominal_dt)
@@ -544,14 +638,14 @@ struct ChunkRows {
     error: Option<InputError>,
 }
 
-/// Parses the lines of `bytes`, the first being line `first_line` of the file `path`.
-fn parse_chunk(bytes: &[u8], first_line: usize, columns: &Columns, source: &str, path: &Path) -> ChunkRows {
+/// Parses the lines of `bytes`, the first being line `first_line` of `source`.
+fn parse_chunk(bytes: &[u8], first_line: usize, columns: &Columns, source: &str) -> ChunkRows {
     let mut parser = RowParser::new(columns, source);
     let error = match std::str::from_utf8(bytes) {
-        Err(_) => Some(InputError::io(
-            path,
-            std::io::Error::new(std::io::ErrorKind::InvalidData, "stream did not contain valid UTF-8"),
-        )),
+        Err(e) => {
+            let line = first_line + bytes[..e.valid_up_to()].iter().filter(|&&b| b == b'\n').count();
+            Some(InputError::at(source, line, "not UTF-8 text (a binary file, or another encoding)"))
+        }
         Ok(text) => {
             text.lines().enumerate().find_map(|(i, l)| parser.line(first_line + i, l.trim_end_matches('\r')).err())
         }
@@ -609,7 +703,7 @@ fn read_rows(
             scope.spawn(move || {
                 while let Some((index, first, bytes)) = work_rx.lock().ok().and_then(|rx| rx.recv().ok()) {
                     if !stop.load(Ordering::Relaxed) {
-                        let _ = done_tx.send((index, parse_chunk(&bytes, first, columns, source, path)));
+                        let _ = done_tx.send((index, parse_chunk(&bytes, first, columns, source)));
                     }
                 }
             });
@@ -653,6 +747,36 @@ fn join_chunks(done: mpsc::Receiver<(usize, ChunkRows)>, source: &str) -> Result
 }
 
 /// A line without its end: `\n`, then any `\r` (LF or CRLF files).
+/// `bytes` (line `line` of `source`) as text; an error naming the line when it is not UTF-8.
+fn utf8_line<'b>(bytes: &'b [u8], line: usize, source: &str) -> Result<&'b str, InputError> {
+    std::str::from_utf8(bytes)
+        .map_err(|_| InputError::at(source, line, "not UTF-8 text (a binary file, or another encoding)"))
+}
+
+/// A file whose last line has no end of line may have been cut short, and a number cut short reads as
+/// another number (`9.80665` as `9.8`): the file is refused, with its last line named.
+fn require_final_line_end(path: &Path, last_line: usize, source: &str) -> Result<(), InputError> {
+    use std::io::{Seek, SeekFrom};
+    let io = |e| InputError::io(path, e);
+    let mut file = File::open(path).map_err(io)?;
+    if file.seek(SeekFrom::End(0)).map_err(io)? == 0 {
+        return Ok(());
+    }
+    file.seek(SeekFrom::End(-1)).map_err(io)?;
+    let mut last = [0u8; 1];
+    file.read_exact(&mut last).map_err(io)?;
+    if last[0] == b'\n' {
+        Ok(())
+    } else {
+        Err(InputError::at(
+            source,
+            last_line,
+            "the last line has no end of line: the file may be cut short (a number cut short reads as another \
+             number); end it with a newline if it is whole",
+        ))
+    }
+}
+
 fn strip_line_end(line: &str) -> &str {
     line.strip_suffix('\n').unwrap_or(line).trim_end_matches('\r')
 }

@@ -28,14 +28,13 @@ pub fn write_report(study: &Study, report_dir: &Path, json_path: Option<&Path>) 
     std::fs::write(&md, &text).map_err(|e| anyhow::anyhow!("cannot write {}: {e}", md.display()))?;
     let to_stdout = json_path == Some(Path::new("-"));
     if !to_stdout {
-        print!("{text}");
-        println!("\nreport: {}", md.display());
+        crate::cmd::out(&format!("{text}\nreport: {}\n", md.display()))?;
     }
     if let Some(path) = json_path {
         let mut out = serde_json::to_string_pretty(&study_json(study, &figures))?;
         out.push('\n');
         if to_stdout {
-            print!("{out}");
+            crate::cmd::out(&out)?;
         } else {
             std::fs::write(path, out).map_err(|e| anyhow::anyhow!("cannot write {}: {e}", path.display()))?;
         }

@@ -262,6 +262,25 @@ pub struct TriadModel {
     pub temperature_coefficient_per_k: [f64; 3],
 }
 
+/// Most rows a scenario may ask for (about 1 GB in memory; 2.8 hours at 1 kHz).
+pub const MAX_SIMULATED_ROWS: f64 = 1e7;
+
+/// Smallest quantisation step, SI: a finer step divides samples into more steps than f64 counts exactly.
+pub const MIN_QUANTIZATION_STEP: f64 = 1e-15;
+
+/// The dotted key of the first number in `value` that is not finite (`inf`, `nan`), if any.
+fn non_finite(key: &str, value: &toml::Value) -> Option<String> {
+    match value {
+        toml::Value::Float(x) if !x.is_finite() => Some(key.to_string()),
+        toml::Value::Array(items) => items.iter().enumerate().find_map(|(i, v)| non_finite(&format!("{key}[{i}]"), v)),
+        toml::Value::Table(t) => t.iter().find_map(|(k, v)| {
+            let key = if key.is_empty() { k.clone() } else { format!("{key}.{k}") };
+            non_finite(&key, v)
+        }),
+        _ => None,
+    }
+}
+
 fn check_offdiagonal(m: &M3, what: &str) -> Result<(), String> {
     if (0..3).any(|i| m[i][i] != 0.0) {
         return Err(format!("{what}: the diagonal must be 0 (scale factors go in scale_factor)"));
@@ -286,17 +305,37 @@ impl ScenarioFile {
                 None => InputError::file(source, message),
             }
         })?;
+        if let Ok(table) = text.parse::<toml::Table>() {
+            non_finite("", &toml::Value::Table(table))
+                .map_or(Ok(()), |key| Err(InputError::file(source, format!("{key} is not a finite number"))))?;
+        }
         scenario.check().map_err(|reason| InputError::file(source, reason))?;
         Ok(scenario)
     }
 
     fn check(&self) -> Result<(), String> {
+        use crate::io::recording::{shown, MAX_LATITUDE_DEG, MAX_RATE_HZ};
         let s = &self.schedule;
-        if self.site.latitude_deg.is_nan() || self.site.latitude_deg.abs() > 90.0 {
-            return Err(format!("site.latitude_deg {} is not in [-90, 90]", self.site.latitude_deg));
+        // What the recording reader accepts, so that simulate never writes a file it refuses.
+        if self.site.latitude_deg.is_nan() || self.site.latitude_deg.abs() > MAX_LATITUDE_DEG {
+            return Err(format!(
+                "site.latitude_deg {} is not in [-{MAX_LATITUDE_DEG}, {MAX_LATITUDE_DEG}]",
+                shown(self.site.latitude_deg)
+            ));
         }
-        if !s.rate_hz.is_finite() || s.rate_hz <= 0.0 {
-            return Err(format!("schedule.rate_hz {} must be positive", s.rate_hz));
+        if let Some(g) = self.site.gravity_mps2.filter(|g| !(9.7..=9.9).contains(g)) {
+            return Err(format!("site.gravity_mps2 {} is not a gravity on Earth (9.7..9.9)", shown(g)));
+        }
+        if !s.rate_hz.is_finite() || s.rate_hz <= 0.0 || s.rate_hz > MAX_RATE_HZ {
+            return Err(format!("schedule.rate_hz {} is not a rate in (0, {MAX_RATE_HZ}] Hz", shown(s.rate_hz)));
+        }
+        let rows = s.positions_deg.len() as f64 * (s.dwell_s + s.settle_s + s.move_s) * s.rate_hz;
+        if rows > MAX_SIMULATED_ROWS {
+            return Err(format!(
+                "the schedule is {} rows: at most {MAX_SIMULATED_ROWS:e} are simulated (shorter dwells or a lower \
+                 rate)",
+                shown(rows)
+            ));
         }
         if s.dwell_s.is_nan() || s.dwell_s * s.rate_hz < 10.0 {
             return Err(format!("schedule.dwell_s {} s gives fewer than 10 samples", s.dwell_s));
@@ -332,8 +371,14 @@ impl ScenarioFile {
         if densities.iter().any(|&d| d.is_nan() || d < 0.0) {
             return Err("noise densities must not be negative".into());
         }
-        if self.gyro.quantization_radps.iter().chain(&self.accel.quantization_mps2).any(|&q| q.is_nan() || q < 0.0) {
-            return Err("quantization steps must not be negative".into());
+        if self
+            .gyro
+            .quantization_radps
+            .iter()
+            .chain(&self.accel.quantization_mps2)
+            .any(|&q| q.is_nan() || q < 0.0 || (q > 0.0 && q < MIN_QUANTIZATION_STEP))
+        {
+            return Err(format!("quantization steps must be 0 (off) or at least {MIN_QUANTIZATION_STEP:e}"));
         }
         Ok(())
     }

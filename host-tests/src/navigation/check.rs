@@ -265,6 +265,12 @@ fn runs_to_compare(
     runs
 }
 
+/// Longest simulated static run, hours.
+pub const MAX_HOURS: f64 = 48.0;
+
+/// Most samples a simulated static run may have (48 h at 1.16 kHz; a few minutes of navigation).
+pub const MAX_SIMULATED_SAMPLES: f64 = 2e8;
+
 /// A SIMULATED static run of `hours` of the IMU of a recording written by sinscal's simulator (its truth
 /// header: biases and white noise), with a new noise seed.
 struct SimulatedRun<'a> {
@@ -293,8 +299,20 @@ impl SimulatedRun<'_> {
                  not a sinscal simulation); without --hours the recording's own static dwell is navigated",
             )
         })?;
-        if !(hours > 0.0 && hours <= 48.0) {
-            return Err(InputError::file(source, format!("--hours {hours}: must be in (0, 48]")));
+        if !(hours > 0.0 && hours <= MAX_HOURS) {
+            return Err(InputError::file(source, format!("--hours {hours}: must be in (0, {MAX_HOURS}]")));
+        }
+        let steps = hours * 3600.0 * self.rate_hz;
+        if steps > MAX_SIMULATED_SAMPLES {
+            return Err(InputError::file(
+                source,
+                format!(
+                    "--hours {hours} at the recording's {} Hz is {} samples: at most {MAX_SIMULATED_SAMPLES:e} \
+                     are simulated (fewer hours, or a recording at a lower rate)",
+                    crate::io::recording::shown(self.rate_hz),
+                    crate::io::recording::shown(steps)
+                ),
+            ));
         }
         let scenario = Scenario {
             latitude_deg: header.latitude_deg,

@@ -407,6 +407,9 @@ pub(crate) fn unit_of(channel: &str) -> (f64, &'static str) {
 // ---------------------------------------------------------------------------------------------------------------
 // Reading a data set, running the study
 
+/// Fewest samples a single-pose record needs for its noise study (below, its statistics are not numbers).
+pub const MIN_SINGLE_POSE_SAMPLES: usize = 1024;
+
 /// Reads the data set from `data_dir` and runs its study (no files written).
 pub fn study_dataset(dataset: Dataset, data_dir: &Path) -> Result<Study, InputError> {
     let file = |relative: &str| -> Result<PathBuf, InputError> {
@@ -423,6 +426,16 @@ pub fn study_dataset(dataset: Dataset, data_dir: &Path) -> Result<Study, InputEr
             eprintln!("study psins: reading {}", path.display());
             let rec = import_psins(&path, None)?.recording;
             rec.require_gyro("study")?;
+            if rec.rows.len() < MIN_SINGLE_POSE_SAMPLES {
+                return Err(InputError::file(
+                    &path.display().to_string(),
+                    format!(
+                        "{} samples: the noise study needs at least {MIN_SINGLE_POSE_SAMPLES} (its Allan deviation \
+                         spans octaves of cluster sizes, and its check holds out half of the record)",
+                        rec.rows.len()
+                    ),
+                ));
+            }
             Ok(study_single_pose(&rec, "psins", vec![path.display().to_string()], STUDY_SEED))
         }
         Dataset::Ferraris => study_ferraris(

@@ -64,11 +64,18 @@ pub fn run_replay<R: ByteSource>(
         // What the data-ready interrupt does.
         on_data_ready(&mut imu, &mut producer, &mut stats);
         // What the processing loop does.
-        while let Some(event) = process_next(&mut consumer, |item| {
+        while let Some(events) = process_next(&mut consumer, |item| {
             let in_position = table as usize == sequence.position() + 1;
-            sequence.on_sample(in_position, item)
+            let first = sequence.on_sample(in_position, item);
+            // Contiguous dwells (no sample between them): the sample that ends a dwell because the table
+            // reports the next position is that position's first sample, not lost.
+            let next = !in_position
+                && matches!(first, Some(Event::DwellCompleted { .. }))
+                && table as usize == sequence.position() + 1;
+            let second = if next { sequence.on_sample(true, item) } else { None };
+            [first, second]
         }) {
-            if let Some(event) = event {
+            for event in events.into_iter().flatten() {
                 handle(event);
             }
         }

@@ -175,12 +175,15 @@ impl ImportArgs {
 /// returns the human summary to print.
 pub fn run(args: &ImportArgs) -> Result<String, InputError> {
     let first = args.inputs.first().ok_or_else(|| InputError::file("sinscal import", "no input file"))?;
+    let mut inputs: Vec<&Path> = args.inputs.iter().map(|p| p.as_path()).collect();
+    let labels = args.labels.clone().unwrap_or_else(|| default_labels_path(first));
+    if args.format == Format::Imucal {
+        inputs.push(&labels);
+    }
+    refuse_output_onto_input(&args.out, &inputs)?;
     let imported = match args.format {
         Format::Psins => import_psins(first, args.latitude_deg)?,
-        Format::Imucal => {
-            let labels = args.labels.clone().unwrap_or_else(|| default_labels_path(first));
-            import_imucal(first, &labels, args.latitude_deg)?
-        }
+        Format::Imucal => import_imucal(first, &labels, args.latitude_deg)?,
         Format::ImucalRaw => import_imucal_raw(first, args.latitude_deg)?,
         Format::Imutk => {
             let gyro = args
@@ -192,6 +195,20 @@ pub fn run(args: &ImportArgs) -> Result<String, InputError> {
     };
     imported.recording.write(&args.out)?;
     Ok(format!("{}wrote {}\n", imported.summary, args.out.display()))
+}
+
+/// The output must not be one of the inputs: the import would overwrite what it reads.
+fn refuse_output_onto_input(out: &Path, inputs: &[&Path]) -> Result<(), InputError> {
+    let Ok(out_canonical) = out.canonicalize() else { return Ok(()) };
+    for input in inputs {
+        if input.canonicalize().is_ok_and(|i| i == out_canonical) {
+            return Err(InputError::file(
+                &out.display().to_string(),
+                format!("--out is the input {}: the import would overwrite what it reads", input.display()),
+            ));
+        }
+    }
+    Ok(())
 }
 
 /// An imported recording and its human summary (samples, rate, duration, positions with their sample counts and
