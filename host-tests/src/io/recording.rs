@@ -123,7 +123,9 @@ impl Recording {
         let mut head: Vec<String> = Vec::new();
         loop {
             let mut bytes = Vec::new();
-            if reader.read_until(b'\n', &mut bytes).map_err(io)? == 0 {
+            let n = read_line_capped(&mut reader, &mut bytes)
+                .map_err(|e| InputError::at(&source, head.len() + 1, e.to_string()))?;
+            if n == 0 {
                 break;
             }
             let line = utf8_line(&bytes, head.len() + 1, &source)?;
@@ -658,9 +660,25 @@ fn read_chunk(reader: &mut impl BufRead, chunk_bytes: u64) -> std::io::Result<Ve
     let mut bytes = Vec::with_capacity(chunk_bytes as usize + 4096);
     reader.by_ref().take(chunk_bytes).read_to_end(&mut bytes)?;
     if bytes.len() as u64 == chunk_bytes {
-        reader.read_until(b'\n', &mut bytes)?;
+        read_line_capped(reader, &mut bytes)?;
     }
     Ok(bytes)
+}
+
+/// Longest line a recording may have, bytes: a row of eleven numbers is about 200.
+pub const MAX_LINE_BYTES: u64 = 1 << 16;
+
+/// Reads to the end of the line into `bytes`, at most [`MAX_LINE_BYTES`]: a longer line is an error (a file of
+/// one 100-MB line would otherwise be held whole).
+fn read_line_capped(reader: &mut impl BufRead, bytes: &mut Vec<u8>) -> std::io::Result<usize> {
+    let n = reader.by_ref().take(MAX_LINE_BYTES).read_until(b'\n', bytes)?;
+    if n as u64 == MAX_LINE_BYTES && bytes.last() != Some(&b'\n') {
+        return Err(std::io::Error::new(
+            std::io::ErrorKind::InvalidData,
+            format!("a line longer than {MAX_LINE_BYTES} bytes: not a line of a recording"),
+        ));
+    }
+    Ok(n)
 }
 
 /// The data rows of `reader`, whose last line read was line `line`: chunks of `chunk_bytes` (then to the end
