@@ -343,3 +343,14 @@ fn hours_that_are_not_a_duration_are_usage_errors() {
         );
     }
 }
+
+#[test]
+fn a_line_longer_than_64_kib_is_refused_without_reading_it_whole() {
+    let dir = tempfile::tempdir().unwrap();
+    let (head, rows) = split_rows(&example_text());
+    let long = ",".repeat(70_000);
+    let path = file(&dir, "long.csv", format!("{head}{}\n{long}\n", rows[..10].join("\n")));
+    refused(&[os("calibrate"), path.as_os_str()], 1, &["long.csv:", "a line longer than 65536 bytes"]);
+    let path = file(&dir, "longhead.csv", format!("# {long}\n{head}"));
+    refused(&[os("calibrate"), path.as_os_str()], 1, &["longhead.csv:1:", "a line longer than 65536 bytes"]);
+}

@@ -668,15 +668,17 @@ fn read_chunk(reader: &mut impl BufRead, chunk_bytes: u64) -> std::io::Result<Ve
 /// Longest line a recording may have, bytes: a row of eleven numbers is about 200.
 pub const MAX_LINE_BYTES: u64 = 1 << 16;
 
+/// The reason for a line of [`MAX_LINE_BYTES`] or more.
+fn long_line() -> String {
+    format!("a line longer than {MAX_LINE_BYTES} bytes: not a line of a recording")
+}
+
 /// Reads to the end of the line into `bytes`, at most [`MAX_LINE_BYTES`]: a longer line is an error (a file of
 /// one 100-MB line would otherwise be held whole).
 fn read_line_capped(reader: &mut impl BufRead, bytes: &mut Vec<u8>) -> std::io::Result<usize> {
     let n = reader.by_ref().take(MAX_LINE_BYTES).read_until(b'\n', bytes)?;
     if n as u64 == MAX_LINE_BYTES && bytes.last() != Some(&b'\n') {
-        return Err(std::io::Error::new(
-            std::io::ErrorKind::InvalidData,
-            format!("a line longer than {MAX_LINE_BYTES} bytes: not a line of a recording"),
-        ));
+        return Err(std::io::Error::new(std::io::ErrorKind::InvalidData, long_line()));
     }
     Ok(n)
 }
@@ -841,6 +843,9 @@ impl<'c> RowParser<'c> {
 
     /// Line `n` of the file (its end removed): a data row, or a blank or `#` line (skipped).
     fn line(&mut self, n: usize, line: &str) -> Result<(), InputError> {
+        if line.len() as u64 >= MAX_LINE_BYTES {
+            return Err(InputError::at(self.source, n, long_line()));
+        }
         if line.trim().is_empty() || line.starts_with('#') {
             return Ok(());
         }
