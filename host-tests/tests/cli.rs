@@ -160,7 +160,7 @@ fn bad_input_exits_1_with_file_line_and_reason() {
             kept_of_6 <= 5
         })
         .collect();
-    std::fs::write(&short, body.join("\n")).unwrap();
+    std::fs::write(&short, body.join("\n") + "\n").unwrap();
     let stderr = calibrate_fails(&short, &[]);
     assert!(stderr.contains("dwell 6") && stderr.contains("too short"), "{stderr}");
 
@@ -212,7 +212,7 @@ fn bad_input_exits_1_with_file_line_and_reason() {
             [&cells[..5], &cells[8..]].concat().join(",")
         })
         .collect();
-    std::fs::write(&acc_only, acc_text.join("\n")).unwrap();
+    std::fs::write(&acc_only, acc_text.join("\n") + "\n").unwrap();
     let out = sinscal().arg("calibrate").arg(&acc_only).args(["--json", "-"]).assert().success();
     let v: Value = serde_json::from_slice(&out.get_output().stdout).unwrap();
     assert_eq!(v["model"], serde_json::json!(["accel_bias", "accel_scale_factor"]));
