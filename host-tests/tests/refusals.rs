@@ -354,3 +354,22 @@ fn a_line_longer_than_64_kib_is_refused_without_reading_it_whole() {
     let path = file(&dir, "longhead.csv", format!("# {long}\n{head}"));
     refused(&[os("calibrate"), path.as_os_str()], 1, &["longhead.csv:1:", "a line longer than 65536 bytes"]);
 }
+
+#[test]
+fn a_calibration_that_says_a_thing_twice_is_refused() {
+    let dir = tempfile::tempdir().unwrap();
+    let rec = file(&dir, "example.csv", example_text());
+    let cal = dir.path().join("cal.json");
+    sinscal().arg("calibrate").arg(&rec).arg("--json").arg(&cal).assert().success();
+    let text = std::fs::read_to_string(&cal).unwrap();
+    // The second gyro_bias_radps would win silently in a plain JSON reader.
+    let twice =
+        text.replacen("\"gyro_bias_radps\":", "\"gyro_bias_radps\": [0.0, 0.0, 0.0],\n  \"gyro_bias_radps\":", 1);
+    let path = file(&dir, "twice.json", twice);
+    let out = dir.path().join("applied.csv");
+    refused(
+        &[os("apply"), rec.as_os_str(), os("--calibration"), path.as_os_str(), os("--out"), out.as_os_str()],
+        1,
+        &["twice.json:", "key 'gyro_bias_radps' appears twice"],
+    );
+}
