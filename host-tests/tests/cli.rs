@@ -121,7 +121,7 @@ fn with_cell(text: &str, pos: u32, col: usize, value: &str) -> String {
         })
         .collect();
     assert!(done);
-    lines.join("\n")
+    lines.join("\n") + "\n"
 }
 
 #[test]

@@ -39,7 +39,7 @@ fn scale_accelerometers(text: &str, factor: f64) -> String {
             cells.join(",")
         })
         .collect();
-    lines.join("\n")
+    lines.join("\n") + "\n"
 }
 
 #[test]

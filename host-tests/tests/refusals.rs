@@ -1,5 +1,5 @@
-//! Bad input is refused with a reason, never a panic nor a quiet wrong answer (docs/cli.md#exit-status,
-//! docs/formats.md#what-the-reader-refuses): one test per case, each on a file or an argument built here from
+//! Bad input is refused with a reason, never a panic nor a quiet wrong answer (docs/cli.md#common-rules,
+//! docs/formats.md#bad-input): one test per case, each on a file or an argument built here from
 //! the built-in example (a SIMULATION), with its exit status and the words of its message.
 
 use std::path::{Path, PathBuf};
