@@ -325,8 +325,8 @@ pub struct FigureData {
     pub correlated: Vec<Option<(f64, f64)>>,
     /// Per channel: quantisation step found, if any.
     pub quantization: Vec<Option<f64>>,
-    /// Per channel: the vibration lines found (amplitude as seen, frequency), strongest first.
-    pub vibration: Vec<Vec<(f64, f64)>>,
+    /// Per channel: vibration (amplitude as seen, frequency) found, if any.
+    pub vibration: Vec<Option<(f64, f64)>>,
     /// Per observation group (channel or angle): (position label, base residual, final residual) of each
     /// observation.
     pub residuals: Vec<Vec<(u32, f64, f64)>>,

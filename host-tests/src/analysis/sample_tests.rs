@@ -5,12 +5,10 @@
 //!
 //! The tests run in two steps, so that the costly one can run while the block selection gives the
 //! Bonferroni `m` (docs/analysis.md#speed-and-memory): [`measure_samples`] computes every statistic, and
-//! [`test_samples`] decides against `alpha / m`. Up to [`MAX_LINES`] vibration lines are searched per
-//! channel, one after the other: each line found is removed and the next strongest searched, against the
-//! same threshold (a search that is made only once a line is found adds no false alarm to a channel without
-//! one). The correlated-noise test runs on the samples after the lines found are removed; [`measure_samples`]
-//! fits it on the series that the smallest possible `m` leaves, and [`test_samples`] fits it again on the
-//! other series in the rare case the decision at the true `m` differs.
+//! [`test_samples`] decides against `alpha / m`. The correlated-noise test runs on the samples after a
+//! vibration found is removed; [`measure_samples`] fits it on the series that the smallest possible `m`
+//! leaves, and [`test_samples`] fits it again on the other series in the rare case the decision at the true
+//! `m` differs.
 
 use crate::model::catalogue::{EffectKind, Sensor};
 use crate::stats::linfit::{chi_square_quantile_upper, chi_square_upper};
@@ -26,9 +24,6 @@ use super::{ChannelDiagnostics, Effect, FigureData, ALPHA, CHANNELS, CHANNEL_UNI
 /// Tests on the samples, counted in the Bonferroni `m`: quantisation, vibration, correlated noise on every
 /// channel.
 pub(super) const SAMPLE_TESTS: usize = 3 * 6;
-
-/// Most vibration lines reported per channel.
-pub(super) const MAX_LINES: usize = 1;
 
 /// What the sample tests found.
 pub(super) struct SampleFindings {
@@ -102,8 +97,7 @@ struct ChannelOutcome {
     longest_dwell: Vec<f64>,
     correlated: Option<(f64, f64)>,
     quantization: Option<f64>,
-    /// The lines found: (amplitude seen, frequency).
-    vibration: Vec<(f64, f64)>,
+    vibration: Option<(f64, f64)>,
 }
 
 /// One channel's statistics.
@@ -121,11 +115,11 @@ struct ChannelMeasures {
     long: Vec<f64>,
     /// The lattice of the raw samples' differences, with the step's standard error.
     quantization: Option<(Quantization, f64)>,
-    /// The spectral lines that pass at the smallest possible `m`, strongest first, each searched once the
-    /// ones before it were removed (at most [`MAX_LINES`]); at a larger `m` a leading part of them passes.
-    lines: Vec<VibrationResult>,
-    /// The correlated-noise fit, on the series with every line of `lines` removed.
+    /// The strongest spectral line.
+    vibration: Option<VibrationResult>,
+    /// The correlated-noise fit, on the series with the line of `vibration` removed when `line_removed`.
     correlated: Option<GaussMarkovResult>,
+    line_removed: bool,
 }
 
 impl ChannelMeasures {
@@ -141,19 +135,17 @@ impl ChannelMeasures {
             let std_error = if q.quantized { quantization_std_error(&raw, q.step) } else { f64::NAN };
             (q, std_error)
         });
-        // A line can be accepted only if it passes at the smallest m (no block candidate observable).
-        let mut lines = Vec::new();
-        while lines.len() < MAX_LINES {
-            let Some(v) = vibration_test(&series, session.dt) else { break };
-            if !vibration_criterion(&v, series.len(), n_all, SAMPLE_TESTS as f64).accepted {
-                break;
-            }
-            remove_line(&mut series, &v, session.dt);
-            lines.push(v);
+        let vibration = vibration_test(&series, session.dt);
+        // The line can be accepted only if it passes at the smallest m (no block candidate observable).
+        let line_removed = vibration
+            .as_ref()
+            .is_some_and(|v| vibration_criterion(v, series.len(), n_all, SAMPLE_TESTS as f64).accepted);
+        if let (true, Some(v)) = (line_removed, &vibration) {
+            remove_line(&mut series, v, session.dt);
         }
         let correlated = gauss_markov_test(series, session.dt);
         let dwells = session.dwells.len();
-        ChannelMeasures { c, n_all, dwells, rms, max_trend_z, long, quantization, lines, correlated }
+        ChannelMeasures { c, n_all, dwells, rms, max_trend_z, long, quantization, vibration, correlated, line_removed }
     }
 
     /// Quantisation, vibration, correlated noise, in that order, against `alpha / m`; the diagnostics and
@@ -163,13 +155,13 @@ impl ChannelMeasures {
         let q_step = self.quantization(m, &mut effects);
         let vib = self.vibration(m, session.dt, &mut effects);
         let refitted;
-        let correlated = if vib.len() == self.lines.len() {
+        let correlated = if vib.is_some() == self.line_removed {
             self.correlated.as_ref()
         } else {
             // The decision at this m differs from the one at the smallest m: fit the other series.
             let mut series: Vec<Vec<f64>> =
                 session.dwells.iter().map(|d| detrend(&d.t, &d.y[self.c]).residual).collect();
-            for v in &self.lines[..vib.len()] {
+            if let (Some(_), Some(v)) = (vib, &self.vibration) {
                 remove_line(&mut series, v, session.dt);
             }
             refitted = gauss_markov_test(series, session.dt);
@@ -251,34 +243,27 @@ impl ChannelMeasures {
         Some(q.step)
     }
 
-    /// The spectral lines that pass, strongest first, up to the first that does not. Returns (amplitude
-    /// seen, frequency) of each.
-    fn vibration(&self, m: f64, dt: f64, effects: &mut Vec<Effect>) -> Vec<(f64, f64)> {
-        let mut found = Vec::new();
-        let mut rms = self.rms;
-        for v in &self.lines {
-            let criterion = vibration_criterion(v, self.dwells, self.n_all, m);
-            if !criterion.accepted {
-                break;
-            }
-            let corr = sinc(v.frequency_hz * dt);
-            let after = (rms * rms - 0.5 * v.amplitude_seen * v.amplitude_seen).max(0.0).sqrt();
-            effects.push(Effect {
-                estimate: v.amplitude_seen / corr,
-                std_error: v.amplitude_std / corr,
-                delta_bic: criterion.delta_bic,
-                residual_rms_before: rms,
-                residual_rms_after: after,
-                frequency_hz: Some(v.frequency_hz),
-                likelihood_ratio: v.lr,
-                parameters: criterion.dof as usize + 1,
-                p_value: chi_square_upper(v.lr, criterion.dof),
-                ..self.effect(EffectKind::Vibration, "samples")
-            });
-            rms = after;
-            found.push((v.amplitude_seen, v.frequency_hz));
+    /// The strongest spectral line, if it passes. Returns (amplitude seen, frequency).
+    fn vibration(&self, m: f64, dt: f64, effects: &mut Vec<Effect>) -> Option<(f64, f64)> {
+        let v = self.vibration.as_ref()?;
+        let criterion = vibration_criterion(v, self.dwells, self.n_all, m);
+        if !criterion.accepted {
+            return None;
         }
-        found
+        let corr = sinc(v.frequency_hz * dt);
+        let rms = self.rms;
+        effects.push(Effect {
+            estimate: v.amplitude_seen / corr,
+            std_error: v.amplitude_std / corr,
+            delta_bic: criterion.delta_bic,
+            residual_rms_after: (rms * rms - 0.5 * v.amplitude_seen * v.amplitude_seen).max(0.0).sqrt(),
+            frequency_hz: Some(v.frequency_hz),
+            likelihood_ratio: v.lr,
+            parameters: criterion.dof as usize + 1,
+            p_value: chi_square_upper(v.lr, criterion.dof),
+            ..self.effect(EffectKind::Vibration, "samples")
+        });
+        Some((v.amplitude_seen, v.frequency_hz))
     }
 
     /// Gauss-Markov plus white noise (the fit `gm`) against white noise alone; returns (sigma, tau) if found.
@@ -329,7 +314,7 @@ fn vibration_criterion(v: &VibrationResult, dwells: usize, n_all: usize, m: f64)
 
 /// Below this fraction of the step, the standard error of a quantisation step is the rounding of f64 and is
 /// reported as 0 (exact).
-pub(super) const EXACT_STEP: f64 = 1e-12;
+const EXACT_STEP: f64 = 1e-12;
 
 /// Standard error of a quantisation step: least squares of the on-grid differences `d_i = n_i q` (of the
 /// dwells `raw` joined).
