@@ -251,7 +251,7 @@ impl Recording {
     /// reason of the first rule broken.
     pub fn check_writable(&self) -> Result<(), String> {
         let h = &self.header;
-        if h.latitude_deg.is_nan() || h.latitude_deg.abs() > MAX_LATITUDE_DEG {
+        if !latitude_ok(h.latitude_deg) {
             return Err(format!(
                 "latitude_deg {} outside [-{MAX_LATITUDE_DEG}, {MAX_LATITUDE_DEG}]",
                 shown(h.latitude_deg)
@@ -260,10 +260,10 @@ impl Recording {
         if !h.height_m.is_finite() {
             return Err(format!("height_m {} is not a finite number", h.height_m));
         }
-        if let Some(r) = h.rate_hz.filter(|r| !(*r > 0.0 && *r <= MAX_RATE_HZ)) {
+        if let Some(r) = h.rate_hz.filter(|&r| !rate_ok(r)) {
             return Err(format!("rate_hz {} is not a rate in (0, {MAX_RATE_HZ}] Hz", shown(r)));
         }
-        if let Some(g) = h.gravity_mps2.filter(|g| !(9.7..=9.9).contains(g)) {
+        if let Some(g) = h.gravity_mps2.filter(|&g| !gravity_ok(g)) {
             return Err(format!("gravity_mps2 {} is not a gravity on Earth (9.7..9.9)", shown(g)));
         }
         if self.rows.is_empty() {
@@ -533,7 +533,7 @@ fn parse_header<'t>(
             "height_m" => height_m = number("height_m")?,
             "rate_hz" => {
                 let r = number("rate_hz")?;
-                if !(r > 0.0 && r <= MAX_RATE_HZ) {
+                if !rate_ok(r) {
                     return Err(bad(n, format!("header rate_hz: {} is not a rate in (0, {MAX_RATE_HZ}] Hz", shown(r))));
                 }
                 rate_hz = Some(r);
@@ -550,7 +550,7 @@ fn parse_header<'t>(
         None => return Err(bad(1, "not a sinscal recording: no '# sinscal-recording: 1' header line".into())),
     }
     let latitude_deg = latitude.ok_or_else(|| bad(header_line, "header has no 'latitude_deg'".into()))?;
-    if !(-MAX_LATITUDE_DEG..=MAX_LATITUDE_DEG).contains(&latitude_deg) {
+    if !latitude_ok(latitude_deg) {
         return Err(bad(
             header_line,
             format!(
@@ -561,7 +561,7 @@ fn parse_header<'t>(
         ));
     }
     if let Some(g) = gravity {
-        if !(9.7..=9.9).contains(&g) {
+        if !gravity_ok(g) {
             return Err(bad(header_line, format!("gravity_mps2 {} is not a gravity on Earth (9.7..9.9)", shown(g))));
         }
     }
@@ -585,6 +585,21 @@ pub fn median_time_step_s(rows: &[Row]) -> Option<f64> {
 /// Highest sample rate a recording may state, Hz: no IMU samples faster, and every size that follows from
 /// the rate (samples per dwell, navigation steps) stays bounded.
 pub const MAX_RATE_HZ: f64 = 1e6;
+
+/// A latitude a recording may have (within [`MAX_LATITUDE_DEG`] of the equator), degrees.
+pub fn latitude_ok(latitude_deg: f64) -> bool {
+    latitude_deg.abs() <= MAX_LATITUDE_DEG
+}
+
+/// A sample rate a recording may state: in (0, [`MAX_RATE_HZ`]] Hz.
+pub fn rate_ok(rate_hz: f64) -> bool {
+    rate_hz > 0.0 && rate_hz <= MAX_RATE_HZ
+}
+
+/// A gravity on Earth (9.7 to 9.9 m/s^2), as a recording may state it.
+pub fn gravity_ok(gravity_mps2: f64) -> bool {
+    (9.7..=9.9).contains(&gravity_mps2)
+}
 
 /// `x` for a message: six significant digits, in exponent form when it is large or small (`1e300` is not
 /// printed as 301 digits, nor 0.009999999999990905 as it falls out of a subtraction).
@@ -611,14 +626,13 @@ fn check_rate(rate_hz: f64, rows: &[Row]) -> Result<(), String> {
     let nominal_dt = 1.0 / rate_hz;
     if (median_dt - nominal_dt).abs() > RATE_TOLERANCE * nominal_dt {
         // Six significant digits: the float noise of the time column (0.009999999999990905 s) is not news.
-        let short = shown;
         return Err(format!(
             "rate_hz {} disagrees with the time column: the median time step is {} s ({} Hz), \
              1/rate_hz is {} s (more than 1 % apart)",
-            short(rate_hz),
-            short(median_dt),
-            short(1.0 / median_dt),
-            short(nominal_dt)
+            shown(rate_hz),
+            shown(median_dt),
+            shown(1.0 / median_dt),
+            shown(nominal_dt)
         ));
     }
     Ok(())
@@ -766,7 +780,6 @@ fn join_chunks(done: mpsc::Receiver<(usize, ChunkRows)>, source: &str) -> Result
     Ok(rows)
 }
 
-/// A line without its end: `\n`, then any `\r` (LF or CRLF files).
 /// `bytes` (line `line` of `source`) as text; an error naming the line when it is not UTF-8.
 fn utf8_line<'b>(bytes: &'b [u8], line: usize, source: &str) -> Result<&'b str, InputError> {
     std::str::from_utf8(bytes)
@@ -797,6 +810,7 @@ fn require_final_line_end(path: &Path, last_line: usize, source: &str) -> Result
     }
 }
 
+/// A line without its end: `\n`, then any `\r` (LF or CRLF files).
 fn strip_line_end(line: &str) -> &str {
     line.strip_suffix('\n').unwrap_or(line).trim_end_matches('\r')
 }

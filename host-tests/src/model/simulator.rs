@@ -314,19 +314,19 @@ impl ScenarioFile {
     }
 
     fn check(&self) -> Result<(), String> {
-        use crate::io::recording::{shown, MAX_LATITUDE_DEG, MAX_RATE_HZ};
+        use crate::io::recording::{gravity_ok, latitude_ok, rate_ok, shown, MAX_LATITUDE_DEG, MAX_RATE_HZ};
         let s = &self.schedule;
         // What the recording reader accepts, so that simulate never writes a file it refuses.
-        if self.site.latitude_deg.is_nan() || self.site.latitude_deg.abs() > MAX_LATITUDE_DEG {
+        if !latitude_ok(self.site.latitude_deg) {
             return Err(format!(
                 "site.latitude_deg {} is not in [-{MAX_LATITUDE_DEG}, {MAX_LATITUDE_DEG}]",
                 shown(self.site.latitude_deg)
             ));
         }
-        if let Some(g) = self.site.gravity_mps2.filter(|g| !(9.7..=9.9).contains(g)) {
+        if let Some(g) = self.site.gravity_mps2.filter(|&g| !gravity_ok(g)) {
             return Err(format!("site.gravity_mps2 {} is not a gravity on Earth (9.7..9.9)", shown(g)));
         }
-        if !s.rate_hz.is_finite() || s.rate_hz <= 0.0 || s.rate_hz > MAX_RATE_HZ {
+        if !rate_ok(s.rate_hz) {
             return Err(format!("schedule.rate_hz {} is not a rate in (0, {MAX_RATE_HZ}] Hz", shown(s.rate_hz)));
         }
         let rows = s.positions_deg.len() as f64 * (s.dwell_s + s.settle_s + s.move_s) * s.rate_hz;

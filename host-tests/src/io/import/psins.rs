@@ -43,7 +43,7 @@ pub fn parse_psins(text: &str, source: &str, latitude_deg: Option<f64>) -> Resul
     if interval_ms <= 0.0 {
         return Err(InputError::at(source, site_line, format!("sampling interval {interval_ms} ms is not positive")));
     }
-    if !(9.7..=9.9).contains(&gravity_mps2) {
+    if !crate::io::recording::gravity_ok(gravity_mps2) {
         return Err(InputError::at(
             source,
             site_line,
