@@ -266,7 +266,7 @@ fn construct(record: &Recording, source: Source, segmentation: String, pieces: &
         detect_quantization(&raw).ok().filter(|q| q.quantized).map(|q| q.step)
     });
     let all_rows: Vec<usize> = pieces.iter().flat_map(|p| p.rows.iter().copied()).collect();
-    let drift = session_drift(record, &dwell_rows().collect::<Vec<_>>(), &all_rows, &steps_si);
+    let drift = session_drift(record, &dwell_rows().collect::<Vec<_>>(), session_mean, &all_rows, &steps_si);
     let (mut rows, mut source_rows) = (Vec::new(), Vec::new());
     for piece in pieces {
         let [pitch, roll, heading] = piece.pose_deg;
@@ -318,8 +318,8 @@ fn construct(record: &Recording, source: Source, segmentation: String, pieces: &
 }
 
 /// The record's own drift over a session, removed from every row of it (`rows`, in order): per channel the
-/// least-squares line of the session's dwell samples (`dwell_rows`) against time, less its value at their
-/// mean time, so that the session mean stays. A quantised channel (`steps_si`) has the line removed through
+/// least-squares line of the session's dwell samples (`dwell_rows`, whose means are `dwell_mean_si`) against
+/// time, less its value at their mean time, so that the session mean stays. A quantised channel (`steps_si`) has the line removed through
 /// the quantiser that carries its remainder, so that the channel stays on its lattice. A measured record is
 /// not free of slow effects (the PSINS vehicle's tilt drifts by about 0.5 urad/s on its quiet stretches;
 /// docs/analysis.md#hidden-effects-in-measured-noise): without this the untouched construction carries a
@@ -327,6 +327,7 @@ fn construct(record: &Recording, source: Source, segmentation: String, pieces: &
 fn session_drift(
     record: &Recording,
     dwell_rows: &[usize],
+    dwell_mean_si: [f64; 6],
     rows: &[usize],
     steps_si: &[Option<f64>; 6],
 ) -> Vec<[f64; 6]> {
@@ -335,9 +336,10 @@ fn session_drift(
     let stt: f64 = dwell_rows.iter().map(|&i| (record.rows[i].t_s - t_mean).powi(2)).sum();
     let mut removed = vec![[0.0; 6]; rows.len()];
     for c in 0..6 {
-        let mean = dwell_rows.iter().map(|&i| channel(&record.rows[i], c)).sum::<f64>() / n;
-        let sty: f64 =
-            dwell_rows.iter().map(|&i| (record.rows[i].t_s - t_mean) * (channel(&record.rows[i], c) - mean)).sum();
+        let sty: f64 = dwell_rows
+            .iter()
+            .map(|&i| (record.rows[i].t_s - t_mean) * (channel(&record.rows[i], c) - dwell_mean_si[c]))
+            .sum();
         let slope = if stt > 0.0 { sty / stt } else { 0.0 };
         let line: Vec<f64> = rows.iter().map(|&i| slope * (record.rows[i].t_s - t_mean)).collect();
         let line = match steps_si[c] {
@@ -550,8 +552,8 @@ pub fn draw(p: &Prepared, effect: EffectKind, seed: u64) -> Result<Planted, Stri
             // (twice the shortest time constant the analysis tries): a warm-up that outlasts the session is a
             // drift there.
             let session_s = r.block_times.iter().flatten().fold(0.0f64, |m, &t| m.max(t));
-            let tau_lo = (0.05 * session_s).max(10.0);
-            let tau = rng.random_range(tau_lo..(0.26 * session_s).max(2.0 * tau_lo));
+            let tau_lo_s = (0.05 * session_s).max(10.0);
+            let tau = rng.random_range(tau_lo_s..(0.26 * session_s).max(2.0 * tau_lo_s));
             h.tau_s = Some(tau);
             let shape: Vec<f64> = r
                 .block_times
@@ -807,30 +809,30 @@ pub fn effect_label(e: &Effect) -> String {
     }
 }
 
-/// `a` and `b` report the same thing: the same label and, for vibration lines, frequencies within 2 % (at
-/// least 0.02 Hz).
-fn same_finding(a: &Effect, b: &Effect) -> bool {
-    effect_label(a) == effect_label(b)
-        && match (a.frequency_hz, b.frequency_hz) {
-            (Some(fa), Some(fb)) => (fa - fb).abs() <= 0.02 * fa.max(fb).max(1.0),
-            _ => true,
-        }
+/// A line at `found_hz` is the one at `reference_hz`: within 2 % of it (at least 0.02 Hz). Without both
+/// frequencies (an effect that is not a line), true.
+fn same_line(reference_hz: Option<f64>, found_hz: Option<f64>) -> bool {
+    match (reference_hz, found_hz) {
+        (Some(r), Some(f)) => (f - r).abs() <= 0.02 * r.max(1.0),
+        _ => true,
+    }
 }
 
 /// Judges `analysis` of a planted recording against the truth `h`; `untouched` is the analysis of the
 /// construction without it.
 pub fn judge(analysis: &Analysis, untouched: &Analysis, h: &Hidden) -> Trial {
     let same_kind = |e: &Effect| e.effect == h.effect && e.sensor == h.sensor.name();
-    // A vibration is a line: at the planted frequency (within 2 %, at least 0.02 Hz), not another line of
-    // the same channel.
-    let at_line = |e: &Effect| match (h.frequency_hz, e.frequency_hz) {
-        (Some(planted), Some(found)) => (found - planted).abs() <= 0.02 * planted.max(1.0),
-        _ => true,
-    };
-    let same_place = |e: &Effect| same_kind(e) && e.axes == h.axes && e.pos == h.pos && at_line(e);
+    // A vibration is a line: at the planted frequency, not another line of the same channel.
+    let same_place =
+        |e: &Effect| same_kind(e) && e.axes == h.axes && e.pos == h.pos && same_line(h.frequency_hz, e.frequency_hz);
     let sign_right = |e: &Effect| e.estimate.signum() == h.value.signum();
     let right = |e: &Effect| same_place(e) && sign_right(e) && ((e.estimate - h.value) / h.value).abs() <= 0.3;
-    let in_untouched = |e: &Effect| untouched.effects.iter().any(|u| same_finding(u, e));
+    let in_untouched = |e: &Effect| {
+        untouched
+            .effects
+            .iter()
+            .any(|u| effect_label(u) == effect_label(e) && same_line(u.frequency_hz, e.frequency_hz))
+    };
     let found = &analysis.effects;
     let verdict = if found.first().is_some_and(right) {
         Verdict::Detected
@@ -923,18 +925,8 @@ pub fn false_alarm_table(prepared: &[&Prepared]) -> String {
     );
     let mut seen: BTreeMap<String, (Vec<f64>, Vec<f64>, String)> = BTreeMap::new();
     for p in prepared {
-        // The second and third vibration lines of a channel have their own rows.
-        let mut lines: BTreeMap<String, usize> = BTreeMap::new();
         for e in &p.untouched.effects {
-            let mut label = effect_label(e);
-            if e.frequency_hz.is_some() {
-                let k = lines.entry(label.clone()).or_insert(0);
-                *k += 1;
-                if *k > 1 {
-                    label = format!("{label} (line {k})");
-                }
-            }
-            let entry = seen.entry(label).or_insert_with(|| (Vec::new(), Vec::new(), e.unit.clone()));
+            let entry = seen.entry(effect_label(e)).or_insert_with(|| (Vec::new(), Vec::new(), e.unit.clone()));
             entry.0.push(e.estimate);
             entry.1.push(e.delta_bic);
         }
@@ -1008,7 +1000,7 @@ mod tests {
         let rec = record(2_000, |i| on_lattice[i] + 3.0 * q);
         let rows: Vec<usize> = (0..2_000).collect();
         let steps = [None, None, None, Some(q), None, None];
-        let removed = session_drift(&rec, &rows, &rows, &steps);
+        let removed = session_drift(&rec, &rows, mean_of(&rec, rows.iter().copied()), &rows, &steps);
         let left: Vec<f64> = rows.iter().map(|&i| rec.rows[i].force_b_mps2[0] - removed[i][3]).collect();
         for v in &left {
             assert!(((v / q) - (v / q).round()).abs() < 1e-9, "{v} is off the lattice");
