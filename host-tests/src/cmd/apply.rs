@@ -26,7 +26,7 @@ pub struct Args {
 pub fn run(args: Args) -> anyhow::Result<()> {
     let Args { recording, calibration, out } = args;
     for (other, what) in [(&recording, "the input recording"), (&calibration, "the calibration")] {
-        if same_file(other, &out) {
+        if crate::io::same_file(other, &out) {
             return Err(InputError::file(
                 &out.display().to_string(),
                 format!("--out is {what}: apply writes a new file and never overwrites its input"),
@@ -66,21 +66,6 @@ fn calibration_key(comments: &[String]) -> String {
         return "calibration".to_string();
     }
     (2..).map(|n| format!("calibration_{n}")).find(|k| !taken(k)).expect("a free key")
-}
-
-/// Whether `a` and `b` are the same existing file (also through links or different spellings of the path).
-fn same_file(a: &Path, b: &Path) -> bool {
-    if !b.exists() || !a.exists() {
-        return false;
-    }
-    #[cfg(unix)]
-    {
-        use std::os::unix::fs::MetadataExt as _;
-        if let (Ok(ma), Ok(mb)) = (std::fs::metadata(a), std::fs::metadata(b)) {
-            return ma.dev() == mb.dev() && ma.ino() == mb.ino();
-        }
-    }
-    matches!((std::fs::canonicalize(a), std::fs::canonicalize(b)), (Ok(x), Ok(y)) if x == y)
 }
 
 /// The human summary: what was applied, in human units.

@@ -9,3 +9,20 @@ pub mod import;
 pub mod plot;
 pub mod recording;
 pub mod study_report;
+
+use std::path::Path;
+
+/// Whether `a` and `b` are the same existing file (also through links or different spellings of the path).
+pub fn same_file(a: &Path, b: &Path) -> bool {
+    if !b.exists() || !a.exists() {
+        return false;
+    }
+    #[cfg(unix)]
+    {
+        use std::os::unix::fs::MetadataExt as _;
+        if let (Ok(ma), Ok(mb)) = (std::fs::metadata(a), std::fs::metadata(b)) {
+            return ma.dev() == mb.dev() && ma.ino() == mb.ino();
+        }
+    }
+    matches!((std::fs::canonicalize(a), std::fs::canonicalize(b)), (Ok(x), Ok(y)) if x == y)
+}
