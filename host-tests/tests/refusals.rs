@@ -38,6 +38,14 @@ fn refused(args: &[&std::ffi::OsStr], code: i32, words: &[&str]) -> String {
     stderr
 }
 
+/// The example recording and its calibration JSON, in `dir`.
+fn calibrated_example(dir: &tempfile::TempDir) -> (PathBuf, PathBuf) {
+    let rec = file(dir, "example.csv", example_text());
+    let cal = dir.path().join("cal.json");
+    sinscal().arg("calibrate").arg(&rec).arg("--json").arg(&cal).assert().success();
+    (rec, cal)
+}
+
 fn os(s: &str) -> &std::ffi::OsStr {
     std::ffi::OsStr::new(s)
 }
@@ -298,9 +306,7 @@ fn an_import_never_writes_what_its_reader_refuses() {
 #[test]
 fn an_implausible_calibration_is_refused_before_it_is_used() {
     let dir = tempfile::tempdir().unwrap();
-    let rec = file(&dir, "example.csv", example_text());
-    let cal = dir.path().join("cal.json");
-    sinscal().arg("calibrate").arg(&rec).arg("--json").arg(&cal).assert().success();
+    let (rec, cal) = calibrated_example(&dir);
     let mut v: serde_json::Value = serde_json::from_str(&std::fs::read_to_string(&cal).unwrap()).unwrap();
     v["gyro_bias_radps"][0] = serde_json::json!(1e308);
     let big = file(&dir, "big.json", v.to_string());
@@ -332,9 +338,7 @@ fn angles_beyond_a_radian_are_refused() {
 #[test]
 fn hours_that_are_not_a_duration_are_usage_errors() {
     let dir = tempfile::tempdir().unwrap();
-    let rec = file(&dir, "example.csv", example_text());
-    let cal = dir.path().join("cal.json");
-    sinscal().arg("calibrate").arg(&rec).arg("--json").arg(&cal).assert().success();
+    let (rec, cal) = calibrated_example(&dir);
     for hours in ["nan", "0", "49", "inf"] {
         refused(
             &[os("navigate"), rec.as_os_str(), os("--calibration"), cal.as_os_str(), os("--hours"), os(hours)],
@@ -358,9 +362,7 @@ fn a_line_longer_than_64_kib_is_refused_without_reading_it_whole() {
 #[test]
 fn a_calibration_that_says_a_thing_twice_is_refused() {
     let dir = tempfile::tempdir().unwrap();
-    let rec = file(&dir, "example.csv", example_text());
-    let cal = dir.path().join("cal.json");
-    sinscal().arg("calibrate").arg(&rec).arg("--json").arg(&cal).assert().success();
+    let (rec, cal) = calibrated_example(&dir);
     let text = std::fs::read_to_string(&cal).unwrap();
     // The second gyro_bias_radps would win silently in a plain JSON reader.
     let twice =
