@@ -62,10 +62,16 @@ struct FilterSums {
     ln_det: f64,
 }
 
-/// The columns every dwell's mean and line were removed along (1 and the time in units of the longest
-/// dwell), through the filter: the filter's gains do not depend on the data and every dwell starts from
-/// the same prior, so one pass serves every dwell, whatever its length (the filter is causal).
+/// The filter's gain sequence, and the columns every dwell's mean and line were removed along (1 and the
+/// time in units of the longest dwell) through it. The gains do not depend on the data and every dwell
+/// starts from the same prior (`x = 0`, `p = q`), so one pass serves every dwell, whatever its length (the
+/// filter is causal).
 struct Columns {
+    /// Innovation variance `s` and gain `k` of each step while the Riccati recursion changes.
+    gains: Vec<(f64, f64)>,
+    /// Once it has converged (two successive variances within 4 units of f64 rounding): the steady `s`
+    /// and `k`, from step `gains.len()` on.
+    steady: Option<(f64, f64)>,
     /// Innovations of the two columns at each step.
     x: Vec<[f64; 2]>,
     /// Per number of steps `m`: the sums over the first `m` steps of `x x' / s` (11, 12, 22).
@@ -75,19 +81,34 @@ struct Columns {
 impl Columns {
     fn new(n_max: usize, phi: f64, q: f64) -> Columns {
         let drive = q * (1.0 - phi * phi);
-        let mut c = Columns { x: Vec::with_capacity(n_max), xx_s: Vec::with_capacity(n_max + 1) };
+        let mut c = Columns {
+            gains: Vec::new(),
+            steady: None,
+            x: Vec::with_capacity(n_max),
+            xx_s: Vec::with_capacity(n_max + 1),
+        };
         c.xx_s.push([0.0; 3]);
         let (mut p, mut state) = (q, [0.0f64; 2]);
         let scale = 1.0 / n_max.max(1) as f64;
         for i in 0..n_max {
-            let s = p + 1.0;
-            let k = p / s;
+            let (s, k) = match c.steady {
+                Some(gain) => gain,
+                None => {
+                    let (s, k) = (p + 1.0, p / (p + 1.0));
+                    c.gains.push((s, k));
+                    let p_next = phi * phi * (p * (1.0 - k)) + drive;
+                    if (p_next - p).abs() <= 4.0 * f64::EPSILON * p {
+                        c.steady = Some((p_next + 1.0, p_next / (p_next + 1.0)));
+                    }
+                    p = p_next;
+                    (s, k)
+                }
+            };
             let e = [1.0 - state[0], i as f64 * scale - state[1]];
             state = [(state[0] + k * e[0]) * phi, (state[1] + k * e[1]) * phi];
             let last = c.xx_s[i];
             c.xx_s.push([last[0] + e[0] * e[0] / s, last[1] + e[0] * e[1] / s, last[2] + e[1] * e[1] / s]);
             c.x.push(e);
-            p = phi * phi * (p * (1.0 - k)) + drive;
         }
         c
     }
@@ -120,17 +141,12 @@ const LANES: usize = 6;
 /// the division by their common `s`): they agree to the rounding of f64 (docs/analysis.md#speed-and-memory).
 /// Each dwell's sums against its columns ([`Columns`]) give what its mean and line explain.
 fn filter_sums(dwells: &[Vec<f64>], phi: f64, q: f64) -> FilterSums {
-    let drive = q * (1.0 - phi * phi);
     let n_max = dwells.iter().map(Vec::len).max().unwrap_or(0);
     let columns = Columns::new(n_max, phi, q);
     let mut x = vec![0.0; dwells.len()];
     let mut b = vec![[0.0f64; 2]; dwells.len()];
     let mut sums = FilterSums::default();
-    let (mut p, mut i) = (q, 0);
-    let mut steady = false;
-    while i < n_max {
-        let s = p + 1.0;
-        let k = p / s;
+    for (i, &(s, k)) in columns.gains.iter().enumerate() {
         let (mut e2, mut active) = (0.0, 0usize);
         let xc = columns.x[i];
         for ((d, xd), bd) in dwells.iter().zip(x.iter_mut()).zip(b.iter_mut()) {
@@ -146,17 +162,9 @@ fn filter_sums(dwells: &[Vec<f64>], phi: f64, q: f64) -> FilterSums {
         sums.ln_s += active as f64 * s.ln();
         sums.e2_s += e2 / s;
         sums.e2 += e2;
-        i += 1;
-        let p_next = phi * phi * (p * (1.0 - k)) + drive;
-        steady = (p_next - p).abs() <= 4.0 * f64::EPSILON * p;
-        p = p_next;
-        if steady {
-            break;
-        }
     }
-    if steady && i < n_max {
-        let s = p + 1.0;
-        let k = p / s;
+    let i = columns.gains.len();
+    if let (Some((s, k)), true) = (columns.steady, i < n_max) {
         let remaining: usize = dwells.iter().map(|d| d.len().saturating_sub(i)).sum();
         let mut e2 = 0.0;
         let mut steady_b = vec![[0.0f64; 2]; dwells.len()];
