@@ -266,7 +266,7 @@ pub struct TriadModel {
 pub const MAX_SIMULATED_ROWS: f64 = 1e7;
 
 /// Smallest quantisation step, SI: a finer step divides samples into more steps than f64 counts exactly.
-pub const MIN_QUANTIZATION_STEP: f64 = 1e-15;
+pub const MIN_QUANTIZATION_STEP_SI: f64 = 1e-15;
 
 /// The dotted key of the first number in `value` that is not finite (`inf`, `nan`), if any.
 fn non_finite(key: &str, value: &toml::Value) -> Option<String> {
@@ -376,9 +376,9 @@ impl ScenarioFile {
             .quantization_radps
             .iter()
             .chain(&self.accel.quantization_mps2)
-            .any(|&q| q.is_nan() || q < 0.0 || (q > 0.0 && q < MIN_QUANTIZATION_STEP))
+            .any(|&q| q.is_nan() || q < 0.0 || (q > 0.0 && q < MIN_QUANTIZATION_STEP_SI))
         {
-            return Err(format!("quantization steps must be 0 (off) or at least {MIN_QUANTIZATION_STEP:e}"));
+            return Err(format!("quantization steps must be 0 (off) or at least {MIN_QUANTIZATION_STEP_SI:e}"));
         }
         Ok(())
     }
