@@ -75,7 +75,7 @@ use std::path::Path;
 use serde::Serialize;
 
 use crate::io::error::InputError;
-use crate::io::recording::Recording;
+use crate::io::recording::RecordingFile;
 
 pub use angles::{analyze_angles, AnglesFile, AnglesRow};
 pub use recording::analyze_recording;
@@ -347,6 +347,6 @@ pub fn analyze_path(path: &Path) -> Result<Analysis, InputError> {
         let text = std::fs::read_to_string(path).map_err(|e| InputError::io(path, e))?;
         analyze_angles(&AnglesFile::parse(&text, &path.display().to_string())?)
     } else {
-        recording::analyze_recording_owned(Recording::read(path)?)
+        recording::analyze_recording(&RecordingFile::open(path)?)
     }
 }

@@ -6,7 +6,8 @@ use std::collections::HashMap;
 
 use crate::calibration::site_of;
 use crate::io::error::InputError;
-use crate::io::recording::{Dwell, Recording};
+use crate::io::dwell_tally::{DwellTallies, DwellTally, MAX_DWELLS_READ};
+use crate::io::recording::{Row, RowSource};
 use crate::model::synth::{c_b_n, earth_rate_n_radps, mul_t_vec, M3};
 
 use super::parallel::on_cores;
@@ -28,30 +29,50 @@ pub(super) struct DwellData {
     pub temp: Option<Vec<f64>>,
 }
 
+/// A dwell's samples as they are read: columns that grow row by row.
+#[derive(Default)]
+struct DwellColumns {
+    t: Vec<f64>,
+    y: [Vec<f64>; 6],
+    /// Temperatures while every row so far has one.
+    temp: Option<Vec<f64>>,
+}
+
+impl DwellColumns {
+    fn push(&mut self, row: &Row) {
+        if self.t.is_empty() {
+            self.temp = Some(Vec::new());
+        }
+        self.t.push(row.t_s);
+        for c in 0..3 {
+            self.y[c].push(row.rate_b_radps[c]);
+            self.y[3 + c].push(row.force_b_mps2[c]);
+        }
+        match (&mut self.temp, row.temp_c) {
+            (Some(temp), Some(t)) => temp.push(t),
+            (temp, _) => *temp = None,
+        }
+    }
+}
+
 impl DwellData {
-    /// The samples and attitude of dwell `d` of `source`.
-    fn read(d: &Dwell<'_>, source: &str) -> Result<DwellData, InputError> {
+    /// The samples of dwell `d` of `source` and its reference attitude.
+    fn new(d: &DwellTally, columns: DwellColumns, source: &str) -> Result<DwellData, InputError> {
         let att = d.attitude(source)?;
-        if d.rows.len() < MIN_DWELL_SAMPLES {
+        if d.samples < MIN_DWELL_SAMPLES {
             return Err(InputError::at(
                 source,
-                d.first_line(),
-                format!("dwell {}: {} rows, the analysis needs at least {MIN_DWELL_SAMPLES}", d.pos, d.rows.len()),
+                d.first_line,
+                format!("dwell {}: {} rows, the analysis needs at least {MIN_DWELL_SAMPLES}", d.pos, d.samples),
             ));
         }
-        let temp = if d.rows.iter().all(|r| r.temp_c.is_some()) {
-            Some(d.rows.iter().map(|r| r.temp_c.unwrap_or(0.0)).collect())
-        } else {
-            None
-        };
+        let DwellColumns { t, y, temp } = columns;
         Ok(DwellData {
             pos: d.pos,
             c_b_n: att.heading_deg.map(|h| c_b_n(att.pitch_deg, att.roll_deg, h)),
             c_tilt: c_b_n(att.pitch_deg, att.roll_deg, 0.0),
-            t: d.rows.iter().map(|r| r.t_s).collect(),
-            y: std::array::from_fn(|c| {
-                d.rows.iter().map(|r| if c < 3 { r.rate_b_radps[c] } else { r.force_b_mps2[c - 3] }).collect()
-            }),
+            t,
+            y,
             temp,
         })
     }
@@ -84,15 +105,42 @@ pub(super) struct Session {
 }
 
 impl Session {
-    /// Reads the dwells of `recording`; an error if a dwell is too short or there is none.
-    pub fn read(recording: &Recording) -> Result<Session, InputError> {
-        let source = recording.source.as_str();
-        let (site, _) = site_of(&recording.header);
+    /// Reads the dwells of `recording` in one pass, keeping of each row only its time and six channels (and
+    /// temperature) in the dwell's columns; an error if a dwell is too short or there is none.
+    pub fn read(recording: &impl RowSource) -> Result<Session, InputError> {
+        let source = recording.source();
+        let header = recording.header();
+        let (site, _) = site_of(header);
         let g = site.gravity_mps2 as f64;
-        let lat = recording.header.latitude_deg.to_radians();
-        let t0 = recording.rows.first().map_or(0.0, |r| r.t_s);
-        let rate_hz = sample_rate(recording, t0);
-        let dwells = recording.dwells().iter().map(|d| DwellData::read(d, source)).collect::<Result<Vec<_>, _>>()?;
+        let lat = header.latitude_deg.to_radians();
+        let mut tallies = DwellTallies::new(MAX_DWELLS_READ, "sinscal reads at most that many from one recording");
+        let mut columns: Vec<DwellColumns> = Vec::new();
+        let (mut rows, mut t0, mut t_last) = (0usize, None, 0.0);
+        recording.for_each_row(&mut |row| {
+            rows += 1;
+            t0.get_or_insert(row.t_s);
+            t_last = row.t_s;
+            if let Some(i) = tallies.push(row, source)? {
+                if i == columns.len() {
+                    columns.push(DwellColumns::default());
+                }
+                columns[i].push(row);
+            }
+            Ok(())
+        })?;
+        let t0 = t0.unwrap_or(0.0);
+        // The header's rate, else measured from the time column, else 100 Hz.
+        let rate_hz = match header.rate_hz {
+            Some(r) => r,
+            None if rows > 1 => (rows - 1) as f64 / (t_last - t0),
+            None => 100.0,
+        };
+        let dwells = tallies
+            .dwells
+            .iter()
+            .zip(columns)
+            .map(|(d, c)| DwellData::new(d, c, source))
+            .collect::<Result<Vec<_>, _>>()?;
         if dwells.is_empty() {
             return Err(InputError::file(source, "no dwell: every row has pos = 0"));
         }
@@ -112,17 +160,6 @@ impl Session {
     /// Index of the longest dwell.
     pub fn longest(&self) -> usize {
         (0..self.dwells.len()).max_by_key(|&i| self.dwells[i].t.len()).unwrap_or(0)
-    }
-}
-
-/// The header's rate, else measured from the time column, else 100 Hz.
-fn sample_rate(recording: &Recording, t0: f64) -> f64 {
-    match recording.header.rate_hz {
-        Some(r) => r,
-        None if recording.rows.len() > 1 => {
-            (recording.rows.len() - 1) as f64 / (recording.rows[recording.rows.len() - 1].t_s - t0)
-        }
-        None => 100.0,
     }
 }
 

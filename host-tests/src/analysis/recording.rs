@@ -5,7 +5,7 @@ use std::collections::BTreeMap;
 
 use crate::calibration::attitude_knowledge;
 use crate::io::error::InputError;
-use crate::io::recording::Recording;
+use crate::io::recording::RowSource;
 use crate::stats::linfit::Observations;
 use sinscal::calib::channels::AttitudeKnowledge;
 
@@ -16,22 +16,12 @@ use super::sample_tests::{measure_samples, test_samples, SampleFindings, SAMPLE_
 use super::selection::{select, Problem, Selection};
 use super::{Analysis, ChannelDiagnostics, CHANNELS, CHANNEL_UNITS};
 
-/// Analyses a recording.
-pub fn analyze_recording(recording: &Recording) -> Result<Analysis, InputError> {
+/// Analyses a recording: in one pass over its rows, of which the dwells' columns are kept
+/// (docs/analysis.md#speed-and-memory).
+pub fn analyze_recording(recording: &impl RowSource) -> Result<Analysis, InputError> {
     recording.require_gyro("analyze")?;
-    let levelled = attitude_knowledge(&recording.header) == AttitudeKnowledge::Unknown;
-    analyze_session(Session::read(recording)?, levelled, &recording.source)
-}
-
-/// Analyses a recording that is not needed afterwards: its rows are dropped once the dwells are read, so
-/// that the rows and the analysis' working data are not held at once (docs/analysis.md#speed-and-memory).
-pub(super) fn analyze_recording_owned(recording: Recording) -> Result<Analysis, InputError> {
-    recording.require_gyro("analyze")?;
-    let levelled = attitude_knowledge(&recording.header) == AttitudeKnowledge::Unknown;
-    let session = Session::read(&recording)?;
-    let source = recording.source.clone();
-    drop(recording);
-    analyze_session(session, levelled, &source)
+    let levelled = attitude_knowledge(recording.header()) == AttitudeKnowledge::Unknown;
+    analyze_session(Session::read(recording)?, levelled, recording.source())
 }
 
 /// The analysis of a session read from `source`; `levelled`: its attitudes were levelled from its own

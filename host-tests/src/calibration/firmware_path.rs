@@ -5,18 +5,20 @@
 use sinscal::calib::align::{position_angles, DwellValue};
 use sinscal::calib::dwell::Prefilter;
 use sinscal::rig::replay::{
-    decode_outcome, encode_outcome, estimator_code, read_header, run_replay, terms_bits, ReplayOutcome, MAGIC,
-    MAX_OUTCOME_BYTES, VERSION,
+    decode_outcome, encode_outcome, estimator_code, read_header, run_replay, terms_bits, ByteSource, ReplayError,
+    ReplayOutcome, MAGIC, MAX_OUTCOME_BYTES, VERSION,
 };
 use sinscal::run::sequence::{SequenceFailure, SequenceSolution};
 use sinscal::sensor::adis::{encode_burst, Burst, Model, BURST32_LEN, I16F16};
 
 use crate::calibration::{
-    angle_error, attitude_knowledge, calibration_dwells, channel_error, leave_out_suspects, prefilter_of,
+    angle_error, attitude_knowledge, channel_error, leave_out_suspects, prefilter_of,
     session_dwells, site_of, Calibration, Estimates, Method, Options, PositionResult,
 };
 use crate::io::error::InputError;
-use crate::io::recording::{DwellAttitude, Recording};
+use crate::io::dwell_tally::{DwellTallies, DwellTally};
+use crate::io::recording::{DwellAttitude, RowSource};
+use crate::io::ScratchFile;
 use sinscal::calib::channels::ChannelSettings;
 use sinscal::calib::session::session_estimator;
 use sinscal::run::sequence::Estimator;
@@ -24,64 +26,98 @@ use sinscal::run::sequence::Estimator;
 /// The sensor model the replay files emulate.
 pub const REPLAY_MODEL: Model = Model::Adis16505_2;
 
-/// Writes the replay file of a recording for the given calibration options.
-pub fn replay_file(rec: &Recording, options: &Options) -> Result<(Vec<u8>, Vec<DwellAttitude>), InputError> {
-    let source = rec.source.as_str();
-    let dwells = calibration_dwells(rec, sinscal::calib::solve::MAX_POSITIONS)?;
-    if attitude_knowledge(&rec.header) == sinscal::calib::channels::AttitudeKnowledge::Unknown {
+/// What a replay file was written from: each dwell's tally (first line, label) and reference attitude, in
+/// the order of the file's schedule.
+#[derive(Clone, Debug)]
+pub struct ReplayPlan {
+    /// The dwells.
+    pub dwells: Vec<DwellTally>,
+    /// Their reference attitudes.
+    pub attitudes: Vec<DwellAttitude>,
+}
+
+/// The replay file of a recording for the given calibration options, in memory ([`write_replay`]).
+pub fn replay_file(rec: &impl RowSource, options: &Options) -> Result<(Vec<u8>, ReplayPlan), InputError> {
+    let mut out = Vec::new();
+    let plan = write_replay(rec, options, &mut out)?;
+    Ok((out, plan))
+}
+
+/// Writes the replay file of a recording for the given calibration options, in two passes over its rows:
+/// the dwells (the file's header holds the schedule and the frame count), then one frame per row. Nothing
+/// is kept of the rows.
+pub fn write_replay(
+    rec: &impl RowSource,
+    options: &Options,
+    out: &mut dyn std::io::Write,
+) -> Result<ReplayPlan, InputError> {
+    let source = rec.source();
+    if attitude_knowledge(rec.header()) == sinscal::calib::channels::AttitudeKnowledge::Unknown {
         return Err(InputError::file(
             source,
             "the firmware path takes the recording's attitudes as its reference, and this recording's were \
              levelled from its own accelerometers: calibrate it without --on (docs/method.md#unknown-attitudes)",
         ));
     }
+    let limit = sinscal::calib::solve::MAX_POSITIONS;
+    let mut tallies = DwellTallies::new(limit, "the core's limit");
+    let mut rows = 0u64;
     // The firmware path needs each dwell as one contiguous stretch of rows (one turntable stop).
-    let mut seen = Vec::new();
     let mut previous = 0;
-    for row in &rec.rows {
-        if row.pos != 0 && row.pos != previous {
-            if seen.contains(&row.pos) {
+    rec.for_each_row(&mut |row| {
+        rows += 1;
+        let known = tallies.dwells.len();
+        if let Some(i) = tallies.push(row, source)? {
+            if i < known && row.pos != previous {
                 return Err(InputError::at(
                     source,
                     row.line,
                     format!("dwell {} is not contiguous: the firmware path needs one stretch per position", row.pos),
                 ));
             }
-            seen.push(row.pos);
         }
         previous = row.pos;
+        Ok(())
+    })?;
+    let dwells = tallies.dwells;
+    if dwells.is_empty() {
+        return Err(InputError::file(source, "no dwell: every row has pos = 0"));
     }
-    let (site, _) = site_of(&rec.header);
+    let frames = u32::try_from(rows).map_err(|_| {
+        InputError::file(source, format!("{rows} rows: the replay file counts its frames in 32 bits"))
+    })?;
+    let (site, _) = site_of(rec.header());
     let estimator = match options.method {
         Method::Angles => Estimator::Angles,
         Method::Channels => Estimator::Channels(ChannelSettings {
             model: options.model,
-            use_gyro: rec.has_gyro,
+            use_gyro: rec.has_gyro(),
             ..ChannelSettings::default()
         }),
     };
-    let (prefilter_code, [a_gyro, a_accel]) = match prefilter_of(options, &dwells[0], source)? {
+    let (prefilter_code, [a_gyro, a_accel]) = match prefilter_of(options, rec)? {
         Prefilter::None => (0u8, [1.0f32, 1.0]),
         Prefilter::HmmKf { gyro, accel } => (1, [gyro.a, accel.a]),
     };
-    let mut out = Vec::with_capacity(64 + rec.rows.len() * (1 + BURST32_LEN));
-    out.extend_from_slice(&MAGIC);
-    out.extend_from_slice(&VERSION.to_le_bytes());
-    out.push(1); // ADIS16505-2
-    out.push(estimator_code(&estimator));
-    out.extend_from_slice(&site.latitude_rad.to_le_bytes());
-    out.extend_from_slice(&site.gravity_mps2.to_le_bytes());
-    out.extend_from_slice(&(dwells.len() as u16).to_le_bytes());
-    out.extend_from_slice(&terms_bits(options.model).to_le_bytes());
-    out.push(prefilter_code);
-    out.push(match options.dwell_value {
+    let mut head = Vec::with_capacity(64 + 16 * dwells.len());
+    let out_head = &mut head;
+    out_head.extend_from_slice(&MAGIC);
+    out_head.extend_from_slice(&VERSION.to_le_bytes());
+    out_head.push(1); // ADIS16505-2
+    out_head.push(estimator_code(&estimator));
+    out_head.extend_from_slice(&site.latitude_rad.to_le_bytes());
+    out_head.extend_from_slice(&site.gravity_mps2.to_le_bytes());
+    out_head.extend_from_slice(&(dwells.len() as u16).to_le_bytes());
+    out_head.extend_from_slice(&terms_bits(options.model).to_le_bytes());
+    out_head.push(prefilter_code);
+    out_head.push(match options.dwell_value {
         DwellValue::Mean => 0,
         DwellValue::Settled => 1,
     });
-    out.push(options.max_passes.min(255) as u8);
-    out.push(options.estimate_reference_offset as u8);
-    out.extend_from_slice(&a_gyro.to_le_bytes());
-    out.extend_from_slice(&a_accel.to_le_bytes());
+    out_head.push(options.max_passes.min(255) as u8);
+    out_head.push(options.estimate_reference_offset as u8);
+    out_head.extend_from_slice(&a_gyro.to_le_bytes());
+    out_head.extend_from_slice(&a_accel.to_le_bytes());
     let mut attitudes = Vec::new();
     for d in &dwells {
         // The angle method needs every heading; the general estimator estimates an unknown one.
@@ -90,22 +126,26 @@ pub fn replay_file(rec: &Recording, options: &Options) -> Result<(Vec<u8>, Vec<D
             Method::Channels => d.attitude(source)?,
         };
         for v in [att.pitch_deg, att.roll_deg, att.heading_deg.unwrap_or(0.0)] {
-            out.extend_from_slice(&(v as f32).to_radians().to_le_bytes());
+            out_head.extend_from_slice(&(v as f32).to_radians().to_le_bytes());
         }
         // The replay file holds a label in 16 bits: a larger one would be clipped and two labels could
         // collide.
         let label = u16::try_from(d.pos).map_err(|_| {
             InputError::at(
                 source,
-                d.first_line(),
+                d.first_line,
                 format!("position label {} does not fit the firmware path's 16 bits (at most 65535)", d.pos),
             )
         })?;
-        out.extend_from_slice(&label.to_le_bytes());
-        out.extend_from_slice(&u16::from(att.heading_deg.is_none()).to_le_bytes());
+        out_head.extend_from_slice(&label.to_le_bytes());
+        out_head.extend_from_slice(&u16::from(att.heading_deg.is_none()).to_le_bytes());
         attitudes.push(att);
     }
-    out.extend_from_slice(&(rec.rows.len() as u32).to_le_bytes());
+    out_head.extend_from_slice(&frames.to_le_bytes());
+    let write = |out: &mut dyn std::io::Write, bytes: &[u8]| {
+        out.write_all(bytes).map_err(|e| InputError::file(source, format!("writing the replay file: {e}")))
+    };
+    write(out, &head)?;
     let lsb_rate = (REPLAY_MODEL.radps_per_lsb() as f64) / 65536.0;
     let lsb_force = (REPLAY_MODEL.accel_mps2_per_lsb() as f64) / 65536.0;
     let quantise = |value: f64, lsb: f64, line: usize, what: &str| -> Result<I16F16, InputError> {
@@ -115,10 +155,15 @@ pub fn replay_file(rec: &Recording, options: &Options) -> Result<(Vec<u8>, Vec<D
         }
         Ok(I16F16::from_bits(counts as i32))
     };
-    let mut frame = [0u8; BURST32_LEN];
-    for (k, row) in rec.rows.iter().enumerate() {
-        let table =
-            if row.pos == 0 { 0 } else { dwells.iter().position(|d| d.pos == row.pos).map_or(0, |i| i + 1) as u8 };
+    let mut record = [0u8; 1 + BURST32_LEN];
+    let mut k = 0usize;
+    let mut last = (0u32, 0u8);
+    rec.for_each_row(&mut |row| {
+        if row.pos != last.0 {
+            let table = dwells.iter().position(|d| d.pos == row.pos).map_or(0, |i| i + 1) as u8;
+            last = (row.pos, table);
+        }
+        let table = if row.pos == 0 { 0 } else { last.1 };
         let mut gyro = [I16F16::ZERO; 3];
         let mut accel = [I16F16::ZERO; 3];
         for i in 0..3 {
@@ -127,36 +172,37 @@ pub fn replay_file(rec: &Recording, options: &Options) -> Result<(Vec<u8>, Vec<D
         }
         let temp_raw = (row.temp_c.unwrap_or(25.0) / 0.1).round().clamp(i16::MIN as f64, i16::MAX as f64) as i16;
         let burst = Burst { diag_stat: 0, gyro_lsb: gyro, accel_lsb: accel, temp_raw, data_counter: k as u16 };
-        encode_burst(REPLAY_MODEL, &burst, &mut frame);
-        out.push(table);
-        out.extend_from_slice(&frame);
-    }
-    Ok((out, attitudes))
+        k += 1;
+        record[0] = table;
+        encode_burst(REPLAY_MODEL, &burst, &mut record[1..]);
+        write(out, &record)
+    })?;
+    Ok(ReplayPlan { dwells, attitudes })
 }
 
 /// The calibration of a replay outcome, in the host's report types (angles per position recomputed with
 /// the core from the replayed dwell statistics where the heading is known). A refusal of the core comes back
 /// with the dwell's label and line, as on the direct path.
 pub fn calibration_from_outcome(
-    rec: &Recording,
+    rec: &impl RowSource,
     options: &Options,
-    attitudes: &[DwellAttitude],
+    plan: &ReplayPlan,
     outcome: &ReplayOutcome,
 ) -> Result<Calibration, InputError> {
-    let source = rec.source.as_str();
+    let source = rec.source();
     let site = outcome.header.site;
-    let dwells = rec.dwells();
+    let ReplayPlan { dwells, attitudes } = plan;
     let mut positions = Vec::new();
     for (k, p) in outcome.positions.iter().enumerate() {
         let angles = match attitudes[k].heading_deg {
             Some(_) => Some(position_angles(&p.summary, options.dwell_value, &p.c_b_n, &site).map_err(|e| {
-                InputError::at(source, dwells[k].first_line(), format!("dwell {}: {e}", dwells[k].pos))
+                InputError::at(source, dwells[k].first_line, format!("dwell {}: {e}", dwells[k].pos))
             })?),
             None => None,
         };
         positions.push(PositionResult {
             pos: outcome.header.labels[k] as u32,
-            first_line: dwells[k].first_line(),
+            first_line: dwells[k].first_line,
             attitude: attitudes[k],
             summary: p.summary,
             angles,
@@ -166,7 +212,7 @@ pub fn calibration_from_outcome(
         return Err(match *f {
             SequenceFailure::PositionAborted { index, reason } => InputError::at(
                 source,
-                dwells.get(index).map_or(0, |d| d.first_line()),
+                dwells.get(index).map_or(0, |d| d.first_line),
                 format!(
                     "calibration sequence failed: position {} (dwell {}) aborted: {reason:?}",
                     index + 1,
@@ -190,16 +236,16 @@ pub fn calibration_from_outcome(
     })?;
     let on_firmware = |estimates, solution, channels, without_suspect, passes, converged| Calibration {
         source: source.to_string(),
-        latitude_deg: rec.header.latitude_deg,
+        latitude_deg: rec.header().latitude_deg,
         site,
-        gravity_source: site_of(&rec.header).1,
+        gravity_source: site_of(rec.header()).1,
         prefilter: outcome.header.settings.prefilter,
         options: *options,
         positions: positions.clone(),
         estimates,
         solution,
         channels,
-        has_gyro: rec.has_gyro,
+        has_gyro: rec.has_gyro(),
         without_suspect,
         passes,
         converged,
@@ -226,15 +272,37 @@ pub fn calibration_from_outcome(
     })
 }
 
-/// `calibrate --on host`: the replay file through the firmware path on x86. The outcome goes through the
-/// same byte encoding as the firmware's, so both report from identical bits.
-pub fn calibrate_on_host(rec: &Recording, options: &Options) -> Result<Calibration, InputError> {
-    let (file, attitudes) = replay_file(rec, options)?;
-    let source = rec.source.as_str();
-    let outcome = run_replay(&file[..], |_| {}).map_err(|e| InputError::file(source, format!("replay: {e}")))?;
+/// `calibrate --on host`: the replay file through the firmware path on x86. The replay file is written to a
+/// scratch file and read back as the firmware reads it, so memory does not grow with the recording. The
+/// outcome goes through the same byte encoding as the firmware's, so both report from identical bits.
+pub fn calibrate_on_host(rec: &impl RowSource, options: &Options) -> Result<Calibration, InputError> {
+    let source = rec.source();
+    let replay = ScratchFile::new("replay.ssrp");
+    let plan = write_replay_file(rec, options, &replay)?;
+    let fail = |e: String| InputError::file(source, format!("replay: {e}"));
+    let open = || std::fs::File::open(replay.path()).map(|f| ReadSource(std::io::BufReader::new(f)));
+    let outcome = run_replay(open().map_err(|e| fail(e.to_string()))?, |_| {}).map_err(|e| fail(e.to_string()))?;
     let mut bytes = vec![0u8; MAX_OUTCOME_BYTES];
-    let n = encode_outcome(&outcome, &mut bytes).map_err(|e| InputError::file(source, format!("replay: {e}")))?;
-    let header = read_header(&mut &file[..]).map_err(|e| InputError::file(source, format!("replay: {e}")))?;
-    let decoded = decode_outcome(&header, &bytes[..n]).map_err(|e| InputError::file(source, format!("replay: {e}")))?;
-    calibration_from_outcome(rec, options, &attitudes, &decoded)
+    let n = encode_outcome(&outcome, &mut bytes).map_err(|e| fail(e.to_string()))?;
+    let header = read_header(&mut open().map_err(|e| fail(e.to_string()))?).map_err(|e| fail(e.to_string()))?;
+    let decoded = decode_outcome(&header, &bytes[..n]).map_err(|e| fail(e.to_string()))?;
+    calibration_from_outcome(rec, options, &plan, &decoded)
+}
+
+/// Writes the replay file of a recording ([`write_replay`]) to `file`.
+pub fn write_replay_file(rec: &impl RowSource, options: &Options, file: &ScratchFile) -> Result<ReplayPlan, InputError> {
+    let fail = |e: std::io::Error| InputError::file(rec.source(), format!("{}: {e}", file.path().display()));
+    let mut out = std::io::BufWriter::new(std::fs::File::create(file.path()).map_err(fail)?);
+    let plan = write_replay(rec, options, &mut out)?;
+    out.into_inner().map_err(|e| fail(e.into_error()))?;
+    Ok(plan)
+}
+
+/// The firmware's byte source on a host reader.
+pub struct ReadSource<R>(pub R);
+
+impl<R: std::io::Read> ByteSource for ReadSource<R> {
+    fn read_exact(&mut self, buf: &mut [u8]) -> Result<(), ReplayError> {
+        self.0.read_exact(buf).map_err(|_| ReplayError::Read)
+    }
 }

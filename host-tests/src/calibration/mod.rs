@@ -25,7 +25,8 @@ use sinscal::sensor::sample::ImuSample;
 
 pub use crate::calibration::estimates::{Estimates, Method};
 use crate::io::error::InputError;
-use crate::io::recording::{Dwell, DwellAttitude, Header, Recording};
+use crate::io::dwell_tally::{DwellTallies, DwellTally};
+use crate::io::recording::{DwellAttitude, Header, RowSource};
 
 /// Which prefilter runs in front of the dwell statistics.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -206,28 +207,26 @@ pub fn gyros_resolve_earth_rate(noise_var: &[f32; 6], samples: impl Iterator<Ite
     (worst / n).sqrt() < sinscal::nav::earth::EARTH_RATE_RADPS / 3.0
 }
 
-/// The dwells of a recording, at least one and at most `limit` (the estimator's).
-pub fn calibration_dwells(recording: &Recording, limit: usize) -> Result<Vec<Dwell<'_>>, InputError> {
-    let source = recording.source.as_str();
-    let dwells = recording.dwells();
-    if dwells.is_empty() {
+/// The dwells of a recording in one pass, at least one and at most `limit` (the estimator's).
+pub fn calibration_dwells(recording: &impl RowSource, limit: usize) -> Result<Vec<DwellTally>, InputError> {
+    let source = recording.source();
+    let mut tallies = DwellTallies::new(limit, "the core's limit");
+    recording.for_each_row(&mut |row| tallies.push(row, source).map(|_| ()))?;
+    if tallies.dwells.is_empty() {
         return Err(InputError::file(source, "no dwell: every row has pos = 0"));
     }
-    if dwells.len() > limit {
-        let line = dwells[limit].first_line();
-        return Err(InputError::at(source, line, format!("more than {limit} positions (the core's limit)")));
-    }
-    Ok(dwells)
+    Ok(tallies.dwells)
 }
 
-/// The prefilter the options ask for; `a` identified from `first` when they say so.
-pub fn prefilter_of(options: &Options, first: &Dwell<'_>, source: &str) -> Result<Prefilter, InputError> {
+/// The prefilter the options ask for; `a` identified from the recording's first dwell when they say so (a
+/// pass over the rows of its label).
+pub fn prefilter_of(options: &Options, recording: &impl RowSource) -> Result<Prefilter, InputError> {
     Ok(match options.prefilter {
         PrefilterKind::None => Prefilter::None,
         PrefilterKind::HmmKf => {
             let [a_gyro, a_accel] = match options.coefficient {
                 Coefficient::Fixed(a) => [a, a],
-                Coefficient::Identify => identify_coefficients(&first.rows, source, first.first_line())?,
+                Coefficient::Identify => identify_coefficients(recording)?,
             };
             Prefilter::HmmKf {
                 gyro: PrefilterSettings::paper_gyro().with_a(a_gyro),
@@ -237,42 +236,62 @@ pub fn prefilter_of(options: &Options, first: &Dwell<'_>, source: &str) -> Resul
     })
 }
 
+/// The dwells of a recording in one pass, at least one and at most `limit`: each dwell's tally and its
+/// statistics from the core's collector, fed its rows in file order.
+pub fn collect_dwells(
+    recording: &impl RowSource,
+    prefilter: &Prefilter,
+    limit: usize,
+) -> Result<Vec<(DwellTally, DwellSummary)>, InputError> {
+    let source = recording.source();
+    let fresh = DwellCollector::new(prefilter).map_err(|e| InputError::file(source, format!("prefilter: {e}")))?;
+    let mut tallies = DwellTallies::new(limit, "the core's limit");
+    let mut collectors: Vec<DwellCollector> = Vec::new();
+    recording.for_each_row(&mut |row| {
+        let Some(i) = tallies.push(row, source)? else { return Ok(()) };
+        if i == collectors.len() {
+            collectors.push(fresh.clone());
+        }
+        let sample = ImuSample { rate_b_radps: to_f32(row.rate_b_radps), force_b_mps2: to_f32(row.force_b_mps2) };
+        collectors[i]
+            .update(&sample)
+            .map_err(|e| InputError::at(source, row.line, format!("{e} (after conversion to f32)")))
+    })?;
+    if tallies.dwells.is_empty() {
+        return Err(InputError::file(source, "no dwell: every row has pos = 0"));
+    }
+    tallies
+        .dwells
+        .into_iter()
+        .zip(collectors)
+        .map(|(tally, collector)| {
+            let summary = collector.summary().map_err(|e| {
+                InputError::at(source, tally.first_line, format!("dwell {}: {e}: too short to use", tally.pos))
+            })?;
+            Ok((tally, summary))
+        })
+        .collect()
+}
+
 /// Runs a calibration of a recording with the estimator the options name.
-pub fn calibrate(recording: &Recording, options: &Options) -> Result<Calibration, InputError> {
+pub fn calibrate(recording: &impl RowSource, options: &Options) -> Result<Calibration, InputError> {
     match options.method {
         Method::Angles => calibrate_angles(recording, options),
         Method::Channels => calibrate_channels(recording, options),
     }
 }
 
-/// The dwell statistics of one dwell through the core's collector.
-fn collect(collector: &mut DwellCollector, dwell: &Dwell<'_>, source: &str) -> Result<DwellSummary, InputError> {
-    collector.reset();
-    for row in &dwell.rows {
-        let sample = ImuSample { rate_b_radps: to_f32(row.rate_b_radps), force_b_mps2: to_f32(row.force_b_mps2) };
-        collector
-            .update(&sample)
-            .map_err(|e| InputError::at(source, row.line, format!("{e} (after conversion to f32)")))?;
-    }
-    collector
-        .summary()
-        .map_err(|e| InputError::at(source, dwell.first_line(), format!("dwell {}: {e}: too short to use", dwell.pos)))
-}
-
 /// The general estimator (docs/method.md#general-estimator) on a recording: headings and gyro columns optional.
-pub fn calibrate_channels(recording: &Recording, options: &Options) -> Result<Calibration, InputError> {
-    let source = recording.source.as_str();
-    let header = &recording.header;
-    let has_gyro = recording.has_gyro;
+pub fn calibrate_channels(recording: &impl RowSource, options: &Options) -> Result<Calibration, InputError> {
+    let source = recording.source();
+    let header = recording.header();
+    let has_gyro = recording.has_gyro();
     let (site, gravity_source) = site_of(header);
-    let dwells = calibration_dwells(recording, MAX_DWELLS)?;
-    let prefilter = prefilter_of(options, &dwells[0], source)?;
-    let mut collector =
-        DwellCollector::new(&prefilter).map_err(|e| InputError::file(source, format!("prefilter: {e}")))?;
+    let prefilter = prefilter_of(options, recording)?;
+    let dwells = collect_dwells(recording, &prefilter, MAX_DWELLS)?;
     let mut positions = Vec::with_capacity(dwells.len());
-    for dwell in &dwells {
+    for (dwell, summary) in dwells {
         let attitude = dwell.attitude(source)?;
-        let summary = collect(&mut collector, dwell, source)?;
         let angles = match (has_gyro, attitude.heading_deg) {
             (true, Some(h)) => {
                 let c = Attitude::from_degrees(attitude.pitch_deg as f32, attitude.roll_deg as f32, h as f32).c_b_n();
@@ -280,7 +299,7 @@ pub fn calibrate_channels(recording: &Recording, options: &Options) -> Result<Ca
             }
             _ => None,
         };
-        positions.push(PositionResult { pos: dwell.pos, first_line: dwell.first_line(), attitude, summary, angles });
+        positions.push(PositionResult { pos: dwell.pos, first_line: dwell.first_line, attitude, summary, angles });
     }
     let attitude = if options.estimate_attitudes { AttitudeKnowledge::Unknown } else { attitude_knowledge(header) };
     // With reference attitudes the Earth rate is always in the gyro model ("unobservable" stays a property of the
@@ -372,20 +391,18 @@ pub fn channel_error(e: ChannelError, positions: &[PositionResult], source: &str
 }
 
 /// The paper's estimator (docs/method.md#step-5-schedule-and-solution) on a recording: headings and gyros needed.
-pub fn calibrate_angles(recording: &Recording, options: &Options) -> Result<Calibration, InputError> {
-    let source = recording.source.as_str();
-    let header = &recording.header;
-    if !recording.has_gyro {
+pub fn calibrate_angles(recording: &impl RowSource, options: &Options) -> Result<Calibration, InputError> {
+    let source = recording.source();
+    let header = recording.header();
+    if !recording.has_gyro() {
         return Err(InputError::file(
             source,
             "no gyro columns: the angle method needs them (--method channels calibrates the accelerometers alone)",
         ));
     }
     let (site, gravity_source) = site_of(header);
-    let dwells = calibration_dwells(recording, MAX_POSITIONS)?;
-    let prefilter = prefilter_of(options, &dwells[0], source)?;
-    let mut collector =
-        DwellCollector::new(&prefilter).map_err(|e| InputError::file(source, format!("prefilter: {e}")))?;
+    let prefilter = prefilter_of(options, recording)?;
+    let dwells = collect_dwells(recording, &prefilter, MAX_POSITIONS)?;
     let settings = CalibrationSettings {
         solver: SolverSettings {
             estimate_reference_offset: options.estimate_reference_offset,
@@ -396,16 +413,15 @@ pub fn calibrate_angles(recording: &Recording, options: &Options) -> Result<Cali
     };
     let mut inputs = Vec::with_capacity(dwells.len());
     let mut positions = Vec::with_capacity(dwells.len());
-    for dwell in &dwells {
-        let at = |reason: String| InputError::at(source, dwell.first_line(), format!("dwell {}: {reason}", dwell.pos));
+    for (dwell, summary) in dwells {
+        let at = |reason: String| InputError::at(source, dwell.first_line, format!("dwell {}: {reason}", dwell.pos));
         let (attitude, heading_deg) = dwell.attitude_with_heading(source, "the calibration")?;
-        let summary = collect(&mut collector, dwell, source)?;
         let c_b_n =
             Attitude::from_degrees(attitude.pitch_deg as f32, attitude.roll_deg as f32, heading_deg as f32).c_b_n();
         let angles = position_angles(&summary, options.dwell_value, &c_b_n, &site).map_err(|e| at(e.to_string()))?;
         inputs.push(PositionInput { c_b_n, summary });
         let angles = Some(angles);
-        positions.push(PositionResult { pos: dwell.pos, first_line: dwell.first_line(), attitude, summary, angles });
+        positions.push(PositionResult { pos: dwell.pos, first_line: dwell.first_line, attitude, summary, angles });
     }
     let CalibrationResult { solution, passes, converged, .. } =
         calibrate_positions(&inputs, &site, &settings).map_err(|e| angle_error(e, &positions, source))?;
@@ -452,25 +468,37 @@ fn dwell_error(dwell: Option<&PositionResult>, text: String, source: &str) -> In
     }
 }
 
-/// Identifies the prefilter coefficient `a` of the gyros and of the accelerometers from a dwell.
-pub fn identify_coefficients(
-    rows: &[&crate::io::recording::Row],
-    source: &str,
-    line: usize,
-) -> Result<[f32; 2], InputError> {
+/// Identifies the prefilter coefficient `a` of the gyros and of the accelerometers from the recording's first
+/// dwell (every row of its label).
+pub fn identify_coefficients(recording: &impl RowSource) -> Result<[f32; 2], InputError> {
     let mut ids = [CoefficientIdentifier::new(); 6];
-    for row in rows {
-        let channels = [to_f32(row.rate_b_radps), to_f32(row.force_b_mps2)];
-        for (i, id) in ids.iter_mut().enumerate() {
-            id.update(channels[i / 3][i % 3]);
+    let mut first: Option<(u32, usize)> = None;
+    recording.for_each_row(&mut |row| {
+        if row.pos == 0 {
+            return Ok(());
         }
-    }
+        let (label, _) = *first.get_or_insert((row.pos, row.line));
+        if row.pos == label {
+            let channels = [to_f32(row.rate_b_radps), to_f32(row.force_b_mps2)];
+            for (i, id) in ids.iter_mut().enumerate() {
+                id.update(channels[i / 3][i % 3]);
+            }
+        }
+        Ok(())
+    })?;
+    let Some((_, line)) = first else {
+        return Err(InputError::file(recording.source(), "no dwell: every row has pos = 0"));
+    };
     let mut out = [0.0; 2];
     for (sensor, slot) in out.iter_mut().enumerate() {
         let mut sum = 0.0;
         for id in &ids[3 * sensor..3 * sensor + 3] {
             sum += id.coefficient().ok_or_else(|| {
-                InputError::at(source, line, "first dwell too short or constant: cannot identify the coefficient a")
+                InputError::at(
+                    recording.source(),
+                    line,
+                    "first dwell too short or constant: cannot identify the coefficient a",
+                )
             })?;
         }
         *slot = sum / 3.0;

@@ -11,10 +11,11 @@ use std::sync::atomic::{AtomicU32, Ordering};
 
 use sinscal::rig::replay::{decode_outcome, read_header};
 
-use crate::calibration::firmware_path::{calibration_from_outcome, replay_file};
+use crate::calibration::firmware_path::{calibration_from_outcome, write_replay_file, ReadSource};
 use crate::calibration::{Calibration, Options};
 use crate::io::error::InputError;
-use crate::io::recording::Recording;
+use crate::io::recording::RowSource;
+use crate::io::ScratchFile;
 
 /// QEMU command and machine.
 pub const QEMU: &str = "qemu-system-arm";
@@ -54,6 +55,13 @@ pub fn firmware_binary(name: &str) -> Result<PathBuf, String> {
 /// Runs the firmware on a replay file in QEMU; returns the outcome bytes and the decoded defmt log (if
 /// defmt-print is available).
 pub fn run_firmware(elf: &Path, replay: &[u8]) -> Result<(Vec<u8>, String), String> {
+    let input = ScratchFile::new("in.ssrp");
+    std::fs::write(input.path(), replay).map_err(|e| format!("{}: {e}", input.path().display()))?;
+    run_firmware_on(elf, input.path())
+}
+
+/// [`run_firmware`] on a replay file on disk.
+pub fn run_firmware_on(elf: &Path, input: &Path) -> Result<(Vec<u8>, String), String> {
     static RUN: AtomicU32 = AtomicU32::new(0);
     let dir = std::env::temp_dir().join(format!(
         "sinscal-qemu-{}-{}",
@@ -61,9 +69,7 @@ pub fn run_firmware(elf: &Path, replay: &[u8]) -> Result<(Vec<u8>, String), Stri
         RUN.fetch_add(1, Ordering::Relaxed)
     ));
     std::fs::create_dir_all(&dir).map_err(|e| format!("{}: {e}", dir.display()))?;
-    let input = dir.join("in.ssrp");
     let output = dir.join("out.ssro");
-    std::fs::write(&input, replay).map_err(|e| format!("{}: {e}", input.display()))?;
     let semihosting =
         format!("enable=on,target=native,arg=sinscal-replay,arg={},arg={}", input.display(), output.display());
     let run = Command::new(QEMU)
@@ -131,19 +137,23 @@ fn decode_defmt(elf: &Path, frames: &[u8]) -> String {
     }
 }
 
-/// `calibrate --on qemu`.
-pub fn calibrate_on_qemu(rec: &Recording, options: &Options) -> Result<Calibration, InputError> {
-    let source = rec.source.as_str();
-    let (file, attitudes) = replay_file(rec, options)?;
+/// `calibrate --on qemu`: the replay file is written to a scratch file, which the firmware reads.
+pub fn calibrate_on_qemu(rec: &impl RowSource, options: &Options) -> Result<Calibration, InputError> {
+    let source = rec.source();
+    let replay = ScratchFile::new("replay.ssrp");
+    let plan = write_replay_file(rec, options, &replay)?;
     let elf = firmware_elf().map_err(|e| InputError::file(source, format!("--on qemu: {e}")))?;
-    let (bytes, log) = run_firmware(&elf, &file).map_err(|e| InputError::file(source, format!("--on qemu: {e}")))?;
+    let (bytes, log) =
+        run_firmware_on(&elf, replay.path()).map_err(|e| InputError::file(source, format!("--on qemu: {e}")))?;
     if std::env::var_os("SINSCAL_FIRMWARE_LOG").is_some() {
         eprint!("{log}");
     }
-    let header = read_header(&mut &file[..]).map_err(|e| InputError::file(source, format!("replay: {e}")))?;
+    let fail = |e: String| InputError::file(source, format!("replay: {e}"));
+    let file = std::fs::File::open(replay.path()).map_err(|e| fail(e.to_string()))?;
+    let header = read_header(&mut ReadSource(std::io::BufReader::new(file))).map_err(|e| fail(e.to_string()))?;
     let outcome =
         decode_outcome(&header, &bytes).map_err(|e| InputError::file(source, format!("--on qemu: outcome: {e}")))?;
-    let mut cal = calibration_from_outcome(rec, options, &attitudes, &outcome)?;
+    let mut cal = calibration_from_outcome(rec, options, &plan, &outcome)?;
     cal.on = "qemu";
     Ok(cal)
 }

@@ -6,7 +6,7 @@ use std::path::{Path, PathBuf};
 
 use crate::io::calibration_model::{CalibrationModel, M3};
 use crate::io::error::InputError;
-use crate::io::recording::Recording;
+use crate::io::recording::{RecordingFile, RecordingWriter, RowSource, WriteError};
 use crate::model::synth::{DEG_PER_HOUR, MICRO_G};
 
 /// Arguments of `sinscal apply`.
@@ -34,29 +34,55 @@ pub fn run(args: Args) -> anyhow::Result<()> {
             .into());
         }
     }
-    let rec = Recording::read(&recording)?;
+    // The rows are read and written one at a time, never held (docs/formats.md#speed-and-memory).
+    let rec = RecordingFile::open(&recording)?;
     let model = CalibrationModel::read(&calibration)?;
-    let compensated = apply(&rec, &model);
-    compensated.write(&out)?;
-    super::out(&summary(&rec, &model, &out))?;
+    let rows = apply(&rec, &model, &out)?;
+    super::out(&summary(&rec, rows, &model, &out))?;
     Ok(())
 }
 
-/// The recording compensated with the model: every row's specific force, and its rate when the recording has
-/// gyros (docs/conventions.md#sensor-model). The header keeps every key of the input and adds
+/// Writes the recording compensated with the model to `out`: every row's specific force, and its rate when the
+/// recording has gyros (docs/conventions.md#sensor-model). The header keeps every key of the input and adds
 /// `calibration: <file name>` (`calibration_2`, `calibration_3`, ... when the input was compensated before).
-pub fn apply(rec: &Recording, model: &CalibrationModel) -> Recording {
-    let mut out = rec.clone();
-    for row in &mut out.rows {
-        let f = model.compensate_force(row.force_b_mps2);
-        if rec.has_gyro {
-            row.rate_b_radps = model.compensate_rate(row.rate_b_radps, f);
-        }
-        row.force_b_mps2 = f;
+/// The rows go through one at a time into a scratch file beside `out`, renamed to `out` when every row is
+/// written: a refusal leaves no partial file. Returns the number of rows.
+pub fn apply(rec: &impl RowSource, model: &CalibrationModel, out: &Path) -> Result<usize, InputError> {
+    let name = out.display().to_string();
+    let refused = |e: WriteError| match e {
+        WriteError::Refused(reason) => InputError::file(&name, format!("not written, its reader would refuse it: {reason}")),
+        WriteError::Io(e) => InputError::io(out, e),
+    };
+    let mut header = rec.header().clone();
+    let key = calibration_key(&header.comments);
+    header.comments.push(format!("{key}: {}", model.source));
+    let partial = out.with_file_name(format!(
+        ".{}.partial",
+        out.file_name().map_or("out".into(), |n| n.to_string_lossy().into_owned())
+    ));
+    let file = std::fs::File::create(&partial).map_err(|e| InputError::io(&partial, e))?;
+    let written = (|| {
+        let mut writer = RecordingWriter::new(std::io::BufWriter::new(file), &header, rec.has_gyro(), rec.has_temp())
+            .map_err(refused)?;
+        let mut rows = 0;
+        rec.for_each_row(&mut |row| {
+            let mut row = row.clone();
+            let f = model.compensate_force(row.force_b_mps2);
+            if rec.has_gyro() {
+                row.rate_b_radps = model.compensate_rate(row.rate_b_radps, f);
+            }
+            row.force_b_mps2 = f;
+            rows += 1;
+            writer.row(&row).map_err(refused)
+        })?;
+        writer.finish().map_err(refused)?;
+        std::fs::rename(&partial, out).map_err(|e| InputError::io(out, e))?;
+        Ok(rows)
+    })();
+    if written.is_err() {
+        let _ = std::fs::remove_file(&partial);
     }
-    let key = calibration_key(&rec.header.comments);
-    out.header.comments.push(format!("{key}: {}", model.source));
-    out
+    written
 }
 
 /// `calibration`, or the first free `calibration_N` (N = 2, 3, ...) when the header already names one.
@@ -69,14 +95,14 @@ fn calibration_key(comments: &[String]) -> String {
 }
 
 /// The human summary: what was applied, in human units.
-fn summary(rec: &Recording, model: &CalibrationModel, out: &Path) -> String {
+fn summary(rec: &RecordingFile, rows: usize, model: &CalibrationModel, out: &Path) -> String {
     let mut s = String::new();
     let _ = writeln!(
         s,
         "sinscal apply: {} -> {} ({} rows), compensated with {} (sinscal-calibration/{})",
-        rec.source,
+        rec.source(),
         out.display(),
-        rec.rows.len(),
+        rows,
         model.source,
         model.version
     );
@@ -95,7 +121,7 @@ fn summary(rec: &Recording, model: &CalibrationModel, out: &Path) -> String {
             let _ = writeln!(s, "  {label:<28} row {axis} {:>+14.3} {:>+14.3} {:>+14.3}", v[0], v[1], v[2]);
         }
     };
-    let gyro_used = rec.has_gyro;
+    let gyro_used = rec.has_gyro();
     if has("gyro_bias") && gyro_used {
         vector(&mut s, "gyro bias b_g [deg/h]", model.gyro_bias_radps, DEG_PER_HOUR);
     }
@@ -123,7 +149,7 @@ fn summary(rec: &Recording, model: &CalibrationModel, out: &Path) -> String {
             model.taken_as_zero.join(", ")
         );
     }
-    if !rec.has_gyro && model.has_gyro_terms() {
+    if !rec.has_gyro() && model.has_gyro_terms() {
         let _ = writeln!(
             s,
             "\nnote: the recording has no gyro columns (accelerometer-only): the calibration's gyro terms are ignored"

@@ -15,7 +15,7 @@ use crate::calibration::{
 };
 use crate::cmd::write_json;
 use crate::io::calibration_result::{summary, CalibrationJson};
-use crate::io::recording::Recording;
+use crate::io::recording::RecordingFile;
 
 /// The prefilter in front of the dwell statistics.
 #[derive(Clone, Copy, ValueEnum)]
@@ -154,7 +154,8 @@ impl Args {
 /// Runs `sinscal calibrate`.
 pub fn run(args: Args) -> anyhow::Result<()> {
     let options = args.options()?;
-    let rec = Recording::read(&args.recording)?;
+    // The rows are read in passes, never held (docs/formats.md#speed-and-memory).
+    let rec = RecordingFile::open(&args.recording)?;
     let cal = match args.on {
         None => calibrate(&rec, &options)?,
         Some(OnArg::Host) => calibrate_on_host(&rec, &options)?,

@@ -6,7 +6,7 @@ use std::path::PathBuf;
 use crate::cmd::{json_to_stdout, write_json};
 use crate::io::calibration_result::ARCSEC_PER_RAD;
 use crate::io::plot::navigation_plot;
-use crate::io::recording::Recording;
+use crate::io::recording::RecordingFile;
 use crate::navigation::check::{navigate, NavCalibration, NavOptions, NavReport};
 
 /// Arguments of `sinscal navigate`.
@@ -42,22 +42,18 @@ pub struct Args {
 pub fn run(args: Args) -> anyhow::Result<()> {
     let Args { recording, calibration, compare, hours, position, seed, json, plot } = args;
     let quiet = json_to_stdout(json.as_deref());
-    let rec = Recording::read(&recording)?;
+    // The rows are read in passes, never held (docs/formats.md#speed-and-memory).
+    let rec = RecordingFile::open(&recording)?;
     let cal = NavCalibration::read(&calibration)?;
     let second = compare.as_deref().map(NavCalibration::read).transpose()?;
     let options = NavOptions { hours, position, seed, ..NavOptions::default() };
     let started = std::time::Instant::now();
     let mut last_tenth = 0;
-    let report = navigate(&rec, &cal, second.as_ref(), &options, |done, total| {
-        let tenth = done * 10 / total.max(1);
+    let report = navigate(&rec, &cal, second.as_ref(), &options, |done_h, total_h| {
+        let tenth = (done_h / total_h * 10.0).floor() as u32;
         if tenth > last_tenth {
             last_tenth = tenth;
-            eprintln!(
-                "navigate: {}0% ({:.2} of {:.2} h)",
-                tenth,
-                done as f64 / total as f64 * report_hours(hours, total),
-                report_hours(hours, total)
-            );
+            eprintln!("navigate: {tenth}0% ({done_h:.2} of {total_h:.2} h)");
         }
     })?;
     let elapsed = started.elapsed().as_secs_f64();
@@ -74,11 +70,6 @@ pub fn run(args: Args) -> anyhow::Result<()> {
         write_json(&path, &report)?;
     }
     Ok(())
-}
-
-/// Hours of a run for progress messages (the sample count is known before the rate when not simulating).
-fn report_hours(hours: Option<f64>, total: usize) -> f64 {
-    hours.unwrap_or(total as f64 / 100.0 / 3600.0)
 }
 
 fn navigation_summary(r: &NavReport, elapsed_s: f64) -> String {

@@ -4,6 +4,7 @@
 pub mod analysis_report;
 pub mod calibration_model;
 pub mod calibration_result;
+pub mod dwell_tally;
 pub mod error;
 pub mod import;
 pub mod plot;
@@ -25,4 +26,28 @@ pub fn same_file(a: &Path, b: &Path) -> bool {
         }
     }
     matches!((std::fs::canonicalize(a), std::fs::canonicalize(b)), (Ok(x), Ok(y)) if x == y)
+}
+
+/// A file in the system's temporary folder, unique to this process and call, removed when dropped.
+#[derive(Debug)]
+pub struct ScratchFile(std::path::PathBuf);
+
+impl ScratchFile {
+    /// A new scratch file name ending in `name` (nothing is created yet).
+    pub fn new(name: &str) -> ScratchFile {
+        static NEXT: std::sync::atomic::AtomicU32 = std::sync::atomic::AtomicU32::new(0);
+        let n = NEXT.fetch_add(1, std::sync::atomic::Ordering::Relaxed);
+        ScratchFile(std::env::temp_dir().join(format!("sinscal-{}-{n}-{name}", std::process::id())))
+    }
+
+    /// Its path.
+    pub fn path(&self) -> &Path {
+        &self.0
+    }
+}
+
+impl Drop for ScratchFile {
+    fn drop(&mut self) {
+        let _ = std::fs::remove_file(&self.0);
+    }
 }

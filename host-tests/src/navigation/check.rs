@@ -10,9 +10,12 @@ use serde::Serialize;
 
 use crate::io::calibration_model::CalibrationModel;
 use crate::io::error::InputError;
-use crate::io::recording::{Dwell, Header, Recording, SimulationTruth};
+use crate::io::dwell_tally::{DwellTallies, DwellTally, MAX_DWELLS_READ};
+use crate::io::recording::{Header, RowSource, SimulationTruth};
 use crate::model::synth::{c_b_n, mul_vec, transpose, Scenario, EARTH_RATE_RADPS};
-use crate::navigation::strapdown::{linear_error_model, navigate_runs, NavError, Run, RunSummary, StaticSetup};
+use crate::navigation::strapdown::{
+    linear_error_model, navigate_runs, Lockstep, NavError, Run, RunSummary, StaticSetup,
+};
 
 /// A calibration JSON file as navigate uses it (docs/formats.md#calibration-json): the whole sensor model to
 /// compensate with, and the covariance of its parameters to predict the calibrated run's error.
@@ -157,20 +160,23 @@ pub struct NavReport {
 
 /// Runs the navigation check.
 pub fn navigate(
-    recording: &Recording,
+    recording: &impl RowSource,
     calibration: &NavCalibration,
     second: Option<&NavCalibration>,
     options: &NavOptions,
-    mut progress: impl FnMut(usize, usize),
+    mut progress_h: impl FnMut(f64, f64),
 ) -> Result<NavReport, InputError> {
-    let source = recording.source.as_str();
+    let source = recording.source();
     recording.require_gyro("navigate")?;
-    let header = &recording.header;
-    let dwells = recording.dwells();
-    let dwell = chosen_dwell(source, &dwells, options)?;
+    let header = recording.header();
+    let mut tallies = DwellTallies::new(MAX_DWELLS_READ, "sinscal reads at most that many from one recording");
+    recording.for_each_row(&mut |row| tallies.push(row, source).map(|_| ()))?;
+    let dwell = chosen_dwell(source, &tallies.dwells, options)?;
     let (attitude, heading) = dwell.attitude_with_heading(source, "navigation")?;
     let attitude_deg = [attitude.pitch_deg, attitude.roll_deg, heading];
     let rate_hz = sample_rate_hz(source, header.rate_hz, dwell)?;
+    let hours = |samples: usize| samples as f64 / rate_hz / 3600.0;
+    let mut progress = |done: usize, total: usize| progress_h(hours(done), hours(total));
     let latitude_rad = header.latitude_deg.to_radians();
     let gravity_mps2 = header.gravity_mps2.unwrap_or_else(|| {
         sinscal::nav::earth::normal_gravity_mps2(latitude_rad as f32, header.height_m as f32) as f64
@@ -192,10 +198,15 @@ pub fn navigate(
             (true, run.navigate(&setup, &mut runs, &mut progress)?)
         }
         None => {
-            let rows = &dwell.rows;
-            let at = |k: usize| (rows[k].rate_b_radps, rows[k].force_b_mps2);
-            navigate_runs(&setup, rows.len(), at, &mut runs, &mut progress);
-            (false, rows.len())
+            // A second pass gives the dwell's rows, as they come, to the runs.
+            let mut lockstep = Lockstep::new(&setup, &mut runs, dwell.samples);
+            recording.for_each_row(&mut |row| {
+                if row.pos == dwell.pos {
+                    lockstep.step(&mut runs, row.rate_b_radps, row.force_b_mps2, &mut progress);
+                }
+                Ok(())
+            })?;
+            (false, dwell.samples)
         }
     };
     let hours = samples as f64 / rate_hz / 3600.0;
@@ -217,7 +228,7 @@ pub fn navigate(
 }
 
 /// The dwell to navigate: `--position`, else the first dwell for a simulated run, else the longest.
-fn chosen_dwell<'a>(source: &str, dwells: &'a [Dwell<'a>], options: &NavOptions) -> Result<&'a Dwell<'a>, InputError> {
+fn chosen_dwell<'a>(source: &str, dwells: &'a [DwellTally], options: &NavOptions) -> Result<&'a DwellTally, InputError> {
     if dwells.is_empty() {
         return Err(InputError::file(source, "no dwell (every row has pos = 0): nothing static to navigate"));
     }
@@ -227,20 +238,20 @@ fn chosen_dwell<'a>(source: &str, dwells: &'a [Dwell<'a>], options: &NavOptions)
             .find(|d| d.pos == p)
             .ok_or_else(|| InputError::file(source, format!("no dwell with pos = {p}")))?,
         None if options.hours.is_some() => &dwells[0],
-        None => dwells.iter().max_by_key(|d| d.rows.len()).expect("non-empty"),
+        None => dwells.iter().max_by_key(|d| d.samples).expect("non-empty"),
     })
 }
 
 /// The header's rate, or the rate measured over the dwell when the header has none.
-fn sample_rate_hz(source: &str, header_rate_hz: Option<f64>, dwell: &Dwell) -> Result<f64, InputError> {
+fn sample_rate_hz(source: &str, header_rate_hz: Option<f64>, dwell: &DwellTally) -> Result<f64, InputError> {
     Ok(match header_rate_hz {
         Some(r) if r > 0.0 => r,
         _ => {
-            let span = dwell.rows.last().unwrap().t_s - dwell.rows[0].t_s;
-            if dwell.rows.len() < 2 || span <= 0.0 {
+            let span = dwell.last_t_s - dwell.first_t_s;
+            if dwell.samples < 2 || span <= 0.0 {
                 return Err(InputError::file(source, "no rate_hz in the header and a dwell too short to measure it"));
             }
-            (dwell.rows.len() - 1) as f64 / span
+            (dwell.samples - 1) as f64 / span
         }
     })
 }

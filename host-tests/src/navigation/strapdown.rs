@@ -247,17 +247,40 @@ pub fn navigate_runs(
     runs: &mut [Run],
     mut progress: impl FnMut(usize, usize),
 ) {
-    let mut navs: Vec<StaticNavigator> = runs
-        .iter()
-        .map(|_| StaticNavigator::new(setup.c_b_n, setup.latitude_rad, setup.height_m, setup.gravity_mps2))
-        .collect();
-    for (run, nav) in runs.iter_mut().zip(&navs) {
-        run.history.clear();
-        run.history.push(nav.error(0.0));
-    }
+    let mut lockstep = Lockstep::new(setup, runs, samples);
     for k in 0..samples {
         let (w, f) = next_sample(k);
-        for (run, nav) in runs.iter_mut().zip(navs.iter_mut()) {
+        lockstep.step(runs, w, f, &mut progress);
+    }
+}
+
+/// Runs navigated in lockstep, one sample at a time ([`navigate_runs`] gives the samples by index; a reader
+/// that keeps no rows gives them as they come).
+pub struct Lockstep<'s> {
+    setup: &'s StaticSetup,
+    navs: Vec<StaticNavigator>,
+    samples: usize,
+    done: usize,
+}
+
+impl<'s> Lockstep<'s> {
+    /// The runs at rest at the start of `samples` samples (their histories restart).
+    pub fn new(setup: &'s StaticSetup, runs: &mut [Run], samples: usize) -> Lockstep<'s> {
+        let navs: Vec<StaticNavigator> = runs
+            .iter()
+            .map(|_| StaticNavigator::new(setup.c_b_n, setup.latitude_rad, setup.height_m, setup.gravity_mps2))
+            .collect();
+        for (run, nav) in runs.iter_mut().zip(&navs) {
+            run.history.clear();
+            run.history.push(nav.error(0.0));
+        }
+        Lockstep { setup, navs, samples, done: 0 }
+    }
+
+    /// The next sample, (rate_b_radps, force_b_mps2), through every run.
+    pub fn step(&mut self, runs: &mut [Run], w: [f64; 3], f: [f64; 3], progress: &mut impl FnMut(usize, usize)) {
+        let (setup, k, samples) = (self.setup, self.done, self.samples);
+        for (run, nav) in runs.iter_mut().zip(self.navs.iter_mut()) {
             let fc = run.compensation.compensate_force(f);
             let wc = run.compensation.compensate_rate(w, fc);
             nav.step(wc, fc, setup.dt_s);
@@ -268,6 +291,7 @@ pub fn navigate_runs(
         if (k + 1) % setup.record_every == 0 {
             progress(k + 1, samples);
         }
+        self.done += 1;
     }
 }
 

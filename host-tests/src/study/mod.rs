@@ -51,7 +51,7 @@ use crate::io::import::{
     import_imucal, import_imutk, import_psins, parse_imucal_labels, StaticDetection, FERRARIS_ROTATIONS,
     IMUCAL_RATE_HZ, IMUTK_GRAVITY_MPS2,
 };
-use crate::io::recording::{Recording, Row};
+use crate::io::recording::{Recording, Row, RowSource};
 use crate::model::synth::{mul_vec, DEG_PER_HOUR, M3, MICRO_G};
 use crate::stats::noise::NoiseTerms;
 use crate::stats::solve::inverse3;

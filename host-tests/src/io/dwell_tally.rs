@@ -1,0 +1,213 @@
+//! What the commands that keep no rows need of a dwell, gathered one row at a time: its label, first line,
+//! sample count and time span, and its reference attitude (docs/formats.md#speed-and-memory).
+
+use std::collections::HashMap;
+
+use crate::io::error::InputError;
+use crate::io::recording::{DwellAttitude, Row, MAX_DWELL_ATTITUDE_SPREAD_DEG};
+
+/// One reference angle of a dwell, row by row: the sums of its circular mean, and its extremes about the
+/// dwell's first value, which are all the spread check needs.
+#[derive(Clone, Debug, Default)]
+struct AngleTally {
+    known: usize,
+    /// Line of the first row where the angle is empty.
+    first_empty_line: Option<usize>,
+    first_deg: f64,
+    sum_sin: f64,
+    sum_cos: f64,
+    /// The last value's bits, its sine and cosine and its difference from the first value: a dwell's angle
+    /// rarely changes from row to row.
+    last: Option<(u64, f64, f64, f64)>,
+    /// The smallest and the largest difference from the first value (wrapped to +-180 deg), deg, with the
+    /// line and value of each.
+    low: (f64, usize, f64),
+    high: (f64, usize, f64),
+}
+
+/// The difference `a - b` of two angles wrapped to [-180, 180), degrees.
+fn wrapped_deg(a: f64, b: f64) -> f64 {
+    (a - b + 540.0).rem_euclid(360.0) - 180.0
+}
+
+impl AngleTally {
+    fn push(&mut self, value_deg: Option<f64>, line: usize) {
+        let Some(v) = value_deg else {
+            self.first_empty_line.get_or_insert(line);
+            return;
+        };
+        if self.known == 0 {
+            self.first_deg = v;
+            self.low = (0.0, line, v);
+            self.high = (0.0, line, v);
+        }
+        self.known += 1;
+        let (sin, cos, d) = match self.last {
+            Some((bits, sin, cos, d)) if bits == v.to_bits() => (sin, cos, d),
+            _ => {
+                let r = v.to_radians();
+                let (sin, cos, d) = (r.sin(), r.cos(), wrapped_deg(v, self.first_deg));
+                self.last = Some((v.to_bits(), sin, cos, d));
+                (sin, cos, d)
+            }
+        };
+        self.sum_sin += sin;
+        self.sum_cos += cos;
+        if d < self.low.0 {
+            self.low = (d, line, v);
+        }
+        if d > self.high.0 {
+            self.high = (d, line, v);
+        }
+    }
+
+    /// The circular mean of the angle, in the range of the dwell's first value (270 stays 270, not -90);
+    /// `None` when it is empty in every row. An angle empty in some rows only, or spread by more than
+    /// [`MAX_DWELL_ATTITUDE_SPREAD_DEG`] about its mean (the table moved), is an error naming the line.
+    fn mean_deg(&self, name: &str, dwell: &DwellTally, source: &str) -> Result<Option<f64>, InputError> {
+        if self.known == 0 {
+            return Ok(None);
+        }
+        if let Some(line) = self.first_empty_line {
+            return Err(InputError::at(source, line, format!("dwell {}: {name} is empty in some rows only", dwell.pos)));
+        }
+        let mean = self.sum_sin.atan2(self.sum_cos).to_degrees();
+        // Every value lies between the two extremes, so these two decide the spread.
+        for (_, line, v) in [self.low, self.high] {
+            if wrapped_deg(v, mean).abs() > MAX_DWELL_ATTITUDE_SPREAD_DEG {
+                return Err(InputError::at(
+                    source,
+                    line,
+                    format!(
+                        "dwell {}: {name} {v} deg differs from the dwell's mean {mean:.4} deg: the table moves",
+                        dwell.pos
+                    ),
+                ));
+            }
+        }
+        Ok(Some(self.first_deg - wrapped_deg(self.first_deg, mean)))
+    }
+}
+
+/// A dwell's label, first line, samples, time span and reference attitude, gathered row by row.
+#[derive(Clone, Debug)]
+pub struct DwellTally {
+    /// Position label.
+    pub pos: u32,
+    /// Line of its first row.
+    pub first_line: usize,
+    /// Its rows.
+    pub samples: usize,
+    /// Time of its first and last row, s.
+    pub first_t_s: f64,
+    /// Time of its last row, s.
+    pub last_t_s: f64,
+    angles: [AngleTally; 3],
+}
+
+impl DwellTally {
+    /// The tally of the first row of a dwell.
+    pub fn new(row: &Row) -> DwellTally {
+        let mut tally = DwellTally {
+            pos: row.pos,
+            first_line: row.line,
+            samples: 0,
+            first_t_s: row.t_s,
+            last_t_s: row.t_s,
+            angles: Default::default(),
+        };
+        tally.push(row);
+        tally
+    }
+
+    /// Adds a row of the dwell (the first row is added by [`DwellTally::new`]).
+    pub fn push(&mut self, row: &Row) {
+        if self.samples > 0 {
+            self.last_t_s = row.t_s;
+        }
+        self.samples += 1;
+        self.angles[0].push(Some(row.pitch_deg), row.line);
+        self.angles[1].push(Some(row.roll_deg), row.line);
+        self.angles[2].push(row.heading_deg, row.line);
+    }
+
+    /// The reference attitude of the dwell: the circular mean of each angle over its rows (a read-out
+    /// jitter averages out). A spread above [`MAX_DWELL_ATTITUDE_SPREAD_DEG`] means the table moved: an error.
+    pub fn attitude(&self, source: &str) -> Result<DwellAttitude, InputError> {
+        Ok(DwellAttitude {
+            pitch_deg: self.angles[0].mean_deg("pitch_deg", self, source)?.unwrap_or(0.0),
+            roll_deg: self.angles[1].mean_deg("roll_deg", self, source)?.unwrap_or(0.0),
+            heading_deg: self.angles[2].mean_deg("heading_deg", self, source)?,
+        })
+    }
+
+    /// The reference attitude with its heading, which `purpose` ("the calibration", "navigation") needs;
+    /// an empty heading is an error naming the dwell.
+    pub fn attitude_with_heading(&self, source: &str, purpose: &str) -> Result<(DwellAttitude, f64), InputError> {
+        let attitude = self.attitude(source)?;
+        let heading_deg = attitude.heading_deg.ok_or_else(|| {
+            InputError::at(
+                source,
+                self.first_line,
+                format!("dwell {}: heading is unknown (empty): {purpose} needs the reference heading", self.pos),
+            )
+        })?;
+        Ok((attitude, heading_deg))
+    }
+}
+
+/// Most dwells a command that keeps no rows reads from one recording: a turntable session has tens.
+pub const MAX_DWELLS_READ: usize = 10_000;
+
+/// The dwells of a recording, row by row, in order of first appearance of their label: rows with the same
+/// non-zero label form one dwell (docs/formats.md#recording); label 0 rows are skipped.
+#[derive(Clone, Debug)]
+pub struct DwellTallies {
+    /// The dwells so far.
+    pub dwells: Vec<DwellTally>,
+    /// Label -> index: one look-up per row, whatever the number of labels.
+    index: HashMap<u32, usize>,
+    /// The label of the last row and its index, so that a dwell's rows cost no look-up.
+    last: Option<(u32, usize)>,
+    limit: usize,
+    /// Why there is a limit, for the message.
+    why: &'static str,
+}
+
+impl DwellTallies {
+    /// Tallies of at most `limit` dwells: the row that starts one more is an error naming its line and `why`
+    /// there is a limit.
+    pub fn new(limit: usize, why: &'static str) -> DwellTallies {
+        DwellTallies { dwells: Vec::new(), index: HashMap::new(), last: None, limit, why }
+    }
+
+    /// Adds a row; returns the index of its dwell (`None` for label 0).
+    pub fn push(&mut self, row: &Row, source: &str) -> Result<Option<usize>, InputError> {
+        if row.pos == 0 {
+            return Ok(None);
+        }
+        let i = match self.last {
+            Some((pos, i)) if pos == row.pos => {
+                self.dwells[i].push(row);
+                i
+            }
+            _ => match self.index.get(&row.pos) {
+                Some(&i) => {
+                    self.dwells[i].push(row);
+                    i
+                }
+                None => {
+                    if self.dwells.len() == self.limit {
+                        let reason = format!("more than {} positions ({})", self.limit, self.why);
+                        return Err(InputError::at(source, row.line, reason));
+                    }
+                    self.index.insert(row.pos, self.dwells.len());
+                    self.dwells.push(DwellTally::new(row));
+                    self.dwells.len() - 1
+                }
+            },
+        };
+        self.last = Some((row.pos, i));
+        Ok(Some(i))
+    }
+}
