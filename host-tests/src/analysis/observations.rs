@@ -5,8 +5,8 @@
 use std::collections::HashMap;
 
 use crate::calibration::site_of;
-use crate::io::error::InputError;
 use crate::io::dwell_tally::{DwellTallies, DwellTally, MAX_DWELLS_READ};
+use crate::io::error::InputError;
 use crate::io::recording::{Row, RowSource};
 use crate::model::synth::{c_b_n, earth_rate_n_radps, mul_t_vec, M3};
 

@@ -12,11 +12,11 @@ use sinscal::run::sequence::{SequenceFailure, SequenceSolution};
 use sinscal::sensor::adis::{encode_burst, Burst, Model, BURST32_LEN, I16F16};
 
 use crate::calibration::{
-    angle_error, attitude_knowledge, channel_error, leave_out_suspects, prefilter_of,
-    session_dwells, site_of, Calibration, Estimates, Method, Options, PositionResult,
+    angle_error, attitude_knowledge, channel_error, leave_out_suspects, prefilter_of, session_dwells, site_of,
+    Calibration, Estimates, Method, Options, PositionResult,
 };
-use crate::io::error::InputError;
 use crate::io::dwell_tally::{DwellTallies, DwellTally};
+use crate::io::error::InputError;
 use crate::io::recording::{DwellAttitude, RowSource};
 use crate::io::ScratchFile;
 use sinscal::calib::channels::ChannelSettings;
@@ -59,33 +59,7 @@ pub fn write_replay(
              levelled from its own accelerometers: calibrate it without --on (docs/method.md#unknown-attitudes)",
         ));
     }
-    let limit = sinscal::calib::solve::MAX_POSITIONS;
-    let mut tallies = DwellTallies::new(limit, "the core's limit");
-    let mut rows = 0u64;
-    // The firmware path needs each dwell as one contiguous stretch of rows (one turntable stop).
-    let mut previous = 0;
-    rec.for_each_row(&mut |row| {
-        rows += 1;
-        let known = tallies.dwells.len();
-        if let Some(i) = tallies.push(row, source)? {
-            if i < known && row.pos != previous {
-                return Err(InputError::at(
-                    source,
-                    row.line,
-                    format!("dwell {} is not contiguous: the firmware path needs one stretch per position", row.pos),
-                ));
-            }
-        }
-        previous = row.pos;
-        Ok(())
-    })?;
-    let dwells = tallies.dwells;
-    if dwells.is_empty() {
-        return Err(InputError::file(source, "no dwell: every row has pos = 0"));
-    }
-    let frames = u32::try_from(rows).map_err(|_| {
-        InputError::file(source, format!("{rows} rows: the replay file counts its frames in 32 bits"))
-    })?;
+    let (dwells, frames) = replay_dwells(rec)?;
     let (site, _) = site_of(rec.header());
     let estimator = match options.method {
         Method::Angles => Estimator::Angles,
@@ -100,24 +74,23 @@ pub fn write_replay(
         Prefilter::HmmKf { gyro, accel } => (1, [gyro.a, accel.a]),
     };
     let mut head = Vec::with_capacity(64 + 16 * dwells.len());
-    let out_head = &mut head;
-    out_head.extend_from_slice(&MAGIC);
-    out_head.extend_from_slice(&VERSION.to_le_bytes());
-    out_head.push(1); // ADIS16505-2
-    out_head.push(estimator_code(&estimator));
-    out_head.extend_from_slice(&site.latitude_rad.to_le_bytes());
-    out_head.extend_from_slice(&site.gravity_mps2.to_le_bytes());
-    out_head.extend_from_slice(&(dwells.len() as u16).to_le_bytes());
-    out_head.extend_from_slice(&terms_bits(options.model).to_le_bytes());
-    out_head.push(prefilter_code);
-    out_head.push(match options.dwell_value {
+    head.extend_from_slice(&MAGIC);
+    head.extend_from_slice(&VERSION.to_le_bytes());
+    head.push(1); // ADIS16505-2
+    head.push(estimator_code(&estimator));
+    head.extend_from_slice(&site.latitude_rad.to_le_bytes());
+    head.extend_from_slice(&site.gravity_mps2.to_le_bytes());
+    head.extend_from_slice(&(dwells.len() as u16).to_le_bytes());
+    head.extend_from_slice(&terms_bits(options.model).to_le_bytes());
+    head.push(prefilter_code);
+    head.push(match options.dwell_value {
         DwellValue::Mean => 0,
         DwellValue::Settled => 1,
     });
-    out_head.push(options.max_passes.min(255) as u8);
-    out_head.push(options.estimate_reference_offset as u8);
-    out_head.extend_from_slice(&a_gyro.to_le_bytes());
-    out_head.extend_from_slice(&a_accel.to_le_bytes());
+    head.push(options.max_passes.min(255) as u8);
+    head.push(options.estimate_reference_offset as u8);
+    head.extend_from_slice(&a_gyro.to_le_bytes());
+    head.extend_from_slice(&a_accel.to_le_bytes());
     let mut attitudes = Vec::new();
     for d in &dwells {
         // The angle method needs every heading; the general estimator estimates an unknown one.
@@ -126,7 +99,7 @@ pub fn write_replay(
             Method::Channels => d.attitude(source)?,
         };
         for v in [att.pitch_deg, att.roll_deg, att.heading_deg.unwrap_or(0.0)] {
-            out_head.extend_from_slice(&(v as f32).to_radians().to_le_bytes());
+            head.extend_from_slice(&(v as f32).to_radians().to_le_bytes());
         }
         // The replay file holds a label in 16 bits: a larger one would be clipped and two labels could
         // collide.
@@ -137,11 +110,11 @@ pub fn write_replay(
                 format!("position label {} does not fit the firmware path's 16 bits (at most 65535)", d.pos),
             )
         })?;
-        out_head.extend_from_slice(&label.to_le_bytes());
-        out_head.extend_from_slice(&u16::from(att.heading_deg.is_none()).to_le_bytes());
+        head.extend_from_slice(&label.to_le_bytes());
+        head.extend_from_slice(&u16::from(att.heading_deg.is_none()).to_le_bytes());
         attitudes.push(att);
     }
-    out_head.extend_from_slice(&frames.to_le_bytes());
+    head.extend_from_slice(&frames.to_le_bytes());
     let write = |out: &mut dyn std::io::Write, bytes: &[u8]| {
         out.write_all(bytes).map_err(|e| InputError::file(source, format!("writing the replay file: {e}")))
     };
@@ -180,6 +153,36 @@ pub fn write_replay(
     Ok(ReplayPlan { dwells, attitudes })
 }
 
+/// The first pass of [`write_replay`]: the dwells, each one contiguous stretch of rows (one turntable stop, as
+/// the firmware path needs), and the number of rows (frames).
+fn replay_dwells(rec: &impl RowSource) -> Result<(Vec<DwellTally>, u32), InputError> {
+    let source = rec.source();
+    let mut tallies = DwellTallies::new(sinscal::calib::solve::MAX_POSITIONS, "the core's limit");
+    let mut rows = 0u64;
+    let mut previous = 0;
+    rec.for_each_row(&mut |row| {
+        rows += 1;
+        let known = tallies.dwells.len();
+        if let Some(i) = tallies.push(row, source)? {
+            if i < known && row.pos != previous {
+                return Err(InputError::at(
+                    source,
+                    row.line,
+                    format!("dwell {} is not contiguous: the firmware path needs one stretch per position", row.pos),
+                ));
+            }
+        }
+        previous = row.pos;
+        Ok(())
+    })?;
+    if tallies.dwells.is_empty() {
+        return Err(InputError::file(source, "no dwell: every row has pos = 0"));
+    }
+    let frames = u32::try_from(rows)
+        .map_err(|_| InputError::file(source, format!("{rows} rows: the replay file counts its frames in 32 bits")))?;
+    Ok((tallies.dwells, frames))
+}
+
 /// The calibration of a replay outcome, in the host's report types (angles per position recomputed with
 /// the core from the replayed dwell statistics where the heading is known). A refusal of the core comes back
 /// with the dwell's label and line, as on the direct path.
@@ -194,12 +197,13 @@ pub fn calibration_from_outcome(
     let ReplayPlan { dwells, attitudes } = plan;
     let mut positions = Vec::new();
     for (k, p) in outcome.positions.iter().enumerate() {
-        let angles = match attitudes[k].heading_deg {
-            Some(_) => Some(position_angles(&p.summary, options.dwell_value, &p.c_b_n, &site).map_err(|e| {
-                InputError::at(source, dwells[k].first_line, format!("dwell {}: {e}", dwells[k].pos))
-            })?),
-            None => None,
-        };
+        let angles =
+            match attitudes[k].heading_deg {
+                Some(_) => Some(position_angles(&p.summary, options.dwell_value, &p.c_b_n, &site).map_err(|e| {
+                    InputError::at(source, dwells[k].first_line, format!("dwell {}: {e}", dwells[k].pos))
+                })?),
+                None => None,
+            };
         positions.push(PositionResult {
             pos: outcome.header.labels[k] as u32,
             first_line: dwells[k].first_line,
@@ -290,7 +294,11 @@ pub fn calibrate_on_host(rec: &impl RowSource, options: &Options) -> Result<Cali
 }
 
 /// Writes the replay file of a recording ([`write_replay`]) to `file`.
-pub fn write_replay_file(rec: &impl RowSource, options: &Options, file: &ScratchFile) -> Result<ReplayPlan, InputError> {
+pub fn write_replay_file(
+    rec: &impl RowSource,
+    options: &Options,
+    file: &ScratchFile,
+) -> Result<ReplayPlan, InputError> {
     let fail = |e: std::io::Error| InputError::file(rec.source(), format!("{}: {e}", file.path().display()));
     let mut out = std::io::BufWriter::new(std::fs::File::create(file.path()).map_err(fail)?);
     let plan = write_replay(rec, options, &mut out)?;

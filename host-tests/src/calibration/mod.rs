@@ -24,8 +24,8 @@ use sinscal::nav::frames::Attitude;
 use sinscal::sensor::sample::ImuSample;
 
 pub use crate::calibration::estimates::{Estimates, Method};
-use crate::io::error::InputError;
 use crate::io::dwell_tally::{DwellTallies, DwellTally};
+use crate::io::error::InputError;
 use crate::io::recording::{DwellAttitude, Header, RowSource};
 
 /// Which prefilter runs in front of the dwell statistics.

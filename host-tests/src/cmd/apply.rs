@@ -50,7 +50,9 @@ pub fn run(args: Args) -> anyhow::Result<()> {
 pub fn apply(rec: &impl RowSource, model: &CalibrationModel, out: &Path) -> Result<usize, InputError> {
     let name = out.display().to_string();
     let refused = |e: WriteError| match e {
-        WriteError::Refused(reason) => InputError::file(&name, format!("not written, its reader would refuse it: {reason}")),
+        WriteError::Refused(reason) => {
+            InputError::file(&name, format!("not written, its reader would refuse it: {reason}"))
+        }
         WriteError::Io(e) => InputError::io(out, e),
     };
     let mut header = rec.header().clone();

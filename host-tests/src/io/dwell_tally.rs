@@ -69,7 +69,11 @@ impl AngleTally {
             return Ok(None);
         }
         if let Some(line) = self.first_empty_line {
-            return Err(InputError::at(source, line, format!("dwell {}: {name} is empty in some rows only", dwell.pos)));
+            return Err(InputError::at(
+                source,
+                line,
+                format!("dwell {}: {name} is empty in some rows only", dwell.pos),
+            ));
         }
         let mean = self.sum_sin.atan2(self.sum_cos).to_degrees();
         // Every value lies between the two extremes, so these two decide the spread.
@@ -209,5 +213,74 @@ impl DwellTallies {
         };
         self.last = Some((row.pos, i));
         Ok(Some(i))
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn row(line: usize, pos: u32, pitch_deg: f64, heading_deg: Option<f64>) -> Row {
+        Row {
+            t_s: line as f64 * 0.01,
+            pos,
+            pitch_deg,
+            roll_deg: 0.0,
+            heading_deg,
+            rate_b_radps: [0.0; 3],
+            force_b_mps2: [0.0, 0.0, 9.8],
+            temp_c: None,
+            line,
+        }
+    }
+
+    fn tally(rows: &[Row]) -> DwellTally {
+        let mut t = DwellTally::new(&rows[0]);
+        rows[1..].iter().for_each(|r| t.push(r));
+        t
+    }
+
+    #[test]
+    fn a_moving_table_is_named_at_its_farthest_value() {
+        // Mean of the pitches -0.0022 deg: 0.005 is 0.0072 from it, -0.02 is 0.0178 (beyond 0.01).
+        let pitches = [0.0, 0.004, 0.005, -0.02, 0.0];
+        let rows: Vec<Row> = pitches.iter().enumerate().map(|(k, &p)| row(10 + k, 1, p, Some(90.0))).collect();
+        let e = tally(&rows).attitude("r.csv").unwrap_err().to_string();
+        assert!(
+            e.starts_with("r.csv:13: dwell 1: pitch_deg -0.02 deg differs from the dwell's mean -0.0022 deg"),
+            "{e}"
+        );
+        // Within the spread the mean is the circular mean, in the range of the first value.
+        let rows: Vec<Row> =
+            [359.996, 0.004, 359.999].iter().enumerate().map(|(k, &h)| row(k, 2, 0.0, Some(h))).collect();
+        let h = tally(&rows).attitude("r.csv").unwrap().heading_deg.unwrap();
+        assert!((h - 359.999_666_666_666_7).abs() < 1e-9, "{h}");
+    }
+
+    #[test]
+    fn a_heading_empty_in_some_rows_only_is_named_at_the_first_empty_one() {
+        let rows = [row(5, 1, 0.0, Some(10.0)), row(6, 1, 0.0, None), row(7, 1, 0.0, None)];
+        let e = tally(&rows).attitude("r.csv").unwrap_err().to_string();
+        assert_eq!(e, "r.csv:6: dwell 1: heading_deg is empty in some rows only");
+        let rows = [row(5, 1, 0.0, None), row(6, 1, 0.0, None)];
+        let t = tally(&rows);
+        assert_eq!(t.attitude("r.csv").unwrap().heading_deg, None);
+        let e = t.attitude_with_heading("r.csv", "navigation").unwrap_err().to_string();
+        assert_eq!(e, "r.csv:5: dwell 1: heading is unknown (empty): navigation needs the reference heading");
+    }
+
+    #[test]
+    fn tallies_group_labels_in_order_of_first_appearance_up_to_the_limit() {
+        let mut tallies = DwellTallies::new(2, "the core's limit");
+        let labels = [0, 7, 7, 0, 3, 7, 3];
+        for (k, &pos) in labels.iter().enumerate() {
+            let i = tallies.push(&row(k + 1, pos, 0.0, None), "r.csv").unwrap();
+            assert_eq!(i, [None, Some(0), Some(0), None, Some(1), Some(0), Some(1)][k]);
+        }
+        let d = &tallies.dwells;
+        assert_eq!((d[0].pos, d[0].first_line, d[0].samples, d[0].first_t_s, d[0].last_t_s), (7, 2, 3, 0.02, 0.06));
+        assert_eq!((d[1].pos, d[1].first_line, d[1].samples), (3, 5, 2));
+        let e = tallies.push(&row(8, 9, 0.0, None), "r.csv").unwrap_err().to_string();
+        assert_eq!(e, "r.csv:8: more than 2 positions (the core's limit)");
     }
 }

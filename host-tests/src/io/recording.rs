@@ -327,7 +327,10 @@ impl<W: std::io::Write> RecordingWriter<W> {
 /// The reader's rules on a header to be written: latitude, height, rate and gravity within their bounds.
 fn check_header_writable(h: &Header) -> Result<(), String> {
     if !latitude_ok(h.latitude_deg) {
-        return Err(format!("latitude_deg {} outside [-{MAX_LATITUDE_DEG}, {MAX_LATITUDE_DEG}]", shown(h.latitude_deg)));
+        return Err(format!(
+            "latitude_deg {} outside [-{MAX_LATITUDE_DEG}, {MAX_LATITUDE_DEG}]",
+            shown(h.latitude_deg)
+        ));
     }
     if !h.height_m.is_finite() {
         return Err(format!("height_m {} is not a finite number", h.height_m));
@@ -1292,6 +1295,29 @@ mod tests {
         assert_eq!(e, "r.csv:6: header key 'source' appears twice (first at line 4)");
         let text = GOOD.replace("# rate_hz: 100\n", "# made at 10:00\n# rate_hz: 100\n# made at 10:00\n");
         assert_eq!(Recording::parse(&text, "r.csv").unwrap().header.comments.len(), 2);
+    }
+
+    #[test]
+    fn the_median_time_step_is_found_without_holding_the_steps() {
+        // Regular 0.01-s steps with gaps between dwells: the median is the step.
+        let mut times: Vec<f64> = (0..1000).map(|k| 0.01 * k as f64).collect();
+        times.extend((0..1000).map(|k| 60.0 + 0.01 * k as f64));
+        let m = TimeSteps::of(times.iter().copied()).median_s().unwrap();
+        assert!((m - 0.01).abs() < 1e-12, "{m}");
+        // Jittered steps (+-2.5 %): within 1e-6 of the exact median (the lower middle of an even count).
+        let mut x = 12345u64;
+        let mut times = vec![0.0];
+        for _ in 0..10_000 {
+            x = x.wrapping_mul(6364136223846793005).wrapping_add(1442695040888963407);
+            let jitter = (x >> 11) as f64 / (1u64 << 53) as f64 - 0.5;
+            times.push(times[times.len() - 1] + 0.001 * (1.0 + 0.05 * jitter));
+        }
+        let mut steps: Vec<f64> = times.windows(2).map(|w| w[1] - w[0]).collect();
+        steps.sort_by(f64::total_cmp);
+        let exact = steps[(steps.len() - 1) / 2];
+        let m = TimeSteps::of(times.into_iter()).median_s().unwrap();
+        assert!(((m - exact) / exact).abs() < 1e-6, "{m} {exact}");
+        assert_eq!(TimeSteps::of([1.0].into_iter()).median_s(), None);
     }
 
     #[test]

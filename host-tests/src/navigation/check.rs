@@ -9,8 +9,8 @@ use rand_distr::{Distribution, Normal};
 use serde::Serialize;
 
 use crate::io::calibration_model::CalibrationModel;
-use crate::io::error::InputError;
 use crate::io::dwell_tally::{DwellTallies, DwellTally, MAX_DWELLS_READ};
+use crate::io::error::InputError;
 use crate::io::recording::{Header, RowSource, SimulationTruth};
 use crate::model::synth::{c_b_n, mul_vec, transpose, Scenario, EARTH_RATE_RADPS};
 use crate::navigation::strapdown::{
@@ -228,7 +228,11 @@ pub fn navigate(
 }
 
 /// The dwell to navigate: `--position`, else the first dwell for a simulated run, else the longest.
-fn chosen_dwell<'a>(source: &str, dwells: &'a [DwellTally], options: &NavOptions) -> Result<&'a DwellTally, InputError> {
+fn chosen_dwell<'a>(
+    source: &str,
+    dwells: &'a [DwellTally],
+    options: &NavOptions,
+) -> Result<&'a DwellTally, InputError> {
     if dwells.is_empty() {
         return Err(InputError::file(source, "no dwell (every row has pos = 0): nothing static to navigate"));
     }
