@@ -871,14 +871,14 @@ fn parse_chunk(bytes: &[u8], first_line: usize, columns: &Columns, source: &str)
     ChunkRows { rows: parser.rows, first_t: parser.first_t, error }
 }
 
-/// The next chunk of whole lines of `reader` (empty at the end of the file).
-fn read_chunk(reader: &mut impl BufRead, chunk_bytes: u64) -> std::io::Result<Vec<u8>> {
-    let mut bytes = Vec::with_capacity(chunk_bytes as usize + 4096);
-    reader.by_ref().take(chunk_bytes).read_to_end(&mut bytes)?;
+/// Reads the next chunk of whole lines of `reader` into `bytes` (nothing at the end of the file); on an error,
+/// `bytes` holds what was read before it.
+fn read_chunk(reader: &mut impl BufRead, chunk_bytes: u64, bytes: &mut Vec<u8>) -> std::io::Result<()> {
+    reader.by_ref().take(chunk_bytes).read_to_end(bytes)?;
     if bytes.len() as u64 == chunk_bytes {
-        read_line_capped(reader, &mut bytes)?;
+        read_line_capped(reader, bytes)?;
     }
-    Ok(bytes)
+    Ok(())
 }
 
 /// Longest line a recording may have, bytes: a row of eleven numbers is about 200.
@@ -924,14 +924,17 @@ fn read_rows(
     let stop = AtomicBool::new(false);
     let (joined, read) = std::thread::scope(|scope| {
         let stop = &stop;
-        let producer = scope.spawn(move || -> std::io::Result<()> {
+        // An error of the reading carries the line it happened in.
+        let producer = scope.spawn(move || -> Result<(), (usize, std::io::Error)> {
             let (mut index, mut line) = (0, line);
             while !stop.load(Ordering::Relaxed) && ticket_rx.recv().is_ok() {
-                let bytes = read_chunk(reader, chunk_bytes)?;
+                let mut bytes = Vec::with_capacity(chunk_bytes as usize + 4096);
+                let read = read_chunk(reader, chunk_bytes, &mut bytes);
+                let lines = bytes.iter().filter(|&&b| b == b'\n').count();
+                read.map_err(|e| (line + lines + 1, e))?;
                 if bytes.is_empty() {
                     break;
                 }
-                let lines = bytes.iter().filter(|&&b| b == b'\n').count();
                 if work_tx.send((index, line + 1, bytes)).is_err() {
                     break;
                 }
@@ -961,7 +964,10 @@ fn read_rows(
     joined?;
     match read {
         Ok(Ok(())) => Ok(()),
-        Ok(Err(e)) => Err(InputError::io(path, e)),
+        Ok(Err((line, e))) if e.kind() == std::io::ErrorKind::InvalidData => {
+            Err(InputError::at(source, line, e.to_string()))
+        }
+        Ok(Err((_, e))) => Err(InputError::io(path, e)),
         Err(panic) => std::panic::resume_unwind(panic),
     }
 }
@@ -1196,6 +1202,8 @@ mod tests {
             good.replace("0.2,1,0,0,0,20e-6", "0.2,1,0,0,0,x"),
             good.replace("0.3,1,0,0,0,30e-6,0,0,", "0.3,1,0,0,0,30e-6,0,"),
             good.replace("0.25,1,", "0.25,y,").replace("0.36,1,", "0.01,1,"),
+            // A line longer than MAX_LINE_BYTES, across chunk ends: refused at its line whatever the chunks.
+            good.replace("0.3,1,", &format!("0.3,1,{}", "0".repeat(MAX_LINE_BYTES as usize))),
         ];
         let dir = tempfile::tempdir().unwrap();
         let path = dir.path().join("r.csv");
