@@ -22,6 +22,8 @@ use crate::io::ScratchFile;
 use sinscal::calib::channels::ChannelSettings;
 use sinscal::calib::session::session_estimator;
 use sinscal::run::sequence::Estimator;
+use std::io::Write as _;
+use std::path::Path;
 
 /// The sensor model the replay files emulate.
 pub const REPLAY_MODEL: Model = Model::Adis16505_2;
@@ -36,21 +38,22 @@ pub struct ReplayPlan {
     pub attitudes: Vec<DwellAttitude>,
 }
 
-/// The replay file of a recording for the given calibration options, in memory ([`write_replay`]).
+/// The replay file of a recording for the given calibration options, in memory ([`replay_parts`]).
 pub fn replay_file(rec: &impl RowSource, options: &Options) -> Result<(Vec<u8>, ReplayPlan), InputError> {
-    let mut out = Vec::new();
-    let plan = write_replay(rec, options, &mut out)?;
-    Ok((out, plan))
+    let mut frames = Vec::new();
+    let (mut file, plan) = replay_parts(rec, options, &mut frames)?;
+    file.extend_from_slice(&frames);
+    Ok((file, plan))
 }
 
-/// Writes the replay file of a recording for the given calibration options, in two passes over its rows:
-/// the dwells (the file's header holds the schedule and the frame count), then one frame per row. Nothing
-/// is kept of the rows.
-pub fn write_replay(
+/// The replay file of a recording for the given calibration options in one pass over its rows: one frame per
+/// row is written to `frames` as the rows come, and the file's header (the schedule of the dwells found, and the
+/// frame count), which comes before the frames in the file, is returned. Nothing is kept of the rows.
+pub fn replay_parts(
     rec: &impl RowSource,
     options: &Options,
-    out: &mut dyn std::io::Write,
-) -> Result<ReplayPlan, InputError> {
+    frames: &mut dyn std::io::Write,
+) -> Result<(Vec<u8>, ReplayPlan), InputError> {
     let source = rec.source();
     if attitude_knowledge(rec.header()) == sinscal::calib::channels::AttitudeKnowledge::Unknown {
         return Err(InputError::file(
@@ -59,7 +62,10 @@ pub fn write_replay(
              levelled from its own accelerometers: calibrate it without --on (docs/method.md#unknown-attitudes)",
         ));
     }
-    let (dwells, frames) = replay_dwells(rec)?;
+    let prefilter = prefilter_of(options, rec)?;
+    let (dwells, rows) = write_frames(rec, frames)?;
+    let frames = u32::try_from(rows)
+        .map_err(|_| InputError::file(source, format!("{rows} rows: the replay file counts its frames in 32 bits")))?;
     let (site, _) = site_of(rec.header());
     let estimator = match options.method {
         Method::Angles => Estimator::Angles,
@@ -69,7 +75,7 @@ pub fn write_replay(
             ..ChannelSettings::default()
         }),
     };
-    let (prefilter_code, [a_gyro, a_accel]) = match prefilter_of(options, rec)? {
+    let (prefilter_code, [a_gyro, a_accel]) = match prefilter {
         Prefilter::None => (0u8, [1.0f32, 1.0]),
         Prefilter::HmmKf { gyro, accel } => (1, [gyro.a, accel.a]),
     };
@@ -115,10 +121,15 @@ pub fn write_replay(
         attitudes.push(att);
     }
     head.extend_from_slice(&frames.to_le_bytes());
-    let write = |out: &mut dyn std::io::Write, bytes: &[u8]| {
-        out.write_all(bytes).map_err(|e| InputError::file(source, format!("writing the replay file: {e}")))
-    };
-    write(out, &head)?;
+    Ok((head, ReplayPlan { dwells, attitudes }))
+}
+
+/// One frame per row of `rec` to `out` (the table byte: the row's dwell in order of first appearance, from 1;
+/// 0 between dwells), with the dwells found, each one contiguous stretch of rows (one turntable stop, as the
+/// firmware path needs). Returns the dwells and the number of rows.
+fn write_frames(rec: &impl RowSource, out: &mut dyn std::io::Write) -> Result<(Vec<DwellTally>, u64), InputError> {
+    let source = rec.source();
+    let mut tallies = DwellTallies::new(sinscal::calib::solve::MAX_POSITIONS, "the core's limit");
     let lsb_rate = (REPLAY_MODEL.radps_per_lsb() as f64) / 65536.0;
     let lsb_force = (REPLAY_MODEL.accel_mps2_per_lsb() as f64) / 65536.0;
     let quantise = |value: f64, lsb: f64, line: usize, what: &str| -> Result<I16F16, InputError> {
@@ -129,14 +140,18 @@ pub fn write_replay(
         Ok(I16F16::from_bits(counts as i32))
     };
     let mut record = [0u8; 1 + BURST32_LEN];
-    let mut k = 0usize;
-    let mut last = (0u32, 0u8);
+    let (mut rows, mut previous) = (0u64, 0);
     rec.for_each_row(&mut |row| {
-        if row.pos != last.0 {
-            let table = dwells.iter().position(|d| d.pos == row.pos).map_or(0, |i| i + 1) as u8;
-            last = (row.pos, table);
+        let known = tallies.dwells.len();
+        let dwell = tallies.push(row, source)?;
+        if dwell.is_some_and(|i| i < known) && row.pos != previous {
+            return Err(InputError::at(
+                source,
+                row.line,
+                format!("dwell {} is not contiguous: the firmware path needs one stretch per position", row.pos),
+            ));
         }
-        let table = if row.pos == 0 { 0 } else { last.1 };
+        previous = row.pos;
         let mut gyro = [I16F16::ZERO; 3];
         let mut accel = [I16F16::ZERO; 3];
         for i in 0..3 {
@@ -144,43 +159,17 @@ pub fn write_replay(
             accel[i] = quantise(row.force_b_mps2[i], lsb_force, row.line, "specific force")?;
         }
         let temp_raw = (row.temp_c.unwrap_or(25.0) / 0.1).round().clamp(i16::MIN as f64, i16::MAX as f64) as i16;
-        let burst = Burst { diag_stat: 0, gyro_lsb: gyro, accel_lsb: accel, temp_raw, data_counter: k as u16 };
-        k += 1;
-        record[0] = table;
-        encode_burst(REPLAY_MODEL, &burst, &mut record[1..]);
-        write(out, &record)
-    })?;
-    Ok(ReplayPlan { dwells, attitudes })
-}
-
-/// The first pass of [`write_replay`]: the dwells, each one contiguous stretch of rows (one turntable stop, as
-/// the firmware path needs), and the number of rows (frames).
-fn replay_dwells(rec: &impl RowSource) -> Result<(Vec<DwellTally>, u32), InputError> {
-    let source = rec.source();
-    let mut tallies = DwellTallies::new(sinscal::calib::solve::MAX_POSITIONS, "the core's limit");
-    let mut rows = 0u64;
-    let mut previous = 0;
-    rec.for_each_row(&mut |row| {
+        let burst = Burst { diag_stat: 0, gyro_lsb: gyro, accel_lsb: accel, temp_raw, data_counter: rows as u16 };
         rows += 1;
-        let known = tallies.dwells.len();
-        if let Some(i) = tallies.push(row, source)? {
-            if i < known && row.pos != previous {
-                return Err(InputError::at(
-                    source,
-                    row.line,
-                    format!("dwell {} is not contiguous: the firmware path needs one stretch per position", row.pos),
-                ));
-            }
-        }
-        previous = row.pos;
-        Ok(())
+        // At most MAX_POSITIONS (24) dwells: the table byte holds every index.
+        record[0] = dwell.map_or(0, |i| i + 1) as u8;
+        encode_burst(REPLAY_MODEL, &burst, &mut record[1..]);
+        out.write_all(&record).map_err(|e| InputError::file(source, format!("writing the replay file: {e}")))
     })?;
     if tallies.dwells.is_empty() {
         return Err(InputError::file(source, "no dwell: every row has pos = 0"));
     }
-    let frames = u32::try_from(rows)
-        .map_err(|_| InputError::file(source, format!("{rows} rows: the replay file counts its frames in 32 bits")))?;
-    Ok((tallies.dwells, frames))
+    Ok((tallies.dwells, rows))
 }
 
 /// The calibration of a replay outcome, in the host's report types (angles per position recomputed with
@@ -293,16 +282,22 @@ pub fn calibrate_on_host(rec: &impl RowSource, options: &Options) -> Result<Cali
     calibration_from_outcome(rec, options, &plan, &decoded)
 }
 
-/// Writes the replay file of a recording ([`write_replay`]) to `file`.
+/// Writes the replay file of a recording ([`replay_parts`]) to `file`: the frames go to a second scratch file
+/// as the rows are read, then the header and the frames are copied into `file`.
 pub fn write_replay_file(
     rec: &impl RowSource,
     options: &Options,
     file: &ScratchFile,
 ) -> Result<ReplayPlan, InputError> {
-    let fail = |e: std::io::Error| InputError::file(rec.source(), format!("{}: {e}", file.path().display()));
-    let mut out = std::io::BufWriter::new(std::fs::File::create(file.path()).map_err(fail)?);
-    let plan = write_replay(rec, options, &mut out)?;
-    out.into_inner().map_err(|e| fail(e.into_error()))?;
+    let fail = |path: &Path, e: std::io::Error| InputError::file(rec.source(), format!("{}: {e}", path.display()));
+    let frames = ScratchFile::new("frames.bin");
+    let mut out = std::io::BufWriter::new(std::fs::File::create(frames.path()).map_err(|e| fail(frames.path(), e))?);
+    let (head, plan) = replay_parts(rec, options, &mut out)?;
+    out.into_inner().map_err(|e| fail(frames.path(), e.into_error()))?;
+    let mut whole = std::fs::File::create(file.path()).map_err(|e| fail(file.path(), e))?;
+    whole.write_all(&head).map_err(|e| fail(file.path(), e))?;
+    let mut frames_in = std::fs::File::open(frames.path()).map_err(|e| fail(frames.path(), e))?;
+    std::io::copy(&mut frames_in, &mut whole).map_err(|e| fail(file.path(), e))?;
     Ok(plan)
 }
 
