@@ -5,7 +5,7 @@
 use std::collections::HashMap;
 
 use crate::calibration::site_of;
-use crate::io::dwell_tally::{DwellTallies, DwellTally, MAX_DWELLS_READ};
+use crate::io::dwell_tally::{DwellTallies, DwellTally};
 use crate::io::error::InputError;
 use crate::io::recording::{Row, RowSource};
 use crate::model::synth::{c_b_n, earth_rate_n_radps, mul_t_vec, M3};
@@ -113,7 +113,7 @@ impl Session {
         let (site, _) = site_of(header);
         let g = site.gravity_mps2 as f64;
         let lat = header.latitude_deg.to_radians();
-        let mut tallies = DwellTallies::new(MAX_DWELLS_READ, "sinscal reads at most that many from one recording");
+        let mut tallies = DwellTallies::bounded();
         let mut columns: Vec<DwellColumns> = Vec::new();
         let (mut rows, mut t0, mut t_last) = (0usize, None, 0.0);
         recording.for_each_row(&mut |row| {
@@ -136,14 +136,11 @@ impl Session {
             None => 100.0,
         };
         let dwells = tallies
-            .dwells
+            .at_least_one(source)?
             .iter()
             .zip(columns)
             .map(|(d, c)| DwellData::new(d, c, source))
             .collect::<Result<Vec<_>, _>>()?;
-        if dwells.is_empty() {
-            return Err(InputError::file(source, "no dwell: every row has pos = 0"));
-        }
         Ok(Session { w_n: earth_rate_n_radps(lat), f_n: [0.0, 0.0, g], t0, rate_hz, dt: 1.0 / rate_hz, dwells })
     }
 

@@ -166,10 +166,7 @@ fn write_frames(rec: &impl RowSource, out: &mut dyn std::io::Write) -> Result<(V
         encode_burst(REPLAY_MODEL, &burst, &mut record[1..]);
         out.write_all(&record).map_err(|e| InputError::file(source, format!("writing the replay file: {e}")))
     })?;
-    if tallies.dwells.is_empty() {
-        return Err(InputError::file(source, "no dwell: every row has pos = 0"));
-    }
-    Ok((tallies.dwells, rows))
+    Ok((tallies.at_least_one(source)?, rows))
 }
 
 /// The calibration of a replay outcome, in the host's report types (angles per position recomputed with

@@ -24,7 +24,7 @@ use sinscal::nav::frames::Attitude;
 use sinscal::sensor::sample::ImuSample;
 
 pub use crate::calibration::estimates::{Estimates, Method};
-use crate::io::dwell_tally::{DwellTallies, DwellTally};
+use crate::io::dwell_tally::{DwellTallies, DwellTally, NO_DWELL};
 use crate::io::error::InputError;
 use crate::io::recording::{DwellAttitude, Header, RowSource};
 
@@ -207,17 +207,6 @@ pub fn gyros_resolve_earth_rate(noise_var: &[f32; 6], samples: impl Iterator<Ite
     (worst / n).sqrt() < sinscal::nav::earth::EARTH_RATE_RADPS / 3.0
 }
 
-/// The dwells of a recording in one pass, at least one and at most `limit` (the estimator's).
-pub fn calibration_dwells(recording: &impl RowSource, limit: usize) -> Result<Vec<DwellTally>, InputError> {
-    let source = recording.source();
-    let mut tallies = DwellTallies::new(limit, "the core's limit");
-    recording.for_each_row(&mut |row| tallies.push(row, source).map(|_| ()))?;
-    if tallies.dwells.is_empty() {
-        return Err(InputError::file(source, "no dwell: every row has pos = 0"));
-    }
-    Ok(tallies.dwells)
-}
-
 /// The prefilter the options ask for; `a` identified from the recording's first dwell when they say so (a
 /// pass over the rows of its label).
 pub fn prefilter_of(options: &Options, recording: &impl RowSource) -> Result<Prefilter, InputError> {
@@ -257,11 +246,8 @@ pub fn collect_dwells(
             .update(&sample)
             .map_err(|e| InputError::at(source, row.line, format!("{e} (after conversion to f32)")))
     })?;
-    if tallies.dwells.is_empty() {
-        return Err(InputError::file(source, "no dwell: every row has pos = 0"));
-    }
     tallies
-        .dwells
+        .at_least_one(source)?
         .into_iter()
         .zip(collectors)
         .map(|(tally, collector)| {
@@ -487,7 +473,7 @@ pub fn identify_coefficients(recording: &impl RowSource) -> Result<[f32; 2], Inp
         Ok(())
     })?;
     let Some((_, line)) = first else {
-        return Err(InputError::file(recording.source(), "no dwell: every row has pos = 0"));
+        return Err(InputError::file(recording.source(), NO_DWELL));
     };
     let mut out = [0.0; 2];
     for (sensor, slot) in out.iter_mut().enumerate() {

@@ -7,7 +7,6 @@
 
 use std::path::{Path, PathBuf};
 use std::process::{Command, Stdio};
-use std::sync::atomic::{AtomicU32, Ordering};
 
 use sinscal::rig::replay::{decode_outcome, read_header};
 
@@ -62,16 +61,9 @@ pub fn run_firmware(elf: &Path, replay: &[u8]) -> Result<(Vec<u8>, String), Stri
 
 /// [`run_firmware`] on a replay file on disk.
 pub fn run_firmware_on(elf: &Path, input: &Path) -> Result<(Vec<u8>, String), String> {
-    static RUN: AtomicU32 = AtomicU32::new(0);
-    let dir = std::env::temp_dir().join(format!(
-        "sinscal-qemu-{}-{}",
-        std::process::id(),
-        RUN.fetch_add(1, Ordering::Relaxed)
-    ));
-    std::fs::create_dir_all(&dir).map_err(|e| format!("{}: {e}", dir.display()))?;
-    let output = dir.join("out.ssro");
+    let output = ScratchFile::new("out.ssro");
     let semihosting =
-        format!("enable=on,target=native,arg=sinscal-replay,arg={},arg={}", input.display(), output.display());
+        format!("enable=on,target=native,arg=sinscal-replay,arg={},arg={}", input.display(), output.path().display());
     let run = Command::new(QEMU)
         .args(["-cpu", "cortex-m4", "-machine", "mps2-an386", "-nographic", "-monitor", "none", "-serial", "none"])
         .args(["-semihosting-config", &semihosting, "-kernel"])
@@ -80,8 +72,7 @@ pub fn run_firmware_on(elf: &Path, input: &Path) -> Result<(Vec<u8>, String), St
         .output()
         .map_err(|e| format!("cannot run {QEMU} ({e}): install it with scripts/setup"))?;
     let log = decode_defmt(elf, &run.stdout);
-    let result = std::fs::read(&output);
-    let _ = std::fs::remove_dir_all(&dir);
+    let result = std::fs::read(output.path());
     if !run.status.success() {
         return Err(format!("the firmware exited with {} in QEMU: {}", run.status, log.trim()));
     }
@@ -92,13 +83,8 @@ pub fn run_firmware_on(elf: &Path, input: &Path) -> Result<(Vec<u8>, String), St
 /// Runs a firmware binary that takes one output-file argument (self-test, benchmark) and returns its exit
 /// code and the text it wrote. `icount` runs QEMU with `-icount shift=0` (instruction counting).
 pub fn run_with_output(elf: &Path, icount: bool) -> Result<(i32, String), String> {
-    static RUN: AtomicU32 = AtomicU32::new(0);
-    let out = std::env::temp_dir().join(format!(
-        "sinscal-fw-{}-{}.txt",
-        std::process::id(),
-        RUN.fetch_add(1, Ordering::Relaxed)
-    ));
-    let semihosting = format!("enable=on,target=native,arg=fw,arg={}", out.display());
+    let out = ScratchFile::new("fw.txt");
+    let semihosting = format!("enable=on,target=native,arg=fw,arg={}", out.path().display());
     let mut cmd = Command::new(QEMU);
     cmd.args(["-cpu", "cortex-m4", "-machine", "mps2-an386", "-nographic", "-monitor", "none", "-serial", "none"]);
     if icount {
@@ -110,8 +96,7 @@ pub fn run_with_output(elf: &Path, icount: bool) -> Result<(i32, String), String
         .stdin(Stdio::null())
         .output()
         .map_err(|e| format!("cannot run {QEMU} ({e}): install it with scripts/setup"))?;
-    let text = std::fs::read_to_string(&out).unwrap_or_default();
-    let _ = std::fs::remove_file(&out);
+    let text = std::fs::read_to_string(out.path()).unwrap_or_default();
     Ok((run.status.code().unwrap_or(-1), text))
 }
 

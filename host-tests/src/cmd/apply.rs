@@ -48,13 +48,7 @@ pub fn run(args: Args) -> anyhow::Result<()> {
 /// The rows go through one at a time into a scratch file beside `out`, renamed to `out` when every row is
 /// written: a refusal leaves no partial file. Returns the number of rows.
 pub fn apply(rec: &impl RowSource, model: &CalibrationModel, out: &Path) -> Result<usize, InputError> {
-    let name = out.display().to_string();
-    let refused = |e: WriteError| match e {
-        WriteError::Refused(reason) => {
-            InputError::file(&name, format!("not written, its reader would refuse it: {reason}"))
-        }
-        WriteError::Io(e) => InputError::io(out, e),
-    };
+    let refused = |e: WriteError| e.writing(out);
     let mut header = rec.header().clone();
     let key = calibration_key(&header.comments);
     header.comments.push(format!("{key}: {}", model.source));
@@ -62,7 +56,7 @@ pub fn apply(rec: &impl RowSource, model: &CalibrationModel, out: &Path) -> Resu
         ".{}.partial",
         out.file_name().map_or("out".into(), |n| n.to_string_lossy().into_owned())
     ));
-    let file = std::fs::File::create(&partial).map_err(|e| InputError::io(&partial, e))?;
+    let file = std::fs::File::create(&partial).map_err(|e| InputError::io(out, e))?;
     let written = (|| {
         let mut writer = RecordingWriter::new(std::io::BufWriter::new(file), &header, rec.has_gyro(), rec.has_temp())
             .map_err(refused)?;

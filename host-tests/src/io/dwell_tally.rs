@@ -160,6 +160,9 @@ impl DwellTally {
     }
 }
 
+/// The reason for a recording without a dwell.
+pub const NO_DWELL: &str = "no dwell: every row has pos = 0";
+
 /// Most dwells a command that keeps no rows reads from one recording: a turntable session has tens.
 pub const MAX_DWELLS_READ: usize = 10_000;
 
@@ -183,6 +186,19 @@ impl DwellTallies {
     /// there is a limit.
     pub fn new(limit: usize, why: &'static str) -> DwellTallies {
         DwellTallies { dwells: Vec::new(), index: HashMap::new(), last: None, limit, why }
+    }
+
+    /// Tallies of at most [`MAX_DWELLS_READ`] dwells, for a command without a limit of its own.
+    pub fn bounded() -> DwellTallies {
+        DwellTallies::new(MAX_DWELLS_READ, "sinscal reads at most that many from one recording")
+    }
+
+    /// The dwells, at least one: none is an error (`no dwell: every row has pos = 0`).
+    pub fn at_least_one(self, source: &str) -> Result<Vec<DwellTally>, InputError> {
+        if self.dwells.is_empty() {
+            return Err(InputError::file(source, NO_DWELL));
+        }
+        Ok(self.dwells)
     }
 
     /// Adds a row; returns the index of its dwell (`None` for label 0).

@@ -159,26 +159,17 @@ impl Recording {
         String::from_utf8(out).expect("the writer writes UTF-8")
     }
 
-    /// Writes the recording to a file.
+    /// Writes the recording to a file, after the reader's rules on what would be written
+    /// (docs/formats.md#bad-input): the header's numbers within their bounds, every value finite, times strictly
+    /// increasing, and `rate_hz` agreeing with them. Nothing is written when a rule is broken.
     pub fn write(&self, path: &Path) -> Result<(), InputError> {
-        self.check_writable().map_err(|reason| {
-            InputError::file(&path.display().to_string(), format!("not written, its reader would refuse it: {reason}"))
-        })?;
-        std::fs::write(path, self.to_csv()).map_err(|e| InputError::io(path, e))
-    }
-
-    /// The reader's rules on what would be written (docs/formats.md#bad-input): the header's numbers within
-    /// their bounds, every value finite, times strictly increasing, and `rate_hz` agreeing with them. The
-    /// reason of the first rule broken.
-    pub fn check_writable(&self) -> Result<(), String> {
-        let refused = |e: WriteError| match e {
-            WriteError::Refused(reason) => reason,
-            WriteError::Io(e) => e.to_string(),
-        };
-        let mut w = RecordingWriter::new(std::io::sink(), &self.header, self.has_gyro, RowSource::has_temp(self))
-            .map_err(refused)?;
+        let refused = |e: WriteError| e.writing(path);
+        let mut text = Vec::new();
+        let mut w =
+            RecordingWriter::new(&mut text, &self.header, self.has_gyro, RowSource::has_temp(self)).map_err(refused)?;
         self.rows.iter().try_for_each(|r| w.row(r)).map_err(refused)?;
-        w.finish().map(|_| ()).map_err(refused)
+        w.finish().map_err(refused)?;
+        std::fs::write(path, text).map_err(|e| InputError::io(path, e))
     }
 
     /// The dwells, in order of first appearance of their label. Rows with the same non-zero label form
@@ -206,6 +197,19 @@ pub enum WriteError {
     Refused(String),
     /// The output failed.
     Io(std::io::Error),
+}
+
+impl WriteError {
+    /// The error of writing `path`: `PATH: not written, its reader would refuse it: REASON`, or the I/O error.
+    pub fn writing(self, path: &Path) -> InputError {
+        match self {
+            WriteError::Refused(reason) => InputError::file(
+                &path.display().to_string(),
+                format!("not written, its reader would refuse it: {reason}"),
+            ),
+            WriteError::Io(e) => InputError::io(path, e),
+        }
+    }
 }
 
 /// Writes a recording row by row (docs/formats.md#recording) and checks, as it goes, the rules its reader
@@ -540,11 +544,6 @@ impl Dwell<'_> {
     /// The reference attitude of the dwell ([`DwellTally::attitude`]).
     pub fn attitude(&self, source: &str) -> Result<DwellAttitude, InputError> {
         self.tally().attitude(source)
-    }
-
-    /// The reference attitude with its heading ([`DwellTally::attitude_with_heading`]).
-    pub fn attitude_with_heading(&self, source: &str, purpose: &str) -> Result<(DwellAttitude, f64), InputError> {
-        self.tally().attitude_with_heading(source, purpose)
     }
 }
 

@@ -97,7 +97,7 @@ pub fn align(rec: &Recording) -> Result<AlignmentReport, InputError> {
     };
     let dwells = rec.dwells();
     if dwells.is_empty() {
-        return Err(InputError::file(source, "no dwell: every row has pos = 0"));
+        return Err(InputError::file(source, crate::io::dwell_tally::NO_DWELL));
     }
     let positions =
         dwells.iter().map(|d| align_dwell(d, rec.has_gyro, &site, source)).collect::<Result<Vec<_>, _>>()?;

@@ -9,7 +9,7 @@ use rand_distr::{Distribution, Normal};
 use serde::Serialize;
 
 use crate::io::calibration_model::CalibrationModel;
-use crate::io::dwell_tally::{DwellTallies, DwellTally, MAX_DWELLS_READ};
+use crate::io::dwell_tally::{DwellTallies, DwellTally};
 use crate::io::error::InputError;
 use crate::io::recording::{Header, RowSource, SimulationTruth};
 use crate::model::synth::{c_b_n, mul_vec, transpose, Scenario, EARTH_RATE_RADPS};
@@ -169,7 +169,7 @@ pub fn navigate(
     let source = recording.source();
     recording.require_gyro("navigate")?;
     let header = recording.header();
-    let mut tallies = DwellTallies::new(MAX_DWELLS_READ, "sinscal reads at most that many from one recording");
+    let mut tallies = DwellTallies::bounded();
     recording.for_each_row(&mut |row| tallies.push(row, source).map(|_| ()))?;
     let dwell = chosen_dwell(source, &tallies.dwells, options)?;
     let (attitude, heading) = dwell.attitude_with_heading(source, "navigation")?;
