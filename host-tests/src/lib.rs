@@ -17,6 +17,7 @@
 pub mod analysis;
 pub mod calibration;
 pub mod cmd;
+pub mod fuzz;
 pub mod io;
 pub mod model;
 pub mod navigation;

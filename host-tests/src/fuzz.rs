@@ -1,0 +1,146 @@
+//! Every reader of sinscal as a fuzz target (docs/formats.md#bad-input): bytes in, the input accepted (with
+//! finite values) or refused with a reason; anything else (a panic, a non-finite value accepted, the file
+//! reader disagreeing with the text reader) is a failure. The stable mutation harness
+//! (`host-tests/tests/fuzz_readers.rs`) and the cargo-fuzz targets (`host-tests/fuzz/`) run these same
+//! functions, from the same seeds.
+
+use sinscal::rig::replay::{run_replay, ReplayError};
+use sinscal::sensor::adis::{decode_burst, encode_burst, AdisError, Burst, Model, I16F16};
+
+use crate::analysis::AnglesFile;
+use crate::calibration::firmware_path::replay_file;
+use crate::calibration::Options;
+use crate::io::calibration_model::CalibrationModel;
+use crate::io::recording::Recording;
+use crate::io::ScratchFile;
+use crate::model::simulator::ScenarioFile;
+use crate::model::synth::Scenario;
+
+/// A reader under test: bytes in, `Ok(true)` accepted (with finite values), `Ok(false)` refused.
+pub type Reader = fn(&[u8]) -> Result<bool, String>;
+
+fn text(bytes: &[u8]) -> Option<&str> {
+    std::str::from_utf8(bytes).ok()
+}
+
+/// The recording text reader (`Recording::parse`).
+pub fn read_recording(bytes: &[u8]) -> Result<bool, String> {
+    let Some(t) = text(bytes) else { return Ok(false) };
+    match Recording::parse(t, "fuzz.csv") {
+        Err(_) => Ok(false),
+        Ok(r) => {
+            let finite = r.rows.iter().all(|row| {
+                row.t_s.is_finite()
+                    && row.rate_b_radps.iter().chain(&row.force_b_mps2).all(|v| v.is_finite())
+                    && [row.pitch_deg, row.roll_deg].iter().all(|v| v.is_finite())
+            });
+            if finite {
+                Ok(true)
+            } else {
+                Err("a recording with a non-finite value was accepted".into())
+            }
+        }
+    }
+}
+
+/// The file reader (chunks parsed on the available cores) against the text reader: what the file reader
+/// accepts, the text reader accepts with the same rows (the file reader also refuses a last line without an
+/// end of line, which the text reader cannot see).
+pub fn read_recording_file(bytes: &[u8]) -> Result<bool, String> {
+    let file = ScratchFile::new("fuzz.csv");
+    std::fs::write(file.path(), bytes).map_err(|e| e.to_string())?;
+    let from_file = Recording::read(file.path());
+    let from_text = text(bytes).map(|t| Recording::parse(t, "fuzz.csv"));
+    match (from_file, from_text) {
+        (Err(_), _) => Ok(false),
+        (Ok(f), Some(Ok(t))) if f.rows == t.rows && f.header == t.header => read_recording(bytes),
+        (Ok(_), _) => Err("the file reader accepted what the text reader refuses or reads otherwise".into()),
+    }
+}
+
+/// The angles file reader.
+pub fn read_angles(bytes: &[u8]) -> Result<bool, String> {
+    let Some(t) = text(bytes) else { return Ok(false) };
+    match AnglesFile::parse(t, "fuzz.angles") {
+        Err(_) => Ok(false),
+        Ok(a) => {
+            let finite =
+                a.rows.iter().all(|r| r.phi_rad.iter().chain(r.phi_std_rad.iter().flatten()).all(|v| v.is_finite()));
+            if finite {
+                Ok(true)
+            } else {
+                Err("an angles file with a non-finite value was accepted".into())
+            }
+        }
+    }
+}
+
+/// The scenario reader (with its checks: finite numbers, bounded sizes).
+pub fn read_scenario(bytes: &[u8]) -> Result<bool, String> {
+    let Some(t) = text(bytes) else { return Ok(false) };
+    Ok(ScenarioFile::parse(t, "fuzz.toml").is_ok())
+}
+
+/// The calibration JSON reader (`apply`, `navigate`).
+pub fn read_calibration(bytes: &[u8]) -> Result<bool, String> {
+    let Some(t) = text(bytes) else { return Ok(false) };
+    match CalibrationModel::parse(t, "fuzz.json") {
+        Err(_) => Ok(false),
+        Ok(m) => {
+            let values = m.gyro_bias_radps.iter().chain(&m.accel_bias_mps2).chain(m.accel_t.iter().flatten());
+            if values.chain(m.gyro_t.iter().flatten()).all(|v| v.is_finite()) {
+                Ok(true)
+            } else {
+                Err("a calibration with a non-finite value was accepted".into())
+            }
+        }
+    }
+}
+
+/// The replay file through the firmware path (header, frames, the calibration sequence).
+pub fn read_replay(bytes: &[u8]) -> Result<bool, String> {
+    let outcome: Result<_, ReplayError> = run_replay(bytes, |_| {});
+    Ok(outcome.is_ok())
+}
+
+/// The ADIS16505-2 burst decoder.
+pub fn read_burst(bytes: &[u8]) -> Result<bool, String> {
+    let decoded: Result<Burst, AdisError<()>> = decode_burst(Model::Adis16505_2, bytes);
+    Ok(decoded.is_ok())
+}
+
+/// The valid inputs the fuzzing starts from, per target: its name, its reader and a valid input that sinscal
+/// writes itself.
+pub fn seeds() -> Vec<(&'static str, Reader, Vec<u8>)> {
+    let scenario = Scenario { dwell_s: 1.0, ..Scenario::example() };
+    let rec = scenario.recording(1, "seed.csv");
+    let cal = crate::calibration::calibrate(&rec, &Options::default()).expect("the seed calibrates");
+    let cal_json = serde_json::to_string_pretty(&crate::io::calibration_result::CalibrationJson::new(&cal))
+        .expect("the calibration serialises");
+    let angles = "# sinscal-angles: 1\n# latitude_deg: 45.7796\n\
+                  pos,pitch_deg,roll_deg,heading_deg,phi_e_rad,phi_n_rad,phi_u_rad,phi_e_std_rad,phi_n_std_rad,phi_u_std_rad\n\
+                  1,0,0,0,1e-5,-2e-5,3e-4,1e-6,1e-6,1e-5\n2,0,0,180,2e-5,1e-5,-3e-4,1e-6,1e-6,1e-5\n\
+                  3,0,0,90,1e-5,1e-5,2e-4,1e-6,1e-6,1e-5\n4,0,0,270,-1e-5,2e-5,1e-4,1e-6,1e-6,1e-5\n\
+                  5,0,90,0,3e-5,-1e-5,3e-4,1e-6,1e-6,1e-5\n6,0,270,0,1e-5,1e-5,-2e-4,1e-6,1e-6,1e-5\n";
+    let scenario_toml = include_str!("../scenarios/all-effects.toml").to_string();
+    let (replay, _) = replay_file(&rec, &Options::default()).expect("the seed replays");
+    let mut burst = vec![0u8; Model::Adis16505_2.burst_len()];
+    let lsb = |x: f64| I16F16::from_num(x);
+    let b = Burst {
+        diag_stat: 0,
+        gyro_lsb: [lsb(100.5), lsb(-200.25), lsb(300.0)],
+        accel_lsb: [lsb(10.0), lsb(20.0), lsb(3000.0)],
+        temp_raw: 25,
+        data_counter: 7,
+    };
+    encode_burst(Model::Adis16505_2, &b, &mut burst);
+    vec![
+        ("recording", read_recording as Reader, rec.to_csv().into_bytes()),
+        ("recording-file", read_recording_file as Reader, rec.to_csv().into_bytes()),
+        ("angles", read_angles as Reader, angles.as_bytes().to_vec()),
+        ("scenario", read_scenario as Reader, scenario_toml.into_bytes()),
+        ("calibration", read_calibration as Reader, cal_json.into_bytes()),
+        ("replay", read_replay as Reader, replay),
+        ("burst", read_burst as Reader, burst),
+    ]
+}
