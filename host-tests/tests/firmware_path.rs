@@ -231,3 +231,39 @@ fn a_full_queue_is_counted_not_dropped_silently() {
     let counters: Vec<u16> = std::iter::from_fn(|| consumer.dequeue()).map(|i| i.unwrap().counter).collect();
     assert_eq!(counters, (1..QUEUE_SLOTS as u16).collect::<Vec<_>>());
 }
+
+#[test]
+fn unknown_headings_beyond_the_32nd_dwell_reach_the_sequence() {
+    // SIMULATION: Table 1 six times over (36 dwells of 1 s); the headings of dwells 4 and 35 (labels) emptied.
+    // The replay header holds one flag per dwell: the sequence must see exactly those two as unknown (a
+    // 32-bit mask put the 35th dwell's flag on the 3rd, and overflowed in a debug build; found by cargo-fuzz).
+    let positions: Vec<[f64; 3]> = (0..6).flat_map(|_| sinscal_host::model::synth::TABLE1_DEG).collect();
+    let mut rec = Scenario { dwell_s: 1.0, positions_deg: positions, ..Scenario::example() }.recording(8, "e.csv");
+    for row in rec.rows.iter_mut().filter(|r| r.pos == 4 || r.pos == 35) {
+        row.heading_deg = None;
+    }
+    let (file, plan) = replay_file(&rec, &Options::default()).unwrap();
+    assert_eq!(plan.dwells.len(), 36);
+    let header = read_header(&mut &file[..]).unwrap();
+    assert_eq!(header.settings.unknown_headings, (1 << 3) | (1 << 34));
+    // The firmware path solves the same session as the direct path: every heading estimate agrees.
+    let direct = calibrate(&rec, &Options::default()).unwrap();
+    let replayed = calibrate_on_host(&rec, &Options::default()).unwrap();
+    let (d, r) = (direct.channels.unwrap(), replayed.channels.unwrap());
+    assert_eq!(d.suspect, r.suspect);
+    for (k, (a, b)) in direct.positions.iter().zip(&replayed.positions).enumerate() {
+        assert_eq!(a.attitude.heading_deg.is_none(), b.attitude.heading_deg.is_none(), "dwell {k}");
+    }
+    // The two unknown headings are estimated (a standard error), the 34 others known, on both paths.
+    for k in 0..36 {
+        let estimated = k == 3 || k == 34;
+        assert_eq!(d.heading_std_rad[k] > 0.0, estimated, "direct, dwell {k}");
+        assert_eq!(r.heading_std_rad[k] > 0.0, estimated, "replayed, dwell {k}");
+        assert!(
+            (d.heading_rad[k] - r.heading_rad[k]).abs() < 1e-3,
+            "dwell {k}: {} {}",
+            d.heading_rad[k],
+            r.heading_rad[k]
+        );
+    }
+}

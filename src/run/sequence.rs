@@ -55,8 +55,9 @@ pub struct SequenceSettings {
     /// The angle method's settings (with [`Estimator::Angles`]).
     pub calibration: CalibrationSettings,
     /// Bit k: the heading of position k is unknown (the general estimator estimates it; the angle method
-    /// needs every heading, so a sequence with [`Estimator::Angles`] refuses a non-zero mask).
-    pub unknown_headings: u32,
+    /// needs every heading, so a sequence with [`Estimator::Angles`] refuses a non-zero mask). 64 bits: one
+    /// per position of `MAX_DWELLS`.
+    pub unknown_headings: u64,
 }
 
 /// The estimator of a sequence.
@@ -364,7 +365,7 @@ impl CalibrationSequence {
                 let mask = self.settings.unknown_headings;
                 let dwells = self.inputs.iter().zip(&self.schedule).enumerate().map(|(k, (p, a))| SessionDwell {
                     attitude: *a,
-                    heading_known: k >= 32 || mask & (1 << k) == 0,
+                    heading_known: mask.checked_shr(k as u32).unwrap_or(0) & 1 == 0,
                     summary: &p.summary,
                 });
                 let dwell_value = self.settings.calibration.dwell_value;

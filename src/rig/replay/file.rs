@@ -85,9 +85,11 @@ pub struct ReplaySolve {
     pub max_passes: u32,
     /// Whether the angle method estimates the reference offset.
     pub estimate_reference_offset: bool,
-    /// Bit k: the heading of position k is unknown.
-    pub unknown_headings: u32,
+    /// Bit k: the heading of position k is unknown (64 bits: one per position of [`MAX_POSITIONS`]).
+    pub unknown_headings: u64,
 }
+
+const _: () = assert!(MAX_POSITIONS <= 64, "unknown_headings holds one bit per position");
 
 /// Settings of a replayed sequence: no settling (the recording's dwells are already the static parts),
 /// dwells as long as the table says, at least [`MIN_DWELL_SAMPLES`] samples.
@@ -195,7 +197,7 @@ pub fn read_header<R: ByteSource>(source: &mut R) -> Result<ReplayHeader, Replay
     };
     let mut schedule = Vec::new();
     let mut labels = Vec::new();
-    let mut unknown_headings = 0u32;
+    let mut unknown_headings = 0u64;
     for k in 0..count {
         let mut p = [0u8; 16];
         source.read_exact(&mut p)?;
@@ -203,7 +205,8 @@ pub fn read_header<R: ByteSource>(source: &mut R) -> Result<ReplayHeader, Replay
         schedule.push(attitude).map_err(|_| ReplayError::Format)?;
         labels.push(u16_at(&p, 12)).map_err(|_| ReplayError::Format)?;
         if u16_at(&p, 14) & 1 != 0 {
-            unknown_headings |= 1 << k;
+            // k < MAX_POSITIONS <= 64: `schedule.push` above refuses more.
+            unknown_headings |= 1u64 << k;
         }
     }
     let solve = ReplaySolve {
