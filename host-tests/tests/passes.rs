@@ -8,7 +8,7 @@ use std::path::{Path, PathBuf};
 use sinscal::calib::channels::Model;
 use sinscal_host::analysis::analyze_recording;
 use sinscal_host::calibration::firmware_path::calibrate_on_host;
-use sinscal_host::calibration::{calibrate, Coefficient, Method, Options, PrefilterKind};
+use sinscal_host::calibration::{calibrate, Coefficient, Options, PrefilterKind};
 use sinscal_host::cmd::apply::apply;
 use sinscal_host::io::calibration_model::CalibrationModel;
 use sinscal_host::io::calibration_result::CalibrationJson;
@@ -59,7 +59,6 @@ fn calibrate_from_a_file_is_calibrate_of_the_rows_in_memory() {
             assert!(matches!(b.prefilter, sinscal::calib::dwell::Prefilter::HmmKf { gyro, .. } if gyro.a < 1.0));
         }
     }
-    assert_eq!(Options::angles().method, Method::Angles);
 }
 
 #[test]

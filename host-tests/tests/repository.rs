@@ -11,14 +11,15 @@ fn root() -> PathBuf {
     Path::new(env!("CARGO_MANIFEST_DIR")).parent().expect("host-tests is inside the workspace").to_path_buf()
 }
 
-/// Every file under `dir` (recursively) whose name ends with one of `exts`, skipping build output.
+/// Every file under `dir` (recursively) whose name ends with one of `exts`, skipping build output and what
+/// cargo-fuzz generates (git ignores both; libFuzzer changes its corpus while it runs).
 fn files(dir: &Path, exts: &[&str], out: &mut Vec<PathBuf>) {
     let Ok(entries) = fs::read_dir(dir) else { return };
     for e in entries.flatten() {
         let p = e.path();
         let name = p.file_name().and_then(|n| n.to_str()).unwrap_or("");
         if p.is_dir() {
-            if name != "target" && !name.starts_with('.') {
+            if !["target", "corpus", "artifacts", "coverage"].contains(&name) && !name.starts_with('.') {
                 files(&p, exts, out);
             }
         } else if exts.iter().any(|x| name.ends_with(x)) {
