@@ -25,9 +25,9 @@ struct AngleTally {
     high: (f64, usize, f64),
 }
 
-/// The difference `a - b` of two angles wrapped to [-180, 180), degrees.
-fn wrapped_deg(a: f64, b: f64) -> f64 {
-    (a - b + 540.0).rem_euclid(360.0) - 180.0
+/// Shortest signed angle from `from_deg` to `to_deg` (`to - from` wrapped to [-180, 180)), degrees.
+pub fn angle_step_deg(from_deg: f64, to_deg: f64) -> f64 {
+    (to_deg - from_deg + 540.0).rem_euclid(360.0) - 180.0
 }
 
 impl AngleTally {
@@ -46,7 +46,7 @@ impl AngleTally {
             Some((bits, sin, cos, d)) if bits == v.to_bits() => (sin, cos, d),
             _ => {
                 let r = v.to_radians();
-                let (sin, cos, d) = (r.sin(), r.cos(), wrapped_deg(v, self.first_deg));
+                let (sin, cos, d) = (r.sin(), r.cos(), angle_step_deg(self.first_deg, v));
                 self.last = Some((v.to_bits(), sin, cos, d));
                 (sin, cos, d)
             }
@@ -78,7 +78,7 @@ impl AngleTally {
         let mean = self.sum_sin.atan2(self.sum_cos).to_degrees();
         // Every value lies between the two extremes, so these two decide the spread.
         for (_, line, v) in [self.low, self.high] {
-            if wrapped_deg(v, mean).abs() > MAX_DWELL_ATTITUDE_SPREAD_DEG {
+            if angle_step_deg(mean, v).abs() > MAX_DWELL_ATTITUDE_SPREAD_DEG {
                 return Err(InputError::at(
                     source,
                     line,
@@ -89,7 +89,7 @@ impl AngleTally {
                 ));
             }
         }
-        Ok(Some(self.first_deg - wrapped_deg(self.first_deg, mean)))
+        Ok(Some(self.first_deg - angle_step_deg(mean, self.first_deg)))
     }
 }
 

@@ -39,6 +39,7 @@ use rand_chacha::ChaCha8Rng;
 use rand_distr::{Distribution, StandardNormal};
 use serde::Deserialize;
 
+use crate::io::dwell_tally::angle_step_deg;
 use crate::io::error::InputError;
 use crate::io::recording::{Header, Recording, Row, SimulationTruth};
 use crate::model::sensor::Triad;
@@ -532,11 +533,6 @@ fn rotation_vector(r: &M3) -> [f64; 3] {
     let angle = s.atan2(c);
     let k = if s > 1e-300 { angle / (2.0 * s) } else { 0.5 };
     v.map(|x| x * k)
-}
-
-/// Shortest signed angle from `a` to `b`, degrees.
-fn angle_step_deg(a: f64, b: f64) -> f64 {
-    (b - a + 540.0).rem_euclid(360.0) - 180.0
 }
 
 /// The true body rate and specific force of the interval from attitude `c0` to `c1` (`C_b^n`) over `dt`: the
