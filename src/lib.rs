@@ -21,8 +21,8 @@
 //! | [`sensor`] | [`ImuSample`], the [`ImuSource`] trait, the ADIS driver |
 //! | [`calib`] | prefilter, dwell statistics, alignment, the bias solution, the calibration |
 //! | [`run`] | the data-ready handler and its queue, the calibration sequence |
-//! | [`instrument`] | the device: the host link (frames, messages), the calibration record in NOR flash, compensation |
 //! | [`rig`] | replay of a recording through the firmware path, semihosting (emulation and tests) |
+//! | [`instrument`] | the device: the host link (frames, messages), the calibration record in NOR flash, compensation; it sends and stores the replay formats' configuration and outcome |
 //! | `board` | register-level code of the board, the panic handler and exit (target only, feature `mps2-an386`, on by default) |
 //!
 //! ## Data flow

@@ -17,6 +17,7 @@
 pub mod analysis;
 pub mod calibration;
 pub mod cmd;
+pub mod device;
 pub mod fuzz;
 pub mod io;
 pub mod model;

@@ -45,6 +45,9 @@ enum Command {
     Study(cmd::study::Args),
     /// SIMULATION: Monte Carlo of the estimators against the Cramer-Rao bound (Table 1, white noise).
     Montecarlo(cmd::montecarlo::Args),
+    /// The calibration firmware as an instrument over its serial link (QEMU or a board): run a calibration and
+    /// store it, or show the stored record.
+    Device(cmd::device::Args),
 }
 
 fn main() -> ExitCode {
@@ -61,6 +64,7 @@ fn main() -> ExitCode {
         Command::Import(args) => cmd::import::run(args),
         Command::Study(args) => cmd::study::run(args),
         Command::Montecarlo(args) => cmd::montecarlo::run(args),
+        Command::Device(args) => cmd::device::run(args),
     };
     match result {
         Ok(()) => ExitCode::SUCCESS,

@@ -2,5 +2,10 @@
 //! serial link, that keeps its calibration across power loss, and that compensates its output.
 //!
 //! - [`crc`]: the CRC-32 of link frames and stored records.
+//! - [`link`]: frames on the serial line (COBS, CRC, bounded).
+//! - [`message`]: the messages in those frames (kinds, error codes, body fields).
 
 pub mod crc;
+pub mod link;
+pub mod message;
+// pub mod record; pub mod device; (enabled when store, compensation and the latch land)

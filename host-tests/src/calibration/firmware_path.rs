@@ -28,14 +28,23 @@ use std::path::Path;
 /// The sensor model the replay files emulate.
 pub const REPLAY_MODEL: Model = Model::Adis16505_2;
 
-/// What a replay file was written from: each dwell's tally (first line, label) and reference attitude, in
+/// What a replay file was written from: each dwell's label and first line, and its reference attitude, in
 /// the order of the file's schedule.
-#[derive(Clone, Debug)]
+#[derive(Clone, Debug, PartialEq, serde::Serialize, serde::Deserialize)]
 pub struct ReplayPlan {
     /// The dwells.
-    pub dwells: Vec<DwellTally>,
+    pub dwells: Vec<PlannedDwell>,
     /// Their reference attitudes.
     pub attitudes: Vec<DwellAttitude>,
+}
+
+/// A dwell of a replay file: its label in the recording and the line of its first row.
+#[derive(Clone, Copy, Debug, PartialEq, serde::Serialize, serde::Deserialize)]
+pub struct PlannedDwell {
+    /// Position label.
+    pub pos: u32,
+    /// Line of its first row.
+    pub first_line: usize,
 }
 
 /// The replay file of a recording for the given calibration options, in memory ([`replay_parts`]).
@@ -121,6 +130,7 @@ pub fn replay_parts(
         attitudes.push(att);
     }
     head.extend_from_slice(&frames.to_le_bytes());
+    let dwells = dwells.iter().map(|d| PlannedDwell { pos: d.pos, first_line: d.first_line }).collect();
     Ok((head, ReplayPlan { dwells, attitudes }))
 }
 

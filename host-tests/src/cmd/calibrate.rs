@@ -61,6 +61,17 @@ pub struct Args {
     /// Write the result as JSON (docs/formats.md#calibration-json-version-2) to this file ('-' = stdout).
     #[arg(long)]
     json: Option<PathBuf>,
+    #[command(flatten)]
+    calibration: CalibrationArgs,
+    /// Replay through the firmware path (device frames quantised by an ADIS16505-2, driver, sampling
+    /// queue, calibration sequence) on this machine or in the emulated Cortex-M4F.
+    #[arg(long, value_enum)]
+    on: Option<OnArg>,
+}
+
+/// The calibration options of `calibrate` and `device run`.
+#[derive(clap::Args)]
+pub struct CalibrationArgs {
     /// The estimator (default: channels, chosen by measurement: docs/method.md#default-estimator).
     #[arg(long, value_enum)]
     method: Option<MethodArg>,
@@ -90,10 +101,6 @@ pub struct Args {
     /// second-order error by realigning the bias-compensated dwells.
     #[arg(long, default_value_t = 6, value_parser = clap::value_parser!(u32).range(1..=50))]
     passes: u32,
-    /// Replay through the firmware path (device frames quantised by an ADIS16505-2, driver, sampling
-    /// queue, calibration sequence) on this machine or in the emulated Cortex-M4F.
-    #[arg(long, value_enum)]
-    on: Option<OnArg>,
 }
 
 /// `--prefilter-a`: 'auto' or a number in [0, 1] (a bad value is a usage error, exit 2).
@@ -107,9 +114,10 @@ fn parse_prefilter_a(text: &str) -> Result<Coefficient, String> {
     }
 }
 
-impl Args {
-    /// The calibration options these arguments ask for.
-    fn options(&self) -> anyhow::Result<Options> {
+impl CalibrationArgs {
+    /// The calibration options these arguments ask for; `firmware_path` when they go through the firmware
+    /// path (which takes the recording's attitudes as its reference).
+    pub fn options(&self, firmware_path: bool) -> anyhow::Result<Options> {
         let coefficient = self.prefilter_a;
         let usage = |text: &str| -> ! {
             clap::Error::raw(clap::error::ErrorKind::ArgumentConflict, format!("{text}\n")).exit()
@@ -122,7 +130,7 @@ impl Args {
         if self.estimate_attitudes && method == Method::Angles {
             usage("--estimate-attitudes: the angle method needs the reference attitudes (--method channels)")
         }
-        if self.estimate_attitudes && self.on.is_some() {
+        if self.estimate_attitudes && firmware_path {
             usage("--estimate-attitudes: the firmware path takes the recording's attitudes as its reference")
         }
         let model = match self.model {
@@ -153,7 +161,7 @@ impl Args {
 
 /// Runs `sinscal calibrate`.
 pub fn run(args: Args) -> anyhow::Result<()> {
-    let options = args.options()?;
+    let options = args.calibration.options(args.on.is_some())?;
     // The rows are read in passes, never held (docs/formats.md#speed-and-memory).
     let rec = RecordingFile::open(&args.recording)?;
     let cal = match args.on {

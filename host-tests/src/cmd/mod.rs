@@ -12,6 +12,7 @@ pub mod analyze;
 pub mod apply;
 pub mod calibrate;
 pub mod demo;
+pub mod device;
 pub mod example;
 pub mod import;
 pub mod montecarlo;

@@ -515,7 +515,7 @@ pub struct Dwell<'a> {
 }
 
 /// A turntable attitude read off a dwell, degrees.
-#[derive(Clone, Copy, Debug, PartialEq)]
+#[derive(Clone, Copy, Debug, PartialEq, serde::Serialize, serde::Deserialize)]
 pub struct DwellAttitude {
     /// Pitch, degrees.
     pub pitch_deg: f64,

@@ -156,25 +156,38 @@ fn f32_at(b: &[u8], i: usize) -> f32 {
 
 /// Reads the header.
 pub fn read_header<R: ByteSource>(source: &mut R) -> Result<ReplayHeader, ReplayError> {
-    let mut head = [0u8; 20];
-    source.read_exact(&mut head)?;
-    if head[..4] != MAGIC || u16_at(&head, 4) != VERSION {
+    let mut magic = [0u8; 6];
+    source.read_exact(&mut magic)?;
+    if magic[..4] != MAGIC || u16_at(&magic, 4) != VERSION {
         return Err(ReplayError::Format);
     }
-    let model = match head[6] {
+    let mut header = read_configuration(source)?;
+    let mut n = [0u8; 4];
+    source.read_exact(&mut n)?;
+    header.frames = u32::from_le_bytes(n);
+    Ok(header)
+}
+
+/// Reads the configuration part of a header: everything between the version and the frame count (sensor
+/// model, estimator, site, schedule, run settings). The device's configure message carries the same bytes.
+/// The header returned counts no frames.
+pub fn read_configuration<R: ByteSource>(source: &mut R) -> Result<ReplayHeader, ReplayError> {
+    let mut head = [0u8; 14];
+    source.read_exact(&mut head)?;
+    let model = match head[0] {
         0 => Model::Adis16470,
         1 => Model::Adis16505_2,
         _ => return Err(ReplayError::Format),
     };
-    let site = Site { latitude_rad: f32_at(&head, 8), gravity_mps2: f32_at(&head, 12) };
-    let count = u16_at(&head, 16) as usize;
+    let site = Site { latitude_rad: f32_at(&head, 2), gravity_mps2: f32_at(&head, 6) };
+    let count = u16_at(&head, 10) as usize;
     if count == 0 || count > MAX_POSITIONS {
         return Err(ReplayError::Format);
     }
     let channels = |use_gyro| {
-        Estimator::Channels(ChannelSettings { model: terms_of_bits(u16_at(&head, 18)), use_gyro, ..Default::default() })
+        Estimator::Channels(ChannelSettings { model: terms_of_bits(u16_at(&head, 12)), use_gyro, ..Default::default() })
     };
-    let estimator = match head[7] {
+    let estimator = match head[1] {
         0 => Estimator::Angles,
         1 => channels(true),
         2 => channels(false),
@@ -217,9 +230,7 @@ pub fn read_header<R: ByteSource>(source: &mut R) -> Result<ReplayHeader, Replay
         unknown_headings,
     };
     let settings = replay_sequence_settings(prefilter, solve);
-    let mut n = [0u8; 4];
-    source.read_exact(&mut n)?;
-    Ok(ReplayHeader { model, site, schedule, labels, settings, frames: u32::from_le_bytes(n) })
+    Ok(ReplayHeader { model, site, schedule, labels, settings, frames: 0 })
 }
 
 /// Magic of an encoded outcome.
@@ -229,15 +240,27 @@ pub const OUTCOME_MAGIC: [u8; 4] = *b"SSRO";
 /// is smaller). For 64 positions: 35,692.
 pub const MAX_OUTCOME_BYTES: usize = 68 + MAX_POSITIONS * 424 + 5_416 + crate::calib::channels::MAX_DWELLS * 48;
 
+/// Writes the encoding into `out`: the whole of it (an error if it does not fit), or only the window of
+/// `out.len()` bytes from `window_start` (the rest is computed and dropped: a part for a link reply or a flash
+/// write without a buffer of the whole).
 struct Writer<'a> {
     out: &'a mut [u8],
     at: usize,
+    window_start: Option<usize>,
 }
 
 impl Writer<'_> {
     fn bytes(&mut self, b: &[u8]) -> Result<(), ReplayError> {
         let end = self.at + b.len();
-        self.out.get_mut(self.at..end).ok_or(ReplayError::Format)?.copy_from_slice(b);
+        match self.window_start {
+            None => self.out.get_mut(self.at..end).ok_or(ReplayError::Format)?.copy_from_slice(b),
+            Some(start) => {
+                let (from, to) = (self.at.max(start), end.min(start + self.out.len()));
+                if from < to {
+                    self.out[from - start..to - start].copy_from_slice(&b[from - self.at..to - self.at]);
+                }
+            }
+        }
         self.at = end;
         Ok(())
     }
@@ -406,9 +429,48 @@ fn encode_channels(w: &mut Writer<'_>, c: &ChannelSolution) -> Result<(), Replay
     w.u32((c.gauge >> 32) as u32)
 }
 
+/// What the outcome encoding holds, borrowed: from a [`ReplayOutcome`], or from a running device's sequence.
+#[derive(Clone, Copy, Debug)]
+pub struct OutcomeView<'a> {
+    /// Sampling counters.
+    pub sampling: SamplingStats,
+    /// Dwells aborted (and collected again).
+    pub aborted_dwells: u32,
+    /// The failure, if the sequence failed.
+    pub failure: Option<SequenceFailure>,
+    /// Completed positions.
+    pub positions: &'a [PositionInput],
+    /// The solution, if the sequence got there.
+    pub result: Option<&'a SequenceSolution>,
+}
+
+impl ReplayOutcome {
+    /// The outcome as an [`OutcomeView`].
+    pub fn view(&self) -> OutcomeView<'_> {
+        OutcomeView {
+            sampling: self.sampling,
+            aborted_dwells: self.aborted_dwells,
+            failure: self.failure,
+            positions: &self.positions,
+            result: self.result.as_ref(),
+        }
+    }
+}
+
 /// Encodes an outcome (every f32 as its bit pattern) into `out`; returns the length.
 pub fn encode_outcome(o: &ReplayOutcome, out: &mut [u8]) -> Result<usize, ReplayError> {
-    let mut w = Writer { out, at: 0 };
+    encode_view(&o.view(), Writer { out, at: 0, window_start: None })
+}
+
+/// The part of an outcome's encoding from byte `offset`, as much as fits `out`; returns the encoding's whole
+/// length (the part written is `out.len()` bytes or up to that end). The encoding is computed each time and
+/// nothing but `out` holds it.
+pub fn encode_outcome_part(o: &OutcomeView<'_>, offset: usize, out: &mut [u8]) -> usize {
+    // A windowed writer never fails.
+    encode_view(o, Writer { out, at: 0, window_start: Some(offset) }).unwrap_or(0)
+}
+
+fn encode_view(o: &OutcomeView<'_>, mut w: Writer<'_>) -> Result<usize, ReplayError> {
     w.bytes(&OUTCOME_MAGIC)?;
     let s = &o.sampling;
     for v in [s.events, s.readings, s.queue_full, s.bus_errors, s.checksum_errors, s.stalled_counters] {
@@ -421,7 +483,7 @@ pub fn encode_outcome(o: &ReplayOutcome, out: &mut [u8]) -> Result<usize, Replay
         w.u32(v)?;
     }
     w.u32(o.positions.len() as u32)?;
-    for p in &o.positions {
+    for p in o.positions {
         let d = &p.summary;
         w.u32(d.samples)?;
         w.u32(d.rejected)?;
@@ -446,7 +508,7 @@ pub fn encode_outcome(o: &ReplayOutcome, out: &mut [u8]) -> Result<usize, Replay
             w.f32(a.prefilter_start_var)?;
         }
     }
-    match &o.result {
+    match o.result {
         None => w.u32(0)?,
         Some(SequenceSolution::Angles(r)) => {
             w.u32(1)?;

@@ -1,0 +1,238 @@
+//! `sinscal device`: the calibration firmware as an instrument, driven over its serial link. [`client`] is the
+//! link; this module boots the firmware in QEMU with its flash in a host file, runs a calibration on a recording
+//! (configure, replay through the emulated IMU, result, store) and reads the stored record back.
+
+pub mod client;
+
+use std::io::{Read, Write};
+use std::os::unix::net::{UnixListener, UnixStream};
+use std::path::{Path, PathBuf};
+use std::process::{Child, Command, Stdio};
+use std::time::{Duration, Instant};
+
+use sinscal::instrument::device::THRESHOLD_BYTES;
+use sinscal::instrument::message::{kind, DeviceState};
+use sinscal::instrument::record::{RecordHead, RECORD_HEAD_BYTES};
+use sinscal::rig::replay::{decode_outcome, read_configuration, read_header, replay_sequence_settings, ReplayHeader};
+
+use crate::calibration::firmware_path::{calibration_from_outcome, write_replay_file, ReadSource, ReplayPlan};
+use crate::calibration::qemu::{firmware_binary, QEMU};
+use crate::calibration::{Calibration, Options};
+use crate::io::error::InputError;
+use crate::io::recording::{Header, Recording, RowSource};
+use crate::io::ScratchFile;
+use client::{Client, LinkError, Stored};
+
+pub use note::Provenance;
+
+mod note;
+
+/// The firmware QEMU boots for `device`: the instrument with the emulated IMU.
+pub const DEVICE_FIRMWARE: &str = "sinscal-device";
+
+/// A device firmware running in QEMU, with its link on a Unix socket; killed when dropped.
+pub struct QemuDevice {
+    child: Child,
+    _socket_dir: ScratchFile,
+    /// The link.
+    pub client: Client<UnixStream>,
+}
+
+impl Drop for QemuDevice {
+    fn drop(&mut self) {
+        let _ = self.child.kill();
+        let _ = self.child.wait();
+    }
+}
+
+/// Boots the device firmware in QEMU (mps2-an386): its flash is the host file `flash`, its IMU replays the
+/// frames of `replay` (none: the IMU delivers nothing), its UART0 is the link.
+pub fn boot_qemu(flash: &Path, replay: Option<&Path>) -> Result<QemuDevice, String> {
+    let elf = match std::env::var_os("SINSCAL_DEVICE_FIRMWARE") {
+        Some(p) => PathBuf::from(p),
+        None => firmware_binary(DEVICE_FIRMWARE)?,
+    };
+    let dir = ScratchFile::new("link");
+    std::fs::create_dir_all(dir.path()).map_err(|e| format!("{}: {e}", dir.path().display()))?;
+    let socket = dir.path().join("uart0");
+    let listener = UnixListener::bind(&socket).map_err(|e| format!("{}: {e}", socket.display()))?;
+    let semihosting = format!(
+        "enable=on,target=native,arg={DEVICE_FIRMWARE},arg={},arg={}",
+        flash.display(),
+        replay.map_or_else(|| "-".to_string(), |p| p.display().to_string())
+    );
+    let mut child = Command::new(QEMU)
+        .args(["-cpu", "cortex-m4", "-machine", "mps2-an386", "-nographic", "-monitor", "none"])
+        .args(["-serial", &format!("unix:{}", socket.display())])
+        .args(["-semihosting-config", &semihosting, "-kernel"])
+        .arg(&elf)
+        .stdin(Stdio::null())
+        .stdout(Stdio::null())
+        .stderr(Stdio::piped())
+        .spawn()
+        .map_err(|e| format!("cannot run {QEMU} ({e}): install it with scripts/setup"))?;
+    listener.set_nonblocking(true).map_err(|e| e.to_string())?;
+    let deadline = Instant::now() + Duration::from_secs(20);
+    let stream = loop {
+        match listener.accept() {
+            Ok((s, _)) => break s,
+            Err(e) if e.kind() == std::io::ErrorKind::WouldBlock && Instant::now() < deadline => {
+                if let Ok(Some(status)) = child.try_wait() {
+                    let mut err = String::new();
+                    if let Some(mut e) = child.stderr.take() {
+                        let _ = e.read_to_string(&mut err);
+                    }
+                    return Err(format!("QEMU exited ({status}) before connecting its serial port: {}", err.trim()));
+                }
+                std::thread::sleep(Duration::from_millis(10));
+            }
+            Err(e) => {
+                let _ = child.kill();
+                return Err(format!("QEMU did not connect its serial port: {e}"));
+            }
+        }
+    };
+    stream.set_nonblocking(false).map_err(|e| e.to_string())?;
+    stream.set_read_timeout(Some(Duration::from_millis(100))).map_err(|e| e.to_string())?;
+    Ok(QemuDevice { child, _socket_dir: dir, client: Client::new(stream) })
+}
+
+/// The configuration body of a replay header: its configuration part (without magic, version and frame count)
+/// and the thresholds of a replayed sequence (no settling, dwells as long as the table says).
+pub fn configuration_body(replay_header: &[u8]) -> Result<Vec<u8>, String> {
+    if replay_header.len() < 6 + 4 {
+        return Err("replay header too short".into());
+    }
+    let mut body = replay_header[6..replay_header.len() - 4].to_vec();
+    let s = replay_sequence_settings(sinscal::calib::dwell::Prefilter::None, Default::default());
+    for v in [s.settle_samples, s.dwell_samples, s.min_dwell_samples] {
+        body.extend_from_slice(&v.to_le_bytes());
+    }
+    debug_assert_eq!(THRESHOLD_BYTES, 12);
+    Ok(body)
+}
+
+/// What `device run` did.
+pub struct DeviceRun {
+    /// The calibration, from the device's result.
+    pub calibration: Calibration,
+    /// The store.
+    pub stored: Stored,
+    /// The status at the end.
+    pub status: client::Status,
+}
+
+/// `device run` on a device reached through `client`: configure from the recording, start, wait (with
+/// progress on stderr), read the result, store it, and check the stored record against the result.
+pub fn run_calibration<T: Read + Write>(
+    client: &mut Client<T>,
+    rec: &impl RowSource,
+    options: &Options,
+    replay: &ScratchFile,
+    plan: &ReplayPlan,
+    mut progress: impl FnMut(&client::Status),
+) -> Result<DeviceRun, anyhow::Error> {
+    let source = rec.source();
+    let head = replay_header_bytes(replay.path())?;
+    let header = read_header(&mut head.as_slice()).map_err(|e| InputError::file(source, format!("replay: {e}")))?;
+    client.identify()?;
+    client.configure(&configuration_body(&head).map_err(anyhow::Error::msg)?)?;
+    let note = Provenance::of(rec, options, plan).to_bytes();
+    client.annotate(&note)?;
+    client.request("start", kind::START, &[])?;
+    let status = loop {
+        let status = client.status()?;
+        progress(&status);
+        if matches!(status.state, DeviceState::Solved | DeviceState::Failed) {
+            break status;
+        }
+        std::thread::sleep(Duration::from_millis(50));
+    };
+    let result = client.read_all("the result", kind::READ_RESULT)?;
+    let outcome = decode_outcome(&header, &result).map_err(|e| InputError::file(source, format!("result: {e}")))?;
+    let mut calibration = calibration_from_outcome(rec, options, plan, &outcome)?;
+    calibration.on = "device";
+    let stored = client.store()?;
+    let record = client.read_all("the record", kind::READ_RECORD)?;
+    let parts = split_record(&record)?;
+    if parts.outcome != result || parts.note != note {
+        anyhow::bail!("the record read back from the device differs from the result it stored");
+    }
+    Ok(DeviceRun { calibration, stored, status })
+}
+
+/// The replay file's header bytes (everything before the frames).
+fn replay_header_bytes(path: &Path) -> Result<Vec<u8>, anyhow::Error> {
+    let mut file = ReadSource(std::io::BufReader::new(std::fs::File::open(path)?));
+    let header = read_header(&mut file).map_err(|e| anyhow::anyhow!("replay: {e}"))?;
+    let len = 6 + 14 + 12 + 16 * header.schedule.len() + 4;
+    let mut bytes = vec![0u8; len];
+    std::fs::File::open(path)?.read_exact(&mut bytes)?;
+    Ok(bytes)
+}
+
+/// The parts of a stored record.
+pub struct RecordParts<'a> {
+    /// The compensation's bytes.
+    pub compensation: &'a [u8],
+    /// The configuration body.
+    pub configuration: &'a [u8],
+    /// The provenance note.
+    pub note: &'a [u8],
+    /// The outcome.
+    pub outcome: &'a [u8],
+}
+
+/// Splits a record into its parts.
+pub fn split_record(record: &[u8]) -> Result<RecordParts<'_>, anyhow::Error> {
+    let head = RecordHead::decode(record).ok_or_else(|| anyhow::anyhow!("record of an unknown version"))?;
+    if head.record_bytes() != record.len() || record.len() < RECORD_HEAD_BYTES {
+        anyhow::bail!("record of {} bytes, its head says {}", record.len(), head.record_bytes());
+    }
+    let [c, k, n, o] = head.parts().map(|(at, len)| &record[at..at + len]);
+    Ok(RecordParts { compensation: c, configuration: k, note: n, outcome: o })
+}
+
+/// The calibration of a stored record (the same report as the run that stored it).
+pub fn calibration_of_record(record: &[u8]) -> Result<Calibration, anyhow::Error> {
+    let parts = split_record(record)?;
+    let settings = &parts.configuration[..parts.configuration.len().saturating_sub(THRESHOLD_BYTES)];
+    let header: ReplayHeader =
+        read_configuration(&mut &settings[..]).map_err(|e| anyhow::anyhow!("stored configuration: {e}"))?;
+    let note = Provenance::from_bytes(parts.note)?;
+    let outcome = decode_outcome(&header, parts.outcome).map_err(|e| anyhow::anyhow!("stored outcome: {e}"))?;
+    let rec = Recording {
+        source: note.source.clone(),
+        header: Header {
+            latitude_deg: note.latitude_deg,
+            height_m: note.height_m,
+            rate_hz: None,
+            gravity_mps2: note.gravity_mps2,
+            comments: Vec::new(),
+            truth: None,
+        },
+        rows: Vec::new(),
+        has_gyro: note.has_gyro,
+    };
+    let options = note.options()?;
+    let mut calibration = calibration_from_outcome(&rec, &options, &note.plan, &outcome)?;
+    calibration.on = "device";
+    Ok(calibration)
+}
+
+/// Writes the replay file of a recording for `device run`.
+pub fn replay_for(rec: &impl RowSource, options: &Options) -> Result<(ScratchFile, ReplayPlan), InputError> {
+    let replay = ScratchFile::new("device.ssrp");
+    let plan = write_replay_file(rec, options, &replay)?;
+    Ok((replay, plan))
+}
+
+/// Reads the stored record of a device: `None` when nothing is stored.
+pub fn read_record<T: Read + Write>(client: &mut Client<T>) -> Result<Option<Vec<u8>>, LinkError> {
+    client.identify()?;
+    match client.read_all("the record", kind::READ_RECORD) {
+        Ok(r) => Ok(Some(r)),
+        Err(LinkError::Refused { code: sinscal::instrument::message::ErrorCode::NothingStored, .. }) => Ok(None),
+        Err(e) => Err(e),
+    }
+}

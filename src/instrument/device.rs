@@ -1,0 +1,523 @@
+//! The device behind the link: it answers the workstation's requests (configure, start, status, result, store,
+//! read the record, erase, stream), runs the calibration sequence on the samples the data-ready interrupt
+//! queued, keeps the calibration record in flash, and compensates every sample with the stored calibration.
+//!
+//! The same [`Device`] runs in every firmware (the board gives it the flash and moves bytes and samples) and in
+//! host tests. Nothing is allocated; every request gets a reply, an error reply for a bad one, and the device
+//! keeps running.
+
+use embedded_storage::nor_flash::NorFlash;
+use heapless::Vec;
+
+use super::link::{encode_frame, Frame, FrameError, MAX_BODY};
+use super::message::{kind, BodyReader, BodyWriter, DeviceState, ErrorCode, MAX_CHUNK, MAX_NOTE};
+use super::record::{Record, RecordHead, RECORD_HEAD_BYTES, RECORD_VERSION};
+use super::store::{RecordInfo, RecordStore};
+use crate::calib::compensation::Compensation;
+use crate::calib::solve::MAX_POSITIONS;
+use crate::rig::replay::{encode_outcome_part, read_configuration, OutcomeView, ReplayHeader};
+use crate::run::sampling::{feed_sequence, QueueItem, SamplingStats};
+use crate::run::sequence::{CalibrationSequence, Event, SequenceFailure, SequenceSolution};
+use crate::sensor::adis::Model;
+use crate::sensor::sample::ImuSample;
+
+/// Longest configuration body, bytes: the fixed fields (14 + 12), a schedule of [`MAX_POSITIONS`] (16 each),
+/// and the thresholds (12).
+pub const MAX_CONFIGURATION: usize = 14 + 12 + 16 * MAX_POSITIONS + THRESHOLD_BYTES;
+/// Bytes of the thresholds at the end of a configuration body.
+pub const THRESHOLD_BYTES: usize = 12;
+/// The firmware's version, as the identify reply reports it (16 bytes, NUL-padded).
+pub const FIRMWARE_VERSION: &str = concat!("sinscal ", env!("CARGO_PKG_VERSION"));
+
+/// Counters of the link.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub struct LinkStats {
+    /// Requests answered (with a reply or an error reply).
+    pub requests: u32,
+    /// Frames refused for their CRC.
+    pub crc_errors: u32,
+    /// Frames refused for their stuffing or length (truncated, too long).
+    pub frame_errors: u32,
+    /// Frames of another protocol version.
+    pub version_errors: u32,
+    /// Requests refused (unknown kind, bad body, refused in this state).
+    pub refused: u32,
+    /// Bytes lost because the receive queue was full.
+    pub rx_overruns: u32,
+}
+
+/// The sequence's thresholds that a configuration sets.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct Thresholds {
+    /// Samples ignored after the table reports in position.
+    pub settle_samples: u32,
+    /// Samples of a full dwell (`u32::MAX`: as long as the table stays).
+    pub dwell_samples: u32,
+    /// Fewest samples of a usable dwell.
+    pub min_dwell_samples: u32,
+}
+
+/// What a request asks the board to do besides replying.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Action {
+    /// Nothing more.
+    None,
+    /// A calibration started: feed it samples (a replay device starts its frames from the first).
+    Started,
+}
+
+/// The device: configuration, sequence, record store, compensation, link counters.
+pub struct Device<F: NorFlash> {
+    model: Model,
+    state: DeviceState,
+    configuration: Vec<u8, MAX_CONFIGURATION>,
+    header: Option<ReplayHeader>,
+    note: Vec<u8, MAX_NOTE>,
+    sequence: Option<CalibrationSequence>,
+    run: RunCounters,
+    store: RecordStore<F>,
+    stored: Option<RecordInfo>,
+    compensation: Compensation,
+    compensation_from_record: bool,
+    streaming: bool,
+    /// Link counters.
+    pub link: LinkStats,
+}
+
+/// What the outcome of a calibration counts besides the sequence's own state.
+#[derive(Clone, Copy, Debug, Default)]
+struct RunCounters {
+    /// The interrupt's counters when the calibration started and when it ended.
+    sampling_at_start: SamplingStats,
+    sampling_at_end: SamplingStats,
+    aborted_dwells: u32,
+    failure: Option<SequenceFailure>,
+}
+
+/// The outcome of the last calibration (solved or failed), as the result encoding sees it.
+fn outcome_of<'a>(
+    state: DeviceState,
+    sequence: &'a Option<CalibrationSequence>,
+    run: &RunCounters,
+) -> Option<OutcomeView<'a>> {
+    let sequence = sequence.as_ref()?;
+    matches!(state, DeviceState::Solved | DeviceState::Failed).then(|| OutcomeView {
+        sampling: run.sampling_at_end,
+        aborted_dwells: run.aborted_dwells,
+        failure: run.failure,
+        positions: sequence.completed(),
+        result: sequence.result(),
+    })
+}
+
+impl<F: NorFlash> Device<F> {
+    /// A device with an IMU of `model` and its record store; the stored calibration, if one is readable, is
+    /// loaded and compensates every sample from now on.
+    pub fn new(model: Model, store: RecordStore<F>) -> Device<F> {
+        let mut d = Device {
+            model,
+            state: DeviceState::Idle,
+            configuration: Vec::new(),
+            header: None,
+            note: Vec::new(),
+            sequence: None,
+            run: RunCounters::default(),
+            store,
+            stored: None,
+            compensation: Compensation::IDENTITY,
+            compensation_from_record: false,
+            streaming: false,
+            link: LinkStats::default(),
+        };
+        d.load_record();
+        d
+    }
+
+    /// Reads the newest record and its compensation (identity if none is stored or it cannot be read).
+    fn load_record(&mut self) {
+        self.stored = self.store.newest().ok().flatten();
+        let mut compensation = None;
+        if let Some(info) = self.stored {
+            let mut head = [0u8; RECORD_HEAD_BYTES];
+            if self.store.read(&info, 0, &mut head).is_ok() {
+                if let Some(h) = RecordHead::decode(&head) {
+                    let mut bytes = [0u8; Compensation::ENCODED_BYTES];
+                    if self.store.read(&info, RECORD_HEAD_BYTES, &mut bytes).is_ok() {
+                        compensation = Compensation::decode(&bytes[..h.compensation_bytes as usize]);
+                    }
+                }
+            }
+        }
+        self.compensation_from_record = compensation.is_some();
+        self.compensation = compensation.unwrap_or(Compensation::IDENTITY);
+    }
+
+    /// The state.
+    pub fn state(&self) -> DeviceState {
+        self.state
+    }
+
+    /// Whether the stored calibration compensates the samples (otherwise they leave uncompensated).
+    pub fn compensating(&self) -> bool {
+        self.compensation_from_record
+    }
+
+    /// Whether the device wants samples (a calibration runs).
+    pub fn running(&self) -> bool {
+        self.state == DeviceState::Running
+    }
+
+    /// The compensation in use.
+    pub fn compensation(&self) -> &Compensation {
+        &self.compensation
+    }
+
+    /// One queued sample: compensated for the stream (returned when the stream is on), and fed raw to a running
+    /// calibration. `on_event` sees the sequence's events; `sampling` is the interrupt's counters now.
+    pub fn on_sample(
+        &mut self,
+        item: &QueueItem,
+        sampling: &SamplingStats,
+        mut on_event: impl FnMut(&Event),
+    ) -> Option<ImuSample> {
+        let compensated = match &item.reading {
+            Ok(r) if self.streaming => Some(self.compensation.apply(&r.sample)),
+            _ => None,
+        };
+        if self.state == DeviceState::Running {
+            if let Some(sequence) = self.sequence.as_mut() {
+                for event in feed_sequence(sequence, item).into_iter().flatten() {
+                    self.on_event(&event, sampling);
+                    on_event(&event);
+                }
+            }
+        }
+        compensated
+    }
+
+    /// The end of the samples (a replay's last frame): the sequence closes its last dwell and solves.
+    pub fn end_of_samples(&mut self, sampling: &SamplingStats, mut on_event: impl FnMut(&Event)) {
+        if self.state != DeviceState::Running {
+            return;
+        }
+        while let Some(event) = self.sequence.as_mut().and_then(|s| s.finish()) {
+            self.on_event(&event, sampling);
+            on_event(&event);
+        }
+        if self.state == DeviceState::Running {
+            // The samples ended before the last position: the sequence neither solved nor failed.
+            self.run.sampling_at_end = sampling.since(&self.run.sampling_at_start);
+            self.state = DeviceState::Failed;
+        }
+    }
+
+    fn on_event(&mut self, event: &Event, sampling: &SamplingStats) {
+        match event {
+            Event::DwellAborted { .. } => self.run.aborted_dwells = self.run.aborted_dwells.saturating_add(1),
+            Event::Solved => {
+                self.run.sampling_at_end = sampling.since(&self.run.sampling_at_start);
+                self.state = DeviceState::Solved;
+            }
+            Event::Failed(f) => {
+                self.run.failure = Some(*f);
+                self.run.sampling_at_end = sampling.since(&self.run.sampling_at_start);
+                self.state = DeviceState::Failed;
+            }
+            _ => {}
+        }
+    }
+
+    fn outcome(&self) -> Option<OutcomeView<'_>> {
+        outcome_of(self.state, &self.sequence, &self.run)
+    }
+
+    /// A received frame (or why it was refused): the reply, written to `wire` ready to send (its length), and
+    /// what the board must do. `sampling` is the interrupt's counters now.
+    pub fn on_frame(
+        &mut self,
+        frame: Result<Frame<'_>, FrameError>,
+        sampling: &SamplingStats,
+        wire: &mut [u8],
+    ) -> (usize, Action) {
+        let mut body = [0u8; MAX_BODY];
+        let (seq, reply_kind, reply) = match frame {
+            Err(e) => {
+                let (code, detail) = match e {
+                    FrameError::Crc => (ErrorCode::Crc, 0),
+                    FrameError::Version(v) => (ErrorCode::Version, v as u32),
+                    FrameError::TooLong | FrameError::Stuffing | FrameError::TooShort => (ErrorCode::Frame, 0),
+                };
+                match code {
+                    ErrorCode::Crc => self.link.crc_errors = self.link.crc_errors.saturating_add(1),
+                    ErrorCode::Version => self.link.version_errors = self.link.version_errors.saturating_add(1),
+                    _ => self.link.frame_errors = self.link.frame_errors.saturating_add(1),
+                }
+                (0, kind::ERROR, Err((code, detail)))
+            }
+            Ok(f) => {
+                self.link.requests = self.link.requests.saturating_add(1);
+                (f.seq, f.kind | kind::REPLY, self.request(f.kind, f.body, sampling, &mut body))
+            }
+        };
+        let (reply_kind, len, action) = match reply {
+            Ok((len, action)) => (reply_kind, len, action),
+            Err((code, detail)) => {
+                if frame.is_ok() {
+                    self.link.refused = self.link.refused.saturating_add(1);
+                }
+                let mut w = BodyWriter::new(&mut body);
+                w.u8(code as u8).u32(detail);
+                (kind::ERROR, 5, Action::None)
+            }
+        };
+        (encode_frame(reply_kind, seq, &body[..len], wire).unwrap_or(0), action)
+    }
+
+    /// A sample for the stream, framed (kind [`kind::SAMPLE`]): rate (rad/s) and force (m/s^2), body frame,
+    /// compensated, as f32. Its length in `wire`.
+    pub fn sample_frame(sample: &ImuSample, wire: &mut [u8]) -> usize {
+        let mut body = [0u8; 24];
+        let mut w = BodyWriter::new(&mut body);
+        for v in sample.rate_b_radps.iter().chain(&sample.force_b_mps2) {
+            w.f32(*v);
+        }
+        encode_frame(kind::SAMPLE, 0, &body, wire).unwrap_or(0)
+    }
+}
+
+/// The record of the last solved calibration (`outcome`), with the compensation it gives.
+fn record_of<'a>(
+    outcome: Option<OutcomeView<'a>>,
+    configuration: &'a [u8],
+    note: &'a [u8],
+) -> Result<Record<'a>, (ErrorCode, u32)> {
+    let outcome = outcome.filter(|o| o.result.is_some()).ok_or((ErrorCode::NoResult, 0))?;
+    let compensation = match outcome.result {
+        Some(SequenceSolution::Channels(c)) => Compensation::from_channels(c).map_err(|_| (ErrorCode::NoResult, 2))?,
+        Some(SequenceSolution::Angles(r)) => Compensation::from_angles(r),
+        None => return Err((ErrorCode::NoResult, 0)),
+    };
+    Ok(Record { compensation, configuration, note, outcome })
+}
+
+/// A reply body's length and the board's action, or the error of an error reply.
+type Reply = Result<(usize, Action), (ErrorCode, u32)>;
+
+/// A reply body of `len` bytes with no action.
+fn body_of(len: Option<usize>) -> Reply {
+    len.map(|n| (n, Action::None)).ok_or((ErrorCode::Body, 0))
+}
+
+impl<F: NorFlash> Device<F> {
+    fn request(&mut self, k: u8, body: &[u8], sampling: &SamplingStats, out: &mut [u8]) -> Reply {
+        let mut r = BodyReader::new(body);
+        let empty = |r: &BodyReader<'_>| if r.is_empty() { Ok(()) } else { Err((ErrorCode::Body, body.len() as u32)) };
+        match k {
+            kind::IDENTIFY => {
+                empty(&r)?;
+                self.identify(out)
+            }
+            kind::CONFIGURE => self.configure(body),
+            kind::ANNOTATE => self.annotate(&mut r),
+            kind::START => {
+                empty(&r)?;
+                self.start(sampling)
+            }
+            kind::ABORT => {
+                empty(&r)?;
+                self.sequence = None;
+                self.state = if self.header.is_some() { DeviceState::Configured } else { DeviceState::Idle };
+                Ok((0, Action::None))
+            }
+            kind::STATUS => {
+                empty(&r)?;
+                self.status(sampling, out)
+            }
+            kind::READ_RESULT => {
+                let offset = r.u32().ok_or((ErrorCode::Body, body.len() as u32))?;
+                empty(&r)?;
+                self.read_result(offset as usize, out)
+            }
+            kind::STORE => {
+                empty(&r)?;
+                self.store_record(out)
+            }
+            kind::READ_RECORD => {
+                let offset = r.u32().ok_or((ErrorCode::Body, body.len() as u32))?;
+                empty(&r)?;
+                self.read_record(offset as usize, out)
+            }
+            kind::ERASE => {
+                empty(&r)?;
+                self.erase(out)
+            }
+            kind::STREAM => {
+                let on = r.u8().ok_or((ErrorCode::Body, body.len() as u32))?;
+                empty(&r)?;
+                self.streaming = on != 0;
+                Ok((0, Action::None))
+            }
+            other => Err((ErrorCode::UnknownKind, other as u32)),
+        }
+    }
+
+    fn identify(&self, out: &mut [u8]) -> Reply {
+        let mut version = [0u8; 16];
+        let v = FIRMWARE_VERSION.as_bytes();
+        let n = v.len().min(16);
+        version[..n].copy_from_slice(&v[..n]);
+        let mut w = BodyWriter::new(out);
+        w.u8(super::link::PROTOCOL_VERSION).bytes(&version);
+        w.u8(match self.model {
+            Model::Adis16470 => 0,
+            Model::Adis16505_2 => 1,
+        });
+        w.u16(RECORD_VERSION).u16(MAX_POSITIONS as u16).u16(MAX_CHUNK as u16).u16(MAX_NOTE as u16);
+        w.u32(self.store.max_payload() as u32);
+        body_of(w.len())
+    }
+
+    fn configure(&mut self, body: &[u8]) -> Reply {
+        if self.state == DeviceState::Running {
+            return Err((ErrorCode::Busy, 0));
+        }
+        let refused = |detail| Err((ErrorCode::Configuration, detail));
+        if body.len() < THRESHOLD_BYTES || body.len() > MAX_CONFIGURATION {
+            return refused(1);
+        }
+        let (settings_bytes, threshold_bytes) = body.split_at(body.len() - THRESHOLD_BYTES);
+        let mut source = settings_bytes;
+        let Ok(mut header) = read_configuration(&mut source) else { return refused(2) };
+        if !source.is_empty() {
+            return refused(2);
+        }
+        if header.model != self.model {
+            return refused(4);
+        }
+        let mut t = BodyReader::new(threshold_bytes);
+        let (Some(settle), Some(dwell), Some(min_dwell)) = (t.u32(), t.u32(), t.u32()) else { return refused(1) };
+        let thresholds = Thresholds { settle_samples: settle, dwell_samples: dwell, min_dwell_samples: min_dwell };
+        header.settings.settle_samples = thresholds.settle_samples;
+        header.settings.dwell_samples = thresholds.dwell_samples;
+        header.settings.min_dwell_samples = thresholds.min_dwell_samples;
+        if CalibrationSequence::new(&header.schedule, header.site, header.settings).is_err() {
+            return refused(3);
+        }
+        self.configuration.clear();
+        // The length is checked above against the capacity.
+        let _ = self.configuration.extend_from_slice(body);
+        self.header = Some(header);
+        self.sequence = None;
+        self.state = DeviceState::Configured;
+        Ok((0, Action::None))
+    }
+
+    fn annotate(&mut self, r: &mut BodyReader<'_>) -> Reply {
+        let (Some(offset), Some(total)) = (r.u16(), r.u16()) else { return Err((ErrorCode::Body, 0)) };
+        let part = r.rest();
+        if total as usize > MAX_NOTE {
+            return Err((ErrorCode::NoteTooLong, MAX_NOTE as u32));
+        }
+        if offset == 0 {
+            self.note.clear();
+        }
+        let fits = offset as usize == self.note.len() && self.note.len() + part.len() <= total as usize;
+        if !fits || self.note.extend_from_slice(part).is_err() {
+            return Err((ErrorCode::Body, offset as u32));
+        }
+        Ok((0, Action::None))
+    }
+
+    fn start(&mut self, sampling: &SamplingStats) -> Reply {
+        if self.state == DeviceState::Running {
+            return Err((ErrorCode::Busy, 0));
+        }
+        let Some(header) = &self.header else { return Err((ErrorCode::NotConfigured, 0)) };
+        let sequence = CalibrationSequence::new(&header.schedule, header.site, header.settings)
+            .map_err(|_| (ErrorCode::Configuration, 3))?;
+        self.sequence = Some(sequence);
+        self.run = RunCounters { sampling_at_start: *sampling, ..RunCounters::default() };
+        self.state = DeviceState::Running;
+        Ok((0, Action::Started))
+    }
+
+    fn status(&self, sampling: &SamplingStats, out: &mut [u8]) -> Reply {
+        let mut w = BodyWriter::new(out);
+        w.u8(self.state as u8);
+        let (position, positions) = match (&self.sequence, &self.header) {
+            (Some(s), Some(h)) => (s.position() as u16, h.schedule.len() as u16),
+            (None, Some(h)) => (0, h.schedule.len() as u16),
+            _ => (0, 0),
+        };
+        w.u16(position).u16(positions);
+        for v in sampling.counters() {
+            w.u32(v);
+        }
+        let l = &self.link;
+        for v in [l.requests, l.crc_errors, l.frame_errors, l.version_errors, l.refused, l.rx_overruns] {
+            w.u32(v);
+        }
+        w.u8(self.stored.is_some() as u8).u32(self.stored.map_or(0, |s| s.sequence));
+        w.u8(self.compensation_from_record as u8).u8(self.streaming as u8);
+        body_of(w.len())
+    }
+
+    fn read_result(&self, offset: usize, out: &mut [u8]) -> Reply {
+        let outcome = self.outcome().ok_or((ErrorCode::NoResult, 0))?;
+        let (head, part) = out.split_at_mut(8);
+        let part = &mut part[..MAX_CHUNK];
+        let total = encode_outcome_part(&outcome, offset, part);
+        let n = total.saturating_sub(offset).min(MAX_CHUNK);
+        BodyWriter::new(head).u32(total as u32).u32(offset as u32);
+        Ok((8 + n, Action::None))
+    }
+
+    fn store_record(&mut self, out: &mut [u8]) -> Reply {
+        if self.state == DeviceState::Running {
+            return Err((ErrorCode::Busy, 0));
+        }
+        let record = record_of(outcome_of(self.state, &self.sequence, &self.run), &self.configuration, &self.note)?;
+        let compensation = record.compensation;
+        let len = record.len();
+        if len > self.store.max_payload() {
+            return Err((ErrorCode::TooLarge, len as u32));
+        }
+        let report = self
+            .store
+            .store(len, |offset, chunk| {
+                record.write_part(offset, chunk);
+                Ok(())
+            })
+            .map_err(|_| (ErrorCode::Flash, 0))?;
+        self.stored = self.store.newest().ok().flatten();
+        self.compensation = compensation;
+        self.compensation_from_record = true;
+        let mut w = BodyWriter::new(out);
+        w.u32(report.sequence).u8(report.slot as u8).u32(report.erases).u32(len as u32);
+        body_of(w.len())
+    }
+
+    fn read_record(&mut self, offset: usize, out: &mut [u8]) -> Reply {
+        let info = self.stored.ok_or((ErrorCode::NothingStored, 0))?;
+        let total = info.len as usize;
+        let n = total.saturating_sub(offset).min(MAX_CHUNK);
+        let (head, part) = out.split_at_mut(8);
+        self.store.read(&info, offset, &mut part[..n]).map_err(|_| (ErrorCode::Flash, 0))?;
+        BodyWriter::new(head).u32(total as u32).u32(offset as u32);
+        Ok((8 + n, Action::None))
+    }
+
+    fn erase(&mut self, out: &mut [u8]) -> Reply {
+        if self.state == DeviceState::Running {
+            return Err((ErrorCode::Busy, 0));
+        }
+        let erases = self.store.erase_all().map_err(|_| (ErrorCode::Flash, 0))?;
+        self.stored = None;
+        self.compensation = Compensation::IDENTITY;
+        self.compensation_from_record = false;
+        let mut w = BodyWriter::new(out);
+        w.u32(erases);
+        body_of(w.len())
+    }
+}

@@ -1,0 +1,226 @@
+//! Messages of the host link: what a workstation asks of the device and what the device answers, each the
+//! body of one [`link`](super::link) frame. Little-endian, fixed layouts; the frame's kind byte says which.
+//!
+//! A reply carries its request's sequence number and the request's kind with bit 7 set, or the kind
+//! [`kind::ERROR`] with an [`ErrorCode`]. Streamed samples come unasked, with kind [`kind::SAMPLE`].
+
+/// Kind bytes of the frames.
+pub mod kind {
+    /// Identify the device: firmware, IMU, record version, limits.
+    pub const IDENTIFY: u8 = 0x01;
+    /// Configure the calibration (site, schedule, estimator, prefilter, thresholds).
+    pub const CONFIGURE: u8 = 0x02;
+    /// A part of the provenance note kept with the record (what the workstation knows of the recording).
+    pub const ANNOTATE: u8 = 0x03;
+    /// Start the calibration sequence.
+    pub const START: u8 = 0x04;
+    /// Abort the calibration sequence.
+    pub const ABORT: u8 = 0x05;
+    /// Status and every fault counter.
+    pub const STATUS: u8 = 0x06;
+    /// A part of the result (the encoded outcome of the sequence).
+    pub const READ_RESULT: u8 = 0x07;
+    /// Store the result as the calibration record in non-volatile memory.
+    pub const STORE: u8 = 0x08;
+    /// A part of the stored record.
+    pub const READ_RECORD: u8 = 0x09;
+    /// Erase the stored record.
+    pub const ERASE: u8 = 0x0A;
+    /// Start or stop the stream of compensated samples.
+    pub const STREAM: u8 = 0x0B;
+    /// Bit set in a reply's kind.
+    pub const REPLY: u8 = 0x80;
+    /// A compensated sample of the stream (device to host, unasked).
+    pub const SAMPLE: u8 = 0xC0;
+    /// An error reply.
+    pub const ERROR: u8 = 0xFF;
+}
+
+/// Why the device refused a request (the body of an error reply: code u8, detail u32).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+#[repr(u8)]
+pub enum ErrorCode {
+    /// The frame's CRC did not match (detail: 0).
+    Crc = 1,
+    /// The frame's stuffing was broken or it was too short or too long (a truncated frame).
+    Frame = 2,
+    /// Another protocol version (detail: the version received).
+    Version = 3,
+    /// An unknown kind (detail: the kind).
+    UnknownKind = 4,
+    /// The body's length or content does not fit the kind (detail: the body's length).
+    Body = 5,
+    /// The configuration is not one the core can run (detail: 1 schedule empty or longer than the core holds,
+    /// 2 an unknown code, 3 the sequence refused it).
+    Configuration = 6,
+    /// Not while a calibration runs (configure, store, erase).
+    Busy = 7,
+    /// Start without a configuration.
+    NotConfigured = 8,
+    /// No result yet (read result, store).
+    NoResult = 9,
+    /// The record would not fit the storage slot (detail: its length in bytes).
+    TooLarge = 10,
+    /// The flash failed (detail: 0).
+    Flash = 11,
+    /// Nothing is stored (read record).
+    NothingStored = 12,
+    /// The note is longer than the device keeps (detail: the largest length accepted).
+    NoteTooLong = 13,
+}
+
+impl ErrorCode {
+    /// The code of a byte.
+    pub fn from_u8(code: u8) -> Option<ErrorCode> {
+        use ErrorCode::*;
+        [Crc, Frame, Version, UnknownKind, Body, Configuration, Busy, NotConfigured, NoResult, TooLarge, Flash]
+            .into_iter()
+            .chain([NothingStored, NoteTooLong])
+            .find(|c| *c as u8 == code)
+    }
+}
+
+impl core::fmt::Display for ErrorCode {
+    fn fmt(&self, f: &mut core::fmt::Formatter<'_>) -> core::fmt::Result {
+        f.write_str(match self {
+            ErrorCode::Crc => "frame CRC mismatch",
+            ErrorCode::Frame => "malformed frame (truncated, too short or too long)",
+            ErrorCode::Version => "unknown protocol version",
+            ErrorCode::UnknownKind => "unknown message kind",
+            ErrorCode::Body => "message body does not fit its kind",
+            ErrorCode::Configuration => "configuration refused",
+            ErrorCode::Busy => "busy: a calibration is running",
+            ErrorCode::NotConfigured => "not configured",
+            ErrorCode::NoResult => "no result",
+            ErrorCode::TooLarge => "record larger than the storage slot",
+            ErrorCode::Flash => "flash failure",
+            ErrorCode::NothingStored => "no calibration record stored",
+            ErrorCode::NoteTooLong => "note longer than the device keeps",
+        })
+    }
+}
+
+/// Writes little-endian fields into a slice; remembers whether everything fitted.
+pub struct BodyWriter<'a> {
+    out: &'a mut [u8],
+    at: usize,
+    fits: bool,
+}
+
+impl<'a> BodyWriter<'a> {
+    /// A writer at the start of `out`.
+    pub fn new(out: &'a mut [u8]) -> BodyWriter<'a> {
+        BodyWriter { out, at: 0, fits: true }
+    }
+    /// Appends bytes.
+    pub fn bytes(&mut self, b: &[u8]) -> &mut Self {
+        match self.out.get_mut(self.at..self.at + b.len()) {
+            Some(dst) => {
+                dst.copy_from_slice(b);
+                self.at += b.len();
+            }
+            None => self.fits = false,
+        }
+        self
+    }
+    /// Appends a byte.
+    pub fn u8(&mut self, v: u8) -> &mut Self {
+        self.bytes(&[v])
+    }
+    /// Appends a u16.
+    pub fn u16(&mut self, v: u16) -> &mut Self {
+        self.bytes(&v.to_le_bytes())
+    }
+    /// Appends a u32.
+    pub fn u32(&mut self, v: u32) -> &mut Self {
+        self.bytes(&v.to_le_bytes())
+    }
+    /// Appends an f32 (its bits).
+    pub fn f32(&mut self, v: f32) -> &mut Self {
+        self.bytes(&v.to_bits().to_le_bytes())
+    }
+    /// The length written, or `None` if something did not fit.
+    pub fn len(&self) -> Option<usize> {
+        self.fits.then_some(self.at)
+    }
+}
+
+/// Reads little-endian fields from a body; `None` past its end.
+pub struct BodyReader<'a> {
+    body: &'a [u8],
+}
+
+impl<'a> BodyReader<'a> {
+    /// A reader at the start of `body`.
+    pub fn new(body: &'a [u8]) -> BodyReader<'a> {
+        BodyReader { body }
+    }
+    /// The next `n` bytes.
+    pub fn bytes(&mut self, n: usize) -> Option<&'a [u8]> {
+        if self.body.len() < n {
+            return None;
+        }
+        let (head, tail) = self.body.split_at(n);
+        self.body = tail;
+        Some(head)
+    }
+    /// The next byte.
+    pub fn u8(&mut self) -> Option<u8> {
+        Some(self.bytes(1)?[0])
+    }
+    /// The next u16.
+    pub fn u16(&mut self) -> Option<u16> {
+        let b = self.bytes(2)?;
+        Some(u16::from_le_bytes([b[0], b[1]]))
+    }
+    /// The next u32.
+    pub fn u32(&mut self) -> Option<u32> {
+        let b = self.bytes(4)?;
+        Some(u32::from_le_bytes([b[0], b[1], b[2], b[3]]))
+    }
+    /// The next f32.
+    pub fn f32(&mut self) -> Option<f32> {
+        Some(f32::from_bits(self.u32()?))
+    }
+    /// The bytes not yet read.
+    pub fn rest(&mut self) -> &'a [u8] {
+        core::mem::take(&mut self.body)
+    }
+    /// Whether every byte was read.
+    pub fn is_empty(&self) -> bool {
+        self.body.is_empty()
+    }
+}
+
+/// Largest part of a result or record in one reply, bytes (with its total and offset, within
+/// [`MAX_BODY`](super::link::MAX_BODY)).
+pub const MAX_CHUNK: usize = 1024;
+
+/// Longest provenance note the device keeps with a record, bytes.
+pub const MAX_NOTE: usize = 2048;
+
+/// The state of the device in a status reply.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+#[repr(u8)]
+pub enum DeviceState {
+    /// Waiting for a configuration.
+    Idle = 0,
+    /// Configured, not started.
+    Configured = 1,
+    /// The calibration sequence runs.
+    Running = 2,
+    /// The sequence ended with a result.
+    Solved = 3,
+    /// The sequence ended without a result (the result holds the failure).
+    Failed = 4,
+}
+
+impl DeviceState {
+    /// The state of a byte.
+    pub fn from_u8(v: u8) -> Option<DeviceState> {
+        use DeviceState::*;
+        [Idle, Configured, Running, Solved, Failed].into_iter().find(|s| *s as u8 == v)
+    }
+}
