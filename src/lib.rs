@@ -19,7 +19,7 @@
 //! | [`math`] | 3-vectors, 3x3 matrices, dwell accumulators, the online octave Allan variance |
 //! | [`nav`] | frames, attitudes, Earth rate and gravity: every sign convention |
 //! | [`sensor`] | [`ImuSample`], the [`ImuSource`] trait, the ADIS driver |
-//! | [`calib`] | prefilter, dwell statistics, alignment, the bias solution, the calibration |
+//! | [`calib`] | prefilter, dwell statistics, alignment, the bias solution, the calibration, the compensation of samples |
 //! | [`run`] | the data-ready handler and its queue, the calibration sequence |
 //! | [`rig`] | replay of a recording through the firmware path, semihosting (emulation and tests) |
 //! | [`instrument`] | the device: the host link (frames, messages), the calibration record in NOR flash, compensation; it sends and stores the replay formats' configuration and outcome |

@@ -4,7 +4,8 @@
 //! clock of mps2-an386, then advances once per 40 instructions, deterministically. The path measured is
 //! what the firmware does for every sample: the data-ready handler (burst read through the SPI device,
 //! checksum, decode, counter and status checks, conversion to SI, enqueue) and the processing loop
-//! (queue hand-over by reference, the calibration sequence's checks, the HMM/KF bank and the dwell accumulators). The SPI
+//! (queue hand-over by reference, the calibration sequence's checks, the HMM/KF bank and the dwell accumulators);
+//! on its own, the compensation of a sample with a stored calibration (docs/compensation.md). The SPI
 //! device is the replay device serving a fixed frame, so the bus itself costs nothing here; on hardware
 //! the burst's 32 bytes at 1 MHz add 256 us of SPI time, not instructions.
 //! The result is written as text to the file named by the first semihosting argument.
@@ -22,6 +23,7 @@ mod firmware {
     use cortex_m_rt::entry;
     use heapless::spsc::Queue;
     use sinscal::board::exit;
+    use sinscal::calib::compensation::Compensation;
     use sinscal::calib::dwell::Prefilter;
     use sinscal::nav::earth::Site;
     use sinscal::nav::frames::Attitude;
@@ -29,6 +31,7 @@ mod firmware {
     use sinscal::run::sampling::{on_data_ready, process_next, QueueItem, SamplingStats, QUEUE_SLOTS};
     use sinscal::run::sequence::{CalibrationSequence, Estimator};
     use sinscal::sensor::adis::{encode_burst, Adis, Burst, Model, BURST32_LEN, I16F16};
+    use sinscal::sensor::sample::ImuSample;
 
     /// Instructions per SysTick tick under -icount shift=0 with the 25 MHz core clock.
     const INSTRUCTIONS_PER_TICK: u32 = 40;
@@ -158,6 +161,32 @@ mod firmware {
 
     static HANDOVER: core::sync::atomic::AtomicU32 = core::sync::atomic::AtomicU32::new(0);
 
+    /// A compensation with every term non-zero (docs/compensation.md); its cost does not depend on the values.
+    fn compensation() -> Compensation {
+        let mut theta = [0.0f32; sinscal::calib::channels::PARAMETERS];
+        for (i, x) in theta.iter_mut().enumerate().take(33) {
+            // 1e-4 to 8e-4 of both signs: biases, scale factors, misalignments, g-sensitivity.
+            *x = if i % 2 == 0 { 1e-4 } else { -2e-4 } * (1 + i % 4) as f32;
+        }
+        Compensation::from_parameters(&theta).unwrap_or_else(|_| exit(5))
+    }
+
+    /// The compensation of a sample (`Compensation::apply`, every term): `SAMPLES` calls in one timed loop, the
+    /// sample read and the result written each time as the per-sample path would, so the tick's 40-instruction
+    /// quantum is spread over all of them (a span of its own per call would be quantised like the parts above).
+    /// Includes the loop's counter and branch and the `black_box` pointer spills (6 instructions per call).
+    fn compensation_loop() -> u32 {
+        let comp = compensation();
+        let sample = ImuSample { rate_b_radps: [0.01, -0.02, 0.03], force_b_mps2: [0.1, -0.2, 9.8] };
+        let syst = unsafe { &*SYST::PTR };
+        let t0 = syst.cvr.read();
+        for _ in 0..SAMPLES {
+            core::hint::black_box(core::hint::black_box(&comp).apply(core::hint::black_box(&sample)));
+        }
+        let t1 = syst.cvr.read();
+        ticks_between(t0, t1) * INSTRUCTIONS_PER_TICK / SAMPLES
+    }
+
     /// The parts on their own: the bus transfer (replay device), the driver's decode (checksum, decode,
     /// counter and status checks, conversion to SI: everything after the bus), and the collector update
     /// (prefilter bank and accumulators) without and with the HMM/KF.
@@ -224,6 +253,7 @@ mod firmware {
         let (isr_none, proc_none, n_none) = measure(Prefilter::None);
         let (isr_kf, proc_kf, n_kf) = measure(Prefilter::paper());
         let (bus, decode, collect_none, collect_kf) = parts();
+        let compensate = compensation_loop();
         let (stack_isr, stack_processing) = stack_depths();
         let mut text: heapless::String<768> = heapless::String::new();
         let _ = writeln!(text, "part_queue_handover {}", HANDOVER.load(core::sync::atomic::Ordering::Relaxed));
@@ -231,7 +261,7 @@ mod firmware {
             text,
             "stack_bytes_data_ready_handler {stack_isr}\nstack_bytes_processing_step {stack_processing}\n"
         );
-        let _ = write!(text, "part_bus_transfer_replay {bus}\npart_driver_decode {decode}\npart_collector_none {collect_none}\npart_collector_hmmkf {collect_kf}\n");
+        let _ = write!(text, "part_bus_transfer_replay {bus}\npart_driver_decode {decode}\npart_collector_none {collect_none}\npart_collector_hmmkf {collect_kf}\npart_compensation {compensate}\n");
         let _ = write!(
             text,
             "samples {SAMPLES} {n_none} {n_kf}\ntimer_overhead_instructions {overhead}\n\
