@@ -107,6 +107,14 @@ fn on_target_tests_pass_in_qemu() {
     println!("on-target tests (Cortex-M4F in QEMU):\n{report}");
     assert_eq!(code, 0, "{report}");
     assert!(report.lines().any(|l| l.ends_with(" passed, 0 failed")), "{report}");
+    // The calibration record stored through the host-file flash, read back after the file was opened again.
+    for check in [
+        "host_file_flash_nor_semantics",
+        "record_store_two_stores_two_erases",
+        "record_store_reopened_record_bit_identical",
+    ] {
+        assert!(report.lines().any(|l| l.starts_with(&format!("ok {check} "))), "{check} missing\n{report}");
+    }
     // The steady prefilter gain computed on the target is the x86 one, bit for bit.
     let k = sinscal::calib::prefilter::HmmKf::new(&sinscal::calib::prefilter::PrefilterSettings::paper_gyro())
         .unwrap()

@@ -1,6 +1,8 @@
 //! On-target tests: core checks run on the Cortex-M4F in QEMU (f32 hardware float, libm, no std).
 //! Writes one line per check (`ok NAME VALUE` or `FAILED NAME VALUE`) and a closing `N passed, N failed`
 //! line to the file named by the first semihosting argument; the exit status is the number of failures.
+//! The record store's check keeps its flash image in a scratch file beside it (that name plus `.flash`),
+//! removed at the end.
 #![cfg_attr(target_os = "none", no_std, no_main)]
 
 #[cfg(not(target_os = "none"))]
@@ -151,6 +153,88 @@ mod firmware {
         report.check("channels_chi_square_bits", true, sol.chi_square);
     }
 
+    /// The payload byte `i` of test record `seed`.
+    fn record_byte(i: usize, seed: usize) -> u8 {
+        (i.wrapping_mul(131).wrapping_add(seed * 7919) >> 2) as u8
+    }
+
+    fn record_store(report: &mut Report) {
+        // The calibration record through RecordStore<HostFileFlash>: two stores into a missing flash file, then
+        // the file opened again (a "power cycle") and the newest record read back.
+        use sinscal::instrument::store::RecordStore;
+        use sinscal::rig::semihost::{arg_path, HostFileFlash};
+        let Some(path) = arg_path(1).and_then(|p| p.with_suffix(".flash")) else {
+            report.check("record_store_scratch_path", false, 0.0);
+            return;
+        };
+        let _ = semihosting::fs::remove_file(path.as_c_str());
+        let slot_bytes = HostFileFlash::SECTOR_BYTES as u32;
+        let Ok(mut store) = RecordStore::new(HostFileFlash::open(path), slot_bytes) else {
+            report.check("record_store_layout", false, 0.0);
+            return;
+        };
+        report.check("record_store_missing_file_reads_empty", matches!(store.newest(), Ok(None)), 0.0);
+        let max = store.max_payload();
+        let mut stored = [None, None];
+        for (k, len) in [10_240, max].into_iter().enumerate() {
+            stored[k] = store
+                .store(len, |offset, chunk| {
+                    chunk.iter_mut().enumerate().for_each(|(i, b)| *b = record_byte(offset + i, k));
+                    Ok(())
+                })
+                .ok();
+        }
+        let erases = stored.iter().flatten().map(|r| r.erases).sum::<u32>();
+        let alternate = matches!(stored, [Some(a), Some(b)] if (a.slot, b.slot, b.sequence) == (0, 1, 2));
+        report.check("record_store_two_stores_two_erases", alternate && erases == 2, erases as f32);
+        // Power cycle: the file opened again by a new store.
+        let path = store.release().into_path();
+        let Ok(mut store) = RecordStore::new(HostFileFlash::open(path), slot_bytes) else { return };
+        let Ok(Some(info)) = store.newest() else {
+            report.check("record_store_reopened_finds_the_record", false, 0.0);
+            return;
+        };
+        let mut chunk = [0u8; 256];
+        let mut mismatches = 0u32;
+        for offset in (0..info.len).step_by(chunk.len()) {
+            let n = chunk.len().min(info.len - offset);
+            if store.read(&info, offset, &mut chunk[..n]).is_err() {
+                mismatches += 1;
+            }
+            mismatches +=
+                chunk[..n].iter().enumerate().filter(|(i, &b)| b != record_byte(offset + i, 1)).count() as u32;
+        }
+        let same = (info.sequence, info.len) == (2, max) && mismatches == 0;
+        report.check("record_store_reopened_record_bit_identical", same, mismatches as f32);
+        let path = store.release().into_path();
+        report.check("record_store_scratch_removed", semihosting::fs::remove_file(path.as_c_str()).is_ok(), 0.0);
+    }
+
+    fn host_file_flash(report: &mut Report) {
+        // The flash file's NOR semantics: a short file reads as erased past its end and is extended with 0xFF, a
+        // write ANDs, an erase sets 0xFF.
+        use embedded_storage::nor_flash::{NorFlash, ReadNorFlash};
+        use sinscal::rig::semihost::{arg_path, write_file, HostFileFlash};
+        let Some(path) = arg_path(1).and_then(|p| p.with_suffix(".flash")) else { return };
+        let written = write_file(&path, &[0x00; 6]);
+        let mut flash = HostFileFlash::open(path);
+        let mut bytes = [0u8; 8];
+        let short = flash.read(4, &mut bytes).is_ok() && bytes == [0, 0, 0xFF, 0xFF, 0xFF, 0xFF, 0xFF, 0xFF];
+        let mut tail = [0u8; 4];
+        let anded = flash.write(8, &[0xF0; 4]).is_ok()
+            && flash.write(8, &[0x3C; 4]).is_ok()
+            && flash.read(8, &mut bytes).is_ok()
+            && bytes == [0x30, 0x30, 0x30, 0x30, 0xFF, 0xFF, 0xFF, 0xFF]
+            && flash.read(HostFileFlash::CAPACITY_BYTES as u32 - 4, &mut tail).is_ok()
+            && tail == [0xFF; 4];
+        let erased = flash.erase(0, HostFileFlash::SECTOR_BYTES as u32).is_ok()
+            && flash.read(0, &mut bytes).is_ok()
+            && bytes == [0xFF; 8];
+        let refused = flash.write(2, &[0; 4]).is_err() && flash.erase(0, 100).is_err();
+        report.check("host_file_flash_nor_semantics", written && short && anded && erased && refused, 0.0);
+        let _ = semihosting::fs::remove_file(flash.into_path().as_c_str());
+    }
+
     #[entry]
     fn main() -> ! {
         let mut report = Report { text: heapless::String::new(), passed: 0, failed: 0 };
@@ -158,6 +242,8 @@ mod firmware {
         prefilter(&mut report);
         accumulator(&mut report);
         general_estimator(&mut report);
+        host_file_flash(&mut report);
+        record_store(&mut report);
         let _ = writeln!(report.text, "{} passed, {} failed", report.passed, report.failed);
         if let Some(path) = sinscal::rig::semihost::arg_path(1) {
             sinscal::rig::semihost::write_file(&path, report.text.as_bytes());

@@ -13,7 +13,7 @@ use super::link::{encode_frame, Frame, FrameError, MAX_BODY};
 use super::message::{kind, BodyReader, BodyWriter, DeviceState, ErrorCode, MAX_CHUNK, MAX_NOTE};
 use super::record::{Record, RecordHead, RECORD_HEAD_BYTES, RECORD_VERSION};
 use super::store::{RecordInfo, RecordStore};
-use crate::calib::compensation::Compensation;
+use crate::calib::compensation::{self, Compensation};
 use crate::calib::solve::MAX_POSITIONS;
 use crate::rig::replay::{encode_outcome_part, read_configuration, OutcomeView, ReplayHeader};
 use crate::run::sampling::{feed_sequence, QueueItem, SamplingStats};
@@ -142,7 +142,7 @@ impl<F: NorFlash> Device<F> {
             let mut head = [0u8; RECORD_HEAD_BYTES];
             if self.store.read(&info, 0, &mut head).is_ok() {
                 if let Some(h) = RecordHead::decode(&head) {
-                    let mut bytes = [0u8; Compensation::ENCODED_BYTES];
+                    let mut bytes = [0u8; compensation::ENCODED_BYTES];
                     if self.store.read(&info, RECORD_HEAD_BYTES, &mut bytes).is_ok() {
                         compensation = Compensation::decode(&bytes[..h.compensation_bytes as usize]);
                     }
@@ -295,7 +295,7 @@ fn record_of<'a>(
     let outcome = outcome.filter(|o| o.result.is_some()).ok_or((ErrorCode::NoResult, 0))?;
     let compensation = match outcome.result {
         Some(SequenceSolution::Channels(c)) => Compensation::from_channels(c).map_err(|_| (ErrorCode::NoResult, 2))?,
-        Some(SequenceSolution::Angles(r)) => Compensation::from_angles(r),
+        Some(SequenceSolution::Angles(r)) => Compensation::from_angles(r).map_err(|_| (ErrorCode::NoResult, 2))?,
         None => return Err((ErrorCode::NoResult, 0)),
     };
     Ok(Record { compensation, configuration, note, outcome })

@@ -4,8 +4,13 @@
 //! - [`crc`]: the CRC-32 of link frames and stored records.
 //! - [`link`]: frames on the serial line (COBS, CRC, bounded).
 //! - [`message`]: the messages in those frames (kinds, error codes, body fields).
+//! - [`store`]: the power-safe A/B store of the calibration record in NOR flash (docs/storage.md).
+//! - [`record`]: the calibration record's layout (compensation, configuration, note, outcome).
+//! - [`device`]: the device behind the link (requests, the calibration, the record, compensation).
 
 pub mod crc;
+pub mod device;
 pub mod link;
 pub mod message;
-// pub mod record; pub mod device; (enabled when store, compensation and the latch land)
+pub mod record;
+pub mod store;

@@ -12,7 +12,7 @@
 //! The store ([`super::store`]) adds its own header (sequence number, length, CRC) around it. The record is
 //! written in parts as the store asks for them; nothing holds the whole of it.
 
-use crate::calib::compensation::Compensation;
+use crate::calib::compensation::{self, Compensation};
 use crate::rig::replay::{encode_outcome_part, OutcomeView};
 
 /// Version of the record layout.
@@ -57,7 +57,7 @@ impl RecordHead {
             note_bytes: u16_at(6)?,
             outcome_bytes: u32::from_le_bytes(b.get(8..12)?.try_into().ok()?),
         };
-        (head.compensation_bytes as usize == Compensation::ENCODED_BYTES).then_some(head)
+        (head.compensation_bytes as usize == compensation::ENCODED_BYTES).then_some(head)
     }
 
     /// Where each part starts and its length: compensation, configuration, note, outcome.
@@ -97,7 +97,7 @@ impl Record<'_> {
     /// The head.
     pub fn head(&self) -> RecordHead {
         RecordHead {
-            compensation_bytes: Compensation::ENCODED_BYTES as u16,
+            compensation_bytes: compensation::ENCODED_BYTES as u16,
             configuration_bytes: self.configuration.len() as u16,
             note_bytes: self.note.len() as u16,
             outcome_bytes: encode_outcome_part(&self.outcome, 0, &mut []) as u32,
@@ -117,7 +117,7 @@ impl Record<'_> {
     /// Writes the record's bytes from `offset` into `out` (as many as fit, up to the record's end).
     pub fn write_part(&self, offset: usize, out: &mut [u8]) {
         let head = self.head();
-        let mut compensation = [0u8; Compensation::ENCODED_BYTES];
+        let mut compensation = [0u8; compensation::ENCODED_BYTES];
         self.compensation.encode(&mut compensation);
         let [(c, _), (k, _), (n, _), (o, _)] = head.parts();
         let fixed: [(usize, &[u8]); 4] =

@@ -81,7 +81,8 @@ pub fn run_firmware_on(elf: &Path, input: &Path) -> Result<(Vec<u8>, String), St
 }
 
 /// Runs a firmware binary that takes one output-file argument (self-test, benchmark) and returns its exit
-/// code and the text it wrote. `icount` runs QEMU with `-icount shift=0` (instruction counting).
+/// code and the text it wrote. `icount` runs QEMU with `-icount shift=0` (instruction counting). The
+/// self-test's flash image, the output file's name plus `.flash`, is removed if the firmware left it.
 pub fn run_with_output(elf: &Path, icount: bool) -> Result<(i32, String), String> {
     let out = ScratchFile::new("fw.txt");
     let semihosting = format!("enable=on,target=native,arg=fw,arg={}", out.path().display());
@@ -97,6 +98,9 @@ pub fn run_with_output(elf: &Path, icount: bool) -> Result<(i32, String), String
         .output()
         .map_err(|e| format!("cannot run {QEMU} ({e}): install it with scripts/setup"))?;
     let text = std::fs::read_to_string(out.path()).unwrap_or_default();
+    let mut flash_image = out.path().as_os_str().to_owned();
+    flash_image.push(".flash");
+    let _ = std::fs::remove_file(flash_image);
     Ok((run.status.code().unwrap_or(-1), text))
 }
 
