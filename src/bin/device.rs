@@ -28,7 +28,7 @@ mod firmware {
     use sinscal::instrument::device::{Action, Device};
     use sinscal::instrument::store::RecordStore;
     use sinscal::rig::replay::{read_header, ByteSource, ReplayDevice};
-    use sinscal::rig::semihost::{arg_path, FileSource, HostFileFlash, FLASH_SECTOR_BYTES};
+    use sinscal::rig::semihost::{arg_path, FileSource, HostFileFlash};
     use sinscal::run::sampling::{on_data_ready, process_next, QueueItem, SamplingStats, QUEUE_SLOTS};
     use sinscal::sensor::adis::{Adis, Model, BURST32_LEN};
 
@@ -88,8 +88,9 @@ mod firmware {
     #[entry]
     fn main() -> ! {
         let flash_path = arg_path(1).unwrap_or_else(|| fail("usage: sinscal-device FLASH REPLAY"));
-        let flash = HostFileFlash::open(&flash_path).unwrap_or_else(|| fail("cannot open the flash file"));
-        let store = RecordStore::new(flash, FLASH_SECTOR_BYTES as u32).unwrap_or_else(|_| fail("flash layout"));
+        let flash = HostFileFlash::open(flash_path);
+        let store =
+            RecordStore::new(flash, HostFileFlash::SECTOR_BYTES as u32).unwrap_or_else(|_| fail("flash layout"));
         let mut frames = open_frames();
         let model = frames.as_ref().map_or(Model::Adis16505_2, |f| f.model);
         let mut imu = Adis::new(ReplayDevice::new(model), model);
