@@ -60,11 +60,13 @@ fn device_run_then_show_gives_the_host_replay_json() {
         let stderr = String::from_utf8_lossy(&run.stderr);
         assert!(run.status.success(), "device run: {stderr}");
         assert!(stderr.contains(&format!("stored calibration record {store} ")), "{stderr}");
-        let show = sinscal().args(["device", "show", "--qemu", "--flash"]).arg(&flash).arg("--json").arg(&show_json);
+        let mut show = sinscal();
+        let show = show.args(["device", "show", "--qemu", "--flash"]).arg(&flash).arg("--json").arg(&show_json);
         let show = show.output().unwrap();
         assert!(show.status.success(), "device show: {}", String::from_utf8_lossy(&show.stderr));
-        let host = sinscal().arg("calibrate").arg(&rec_path).args(["--on", "host", "--model", model, "--json"]);
-        assert!(host.arg(&host_json).output().unwrap().status.success());
+        let mut host = sinscal();
+        host.arg("calibrate").arg(&rec_path).args(["--on", "host", "--model", model, "--json"]).arg(&host_json);
+        assert!(host.output().unwrap().status.success());
         let (run_v, show_v, mut host_v) = (json(&run_json), json(&show_json), json(&host_json));
         assert_eq!(run_v, show_v, "model {model}: the stored record reads back as the run reported it");
         assert_eq!(run_v["on"], "device");

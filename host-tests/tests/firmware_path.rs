@@ -29,6 +29,10 @@ fn replay_matches_the_direct_calibration_to_the_device_quantisation() {
     let s = replayed.sampling.unwrap();
     assert_eq!((s.events as usize, s.readings as usize), (rec.rows.len(), rec.rows.len()));
     assert_eq!(s.faults() + s.queue_full + s.missed_samples, 0);
+    // The JSON lists every fault counter: bus, checksum, stalled counter, status flag, dead bus.
+    let json = serde_json::to_value(sinscal_host::io::calibration_result::CalibrationJson::new(&replayed)).unwrap();
+    assert_eq!(json["sampling"]["faults"], serde_json::json!([0, 0, 0, 0, 0]));
+    assert_eq!(json["sampling"]["readings"].as_u64(), Some(rec.rows.len() as u64));
     for (a, b) in direct.positions.iter().zip(&replayed.positions) {
         assert_eq!(a.summary.samples, b.summary.samples);
     }
@@ -143,15 +147,25 @@ fn corrupted_frames_are_counted_and_the_dwell_survives_a_few() {
     let mut bytes = [0u8; BURST32_LEN];
     encode_burst(Model::Adis16505_2, &burst, &mut bytes);
     file[flagged..flagged + BURST32_LEN].copy_from_slice(&bytes);
+    // Row 330: every byte zero (the data line stuck low), which passes the byte-sum checksum.
+    let dead = frame_offset(&file, 330) + 1;
+    file[dead..dead + BURST32_LEN].fill(0);
 
     let outcome = run_replay(&file[..], |_| {}).unwrap();
     let s = outcome.sampling;
-    assert_eq!((s.checksum_errors, s.stalled_counters, s.status_flags), (1, 1, 1));
-    assert_eq!(s.readings as usize, rec.rows.len() - 3);
-    // Three faults are within the dwell's allowance: the sequence completes, with 3 fewer samples there.
+    assert_eq!((s.checksum_errors, s.stalled_counters, s.status_flags, s.dead_bus_frames), (1, 1, 1, 1));
+    assert_eq!((s.bus_errors, s.faults()), (0, 4));
+    assert_eq!(s.readings as usize, rec.rows.len() - 4);
+    // Four faults are within the dwell's allowance: the sequence completes, with 4 fewer samples there.
     assert!(outcome.result.is_some());
-    assert_eq!(outcome.positions[0].summary.samples, 2000 - 3);
+    assert_eq!(outcome.positions[0].summary.samples, 2000 - 4);
     assert_eq!(outcome.positions[1].summary.samples, 2000);
+    // The outcome file carries every counter, and decodes to the same outcome.
+    let mut bytes = vec![0u8; sinscal::rig::replay::MAX_OUTCOME_BYTES];
+    let n = sinscal::rig::replay::encode_outcome(&outcome, &mut bytes).unwrap();
+    let decoded = sinscal::rig::replay::decode_outcome(&outcome.header, &bytes[..n]).unwrap();
+    assert_eq!(decoded.sampling, s);
+    assert_eq!(decoded, outcome);
 }
 
 #[test]
@@ -222,14 +236,158 @@ fn a_full_queue_is_counted_not_dropped_silently() {
     let (mut producer, mut consumer) = queue.split();
     let mut stats = SamplingStats::default();
     let mut imu = Counter(0);
-    // The processing loop stalls for 20 samples (200 ms).
-    for _ in 0..20 {
-        on_data_ready(&mut imu, &mut producer, &mut stats);
+    // The processing loop stalls for 20 samples (200 ms); the table signal changes every sample.
+    for k in 0..20u8 {
+        on_data_ready(&mut imu, &mut producer, &mut stats, k % 3);
     }
     assert_eq!((stats.events, stats.readings, stats.queue_full), (20, 20, 20 - (QUEUE_SLOTS as u32 - 1)));
-    // What is in the queue is in order, the oldest first.
-    let counters: Vec<u16> = std::iter::from_fn(|| consumer.dequeue()).map(|i| i.unwrap().counter).collect();
+    // What is in the queue is in order, the oldest first, each with the table signal of its own sample.
+    let items: Vec<QueueItem> = std::iter::from_fn(|| consumer.dequeue()).collect();
+    let counters: Vec<u16> = items.iter().map(|i| i.reading.unwrap().counter).collect();
     assert_eq!(counters, (1..QUEUE_SLOTS as u16).collect::<Vec<_>>());
+    let tables: Vec<u8> = items.iter().map(|i| i.table).collect();
+    assert_eq!(tables, (0..QUEUE_SLOTS as u8 - 1).map(|k| k % 3).collect::<Vec<_>>());
+}
+
+#[test]
+fn sampling_counters_saturate_instead_of_wrapping() {
+    use heapless::spsc::Queue;
+    use sinscal::run::sampling::{on_data_ready, QueueItem, SamplingStats};
+    // Every counter at its largest value (497 days of events at 100 Hz): more events, readings, a missed
+    // sample, a dead-bus fault and a full queue leave them there; a wrapping counter would restart from 0.
+    let max = u32::MAX;
+    let all_max = SamplingStats {
+        events: max,
+        readings: max,
+        queue_full: max,
+        bus_errors: max,
+        checksum_errors: max,
+        stalled_counters: max,
+        status_flags: max,
+        dead_bus_frames: max,
+        missed_samples: max,
+    };
+    assert_eq!(all_max.faults(), max);
+    let mut stats = all_max;
+    // A queue of one item: the second and third enqueue find it full.
+    let mut queue: Queue<QueueItem, 2> = Queue::new();
+    let (mut producer, _consumer) = queue.split();
+    let mut imu = Level { counter: 0, dead_bus_at: Some(3), missed: 1 };
+    for _ in 0..3 {
+        on_data_ready(&mut imu, &mut producer, &mut stats, 1);
+    }
+    assert_eq!(stats, all_max);
+    // From zero the same events count normally.
+    let mut stats = SamplingStats::default();
+    let mut queue: Queue<QueueItem, 2> = Queue::new();
+    let (mut producer, _consumer) = queue.split();
+    let mut imu = Level { counter: 0, dead_bus_at: Some(3), missed: 1 };
+    for _ in 0..3 {
+        on_data_ready(&mut imu, &mut producer, &mut stats, 1);
+    }
+    let expected = SamplingStats {
+        events: 3,
+        readings: 2,
+        queue_full: 2,
+        dead_bus_frames: 1,
+        missed_samples: 2,
+        ..SamplingStats::default()
+    };
+    assert_eq!(stats, expected);
+}
+
+/// A level IMU at rest (gravity on z, a little Earth rate) whose data counter advances, or a dead bus.
+struct Level {
+    counter: u16,
+    dead_bus_at: Option<u16>,
+    /// Samples reported missed before each reading.
+    missed: u16,
+}
+
+impl sinscal::sensor::source::ImuSource for Level {
+    type Error = sinscal::sensor::adis::AdisError<()>;
+    fn read(&mut self) -> Result<sinscal::sensor::sample::ImuReading, Self::Error> {
+        self.counter += 1;
+        if self.dead_bus_at == Some(self.counter) {
+            return Err(sinscal::sensor::adis::AdisError::DeadBus);
+        }
+        let sample = sinscal::sensor::sample::ImuSample {
+            rate_b_radps: [0.0, 5.1e-5, 5.2e-5],
+            force_b_mps2: [1e-3, -2e-3, 9.806],
+        };
+        Ok(sinscal::sensor::sample::ImuReading {
+            sample,
+            counter: self.counter,
+            missed: self.missed,
+            ..Default::default()
+        })
+    }
+}
+
+/// A one-position sequence as the replay runs it (no settling, dwells as long as the table says).
+fn level_sequence() -> sinscal::run::sequence::CalibrationSequence {
+    use sinscal::rig::replay::{replay_sequence_settings, ReplaySolve};
+    let solve = ReplaySolve {
+        estimator: sinscal::run::sequence::Estimator::Angles,
+        dwell_value: sinscal::calib::align::DwellValue::Mean,
+        max_passes: 1,
+        estimate_reference_offset: false,
+        unknown_headings: 0,
+    };
+    let settings = replay_sequence_settings(sinscal::calib::dwell::Prefilter::None, solve);
+    let site = sinscal::nav::earth::Site::with_normal_gravity(45.0f32.to_radians(), 0.0);
+    let schedule = [sinscal::nav::frames::Attitude::from_degrees(0.0, 0.0, 0.0)];
+    sinscal::run::sequence::CalibrationSequence::new(&schedule, site, settings).unwrap()
+}
+
+#[test]
+fn the_table_signal_is_the_one_latched_with_its_sample() {
+    use heapless::spsc::Queue;
+    use sinscal::run::sampling::{on_data_ready, process_next, QueueItem, SamplingStats, QUEUE_SLOTS};
+    use sinscal::run::sequence::feed_sequence;
+    // The processing loop falls behind by 14 samples: 12 taken in position 1, then 2 after the table left.
+    // Processed later, when the table has long left, the dwell still holds exactly the 12 samples taken in
+    // position; a loop that read the table when it dequeued would have collected none.
+    let mut queue: Queue<QueueItem, QUEUE_SLOTS> = Queue::new();
+    let (mut producer, mut consumer) = queue.split();
+    let mut stats = SamplingStats::default();
+    let mut imu = Level { counter: 0, dead_bus_at: Some(5), missed: 0 };
+    for k in 0..14 {
+        on_data_ready(&mut imu, &mut producer, &mut stats, if k < 12 { 1 } else { 0 });
+    }
+    assert_eq!((stats.readings, stats.dead_bus_frames, stats.faults()), (13, 1, 1));
+    let mut sequence = level_sequence();
+    let mut events = Vec::new();
+    while let Some(e) = process_next(&mut consumer, |item| feed_sequence(&mut sequence, item)) {
+        events.extend(e.into_iter().flatten());
+    }
+    assert_eq!(events[0], Event::DwellStarted { index: 0 });
+    // 12 samples in position, one of them the dead-bus fault: 11 in the statistics.
+    assert_eq!(events[1], Event::DwellCompleted { index: 0, samples: 11, faults: 1 });
+    assert_eq!(sequence.completed()[0].summary.samples, 11);
+}
+
+#[test]
+fn a_gpio_in_position_signal_feeds_whichever_position_is_next() {
+    use sinscal::run::sampling::{QueueItem, TABLE_IN_POSITION};
+    use sinscal::run::sequence::feed_sequence;
+    use sinscal::sensor::source::{ClassifiedError, ImuSource};
+    // TABLE_IN_POSITION (a board that only says "in position") counts as in position for the position the
+    // sequence works on, whatever its number; 0 is moving; another position's number is not in position.
+    let mut imu = Level { counter: 0, dead_bus_at: None, missed: 0 };
+    let mut sequence = level_sequence();
+    let mut item = |table: u8| QueueItem { reading: imu.read().map_err(|e| e.fault()), table };
+    assert_eq!(feed_sequence(&mut sequence, &item(2)), [None, None]);
+    assert_eq!(feed_sequence(&mut sequence, &item(0)), [None, None]);
+    assert_eq!(feed_sequence(&mut sequence, &item(TABLE_IN_POSITION)), [Some(Event::DwellStarted { index: 0 }), None]);
+    for _ in 0..19 {
+        assert_eq!(feed_sequence(&mut sequence, &item(TABLE_IN_POSITION)), [None, None]);
+    }
+    assert_eq!(
+        feed_sequence(&mut sequence, &item(0)),
+        [Some(Event::DwellCompleted { index: 0, samples: 20, faults: 0 }), None]
+    );
+    assert_eq!(sequence.completed()[0].summary.samples, 20);
 }
 
 #[test]

@@ -4,8 +4,9 @@
 //! clock of mps2-an386, then advances once per 40 instructions, deterministically. The path measured is
 //! what the firmware does for every sample: the data-ready handler (burst read through the SPI device,
 //! checksum, decode, counter and status checks, conversion to SI, enqueue) and the processing loop
-//! (queue hand-over by reference, the calibration sequence's checks, the HMM/KF bank and the dwell accumulators);
-//! on its own, the compensation of a sample with a stored calibration (docs/compensation.md). The SPI
+//! (queue hand-over by reference, `feed_sequence` with the latched table signal, the calibration sequence's
+//! checks, the HMM/KF bank and the dwell accumulators); on its own, the compensation of a sample with a stored
+//! calibration (docs/compensation.md). The SPI
 //! device is the replay device serving a fixed frame, so the bus itself costs nothing here; on hardware
 //! the burst's 32 bytes at 1 MHz add 256 us of SPI time, not instructions.
 //! The result is written as text to the file named by the first semihosting argument.
@@ -27,9 +28,11 @@ mod firmware {
     use sinscal::calib::dwell::Prefilter;
     use sinscal::nav::earth::Site;
     use sinscal::nav::frames::Attitude;
-    use sinscal::rig::replay::{replay_sequence_settings, ReplayDevice, ReplaySolve};
-    use sinscal::run::sampling::{on_data_ready, process_next, QueueItem, SamplingStats, QUEUE_SLOTS};
-    use sinscal::run::sequence::{CalibrationSequence, Estimator};
+    use sinscal::rig::replay::{replay_sequence_settings, NoDelay, ReplayDevice, ReplaySolve};
+    use sinscal::run::sampling::{
+        on_data_ready, process_next, QueueItem, SamplingStats, QUEUE_SLOTS, TABLE_IN_POSITION,
+    };
+    use sinscal::run::sequence::{feed_sequence, CalibrationSequence, Estimator};
     use sinscal::sensor::adis::{encode_burst, Adis, Burst, Model, BURST32_LEN, I16F16};
     use sinscal::sensor::sample::ImuSample;
 
@@ -56,7 +59,7 @@ mod firmware {
     fn measure(prefilter: Prefilter) -> (u32, u32, u32) {
         let model = Model::Adis16505_2;
         let mut imu = Adis::new(ReplayDevice::new(model), model);
-        let _ = imu.init();
+        let _ = imu.init(&mut NoDelay);
         let site = Site::with_normal_gravity(45.7796f32.to_radians(), 0.0);
         let settings = replay_sequence_settings(prefilter, single_pass());
         let schedule = [Attitude::from_degrees(0.0, 0.0, 0.0)];
@@ -91,9 +94,9 @@ mod firmware {
             encode_burst(model, &burst, &mut frame);
             imu.spi_mut().load_frame(&frame);
             let t0 = syst.cvr.read();
-            on_data_ready(&mut imu, &mut producer, &mut stats);
+            on_data_ready(&mut imu, &mut producer, &mut stats, TABLE_IN_POSITION);
             let t1 = syst.cvr.read();
-            let _ = process_next(&mut consumer, |item| sequence.on_sample(true, item));
+            let _ = process_next(&mut consumer, |item| feed_sequence(&mut sequence, item));
             let t2 = syst.cvr.read();
             isr += ticks_between(t0, t1);
             processing += ticks_between(t1, t2);
@@ -101,9 +104,10 @@ mod firmware {
         // The queue hand-over on its own: one item enqueued (not timed), then taken by reference.
         let mut handover = 0u32;
         for _ in 0..SAMPLES {
-            let _ = producer.enqueue(Ok(sinscal::sensor::sample::ImuReading::default()));
+            let reading = Ok(sinscal::sensor::sample::ImuReading::default());
+            let _ = producer.enqueue(QueueItem { reading, table: TABLE_IN_POSITION });
             let t0 = syst.cvr.read();
-            let _ = process_next(&mut consumer, |item| core::hint::black_box(item).is_ok());
+            let _ = process_next(&mut consumer, |item| core::hint::black_box(item).reading.is_ok());
             let t1 = syst.cvr.read();
             handover += ticks_between(t0, t1);
         }
@@ -134,7 +138,7 @@ mod firmware {
     fn stack_depths() -> (u32, u32) {
         let model = Model::Adis16505_2;
         let mut imu = Adis::new(ReplayDevice::new(model), model);
-        let _ = imu.init();
+        let _ = imu.init(&mut NoDelay);
         let site = Site::with_normal_gravity(45.7796f32.to_radians(), 0.0);
         let settings = replay_sequence_settings(Prefilter::paper(), single_pass());
         let schedule = [Attitude::from_degrees(0.0, 0.0, 0.0)];
@@ -152,9 +156,9 @@ mod firmware {
         };
         encode_burst(model, &burst, &mut frame);
         imu.spi_mut().load_frame(&frame);
-        let isr = stack_used(&mut || on_data_ready(&mut imu, &mut producer, &mut stats));
+        let isr = stack_used(&mut || on_data_ready(&mut imu, &mut producer, &mut stats, TABLE_IN_POSITION));
         let processing = stack_used(&mut || {
-            let _ = process_next(&mut consumer, |item| sequence.on_sample(true, item));
+            let _ = process_next(&mut consumer, |item| feed_sequence(&mut sequence, item));
         });
         (isr, processing)
     }
@@ -194,7 +198,7 @@ mod firmware {
         use embedded_hal::spi::{Operation, SpiDevice};
         let model = Model::Adis16505_2;
         let mut imu = Adis::new(ReplayDevice::new(model), model);
-        let _ = imu.init();
+        let _ = imu.init(&mut NoDelay);
         let mut frame = [0u8; BURST32_LEN];
         let mut burst = Burst {
             diag_stat: 0,

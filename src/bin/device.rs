@@ -34,9 +34,15 @@ mod firmware {
 
     static RX: Mutex<RefCell<Option<Producer<'static, u8>>>> = Mutex::new(RefCell::new(None));
     static RX_LOST: AtomicU32 = AtomicU32::new(0);
+    /// The idle loop's wake-up tick, Hz.
+    const IDLE_TICK_HZ: u32 = 100;
 
     #[exception]
     unsafe fn DefaultHandler(irqn: i16) {
+        if irqn == sinscal::board::mps2_an386::TIMER0_IRQ {
+            // The wake-up tick of the idle loop.
+            sinscal::board::mps2_an386::clear_sample_timer();
+        }
         if irqn == uart::UART0_RX_IRQ {
             cortex_m::interrupt::free(|cs| {
                 if let Some(p) = RX.borrow(cs).borrow_mut().as_mut() {
@@ -107,6 +113,7 @@ mod firmware {
         });
         let mut link = LinkPort::new(rx_consumer);
         uart::init();
+        sinscal::board::mps2_an386::start_sample_timer(IDLE_TICK_HZ);
         let mut queue: Queue<QueueItem, QUEUE_SLOTS> = Queue::new();
         let (mut producer, mut consumer) = queue.split();
         let mut stats = SamplingStats::default();
@@ -117,18 +124,18 @@ mod firmware {
                 frames = open_frames();
             }
             if !device.running() {
-                // Sleep until a byte arrives; interrupts masked between the check and the wait.
-                cortex_m::interrupt::free(|_| {
-                    if link.is_idle() {
-                        cortex_m::asm::wfi();
-                    }
-                });
+                // Sleep until a byte arrives or the next tick. (The tick bounds the wait of a byte that arrives
+                // between the check and the WFI: QEMU does not wake a WFI for an interrupt masked by PRIMASK, so
+                // the usual masked check-then-wait would sleep for ever there.)
+                if link.is_idle() {
+                    cortex_m::asm::wfi();
+                }
                 continue;
             }
             let sampled = frames.as_mut().is_some_and(|f| sample_frame(f, &mut imu, &mut producer, &mut stats));
-            while let Some(out) = process_next(&mut consumer, |item| {
-                device.on_sample(item, &stats, |e| log_event(e, None))
-            }) {
+            while let Some(out) =
+                process_next(&mut consumer, |item| device.on_sample(item, &stats, |e| log_event(e, None)))
+            {
                 if let Some(sample) = out {
                     link.send_sample::<HostFileFlash>(&sample);
                 }

@@ -3,10 +3,11 @@
 //! and RAM the budget measures.
 //!
 //! - TIMER0 (CMSDK APB timer, 25 MHz) interrupts at exactly 100 Hz: its hardware reload gives absolute
-//!   deadlines. The interrupt only reads the IMU (burst read through the driver) and enqueues the reading.
+//!   deadlines. The interrupt only reads the IMU (burst read through the driver), latches the turntable's
+//!   "in position" signal (GPIO0 pin 0) with it and enqueues both.
 //! - The main loop owns the calibration sequence (prefilter bank and accumulators inside): it takes the
-//!   readings off the queue with the turntable's "in position" signal (GPIO0 pin 0) and logs the events
-//!   and the result with defmt.
+//!   items off the queue, feeds them to the sequence with the signal as it was at each sample
+//!   (`feed_sequence`), and logs the events and the result with defmt.
 //! - Chip select of the IMU: GPIO0 pin 1, active low.
 #![cfg_attr(target_os = "none", no_std, no_main)]
 
@@ -21,14 +22,16 @@ mod firmware {
     use cortex_m_rt::{entry, exception};
     use defmt_full as defmt;
     use heapless::spsc::{Consumer, Producer, Queue};
-    use sinscal::board::mps2_an386::{self as board, exit, Pl022, TIMER0_IRQ};
+    use sinscal::board::mps2_an386::{self as board, exit, CycleDelay, Pl022, TIMER0_IRQ};
     use sinscal::calib::channels::parameter_name;
     use sinscal::calib::solve::TABLE1_POSITIONS_DEG;
     use sinscal::nav::earth::Site;
     use sinscal::nav::frames::Attitude;
-    use sinscal::run::sampling::{on_data_ready, process_next, QueueItem, SamplingStats, QUEUE_SLOTS};
-    use sinscal::run::sequence::{CalibrationSequence, Event, SequenceSettings, SequenceSolution};
-    use sinscal::sensor::adis::{Adis, Model, OUTPUT_RATE_HZ};
+    use sinscal::run::sampling::{
+        on_data_ready, process_next, QueueItem, SamplingStats, QUEUE_SLOTS, TABLE_IN_POSITION,
+    };
+    use sinscal::run::sequence::{feed_sequence, CalibrationSequence, Event, SequenceSettings, SequenceSolution};
+    use sinscal::sensor::adis::{Adis, AdisError, Model, OUTPUT_RATE_HZ};
 
     /// What the data-ready interrupt owns.
     struct Sampler {
@@ -45,7 +48,10 @@ mod firmware {
             board::clear_sample_timer();
             cortex_m::interrupt::free(|cs| {
                 if let Some(s) = SAMPLER.borrow(cs).borrow_mut().as_mut() {
-                    on_data_ready(&mut s.imu, &mut s.queue, &mut s.stats);
+                    // The table's signal now, with the sample now: the processing loop may be up to 15
+                    // samples behind.
+                    let table = if board::in_position() { TABLE_IN_POSITION } else { 0 };
+                    on_data_ready(&mut s.imu, &mut s.queue, &mut s.stats, table);
                 }
             });
         }
@@ -91,11 +97,21 @@ mod firmware {
     #[entry]
     fn main() -> ! {
         let mut imu = Adis::new(Pl022::init(), Model::Adis16505_2);
-        if let Err(e) = imu.init() {
+        if let Err(e) = imu.init(&mut CycleDelay) {
             match e {
-                sinscal::sensor::adis::AdisError::WrongProduct { expected, found } => {
+                AdisError::WrongProduct { expected, found } => {
                     defmt::error!("IMU: PROD_ID {=u16}, expected {=u16}", found, expected)
                 }
+                AdisError::SelfTest { diag_stat } => {
+                    defmt::error!("IMU: self-test failed, DIAG_STAT {=u16:#x}", diag_stat)
+                }
+                AdisError::ReadBack { register, written, read } => defmt::error!(
+                    "IMU: register {=u8:#x} reads back {=u16:#x}, {=u16:#x} written",
+                    register,
+                    read,
+                    written
+                ),
+                AdisError::Spi(_) => defmt::error!("IMU: SPI timeout"),
                 _ => defmt::error!("IMU initialisation failed"),
             }
             exit(1);
@@ -112,9 +128,9 @@ mod firmware {
         // The data-ready timer at the IMU's output rate (100 Hz).
         board::start_sample_timer(OUTPUT_RATE_HZ as u32);
         loop {
-            while let Some(event) = process_next(&mut consumer, |item| sequence.on_sample(board::in_position(), item)) {
-                if let Some(event) = event {
-                    log_event(&event, &sequence);
+            while let Some(events) = process_next(&mut consumer, |item| feed_sequence(&mut sequence, item)) {
+                for event in events.iter().flatten() {
+                    log_event(event, &sequence);
                 }
             }
             cortex_m::asm::wfi();

@@ -1,4 +1,5 @@
-//! On-target tests: core checks run on the Cortex-M4F in QEMU (f32 hardware float, libm, no std).
+//! On-target tests: core checks run on the Cortex-M4F in QEMU (f32 hardware float, libm, no std), and the
+//! board's SPI port giving up on a stalled bus.
 //! Writes one line per check (`ok NAME VALUE` or `FAILED NAME VALUE`) and a closing `N passed, N failed`
 //! line to the file named by the first semihosting argument; the exit status is the number of failures.
 //! The record store's check keeps its flash image in a scratch file beside it (that name plus `.flash`),
@@ -235,6 +236,21 @@ mod firmware {
         let _ = semihosting::fs::remove_file(flash.into_path().as_c_str());
     }
 
+    fn bounded_spi(report: &mut Report) {
+        // The PL022 with its port disabled never moves a byte: the transfer must give up with a timeout (not
+        // hang), and the port must work again once enabled. (The chip select's release is not visible here:
+        // QEMU's MPS2 leaves the GPIO block unimplemented.)
+        use embedded_hal::spi::SpiDevice;
+        use sinscal::board::mps2_an386::{Pl022, SpiError};
+        let mut spi = Pl022::init();
+        spi.disable();
+        let mut word = [0u8; 2];
+        let stalled = spi.transaction(&mut [embedded_hal::spi::Operation::Read(&mut word)]);
+        report.check("spi_stalled_port_times_out", stalled == Err(SpiError::Timeout), 0.0);
+        spi.enable();
+        report.check("spi_port_works_again_when_enabled", spi.read(&mut word).is_ok(), 0.0);
+    }
+
     #[entry]
     fn main() -> ! {
         let mut report = Report { text: heapless::String::new(), passed: 0, failed: 0 };
@@ -244,6 +260,7 @@ mod firmware {
         general_estimator(&mut report);
         host_file_flash(&mut report);
         record_store(&mut report);
+        bounded_spi(&mut report);
         let _ = writeln!(report.text, "{} passed, {} failed", report.passed, report.failed);
         if let Some(path) = sinscal::rig::semihost::arg_path(1) {
             sinscal::rig::semihost::write_file(&path, report.text.as_bytes());

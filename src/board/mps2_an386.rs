@@ -3,10 +3,13 @@
 //! semihosting. Register addresses and bits: ARM's MPS2 AN386 application note and the PL022 and CMSDK
 //! technical reference manuals.
 
+use embedded_hal::delay::DelayNs;
 use embedded_hal::spi::{ErrorKind, ErrorType, Operation, SpiDevice};
 
 /// Core and peripheral clock, Hz.
 pub const CLOCK_HZ: u32 = 25_000_000;
+/// Nanoseconds per core cycle at [`CLOCK_HZ`]: 40.
+const NS_PER_CYCLE: u32 = 1_000_000_000 / CLOCK_HZ;
 
 /// PL022 SSP0 of the MPS2 FPGA image (AN386).
 const SSP0: usize = 0x4002_0000;
@@ -21,8 +24,22 @@ const SSP_CR0_MODE3_8BIT: u32 = 0x7 | (1 << 6) | (1 << 7);
 const SSP_CR1_SSE: u32 = 1 << 1;
 /// Clock prescaler: 25 MHz / (2 * 13) < 1 MHz, the ADIS burst limit.
 const SSP_CPSR_BELOW_1MHZ: u32 = 26;
+/// SSP0's bit clock, Hz: the peripheral clock / (CPSDVSR * (1 + SCR)) with SCR = 0 (PL022 TRM): 961,538 Hz.
+pub const SPI_CLOCK_HZ: u32 = CLOCK_HZ / SSP_CPSR_BELOW_1MHZ;
+/// Core cycles of one 8-bit frame on SSP0: 8 bits of 26 peripheral (= core) cycles, 208 cycles (8.3 us).
+const SSP_BYTE_CYCLES: u32 = 8 * SSP_CPSR_BELOW_1MHZ;
+/// Most polls of the SSP status register while waiting for one byte: a poll takes at least one core cycle,
+/// so this is at least four byte times (832 cycles, 33 us); a byte that has not moved by then will not, and
+/// the transfer fails with [`SpiError::Timeout`] instead of hanging the data-ready interrupt.
+pub const SSP_WAIT_POLLS_MAX: u32 = 4 * SSP_BYTE_CYCLES;
+/// Entries of the PL022's receive FIFO (PL022 TRM): the most stale bytes to drain after a failed transfer.
+const SSP_FIFO_DEPTH: u32 = 8;
+/// SSP_SR: transmit FIFO not full.
 const SSP_SR_TNF: u32 = 1 << 1;
+/// SSP_SR: receive FIFO not empty.
 const SSP_SR_RNE: u32 = 1 << 2;
+/// SSP_SR: the port is busy (a frame is being sent or received).
+const SSP_SR_BSY: u32 = 1 << 4;
 
 /// CMSDK AHB GPIO 0.
 const GPIO0: usize = 0x4001_0000;
@@ -89,16 +106,37 @@ unsafe impl cortex_m::interrupt::InterruptNumber for Irq {
     }
 }
 
+/// A delay counted in core cycles at [`CLOCK_HZ`] (`cortex_m::asm::delay` runs at least the given number of
+/// cycles: 40 ns each at 25 MHz; rounded up). Interrupts taken meanwhile lengthen it, never shorten it. The
+/// driver's start-up waits (reset recovery, self-test) go through it.
+#[derive(Clone, Copy, Debug, Default)]
+pub struct CycleDelay;
+
+impl DelayNs for CycleDelay {
+    fn delay_ns(&mut self, ns: u32) {
+        cortex_m::asm::delay(ns.div_ceil(NS_PER_CYCLE));
+    }
+}
+
 /// The PL022 SSP0 as an embedded-hal SPI device, with GPIO 0 pin 1 as its chip select.
 pub struct Pl022;
 
-/// The PL022 reports no errors; the type exists for embedded-hal.
-#[derive(Debug)]
-pub struct SpiError;
+/// Failures of a PL022 transfer.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+#[non_exhaustive]
+pub enum SpiError {
+    /// A status flag (transmit FIFO not full, receive FIFO not empty) did not come within
+    /// [`SSP_WAIT_POLLS_MAX`] polls: the port or its clock is stuck. The transaction was abandoned and the
+    /// chip select released.
+    Timeout,
+}
 
 impl embedded_hal::spi::Error for SpiError {
+    /// embedded-hal has no kind for a timeout: [`ErrorKind::Other`].
     fn kind(&self) -> ErrorKind {
-        ErrorKind::Other
+        match self {
+            SpiError::Timeout => ErrorKind::Other,
+        }
     }
 }
 
@@ -117,34 +155,102 @@ impl Pl022 {
         Pl022
     }
 
-    fn transfer_byte(byte: u8) -> u8 {
-        while read(SSP0 + SSP_SR) & SSP_SR_TNF == 0 {}
+    /// Disables the port (SSE cleared): transfers stall until [`Pl022::enable`]. The on-target test stalls
+    /// the bus this way to show that a transfer then fails with [`SpiError::Timeout`] instead of hanging.
+    pub fn disable(&mut self) {
+        write(SSP0 + SSP_CR1, 0);
+    }
+
+    /// Enables the port again (as [`Pl022::init`] left it).
+    pub fn enable(&mut self) {
+        write(SSP0 + SSP_CR1, SSP_CR1_SSE);
+    }
+
+    /// Waits until `flag` is set in SSP_SR, at most [`SSP_WAIT_POLLS_MAX`] polls.
+    fn wait_for(flag: u32) -> Result<(), SpiError> {
+        for _ in 0..SSP_WAIT_POLLS_MAX {
+            if read(SSP0 + SSP_SR) & flag != 0 {
+                return Ok(());
+            }
+        }
+        Err(SpiError::Timeout)
+    }
+
+    fn transfer_byte(byte: u8) -> Result<u8, SpiError> {
+        Self::wait_for(SSP_SR_TNF)?;
         write(SSP0 + SSP_DR, byte as u32);
-        while read(SSP0 + SSP_SR) & SSP_SR_RNE == 0 {}
-        read(SSP0 + SSP_DR) as u8
+        Self::wait_for(SSP_SR_RNE)?;
+        Ok(read(SSP0 + SSP_DR) as u8)
+    }
+
+    /// Empties the receive FIFO (at most its depth): a byte that arrived after its transfer was given up
+    /// must not be taken for the first byte of the next transaction. One status read when it is empty.
+    fn drain_receive_fifo() {
+        for _ in 0..SSP_FIFO_DEPTH {
+            if read(SSP0 + SSP_SR) & SSP_SR_RNE == 0 {
+                break;
+            }
+            let _ = read(SSP0 + SSP_DR);
+        }
+    }
+
+    /// After a failed transfer: waits (bounded) for the port to finish the frame in flight, then drains the
+    /// receive FIFO.
+    fn recover() {
+        for _ in 0..SSP_WAIT_POLLS_MAX {
+            if read(SSP0 + SSP_SR) & SSP_SR_BSY == 0 {
+                break;
+            }
+        }
+        Self::drain_receive_fifo();
+    }
+
+    /// The operations of one transaction, stopping at the first failure.
+    fn run(operations: &mut [Operation<'_, u8>]) -> Result<(), SpiError> {
+        for op in operations.iter_mut() {
+            match op {
+                Operation::Write(bytes) => {
+                    for &b in bytes.iter() {
+                        Self::transfer_byte(b)?;
+                    }
+                }
+                Operation::Read(bytes) => {
+                    for b in bytes.iter_mut() {
+                        *b = Self::transfer_byte(0)?;
+                    }
+                }
+                Operation::Transfer(r, w) => {
+                    // As long as the longer of the two: missing write bytes are 0, extra read bytes dropped.
+                    for i in 0..r.len().max(w.len()) {
+                        let received = Self::transfer_byte(w.get(i).copied().unwrap_or(0))?;
+                        if let Some(rb) = r.get_mut(i) {
+                            *rb = received;
+                        }
+                    }
+                }
+                Operation::TransferInPlace(bytes) => {
+                    for b in bytes.iter_mut() {
+                        *b = Self::transfer_byte(*b)?;
+                    }
+                }
+                Operation::DelayNs(ns) => CycleDelay.delay_ns(*ns),
+            }
+        }
+        Ok(())
     }
 }
 
 impl SpiDevice for Pl022 {
+    /// The operations with the chip select low, from an empty receive FIFO; the chip select is released
+    /// whether they succeed or not.
     fn transaction(&mut self, operations: &mut [Operation<'_, u8>]) -> Result<(), SpiError> {
+        Self::drain_receive_fifo();
         write(GPIO0 + GPIO_DATAOUT, 0);
-        for op in operations.iter_mut() {
-            match op {
-                Operation::Write(bytes) => bytes.iter().for_each(|&b| {
-                    Self::transfer_byte(b);
-                }),
-                Operation::Read(bytes) => bytes.iter_mut().for_each(|b| *b = Self::transfer_byte(0)),
-                Operation::Transfer(r, w) => {
-                    for (i, rb) in r.iter_mut().enumerate() {
-                        *rb = Self::transfer_byte(w.get(i).copied().unwrap_or(0));
-                    }
-                }
-                Operation::TransferInPlace(bytes) => bytes.iter_mut().for_each(|b| *b = Self::transfer_byte(*b)),
-                // One loop iteration of `delay` per 40 ns at 25 MHz.
-                Operation::DelayNs(ns) => cortex_m::asm::delay(*ns / 40 + 1),
-            }
-        }
+        let result = Self::run(operations);
         write(GPIO0 + GPIO_DATAOUT, PIN_IMU_CS);
-        Ok(())
+        if result.is_err() {
+            Self::recover();
+        }
+        result
     }
 }

@@ -29,9 +29,11 @@ pub const LINK_BAUD: u32 = 115_200;
 /// Length of the receive queue (it holds one byte less): 44 ms of the link at 115200 baud (11.5 bytes per ms),
 /// more than four sample periods of the main loop, which empties it every period.
 pub const RX_QUEUE_SLOTS: usize = 512;
-/// The longest wait for room in the transmit buffer, in polls of its state: one byte time at 115200 baud is
-/// 87 us = 2170 clock cycles at 25 MHz; a poll takes several cycles, so 10,000 polls are more than a byte time.
-const TX_WAIT_POLLS: u32 = 10_000;
+/// The longest wait for room in the transmit buffer, in polls of its state: at least 0.2 s at 25 MHz (a poll is
+/// at least one cycle), thousands of byte times at 115200 baud (87 us each). The wait is that long because under
+/// QEMU the transmit buffer stays full until the host end of the socket has read what was sent, which takes
+/// host time, not emulated cycles; on a board a host that stops reading costs at most that per byte.
+const TX_WAIT_POLLS: u32 = 5_000_000;
 
 fn write(addr: usize, value: u32) {
     // SAFETY: `addr` is one of UART0's memory-mapped registers above.
@@ -64,18 +66,19 @@ unsafe impl cortex_m::interrupt::InterruptNumber for RxIrq {
 }
 
 /// The receive interrupt: the byte into `queue`. Returns whether a byte was lost (queue full or the UART's
-/// own overrun).
+/// own overrun). The interrupt is acknowledged before the byte is read: reading DATA lets the next byte in, and
+/// its interrupt must not be cleared with this one's.
 pub fn on_receive(queue: &mut Producer<'_, u8>) -> bool {
+    write(UART0 + UART_INTSTATUS, INT_RX | INT_RX_OVERRUN);
     let state = read(UART0 + UART_STATE);
     let mut lost = state & STATE_RX_OVERRUN != 0;
+    if lost {
+        write(UART0 + UART_STATE, STATE_RX_OVERRUN);
+    }
     if state & STATE_RX_FULL != 0 {
         let byte = read(UART0 + UART_DATA) as u8;
         lost |= queue.enqueue(byte).is_err();
     }
-    if lost {
-        write(UART0 + UART_STATE, STATE_RX_OVERRUN);
-    }
-    write(UART0 + UART_INTSTATUS, INT_RX | INT_RX_OVERRUN);
     lost
 }
 

@@ -16,8 +16,8 @@ use super::store::{RecordInfo, RecordStore};
 use crate::calib::compensation::{self, Compensation};
 use crate::calib::solve::MAX_POSITIONS;
 use crate::rig::replay::{encode_outcome_part, read_configuration, OutcomeView, ReplayHeader};
-use crate::run::sampling::{feed_sequence, QueueItem, SamplingStats};
-use crate::run::sequence::{CalibrationSequence, Event, SequenceFailure, SequenceSolution};
+use crate::run::sampling::{QueueItem, SamplingStats};
+use crate::run::sequence::{feed_sequence, CalibrationSequence, Event, SequenceFailure, SequenceSolution};
 use crate::sensor::adis::Model;
 use crate::sensor::sample::ImuSample;
 
@@ -494,13 +494,13 @@ impl<F: NorFlash> Device<F> {
         self.compensation = compensation;
         self.compensation_from_record = true;
         let mut w = BodyWriter::new(out);
-        w.u32(report.sequence).u8(report.slot as u8).u32(report.erases).u32(len as u32);
+        w.u32(report.sequence).u8(report.slot).u32(report.erases).u32(len as u32);
         body_of(w.len())
     }
 
     fn read_record(&mut self, offset: usize, out: &mut [u8]) -> Reply {
         let info = self.stored.ok_or((ErrorCode::NothingStored, 0))?;
-        let total = info.len as usize;
+        let total = info.len;
         let n = total.saturating_sub(offset).min(MAX_CHUNK);
         let (head, part) = out.split_at_mut(8);
         self.store.read(&info, offset, &mut part[..n]).map_err(|_| (ErrorCode::Flash, 0))?;

@@ -205,7 +205,10 @@ impl FrameReceiver {
 mod tests {
     use super::*;
 
-    fn receive_all(wire: &[u8]) -> std::vec::Vec<Result<(u8, u8, std::vec::Vec<u8>), FrameError>> {
+    /// A received frame: kind, seq, body.
+    type Received = Result<(u8, u8, std::vec::Vec<u8>), FrameError>;
+
+    fn receive_all(wire: &[u8]) -> std::vec::Vec<Received> {
         let mut rx = FrameReceiver::new();
         let mut got = std::vec::Vec::new();
         for &b in wire {

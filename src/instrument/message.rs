@@ -144,6 +144,10 @@ impl<'a> BodyWriter<'a> {
     pub fn len(&self) -> Option<usize> {
         self.fits.then_some(self.at)
     }
+    /// Whether nothing was written.
+    pub fn is_empty(&self) -> bool {
+        self.at == 0
+    }
 }
 
 /// Reads little-endian fields from a body; `None` past its end.

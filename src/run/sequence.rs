@@ -2,8 +2,8 @@
 //!
 //! Per position: wait until the turntable reports "in position", let it settle, collect the dwell, then
 //! go on; after the last position, solve with the estimator the settings name ([`Estimator`]: the general
-//! estimator by default, or the paper's angle method). Call rate: [`CalibrationSequence::on_sample`] once per queue
-//! item (100 Hz), with the turntable's in-position signal at that sample.
+//! estimator by default, or the paper's angle method). Call rate: [`feed_sequence`] once per queue item
+//! (100 Hz); it decides from the item's latched turntable signal whether the table is in position.
 //!
 //! A dwell is aborted, with its reason, and collected again (after settling) when a sample contradicts
 //! the announced position (specific force more than [`SequenceSettings::max_gravity_angle_rad`] away from
@@ -25,7 +25,7 @@ use crate::calib::solve::MAX_POSITIONS;
 use crate::math::linalg::{dot, Vec3};
 use crate::nav::earth::Site;
 use crate::nav::frames::Attitude;
-use crate::run::sampling::QueueItem;
+use crate::run::sampling::{QueueItem, TABLE_IN_POSITION};
 
 /// Settings of the sequence.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -304,7 +304,7 @@ impl CalibrationSequence {
 
     fn abort(&mut self, reason: AbortReason, in_position: bool) -> Event {
         let event = Event::DwellAborted { index: self.index, reason, at_sample: self.dwell_sample };
-        self.aborts += 1;
+        self.aborts = self.aborts.saturating_add(1);
         if self.aborts >= self.settings.max_aborts {
             self.phase = Phase::Finished;
             return Event::Failed(SequenceFailure::PositionAborted { index: self.index, reason });
@@ -377,7 +377,8 @@ impl CalibrationSequence {
         }
     }
 
-    /// One queue item, with the turntable's in-position signal at that sample.
+    /// One queue item, with the decision whether the table is in the position the sequence works on at that
+    /// sample (`item.table` is not read here: [`feed_sequence`] decides from it).
     pub fn on_sample(&mut self, in_position: bool, item: &QueueItem) -> Option<Event> {
         match self.phase {
             Phase::Finished => None,
@@ -439,11 +440,11 @@ impl CalibrationSequence {
             }
             return Some(self.abort(AbortReason::TableLeft, false));
         }
-        self.dwell_sample += 1;
-        let reading = match item {
+        self.dwell_sample = self.dwell_sample.saturating_add(1);
+        let reading = match &item.reading {
             Ok(r) => r,
             Err(_) => {
-                self.faults += 1;
+                self.faults = self.faults.saturating_add(1);
                 if self.faults > self.settings.max_faults_per_dwell {
                     return Some(self.abort(AbortReason::TooManyFaults, true));
                 }
@@ -475,6 +476,26 @@ impl CalibrationSequence {
         }
         None
     }
+}
+
+/// Feeds one queue item to the sequence, as every processing loop does (the firmware's and the replay's):
+/// the table is in the sequence's position when the item's latched signal is [`TABLE_IN_POSITION`] or the
+/// position's number (`position + 1`). Returns up to two events.
+///
+/// Contiguous dwells (no sample between two positions, as a replay can have them): the sample that ends a
+/// dwell because the table reports the next position is that position's first sample, not lost, so it is
+/// fed a second time, to the next position. A board that only says "in position" cannot tell one position
+/// from the next; its table must report "moving" (0) in between.
+#[inline]
+pub fn feed_sequence(sequence: &mut CalibrationSequence, item: &QueueItem) -> [Option<Event>; 2] {
+    let table = item.table;
+    let in_position = table == TABLE_IN_POSITION || table as usize == sequence.position() + 1;
+    let first = sequence.on_sample(in_position, item);
+    let next = !in_position
+        && matches!(first, Some(Event::DwellCompleted { .. }))
+        && table as usize == sequence.position() + 1;
+    let second = if next { sequence.on_sample(true, item) } else { None };
+    [first, second]
 }
 
 #[cfg(test)]

@@ -18,6 +18,9 @@ pub enum ReadFault {
     StalledCounter,
     /// The sensor flagged a fault in its status word.
     StatusFlag,
+    /// Every byte of the frame was zero: the data line stuck low (or a sensor that does not drive it). Such
+    /// a frame passes a byte-sum checksum (0 = 0), so it is recognised on its own.
+    DeadBus,
 }
 
 /// An error that knows its [`ReadFault`] class.

@@ -134,9 +134,7 @@ impl<T: Read + Write> Client<T> {
             let n = match self.io.read(&mut buf) {
                 Ok(0) => return Err(LinkError::Io(std::io::ErrorKind::UnexpectedEof.into())),
                 Ok(n) => n,
-                Err(e) if matches!(e.kind(), std::io::ErrorKind::WouldBlock | std::io::ErrorKind::TimedOut) => {
-                    continue
-                }
+                Err(e) if matches!(e.kind(), std::io::ErrorKind::WouldBlock | std::io::ErrorKind::TimedOut) => continue,
                 Err(e) => return Err(e.into()),
             };
             for &b in &buf[..n] {

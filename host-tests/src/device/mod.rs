@@ -13,7 +13,7 @@ use std::time::{Duration, Instant};
 use sinscal::instrument::device::THRESHOLD_BYTES;
 use sinscal::instrument::message::{kind, DeviceState};
 use sinscal::instrument::record::{RecordHead, RECORD_HEAD_BYTES};
-use sinscal::rig::replay::{decode_outcome, read_configuration, read_header, replay_sequence_settings, ReplayHeader};
+use sinscal::rig::replay::{decode_outcome, read_configuration, read_header, ReplayHeader};
 
 use crate::calibration::firmware_path::{calibration_from_outcome, write_replay_file, ReadSource, ReplayPlan};
 use crate::calibration::qemu::{firmware_binary, QEMU};
@@ -104,7 +104,8 @@ pub fn configuration_body(replay_header: &[u8]) -> Result<Vec<u8>, String> {
         return Err("replay header too short".into());
     }
     let mut body = replay_header[6..replay_header.len() - 4].to_vec();
-    let s = replay_sequence_settings(sinscal::calib::dwell::Prefilter::None, Default::default());
+    // The thresholds of a replayed sequence, as the replay header's reader sets them.
+    let s = read_header(&mut &replay_header[..]).map_err(|e| e.to_string())?.settings;
     for v in [s.settle_samples, s.dwell_samples, s.min_dwell_samples] {
         body.extend_from_slice(&v.to_le_bytes());
     }

@@ -173,8 +173,8 @@ pub struct SamplingJson {
     pub readings: u32,
     /// Items lost to a full queue.
     pub queue_full: u32,
-    /// Bus errors, checksum errors, stalled counters, status flags.
-    pub faults: [u32; 4],
+    /// Bus errors, checksum errors, stalled counters, status flags, dead-bus (all-zero) frames.
+    pub faults: [u32; 5],
     /// Samples missed by the data counter.
     pub missed_samples: u32,
 }
@@ -318,7 +318,7 @@ impl CalibrationJson {
                 events: s.events,
                 readings: s.readings,
                 queue_full: s.queue_full,
-                faults: [s.bus_errors, s.checksum_errors, s.stalled_counters, s.status_flags],
+                faults: [s.bus_errors, s.checksum_errors, s.stalled_counters, s.status_flags, s.dead_bus_frames],
                 missed_samples: s.missed_samples,
             }),
             source: c.source.clone(),

@@ -11,7 +11,8 @@
 //! passes u8, estimate reference offset u8, a_gyro f32, a_accel f32
 //! positions x (pitch_rad f32, roll_rad f32, heading_rad f32, label u16, flags u16: bit 0 = heading unknown)
 //! frames u32
-//! frames x (table u8: 0 = moving, k = in position k of the list (1-based); burst bytes of the model)
+//! frames x (table u8: 0 = moving, k = in position k of the list (1-based), 255 = in position without a
+//!           number (`TABLE_IN_POSITION`, as a GPIO reports it); burst bytes of the model)
 //! ```
 //!
 //! Three parts: [`file`](mod@file) (the replay file and the outcome file: header, frames, encoding), [`device`] (the

@@ -76,7 +76,8 @@ fn checksum16(f: &[u8; BURST16_LEN]) -> u16 {
     fold_lanes(w(0) + w(4) + w(8) + w(12), f[16] as u32 + f[17] as u32)
 }
 
-/// Decodes a burst of `model.burst_len()` bytes (after the command word) and checks its checksum.
+/// Decodes a burst of `model.burst_len()` bytes (after the command word) and checks its checksum; a frame
+/// of zero bytes only is [`AdisError::DeadBus`] (its checksum would match).
 ///
 /// Straight-line code on fixed-size arrays: every index is a constant, so there are no bounds checks and
 /// no per-channel closure calls on the interrupt path.
@@ -95,11 +96,23 @@ pub fn decode_burst<E>(model: Model, bytes: &[u8]) -> Result<Burst, AdisError<E>
     }
 }
 
-/// The checksum check shared by both burst formats: the last word must equal the byte sum of the others.
+/// The largest byte sum of a burst before its checksum word: 30 bytes of 255. It is below 2^16, so the
+/// 16-bit sum is exact and is zero only when every byte is zero.
+const MAX_BYTE_SUM: usize = (BURST32_LEN - 2) * 255;
+const _: () = assert!(MAX_BYTE_SUM < 1 << 16 && BURST16_LEN < BURST32_LEN);
+
+/// The checks shared by both burst formats: the last word must equal the byte sum of the others, and the
+/// frame must not be all zero. A data line stuck low delivers zero bytes whose sum, 0, matches the zero
+/// checksum word; since the sum is exact ([`MAX_BYTE_SUM`]), a matching zero sum means exactly that every
+/// byte of the frame was zero: one comparison with the sum already computed, no second pass over the bytes.
+/// (A line stuck high fails the checksum: 30 bytes of 0xFF sum to 0x1DE2, not 0xFFFF.)
 #[inline(always)]
 fn check_sum<E>(computed: u16, received: u16) -> Result<(), AdisError<E>> {
     if computed != received {
         return Err(AdisError::Checksum { computed, received });
+    }
+    if computed == 0 {
+        return Err(AdisError::DeadBus);
     }
     Ok(())
 }
@@ -142,7 +155,9 @@ fn burst_fields(frame: &[u8], channel: impl Fn(usize) -> I16F16, temp_word: usiz
 }
 
 /// Encodes a burst (the inverse of [`decode_burst`], with a valid checksum): what the device would send.
-/// Used by the replay device and by tests.
+/// Used by the replay device and by tests. A burst whose every field is zero encodes to zero bytes only,
+/// which [`decode_burst`] refuses as [`AdisError::DeadBus`]: no sensor at rest delivers it (gravity reads on
+/// some axis).
 pub fn encode_burst(model: Model, burst: &Burst, out: &mut [u8]) {
     let len = model.burst_len();
     let mut put = |index: usize, value: u16| out[2 * index..2 * index + 2].copy_from_slice(&value.to_be_bytes());

@@ -1,5 +1,7 @@
-//! The ADIS driver over an embedded-hal 1.0 SPI device: initialisation, burst reads, the [`ImuSource`] implementation.
+//! The ADIS driver over an embedded-hal 1.0 SPI device: start-up (reset, self-test, product check, configuration
+//! read back), register access with the stall time, burst reads, the [`ImuSource`] implementation.
 
+use embedded_hal::delay::DelayNs;
 use embedded_hal::spi::{Operation, SpiDevice};
 
 use super::burst::*;
@@ -37,32 +39,81 @@ impl<SPI: SpiDevice> Adis<SPI> {
         self.spi
     }
 
-    /// Reads a 16-bit register: the address word, then the value in the following word.
+    /// One 16-bit register word in its own chip-select cycle, followed by the stall time the device needs
+    /// before the next word ([`STALL_NS`]). The delay is an [`Operation::DelayNs`] inside the transaction:
+    /// embedded-hal delays run with the chip select asserted, so the chip select rises after the stall, and no
+    /// clock edge of the next word comes sooner than the stall after this word's last one.
+    fn word(&mut self, first: u8, second: u8) -> Result<(), AdisError<SPI::Error>> {
+        self.spi
+            .transaction(&mut [Operation::Write(&[first, second]), Operation::DelayNs(STALL_NS)])
+            .map_err(AdisError::Spi)
+    }
+
+    /// Reads a 16-bit register: the address word, then the value in the following word, each followed by
+    /// the stall time.
     pub fn read_register(&mut self, register: u8) -> Result<u16, AdisError<SPI::Error>> {
-        self.spi.write(&[register, 0x00]).map_err(AdisError::Spi)?;
+        self.word(register, 0x00)?;
         let mut value = [0u8; 2];
-        self.spi.read(&mut value).map_err(AdisError::Spi)?;
+        self.spi
+            .transaction(&mut [Operation::Read(&mut value), Operation::DelayNs(STALL_NS)])
+            .map_err(AdisError::Spi)?;
         Ok(u16::from_be_bytes(value))
     }
 
-    /// Writes a 16-bit register, low byte first.
+    /// Writes a 16-bit register, low byte first, each word followed by the stall time.
     pub fn write_register(&mut self, register: u8, value: u16) -> Result<(), AdisError<SPI::Error>> {
         let [high, low] = value.to_be_bytes();
-        self.spi.write(&[WRITE_FLAG | register, low]).map_err(AdisError::Spi)?;
-        self.spi.write(&[WRITE_FLAG | (register + 1), high]).map_err(AdisError::Spi)
+        self.word(WRITE_FLAG | register, low)?;
+        self.word(WRITE_FLAG | (register + 1), high)
     }
 
-    /// Checks PROD_ID, sets DEC_RATE for 100 Hz and, for ADIS1650x, the 32-bit burst.
-    pub fn init(&mut self) -> Result<(), AdisError<SPI::Error>> {
+    /// A global command: `bits` written to GLOB_CMD's low byte, one word (the data sheets' form, e.g. 0xE880
+    /// for the software reset). The high byte is not written: the command starts with the low byte's write,
+    /// and the device may already be busy with it.
+    pub fn command(&mut self, bits: u8) -> Result<(), AdisError<SPI::Error>> {
+        self.word(WRITE_FLAG | reg::GLOB_CMD, bits)
+    }
+
+    /// Writes a configuration register and reads it back: [`AdisError::ReadBack`] when the value differs.
+    fn write_checked(&mut self, register: u8, value: u16) -> Result<(), AdisError<SPI::Error>> {
+        self.write_register(register, value)?;
+        let read = self.read_register(register)?;
+        if read != value {
+            return Err(AdisError::ReadBack { register, written: value, read });
+        }
+        Ok(())
+    }
+
+    /// Starts the device as the data sheets and the Linux IIO driver do:
+    ///
+    /// 1. software reset (GLOB_CMD bit 7), then `delay` waits [`Model::reset_recovery_ms`];
+    /// 2. self-test (GLOB_CMD bit 2), then `delay` waits [`Model::self_test_ms`], and DIAG_STAT must read 0
+    ///    ([`AdisError::SelfTest`] with the flags otherwise);
+    /// 3. PROD_ID must be the model's ([`AdisError::WrongProduct`]);
+    /// 4. DEC_RATE = 19 (100 Hz) and, for ADIS1650x, MSC_CTRL with the 32-bit burst bit (read, modified,
+    ///    written), each read back and compared ([`AdisError::ReadBack`]).
+    ///
+    /// Every register word is followed by the stall time ([`STALL_NS`]) as an SPI delay operation; the
+    /// millisecond waits go through `delay` (the board's clock-based delay; a replay's emulated device is
+    /// ready at once and takes a no-op delay).
+    pub fn init(&mut self, delay: &mut impl DelayNs) -> Result<(), AdisError<SPI::Error>> {
+        self.command(GLOB_CMD_SOFTWARE_RESET)?;
+        delay.delay_ms(self.model.reset_recovery_ms());
+        self.command(GLOB_CMD_SELF_TEST)?;
+        delay.delay_ms(self.model.self_test_ms());
+        let diag_stat = self.read_register(reg::DIAG_STAT)?;
+        if diag_stat != 0 {
+            return Err(AdisError::SelfTest { diag_stat });
+        }
         let found = self.read_register(reg::PROD_ID)?;
         let expected = self.model.product_id();
         if found != expected {
             return Err(AdisError::WrongProduct { expected, found });
         }
-        self.write_register(reg::DEC_RATE, DEC_RATE_FOR_100HZ)?;
+        self.write_checked(reg::DEC_RATE, DEC_RATE_FOR_100HZ)?;
         if self.model.burst32() {
             let msc = self.read_register(reg::MSC_CTRL)?;
-            self.write_register(reg::MSC_CTRL, msc | MSC_CTRL_BURST32)?;
+            self.write_checked(reg::MSC_CTRL, msc | MSC_CTRL_BURST32)?;
         }
         self.last_counter = None;
         Ok(())

@@ -38,6 +38,23 @@ pub enum AdisError<E> {
         /// PROD_ID read.
         found: u16,
     },
+    /// Every byte of the burst was zero (the data line stuck low): a frame the checksum cannot catch, since
+    /// the sum of zero bytes is the zero checksum word.
+    DeadBus,
+    /// DIAG_STAT was not 0 after the self-test (bit 5: sensor failure; all ones: nothing drives the data line).
+    SelfTest {
+        /// The DIAG_STAT word read after the self-test.
+        diag_stat: u16,
+    },
+    /// A configuration register read back another value than was written.
+    ReadBack {
+        /// The register's address.
+        register: u8,
+        /// The value written.
+        written: u16,
+        /// The value read back.
+        read: u16,
+    },
 }
 
 impl<E: core::fmt::Debug> core::fmt::Display for AdisError<E> {
@@ -51,6 +68,11 @@ impl<E: core::fmt::Debug> core::fmt::Display for AdisError<E> {
             AdisError::Status { diag_stat } => write!(f, "DIAG_STAT flags {diag_stat:#06x}"),
             AdisError::WrongProduct { expected, found } => write!(f, "PROD_ID {found}, expected {expected}"),
             AdisError::ShortBurst { len } => write!(f, "burst of {len} bytes is too short"),
+            AdisError::DeadBus => f.write_str("burst of zero bytes only (data line stuck low)"),
+            AdisError::SelfTest { diag_stat } => write!(f, "self-test failed: DIAG_STAT {diag_stat:#06x}"),
+            AdisError::ReadBack { register, written, read } => {
+                write!(f, "register {register:#04x} reads back {read:#06x}, {written:#06x} written")
+            }
         }
     }
 }
@@ -60,10 +82,14 @@ impl<E: core::fmt::Debug> core::error::Error for AdisError<E> {}
 impl<E: core::fmt::Debug> ClassifiedError for AdisError<E> {
     fn fault(&self) -> ReadFault {
         match self {
-            AdisError::Spi(_) | AdisError::WrongProduct { .. } | AdisError::ShortBurst { .. } => ReadFault::Bus,
+            AdisError::Spi(_)
+            | AdisError::WrongProduct { .. }
+            | AdisError::ShortBurst { .. }
+            | AdisError::ReadBack { .. } => ReadFault::Bus,
             AdisError::Checksum { .. } => ReadFault::Checksum,
             AdisError::StalledCounter { .. } => ReadFault::StalledCounter,
-            AdisError::Status { .. } => ReadFault::StatusFlag,
+            AdisError::Status { .. } | AdisError::SelfTest { .. } => ReadFault::StatusFlag,
+            AdisError::DeadBus => ReadFault::DeadBus,
         }
     }
 }

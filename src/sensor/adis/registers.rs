@@ -20,6 +20,16 @@ pub mod reg {
 
 /// MSC_CTRL bit selecting the 32-bit burst (ADIS1650x).
 pub const MSC_CTRL_BURST32: u16 = 1 << 9;
+/// MSC_CTRL after power-on or reset (data sheets): linear-g compensation of the gyros (bit 7), point of
+/// percussion alignment (bit 6), data-ready active high (bit 0).
+pub const MSC_CTRL_DEFAULT: u16 = 0x00C1;
+/// GLOB_CMD bit 7: software reset. A command takes effect on the write of GLOB_CMD's low byte.
+pub const GLOB_CMD_SOFTWARE_RESET: u8 = 1 << 7;
+/// GLOB_CMD bit 2: sensor self-test; its result is in DIAG_STAT bit 5 (sensor failure).
+pub const GLOB_CMD_SELF_TEST: u8 = 1 << 2;
+/// The stall time between two 16-bit register words outside burst mode, ns (data sheets: t_STALL >= 16 us;
+/// the Linux IIO driver waits 16 us between the words of a register access).
+pub const STALL_NS: u32 = 16_000;
 /// Write flag of the first byte of a register write.
 pub const WRITE_FLAG: u8 = 0x80;
 /// The burst command word.
@@ -94,5 +104,24 @@ impl Model {
     /// rad/s per 16-bit LSB.
     pub fn radps_per_lsb(self) -> f32 {
         RAD_PER_DEG / self.gyro_lsb_per_dps()
+    }
+
+    /// Time from a software reset until the device answers, ms. The ADIS1650x data sheet gives 255 ms for
+    /// the recovery from a software reset; the waits here are the Linux IIO driver's `adis16475.c`
+    /// (`sw_reset_ms`: 260 ms for ADIS1650x, 200 ms for ADIS1647x), a margin above the data sheets.
+    pub const fn reset_recovery_ms(self) -> u32 {
+        match self {
+            Model::Adis16470 => 200,
+            Model::Adis16505_2 => 260,
+        }
+    }
+
+    /// Time from the self-test command until DIAG_STAT holds its result, ms (the Linux IIO driver's
+    /// `self_test_ms`: 30 ms for ADIS1650x, 20 ms for ADIS1647x).
+    pub const fn self_test_ms(self) -> u32 {
+        match self {
+            Model::Adis16470 => 20,
+            Model::Adis16505_2 => 30,
+        }
     }
 }
