@@ -266,6 +266,7 @@ fn sampling_counters_saturate_instead_of_wrapping() {
         status_flags: max,
         dead_bus_frames: max,
         missed_samples: max,
+        queue_high_water: max,
     };
     assert_eq!(all_max.faults(), max);
     let mut stats = all_max;
