@@ -8,10 +8,12 @@
 use assert_cmd::Command;
 use sinscal::instrument::link::{encode_frame, MAX_WIRE, PROTOCOL_VERSION};
 use sinscal::instrument::message::{kind, DeviceState, ErrorCode};
+use sinscal_host::calibration::qemu::firmware_binary;
 use sinscal_host::calibration::qemu::QEMU;
 use sinscal_host::calibration::Options;
 use sinscal_host::device::client::LinkError;
-use sinscal_host::device::{boot_qemu, configuration_body, replay_for};
+use sinscal_host::device::{boot_elf, boot_qemu, calibration_of_record, configuration_body, read_record, replay_for};
+use sinscal_host::io::calibration_result::CalibrationJson;
 use sinscal_host::model::synth::Scenario;
 
 fn qemu_available() -> bool {
@@ -74,6 +76,18 @@ fn device_run_then_show_gives_the_host_replay_json() {
         host_v["on"] = "device".into();
         assert_eq!(run_v, host_v, "model {model}: the device's result equals the host replay's");
     }
+    // The calibration firmware (the budget binary: its IMU is the board's SPI port, which QEMU leaves empty, so
+    // it samples nothing) boots on the same flash: it finds the record, compensates with it, and gives it back.
+    let elf = firmware_binary("sinscal-firmware").unwrap();
+    let mut firmware = boot_elf(&elf, &flash, None).unwrap();
+    let id = firmware.client.identify().unwrap();
+    assert!(id.firmware.starts_with("sinscal "), "{id:?}");
+    let status = firmware.client.status().unwrap();
+    assert!(status.compensating && status.stored == Some(2), "{status:?}");
+    assert_eq!(status.sampling[0], 0, "no data-ready events without an IMU");
+    let record = read_record(&mut firmware.client).unwrap().expect("a record");
+    let from_firmware = serde_json::to_value(CalibrationJson::new(&calibration_of_record(&record).unwrap())).unwrap();
+    assert_eq!(from_firmware, json(&show_json), "sinscal-firmware reads the record sinscal-device stored");
 }
 
 #[test]

@@ -1,13 +1,20 @@
-//! The calibration firmware for an ADIS16505-2 on the SSP0 (PL022) SPI port of an MPS2 AN386 board
-//! (Cortex-M4F), as QEMU's `mps2-an386` models it. No replay or test code: this is the binary whose flash
-//! and RAM the budget measures.
+//! The calibration instrument for an ADIS16505-2 on the SSP0 (PL022) SPI port of an MPS2 AN386 board
+//! (Cortex-M4F), as QEMU's `mps2-an386` models it. No replay or test code: this is the binary whose flash and RAM
+//! the budget measures.
 //!
 //! - TIMER0 (CMSDK APB timer, 25 MHz) interrupts at exactly 100 Hz: its hardware reload gives absolute
 //!   deadlines. The interrupt only reads the IMU (burst read through the driver), latches the turntable's
 //!   "in position" signal (GPIO0 pin 0) with it and enqueues both.
-//! - The main loop owns the calibration sequence (prefilter bank and accumulators inside): it takes the
-//!   items off the queue, feeds them to the sequence with the signal as it was at each sample
-//!   (`feed_sequence`), and logs the events and the result with defmt.
+//! - UART0 is the host link (`sinscal device ... --port`): bytes in by interrupt, frames to the [`Device`],
+//!   replies out. The site, schedule and thresholds come over the link; nothing is compiled in.
+//! - The main loop hands each queued sample to the device: the calibration sequence (when one runs) sees it raw,
+//!   the stream (when on) gets it compensated with the stored calibration.
+//! - The calibration record lives in the flash (on this board: the host file named by the first semihosting
+//!   argument, `sinscal-flash.img` by default; QEMU models no flash controller here).
+//! - The watchdog (CMSDK, NMI then reset): the main loop feeds it at every tick of TIMER0 (100 Hz, with or
+//!   without an IMU), and so does the record store between its flash chunks; its NMI resets the system. Its
+//!   period here is 0.5 s, not two sample periods: QEMU counts this watchdog in host time, and a loaded host
+//!   stalls QEMU for tens of milliseconds. A board with a real oscillator uses two sample periods.
 //! - Chip select of the IMU: GPIO0 pin 1, active low.
 #![cfg_attr(target_os = "none", no_std, no_main)]
 
@@ -17,21 +24,25 @@ fn main() {}
 #[cfg(target_os = "none")]
 mod firmware {
     use core::cell::RefCell;
+    use core::sync::atomic::{AtomicU32, Ordering};
 
     use cortex_m::interrupt::Mutex;
     use cortex_m_rt::{entry, exception};
     use defmt_full as defmt;
     use heapless::spsc::{Consumer, Producer, Queue};
+    use sinscal::board::link::{log_counters, log_event, LinkPort};
     use sinscal::board::mps2_an386::{self as board, exit, CycleDelay, Pl022, TIMER0_IRQ};
-    use sinscal::calib::channels::parameter_name;
-    use sinscal::calib::solve::TABLE1_POSITIONS_DEG;
-    use sinscal::nav::earth::Site;
-    use sinscal::nav::frames::Attitude;
+    use sinscal::board::{uart, watchdog};
+    use sinscal::instrument::device::Device;
+    use sinscal::instrument::store::RecordStore;
+    use sinscal::rig::semihost::{arg_path, CPath, HostFileFlash};
     use sinscal::run::sampling::{
         on_data_ready, process_next, QueueItem, SamplingStats, QUEUE_SLOTS, TABLE_IN_POSITION,
     };
-    use sinscal::run::sequence::{feed_sequence, CalibrationSequence, Event, SequenceSettings, SequenceSolution};
     use sinscal::sensor::adis::{Adis, AdisError, Model, OUTPUT_RATE_HZ};
+
+    /// The watchdog's period, microseconds (see the module's documentation for why not two sample periods).
+    const WATCHDOG_PERIOD_US: u32 = 500_000;
 
     /// What the data-ready interrupt owns.
     struct Sampler {
@@ -41,6 +52,8 @@ mod firmware {
     }
 
     static SAMPLER: Mutex<RefCell<Option<Sampler>>> = Mutex::new(RefCell::new(None));
+    static RX: Mutex<RefCell<Option<Producer<'static, u8>>>> = Mutex::new(RefCell::new(None));
+    static RX_LOST: AtomicU32 = AtomicU32::new(0);
 
     #[exception]
     unsafe fn DefaultHandler(irqn: i16) {
@@ -54,85 +67,99 @@ mod firmware {
                     on_data_ready(&mut s.imu, &mut s.queue, &mut s.stats, table);
                 }
             });
+        } else if irqn == uart::UART0_RX_IRQ {
+            cortex_m::interrupt::free(|cs| {
+                if let Some(p) = RX.borrow(cs).borrow_mut().as_mut() {
+                    if uart::on_receive(p) {
+                        RX_LOST.fetch_add(1, Ordering::Relaxed);
+                    }
+                }
+            });
         }
     }
 
-    fn log_event(e: &Event, sequence: &CalibrationSequence) {
+    #[exception]
+    unsafe fn NonMaskableInt() {
+        // The watchdog: the main loop missed two sample periods.
+        defmt::error!("watchdog: the main loop stalled; reset");
+        cortex_m::peripheral::SCB::sys_reset();
+    }
+
+    fn log_init_error(e: AdisError<sinscal::board::mps2_an386::SpiError>) {
         match e {
-            Event::Settling { index } => defmt::info!("position {=usize}: in position, settling", index + 1),
-            Event::DwellStarted { index } => defmt::info!("position {=usize}: collecting", index + 1),
-            Event::DwellAborted { index, at_sample, .. } => {
-                defmt::warn!("position {=usize}: dwell aborted at sample {=u32}", index + 1, at_sample)
+            AdisError::WrongProduct { expected, found } => {
+                defmt::error!("IMU: PROD_ID {=u16}, expected {=u16}", found, expected)
             }
-            Event::DwellCompleted { index, samples, faults } => {
-                defmt::info!("position {=usize}: {=u32} samples, {=u32} faults", index + 1, samples, faults)
+            AdisError::SelfTest { diag_stat } => defmt::error!("IMU: self-test failed, DIAG_STAT {=u16:#x}", diag_stat),
+            AdisError::ReadBack { register, written, read } => {
+                defmt::error!("IMU: register {=u8:#x} reads back {=u16:#x}, {=u16:#x} written", register, read, written)
             }
-            Event::Solved => match sequence.result() {
-                Some(SequenceSolution::Channels(c)) => {
-                    for i in 0..6 {
-                        let (value, std) = c.estimate(i).unwrap_or((f32::NAN, f32::NAN));
-                        defmt::info!("{=str}: {=f32} +- {=f32} (SI)", parameter_name(i), value, std);
-                    }
-                }
-                Some(SequenceSolution::Angles(r)) => {
-                    let s = &r.solution;
-                    for i in 0..3 {
-                        let (g, a) = (s.gyro_bias_b_radps[i], s.accel_bias_b_mps2[i]);
-                        defmt::info!(
-                            "axis {=usize}: gyro bias {=f32} +- {=f32} rad/s, accel bias {=f32} +- {=f32} m/s^2",
-                            i,
-                            g.map_or(f32::NAN, |e| e.value),
-                            g.map_or(f32::NAN, |e| e.std_error),
-                            a.map_or(f32::NAN, |e| e.value),
-                            a.map_or(f32::NAN, |e| e.std_error)
-                        );
-                    }
-                }
-                None => {}
-            },
-            Event::Failed(_) => defmt::error!("calibration failed"),
+            AdisError::Spi(_) => defmt::error!("IMU: SPI timeout"),
+            _ => defmt::error!("IMU initialisation failed"),
         }
+    }
+
+    /// Starts sampling: the IMU initialised, the data-ready timer at its output rate; `None` if the IMU does not
+    /// start (the link still answers; the status shows no samples).
+    fn start_sampling() -> Option<Consumer<'static, QueueItem>> {
+        let mut imu = Adis::new(Pl022::init(), Model::Adis16505_2);
+        if let Err(e) = imu.init(&mut CycleDelay) {
+            log_init_error(e);
+            return None;
+        }
+        let queue: &'static mut Queue<QueueItem, QUEUE_SLOTS> =
+            cortex_m::singleton!(: Queue<QueueItem, QUEUE_SLOTS> = Queue::new())?;
+        let (producer, consumer) = queue.split();
+        cortex_m::interrupt::free(|cs| {
+            SAMPLER.borrow(cs).replace(Some(Sampler { imu, queue: producer, stats: SamplingStats::default() }));
+        });
+        Some(consumer)
     }
 
     #[entry]
     fn main() -> ! {
-        let mut imu = Adis::new(Pl022::init(), Model::Adis16505_2);
-        if let Err(e) = imu.init(&mut CycleDelay) {
-            match e {
-                AdisError::WrongProduct { expected, found } => {
-                    defmt::error!("IMU: PROD_ID {=u16}, expected {=u16}", found, expected)
-                }
-                AdisError::SelfTest { diag_stat } => {
-                    defmt::error!("IMU: self-test failed, DIAG_STAT {=u16:#x}", diag_stat)
-                }
-                AdisError::ReadBack { register, written, read } => defmt::error!(
-                    "IMU: register {=u8:#x} reads back {=u16:#x}, {=u16:#x} written",
-                    register,
-                    read,
-                    written
-                ),
-                AdisError::Spi(_) => defmt::error!("IMU: SPI timeout"),
-                _ => defmt::error!("IMU initialisation failed"),
-            }
-            exit(1);
-        }
-        let queue: &'static mut Queue<QueueItem, QUEUE_SLOTS> =
-            cortex_m::singleton!(: Queue<QueueItem, QUEUE_SLOTS> = Queue::new()).unwrap_or_else(|| exit(2));
-        let (producer, mut consumer): (_, Consumer<'static, QueueItem>) = queue.split();
+        let path = arg_path(1).or_else(|| CPath::new("sinscal-flash.img")).unwrap_or_else(|| exit(2));
+        let Ok(store) = RecordStore::new(HostFileFlash::open(path), HostFileFlash::SECTOR_BYTES as u32) else {
+            exit(3)
+        };
+        let mut device = Device::new(Model::Adis16505_2, store);
+        device.set_busy_hook(watchdog::feed);
+        defmt::info!("sinscal-firmware: stored calibration compensates: {=bool}", device.compensating());
+        let rx: &'static mut Queue<u8, { uart::RX_QUEUE_SLOTS }> =
+            cortex_m::singleton!(: Queue<u8, { uart::RX_QUEUE_SLOTS }> = Queue::new()).unwrap_or_else(|| exit(2));
+        let (rx_producer, rx_consumer) = rx.split();
         cortex_m::interrupt::free(|cs| {
-            SAMPLER.borrow(cs).replace(Some(Sampler { imu, queue: producer, stats: SamplingStats::default() }));
+            RX.borrow(cs).replace(Some(rx_producer));
         });
-        let schedule = TABLE1_POSITIONS_DEG.map(|p| Attitude::from_degrees(p[0], p[1], p[2]));
-        let site = Site::with_normal_gravity(45.7796f32.to_radians(), 0.0);
-        let Ok(mut sequence) = CalibrationSequence::new(&schedule, site, SequenceSettings::default()) else { exit(3) };
-        // The data-ready timer at the IMU's output rate (100 Hz).
+        let mut link = LinkPort::new(rx_consumer);
+        uart::init();
+        let mut samples = start_sampling();
+        // The data-ready timer at the IMU's output rate (100 Hz); without an IMU, the main loop's tick.
         board::start_sample_timer(OUTPUT_RATE_HZ as u32);
+        if watchdog::present() {
+            watchdog::start(WATCHDOG_PERIOD_US);
+        }
+        let mut reported = false;
         loop {
-            while let Some(events) = process_next(&mut consumer, |item| feed_sequence(&mut sequence, item)) {
-                for event in events.iter().flatten() {
-                    log_event(event, &sequence);
+            watchdog::feed();
+            let stats = cortex_m::interrupt::free(|cs| SAMPLER.borrow(cs).borrow().as_ref().map(|s| s.stats))
+                .unwrap_or_default();
+            device.link.rx_overruns = RX_LOST.load(Ordering::Relaxed);
+            link.pump(&mut device, &stats);
+            if let Some(consumer) = samples.as_mut() {
+                while let Some(out) =
+                    process_next(consumer, |item| device.on_sample(item, &stats, |e| log_event(e, None)))
+                {
+                    if let Some(sample) = out {
+                        link.send_sample::<HostFileFlash>(&sample);
+                    }
                 }
             }
+            let done = !device.running() && device.state() != sinscal::instrument::message::DeviceState::Idle;
+            if done && !reported {
+                log_counters(&stats, &device);
+            }
+            reported = done;
             cortex_m::asm::wfi();
         }
     }

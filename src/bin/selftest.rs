@@ -236,6 +236,45 @@ mod firmware {
         let _ = semihosting::fs::remove_file(flash.into_path().as_c_str());
     }
 
+    fn watchdog(report: &mut Report) {
+        // The board's watchdog: present, counting down from its load value, and fed back to it.
+        use sinscal::board::watchdog;
+        report.check("watchdog_present", watchdog::present(), 0.0);
+        watchdog::start(1_000_000);
+        let first = watchdog::value();
+        cortex_m::asm::delay(100_000);
+        let later = watchdog::value();
+        watchdog::feed();
+        let fed = watchdog::value();
+        watchdog::stop();
+        report.check("watchdog_counts_down_and_is_fed", first > later && fed > later, (first - later) as f32);
+        // Not fed for more than a period: its interrupt, the NMI, fires (the handler stops the watchdog).
+        WATCHDOG_NMI.store(false, core::sync::atomic::Ordering::SeqCst);
+        watchdog::start(1_000);
+        // QEMU counts the watchdog in host time: wait until its count has gone round at least once.
+        let mut polls = 0u32;
+        let mut last = watchdog::value();
+        while !WATCHDOG_NMI.load(core::sync::atomic::Ordering::SeqCst) && polls < 50_000_000 {
+            let now = watchdog::value();
+            if now > last {
+                polls = polls.max(49_000_000);
+            }
+            last = now;
+            polls += 1;
+        }
+        let fired = WATCHDOG_NMI.load(core::sync::atomic::Ordering::SeqCst);
+        watchdog::stop();
+        report.check("watchdog_unfed_raises_the_nmi", fired, 0.0);
+    }
+
+    static WATCHDOG_NMI: core::sync::atomic::AtomicBool = core::sync::atomic::AtomicBool::new(false);
+
+    #[cortex_m_rt::exception]
+    unsafe fn NonMaskableInt() {
+        sinscal::board::watchdog::stop();
+        WATCHDOG_NMI.store(true, core::sync::atomic::Ordering::SeqCst);
+    }
+
     fn bounded_spi(report: &mut Report) {
         // The PL022 with its port disabled never moves a byte: the transfer must give up with a timeout (not
         // hang), and the port must work again once enabled. (The chip select's release is not visible here:
@@ -261,6 +300,7 @@ mod firmware {
         host_file_flash(&mut report);
         record_store(&mut report);
         bounded_spi(&mut report);
+        watchdog(&mut report);
         let _ = writeln!(report.text, "{} passed, {} failed", report.passed, report.failed);
         if let Some(path) = sinscal::rig::semihost::arg_path(1) {
             sinscal::rig::semihost::write_file(&path, report.text.as_bytes());

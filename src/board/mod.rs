@@ -10,6 +10,7 @@ use defmt_semihosting as _;
 pub mod link;
 pub mod mps2_an386;
 pub mod uart;
+pub mod watchdog;
 
 pub use mps2_an386::exit;
 

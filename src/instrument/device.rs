@@ -81,6 +81,7 @@ pub struct Device<F: NorFlash> {
     compensation: Compensation,
     compensation_from_record: bool,
     streaming: bool,
+    busy_hook: Option<fn()>,
     /// Link counters.
     pub link: LinkStats,
 }
@@ -128,6 +129,7 @@ impl<F: NorFlash> Device<F> {
             compensation: Compensation::IDENTITY,
             compensation_from_record: false,
             streaming: false,
+            busy_hook: None,
             link: LinkStats::default(),
         };
         d.load_record();
@@ -151,6 +153,12 @@ impl<F: NorFlash> Device<F> {
         }
         self.compensation_from_record = compensation.is_some();
         self.compensation = compensation.unwrap_or(Compensation::IDENTITY);
+    }
+
+    /// A function called between the flash operations of a store (a board feeds its watchdog there: a store
+    /// erases and writes for longer than the watchdog's period).
+    pub fn set_busy_hook(&mut self, hook: fn()) {
+        self.busy_hook = Some(hook);
     }
 
     /// The state.
@@ -298,7 +306,7 @@ fn record_of<'a>(
         Some(SequenceSolution::Angles(r)) => Compensation::from_angles(r).map_err(|_| (ErrorCode::NoResult, 2))?,
         None => return Err((ErrorCode::NoResult, 0)),
     };
-    Ok(Record { compensation, configuration, note, outcome })
+    Ok(Record::new(compensation, configuration, note, outcome))
 }
 
 /// A reply body's length and the board's action, or the error of an error reply.
@@ -478,14 +486,18 @@ impl<F: NorFlash> Device<F> {
             return Err((ErrorCode::Busy, 0));
         }
         let record = record_of(outcome_of(self.state, &self.sequence, &self.run), &self.configuration, &self.note)?;
-        let compensation = record.compensation;
+        let compensation = *record.compensation();
         let len = record.len();
         if len > self.store.max_payload() {
             return Err((ErrorCode::TooLarge, len as u32));
         }
+        let hook = self.busy_hook;
         let report = self
             .store
             .store(len, |offset, chunk| {
+                if let Some(h) = hook {
+                    h();
+                }
                 record.write_part(offset, chunk);
                 Ok(())
             })

@@ -83,30 +83,43 @@ impl RecordHead {
 
 /// A record to store, from its parts.
 pub struct Record<'a> {
-    /// The compensation it gives.
-    pub compensation: Compensation,
-    /// The configuration body.
-    pub configuration: &'a [u8],
-    /// The provenance note.
-    pub note: &'a [u8],
-    /// The outcome.
-    pub outcome: OutcomeView<'a>,
+    compensation: Compensation,
+    configuration: &'a [u8],
+    note: &'a [u8],
+    outcome: OutcomeView<'a>,
+    head: RecordHead,
 }
 
-impl Record<'_> {
+impl<'a> Record<'a> {
+    /// The record of these parts (the outcome's encoded length is computed once, here).
+    pub fn new(
+        compensation: Compensation,
+        configuration: &'a [u8],
+        note: &'a [u8],
+        outcome: OutcomeView<'a>,
+    ) -> Record<'a> {
+        let head = RecordHead {
+            compensation_bytes: compensation::ENCODED_BYTES as u16,
+            configuration_bytes: configuration.len() as u16,
+            note_bytes: note.len() as u16,
+            outcome_bytes: encode_outcome_part(&outcome, 0, &mut []) as u32,
+        };
+        Record { compensation, configuration, note, outcome, head }
+    }
+
+    /// The compensation the record gives.
+    pub fn compensation(&self) -> &Compensation {
+        &self.compensation
+    }
+
     /// The head.
     pub fn head(&self) -> RecordHead {
-        RecordHead {
-            compensation_bytes: compensation::ENCODED_BYTES as u16,
-            configuration_bytes: self.configuration.len() as u16,
-            note_bytes: self.note.len() as u16,
-            outcome_bytes: encode_outcome_part(&self.outcome, 0, &mut []) as u32,
-        }
+        self.head
     }
 
     /// The record's length, bytes.
     pub fn len(&self) -> usize {
-        self.head().record_bytes()
+        self.head.record_bytes()
     }
 
     /// Whether the record is empty (never: it has a head).
@@ -116,7 +129,7 @@ impl Record<'_> {
 
     /// Writes the record's bytes from `offset` into `out` (as many as fit, up to the record's end).
     pub fn write_part(&self, offset: usize, out: &mut [u8]) {
-        let head = self.head();
+        let head = self.head;
         let mut compensation = [0u8; compensation::ENCODED_BYTES];
         self.compensation.encode(&mut compensation);
         let [(c, _), (k, _), (n, _), (o, _)] = head.parts();

@@ -52,6 +52,12 @@ pub fn boot_qemu(flash: &Path, replay: Option<&Path>) -> Result<QemuDevice, Stri
         Some(p) => PathBuf::from(p),
         None => firmware_binary(DEVICE_FIRMWARE)?,
     };
+    boot_elf(&elf, flash, replay)
+}
+
+/// Boots a firmware ELF of this workspace's instrument (`sinscal-device`, or `sinscal-firmware`, which takes
+/// no replay and whose IMU is the board's SPI port) in QEMU with its flash file and UART0 on a Unix socket.
+pub fn boot_elf(elf: &Path, flash: &Path, replay: Option<&Path>) -> Result<QemuDevice, String> {
     let dir = ScratchFile::new("link");
     std::fs::create_dir_all(dir.path()).map_err(|e| format!("{}: {e}", dir.path().display()))?;
     let socket = dir.path().join("uart0");
@@ -65,7 +71,7 @@ pub fn boot_qemu(flash: &Path, replay: Option<&Path>) -> Result<QemuDevice, Stri
         .args(["-cpu", "cortex-m4", "-machine", "mps2-an386", "-nographic", "-monitor", "none"])
         .args(["-serial", &format!("unix:{}", socket.display())])
         .args(["-semihosting-config", &semihosting, "-kernel"])
-        .arg(&elf)
+        .arg(elf)
         .stdin(Stdio::null())
         .stdout(Stdio::null())
         .stderr(Stdio::piped())
