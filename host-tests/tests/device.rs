@@ -88,6 +88,45 @@ fn device_run_then_show_gives_the_host_replay_json() {
     let record = read_record(&mut firmware.client).unwrap().expect("a record");
     let from_firmware = serde_json::to_value(CalibrationJson::new(&calibration_of_record(&record).unwrap())).unwrap();
     assert_eq!(from_firmware, json(&show_json), "sinscal-firmware reads the record sinscal-device stored");
+    drop(firmware);
+    // `--port`: the same record through a serial port, here the pseudo-terminal QEMU gives UART0.
+    let port_json = dir.path().join("port.json");
+    let (mut qemu, pty) = boot_on_pty(&flash);
+    let port = sinscal().args(["device", "show", "--port", &pty, "--json"]).arg(&port_json).output().unwrap();
+    let _ = qemu.kill();
+    let _ = qemu.wait();
+    assert!(port.status.success(), "device show --port: {}", String::from_utf8_lossy(&port.stderr));
+    assert_eq!(json(&port_json), json(&show_json), "the record read through a serial port");
+}
+
+/// Boots `sinscal-device` with UART0 on a pseudo-terminal; the terminal's path from QEMU's message.
+fn boot_on_pty(flash: &std::path::Path) -> (std::process::Child, String) {
+    use std::io::BufRead;
+    let elf = firmware_binary("sinscal-device").unwrap();
+    let semihosting = format!("enable=on,target=native,arg=sinscal-device,arg={},arg=-", flash.display());
+    let mut child = std::process::Command::new(QEMU)
+        .args(["-cpu", "cortex-m4", "-machine", "mps2-an386", "-nographic", "-monitor", "none", "-serial", "pty"])
+        .args(["-semihosting-config", &semihosting, "-kernel"])
+        .arg(&elf)
+        .stdin(std::process::Stdio::null())
+        .stdout(std::process::Stdio::piped())
+        .stderr(std::process::Stdio::null())
+        .spawn()
+        .unwrap();
+    // QEMU names the terminal on its standard output, before the firmware's defmt frames.
+    let mut stdout = std::io::BufReader::new(child.stdout.take().unwrap());
+    let mut line = Vec::new();
+    while stdout.read_until(b'\n', &mut line).unwrap() > 0 {
+        let text = String::from_utf8_lossy(&line);
+        if let Some(at) = text.find("/dev/pts/") {
+            let pty = text[at..].split_whitespace().next().unwrap().to_string();
+            // The rest of standard output (the defmt log) is drained, so that QEMU never blocks on it.
+            std::thread::spawn(move || std::io::copy(&mut stdout, &mut std::io::sink()));
+            return (child, pty);
+        }
+        line.clear();
+    }
+    panic!("QEMU named no pseudo-terminal");
 }
 
 #[test]

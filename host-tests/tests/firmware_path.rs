@@ -292,6 +292,8 @@ fn sampling_counters_saturate_instead_of_wrapping() {
         queue_full: 2,
         dead_bus_frames: 1,
         missed_samples: 2,
+        // The queue of one slot, full from the first sample on.
+        queue_high_water: 1,
         ..SamplingStats::default()
     };
     assert_eq!(stats, expected);

@@ -235,10 +235,10 @@ pub fn read_configuration<R: ByteSource>(source: &mut R) -> Result<ReplayHeader,
 
 /// Magic of an encoded outcome.
 pub const OUTCOME_MAGIC: [u8; 4] = *b"SSRO";
-/// Largest encoded outcome, bytes: the counters and failure (72), [`MAX_POSITIONS`] positions of 424 bytes,
+/// Largest encoded outcome, bytes: the counters and failure (76), [`MAX_POSITIONS`] positions of 424 bytes,
 /// and the general estimator's solution (5,416 and 48 per dwell; the angle method's, 520 and 12 per position,
 /// is smaller). For 64 positions: 35,696.
-pub const MAX_OUTCOME_BYTES: usize = 72 + MAX_POSITIONS * 424 + 5_416 + crate::calib::channels::MAX_DWELLS * 48;
+pub const MAX_OUTCOME_BYTES: usize = 76 + MAX_POSITIONS * 424 + 5_416 + crate::calib::channels::MAX_DWELLS * 48;
 
 /// Writes the encoding into `out`: the whole of it (an error if it does not fit), or only the window of
 /// `out.len()` bytes from `window_start` (the rest is computed and dropped: a part for a link reply or a flash
@@ -479,6 +479,7 @@ fn encode_view(o: &OutcomeView<'_>, mut w: Writer<'_>) -> Result<usize, ReplayEr
     w.u32(s.status_flags)?;
     w.u32(s.dead_bus_frames)?;
     w.u32(s.missed_samples)?;
+    w.u32(s.queue_high_water)?;
     w.u32(o.aborted_dwells)?;
     for v in failure_code(&o.failure) {
         w.u32(v)?;
@@ -542,8 +543,7 @@ pub fn decode_outcome(header: &ReplayHeader, bytes: &[u8]) -> Result<ReplayOutco
         status_flags: r.u32()?,
         dead_bus_frames: r.u32()?,
         missed_samples: r.u32()?,
-        // The outcome does not carry the queue's high-water mark (the device's status does).
-        queue_high_water: 0,
+        queue_high_water: r.u32()?,
     };
     let aborted_dwells = r.u32()?;
     let failure = failure_of_code([r.u32()?, r.u32()?, r.u32()?, r.u32()?, r.u32()?])?;
