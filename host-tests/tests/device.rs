@@ -126,6 +126,8 @@ fn boot_on_pty(flash: &std::path::Path) -> (std::process::Child, String) {
         }
         line.clear();
     }
+    let _ = child.kill();
+    let _ = child.wait();
     panic!("QEMU named no pseudo-terminal");
 }
 

@@ -5,7 +5,7 @@
 //! - TIMER0 (CMSDK APB timer, 25 MHz) interrupts at exactly 100 Hz: its hardware reload gives absolute
 //!   deadlines. The interrupt only reads the IMU (burst read through the driver), latches the turntable's
 //!   "in position" signal (GPIO0 pin 0) with it and enqueues both.
-//! - UART0 is the host link (`sinscal device ... --port`): bytes in by interrupt, frames to the [`Device`],
+//! - UART0 is the host link (`sinscal device ... --port`): bytes in by interrupt, frames to the `Device`,
 //!   replies out. The site, schedule and thresholds come over the link; nothing is compiled in.
 //! - The main loop hands each queued sample to the device: the calibration sequence (when one runs) sees it raw,
 //!   the stream (when on) gets it compensated with the stored calibration.
