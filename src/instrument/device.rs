@@ -176,6 +176,11 @@ impl<F: NorFlash> Device<F> {
         self.state == DeviceState::Running
     }
 
+    /// The record store (and through it the flash), for a board that stops the device.
+    pub fn into_store(self) -> RecordStore<F> {
+        self.store
+    }
+
     /// The compensation in use.
     pub fn compensation(&self) -> &Compensation {
         &self.compensation
@@ -409,7 +414,7 @@ impl<F: NorFlash> Device<F> {
         header.settings.settle_samples = thresholds.settle_samples;
         header.settings.dwell_samples = thresholds.dwell_samples;
         header.settings.min_dwell_samples = thresholds.min_dwell_samples;
-        if CalibrationSequence::new(&header.schedule, header.site, header.settings).is_err() {
+        if CalibrationSequence::check(&header.schedule, &header.settings).is_err() {
             return refused(3);
         }
         self.configuration.clear();

@@ -19,7 +19,7 @@ use crate::calib::calibration::{
 };
 use crate::calib::channels::{ChannelError, ChannelSettings, ChannelSolution};
 use crate::calib::dwell::{DwellCollector, Prefilter, MIN_DWELL_SAMPLES};
-use crate::calib::prefilter::PrefilterError;
+use crate::calib::prefilter::{HmmKf, PrefilterError};
 use crate::calib::session::{default_channel_settings, session_estimator, SessionDwell};
 use crate::calib::solve::MAX_POSITIONS;
 use crate::math::linalg::{dot, Vec3};
@@ -250,10 +250,7 @@ pub struct CalibrationSequence {
 impl CalibrationSequence {
     /// A sequence over a schedule of turntable attitudes.
     pub fn new(schedule: &[Attitude], site: Site, settings: SequenceSettings) -> Result<Self, SequenceError> {
-        let angles_without_heading = settings.estimator == Estimator::Angles && settings.unknown_headings != 0;
-        if schedule.is_empty() || schedule.len() > MAX_POSITIONS || angles_without_heading {
-            return Err(SequenceError::BadSchedule);
-        }
+        Self::check(schedule, &settings)?;
         let mut stored = Vec::new();
         for a in schedule {
             // Capacity checked above.
@@ -280,6 +277,20 @@ impl CalibrationSequence {
             force2_bounds_mps2sq: ((g - e) * (g - e), (g + e) * (g + e)),
             result: None,
         })
+    }
+
+    /// Whether [`CalibrationSequence::new`] would accept this schedule and these settings, without building the
+    /// sequence (tens of kilobytes: a device checks a configuration with this, not with a sequence on its stack).
+    pub fn check(schedule: &[Attitude], settings: &SequenceSettings) -> Result<(), SequenceError> {
+        let angles_without_heading = settings.estimator == Estimator::Angles && settings.unknown_headings != 0;
+        if schedule.is_empty() || schedule.len() > MAX_POSITIONS || angles_without_heading {
+            return Err(SequenceError::BadSchedule);
+        }
+        if let Prefilter::HmmKf { gyro, accel } = &settings.prefilter {
+            HmmKf::new(gyro).map_err(SequenceError::Prefilter)?;
+            HmmKf::new(accel).map_err(SequenceError::Prefilter)?;
+        }
+        Ok(())
     }
 
     /// Where the sequence is.
