@@ -204,7 +204,11 @@ fn every_request_and_refusal_in_order_then_the_record_at_the_next_boot() {
     let mut again = Bench::boot(b.device.into_store().release());
     let status = again.ok(kind::STATUS, &[]);
     let tail = &status[status.len() - 7..];
-    assert_eq!((tail[0], u32::from_le_bytes(tail[1..5].try_into().unwrap()), tail[5]), (1, 1, 1), "stored, seq 1, compensating");
+    assert_eq!(
+        (tail[0], u32::from_le_bytes(tail[1..5].try_into().unwrap()), tail[5]),
+        (1, 1, 1),
+        "stored, seq 1, compensating"
+    );
     again.ok(kind::STREAM, &[1]);
     let streamed = again.feed(&replay, 200);
     assert_eq!(streamed.len(), 200);

@@ -104,19 +104,34 @@ pub fn boot_elf(elf: &Path, flash: &Path, replay: Option<&Path>) -> Result<QemuD
 }
 
 /// The configuration body of a replay header: its configuration part (without magic, version and frame count)
-/// and the thresholds of a replayed sequence (no settling, dwells as long as the table says).
+/// and the thresholds of a replayed sequence (no settling, dwells as long as the table says, the core's fewest
+/// samples), which make a device's result equal to the host replay's.
 pub fn configuration_body(replay_header: &[u8]) -> Result<Vec<u8>, String> {
+    configuration_body_with(replay_header, None)
+}
+
+/// [`configuration_body`] with the thresholds `[settle samples, dwell samples, fewest samples]` of a real
+/// turntable instead (`None`: the replay's).
+pub fn configuration_body_with(replay_header: &[u8], thresholds: Option<[u32; 3]>) -> Result<Vec<u8>, String> {
     if replay_header.len() < 6 + 4 {
         return Err("replay header too short".into());
     }
     let mut body = replay_header[6..replay_header.len() - 4].to_vec();
     // The thresholds of a replayed sequence, as the replay header's reader sets them.
     let s = read_header(&mut &replay_header[..]).map_err(|e| e.to_string())?.settings;
-    for v in [s.settle_samples, s.dwell_samples, s.min_dwell_samples] {
+    let replay = [s.settle_samples, s.dwell_samples, s.min_dwell_samples];
+    for v in thresholds.unwrap_or(replay) {
         body.extend_from_slice(&v.to_le_bytes());
     }
     debug_assert_eq!(THRESHOLD_BYTES, 12);
     Ok(body)
+}
+
+/// The thresholds of a calibration on a real turntable (the sequence's defaults: 2 s of settling, 60 s dwells,
+/// at least 10 s, at 100 Hz).
+pub fn table_thresholds() -> [u32; 3] {
+    let s = sinscal::run::sequence::SequenceSettings::default();
+    [s.settle_samples, s.dwell_samples, s.min_dwell_samples]
 }
 
 /// What `device run` did.
@@ -129,21 +144,23 @@ pub struct DeviceRun {
     pub status: client::Status,
 }
 
-/// `device run` on a device reached through `client`: configure from the recording, start, wait (with
-/// progress on stderr), read the result, store it, and check the stored record against the result.
+/// `device run` on a device reached through `client`: configure from the recording (with `thresholds`, or the
+/// replay's), start, wait (with progress on stderr), read the result, store it, and check the stored record
+/// against the result.
 pub fn run_calibration<T: Read + Write>(
     client: &mut Client<T>,
     rec: &impl RowSource,
     options: &Options,
     replay: &ScratchFile,
     plan: &ReplayPlan,
+    thresholds: Option<[u32; 3]>,
     mut progress: impl FnMut(&client::Status),
 ) -> Result<DeviceRun, anyhow::Error> {
     let source = rec.source();
     let head = replay_header_bytes(replay.path())?;
     let header = read_header(&mut head.as_slice()).map_err(|e| InputError::file(source, format!("replay: {e}")))?;
     client.identify()?;
-    client.configure(&configuration_body(&head).map_err(anyhow::Error::msg)?)?;
+    client.configure(&configuration_body_with(&head, thresholds).map_err(anyhow::Error::msg)?)?;
     let note = Provenance::of(rec, options, plan).to_bytes();
     client.annotate(&note)?;
     client.request("start", kind::START, &[])?;
