@@ -194,6 +194,14 @@ fn every_request_and_refusal_in_order_then_the_record_at_the_next_boot() {
     assert_eq!(erases, 1);
     let record = b.read_all(kind::READ_RECORD);
     assert_eq!(record.len(), bytes as usize);
+    // A second calibration on the same device (the sequence started again in place): the same result.
+    b.ok(kind::CONFIGURE, &config);
+    assert_eq!(b.refused(kind::READ_RESULT, &0u32.to_le_bytes()), ErrorCode::NoResult, "configure drops the result");
+    b.ok(kind::START, &[]);
+    b.feed(&replay, usize::MAX);
+    // The counters are those since the start; the rest is the same run again.
+    let second = b.read_all(kind::READ_RESULT);
+    assert!(second == expected[..n], "the second run differs from the first ({} and {} bytes)", second.len(), n);
     let parts = sinscal_host::device::split_record(&record).unwrap();
     assert_eq!((parts.configuration, parts.note, parts.outcome), (&config[..], &note[..], &expected[..n]));
     // The raw samples: a device without a record streams them as measured.

@@ -120,12 +120,17 @@ mod firmware {
     /// with a pattern, run `f`, find the lowest word that changed).
     #[inline(never)]
     fn stack_used(f: &mut dyn FnMut()) -> u32 {
+        stack_used_within(2048, f)
+    }
+
+    /// [`stack_used`] with a painted depth of `depth_words` words.
+    #[inline(never)]
+    fn stack_used_within(depth_words: usize, f: &mut dyn FnMut()) -> u32 {
         const PAINT: u32 = 0xDEAD_BEEF;
-        const DEPTH_WORDS: usize = 2048;
         let sp = cortex_m::register::msp::read() as usize;
         // Paint up to just below the current stack pointer: everything `f` and its callees push is below.
         let top = (sp - 8) & !3;
-        let bottom = top - 4 * DEPTH_WORDS;
+        let bottom = top - 4 * depth_words;
         for a in (bottom..top).step_by(4) {
             unsafe { core::ptr::write_volatile(a as *mut u32, PAINT) };
         }
@@ -161,6 +166,83 @@ mod firmware {
             let _ = process_next(&mut consumer, |item| feed_sequence(&mut sequence, item));
         });
         (isr, processing)
+    }
+
+    /// A configure body: the general estimator with its default terms, the paper's prefilter, the six positions
+    /// of Table 1 at 45.7796 N, and a replay's thresholds.
+    fn configuration(out: &mut [u8]) -> usize {
+        use sinscal::instrument::message::BodyWriter;
+        let mut w = BodyWriter::new(out);
+        w.u8(1).u8(1).f32(45.7796f32.to_radians()).f32(9.8063).u16(6);
+        w.u16(sinscal::rig::replay::terms_bits(sinscal::calib::session::DEFAULT_MODEL));
+        w.u8(1).u8(0).u8(6).u8(1).f32(1.0).f32(1.0);
+        for (k, p) in sinscal::calib::solve::TABLE1_POSITIONS_DEG.iter().enumerate() {
+            for angle_deg in p {
+                w.f32(angle_deg.to_radians());
+            }
+            w.u16(k as u16 + 1).u16(0);
+        }
+        w.u32(0).u32(u32::MAX).u32(1000);
+        w.len().unwrap_or(0)
+    }
+
+    /// One request as the firmware's main loop handles it: its frame received byte by byte, the device's reply
+    /// framed into a buffer of the longest frame. Its own frame (not inlined), so that its stack is measured.
+    #[inline(never)]
+    fn ask(
+        device: &mut sinscal::instrument::device::Device<sinscal::rig::semihost::HostFileFlash>,
+        k: u8,
+        b: &[u8],
+    ) -> usize {
+        use sinscal::instrument::link::{encode_frame, FrameReceiver, MAX_WIRE};
+        let stats = SamplingStats::default();
+        let mut request = [0u8; MAX_WIRE];
+        let mut reply = [0u8; MAX_WIRE];
+        let len = encode_frame(k, 1, b, &mut request).unwrap_or(0);
+        let mut rx = FrameReceiver::new();
+        let mut sent = 0;
+        for &byte in &request[..len] {
+            if let Some(f) = rx.push(byte) {
+                sent = device.on_frame(f, &stats, &mut reply).0;
+            }
+        }
+        core::hint::black_box(&reply);
+        sent
+    }
+
+    /// The link's requests on a device whose flash is a scratch host file: the stack of a status request, of a
+    /// configure and of a start (which builds the calibration sequence), and the instructions of a status request
+    /// (frame checked, reply built and framed). The device itself is in this function's frame, as in `main`'s.
+    fn link_costs() -> (u32, u32, u32, u32) {
+        use sinscal::instrument::device::Device;
+        use sinscal::instrument::message::kind;
+        use sinscal::instrument::store::RecordStore;
+        use sinscal::rig::semihost::{arg_path, HostFileFlash};
+        let Some(path) = arg_path(1).and_then(|p| p.with_suffix(".flash")) else { return (0, 0, 0, 0) };
+        let Ok(store) = RecordStore::new(HostFileFlash::open(path), HostFileFlash::SECTOR_BYTES as u32) else {
+            return (0, 0, 0, 0);
+        };
+        let mut device = Device::new(Model::Adis16505_2, store);
+        let mut body = [0u8; 512];
+        let n = configuration(&mut body);
+        // Painted 128 KiB deep: a request's handlers share one frame unless the compiler keeps them apart.
+        let status = stack_used_within(32 * 1024, &mut || {
+            ask(&mut device, kind::STATUS, &[]);
+        });
+        let configure = stack_used_within(32 * 1024, &mut || {
+            ask(&mut device, kind::CONFIGURE, &body[..n]);
+        });
+        let start = stack_used_within(32 * 1024, &mut || {
+            ask(&mut device, kind::START, &[]);
+        });
+        let syst = unsafe { &*SYST::PTR };
+        let t0 = syst.cvr.read();
+        for _ in 0..20 {
+            core::hint::black_box(ask(&mut device, kind::STATUS, &[]));
+        }
+        let t1 = syst.cvr.read();
+        let _ = semihosting::fs::remove_file(device.into_store().release().into_path().as_c_str());
+        (status, configure, start, ticks_between(t0, t1) * INSTRUCTIONS_PER_TICK / 20)
     }
 
     static HANDOVER: core::sync::atomic::AtomicU32 = core::sync::atomic::AtomicU32::new(0);
@@ -259,7 +341,15 @@ mod firmware {
         let (bus, decode, collect_none, collect_kf) = parts();
         let compensate = compensation_loop();
         let (stack_isr, stack_processing) = stack_depths();
-        let mut text: heapless::String<768> = heapless::String::new();
+        let (stack_status, stack_configure, stack_start, status_instructions) = link_costs();
+        let mut text: heapless::String<1024> = heapless::String::new();
+        let _ = write!(
+            text,
+            "stack_bytes_link_status {stack_status}\nstack_bytes_link_configure {stack_configure}\n\
+             stack_bytes_link_start {stack_start}\nlink_status_request_instructions {status_instructions}\n\
+             device_bytes {}\n",
+            core::mem::size_of::<sinscal::instrument::device::Device<sinscal::rig::semihost::HostFileFlash>>()
+        );
         let _ = writeln!(text, "part_queue_handover {}", HANDOVER.load(core::sync::atomic::Ordering::Relaxed));
         let _ = write!(
             text,

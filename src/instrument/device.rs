@@ -114,7 +114,9 @@ fn outcome_of<'a>(
 
 impl<F: NorFlash> Device<F> {
     /// A device with an IMU of `model` and its record store; the stored calibration, if one is readable, is
-    /// loaded and compensates every sample from now on.
+    /// loaded and compensates every sample from now on. (Kept out of line: the sequence it builds passes through
+    /// its frame once, at boot, not through the caller's for good.)
+    #[inline(never)]
     pub fn new(model: Model, store: RecordStore<F>) -> Device<F> {
         let mut d = Device {
             model,
@@ -122,7 +124,14 @@ impl<F: NorFlash> Device<F> {
             configuration: Vec::new(),
             header: None,
             note: Vec::new(),
-            sequence: None,
+            // A sequence built once, here, and started again in place by every start (a second one on the
+            // stack would cost tens of kilobytes); until a start it holds no result and is never reported.
+            sequence: CalibrationSequence::new(
+                &[crate::nav::frames::Attitude::from_degrees(0.0, 0.0, 0.0)],
+                crate::nav::earth::Site::with_normal_gravity(0.0, 0.0),
+                crate::run::sequence::SequenceSettings::default(),
+            )
+            .ok(),
             run: RunCounters::default(),
             store,
             stored: None,
@@ -339,7 +348,6 @@ impl<F: NorFlash> Device<F> {
             }
             kind::ABORT => {
                 empty(&r)?;
-                self.sequence = None;
                 self.state = if self.header.is_some() { DeviceState::Configured } else { DeviceState::Idle };
                 Ok((0, Action::None))
             }
@@ -375,6 +383,7 @@ impl<F: NorFlash> Device<F> {
         }
     }
 
+    #[inline(never)]
     fn identify(&self, out: &mut [u8]) -> Reply {
         let mut version = [0u8; 16];
         let v = FIRMWARE_VERSION.as_bytes();
@@ -391,6 +400,7 @@ impl<F: NorFlash> Device<F> {
         body_of(w.len())
     }
 
+    #[inline(never)]
     fn configure(&mut self, body: &[u8]) -> Reply {
         if self.state == DeviceState::Running {
             return Err((ErrorCode::Busy, 0));
@@ -421,11 +431,12 @@ impl<F: NorFlash> Device<F> {
         // The length is checked above against the capacity.
         let _ = self.configuration.extend_from_slice(body);
         self.header = Some(header);
-        self.sequence = None;
+        // The last result, if any, is no longer offered: the state says configured.
         self.state = DeviceState::Configured;
         Ok((0, Action::None))
     }
 
+    #[inline(never)]
     fn annotate(&mut self, r: &mut BodyReader<'_>) -> Reply {
         let (Some(offset), Some(total)) = (r.u16(), r.u16()) else { return Err((ErrorCode::Body, 0)) };
         let part = r.rest();
@@ -442,19 +453,22 @@ impl<F: NorFlash> Device<F> {
         Ok((0, Action::None))
     }
 
+    #[inline(never)]
     fn start(&mut self, sampling: &SamplingStats) -> Reply {
         if self.state == DeviceState::Running {
             return Err((ErrorCode::Busy, 0));
         }
         let Some(header) = &self.header else { return Err((ErrorCode::NotConfigured, 0)) };
-        let sequence = CalibrationSequence::new(&header.schedule, header.site, header.settings)
-            .map_err(|_| (ErrorCode::Configuration, 3))?;
-        self.sequence = Some(sequence);
+        let refused = (ErrorCode::Configuration, 3);
+        // The sequence built at boot, started again in place (never a second one on the stack).
+        let sequence = self.sequence.as_mut().ok_or(refused)?;
+        sequence.restart(&header.schedule, header.site, header.settings).map_err(|_| refused)?;
         self.run = RunCounters { sampling_at_start: *sampling, ..RunCounters::default() };
         self.state = DeviceState::Running;
         Ok((0, Action::Started))
     }
 
+    #[inline(never)]
     fn status(&self, sampling: &SamplingStats, out: &mut [u8]) -> Reply {
         let mut w = BodyWriter::new(out);
         w.u8(self.state as u8);
@@ -476,6 +490,7 @@ impl<F: NorFlash> Device<F> {
         body_of(w.len())
     }
 
+    #[inline(never)]
     fn read_result(&self, offset: usize, out: &mut [u8]) -> Reply {
         let outcome = self.outcome().ok_or((ErrorCode::NoResult, 0))?;
         let (head, part) = out.split_at_mut(8);
@@ -486,6 +501,7 @@ impl<F: NorFlash> Device<F> {
         Ok((8 + n, Action::None))
     }
 
+    #[inline(never)]
     fn store_record(&mut self, out: &mut [u8]) -> Reply {
         if self.state == DeviceState::Running {
             return Err((ErrorCode::Busy, 0));
@@ -515,6 +531,7 @@ impl<F: NorFlash> Device<F> {
         body_of(w.len())
     }
 
+    #[inline(never)]
     fn read_record(&mut self, offset: usize, out: &mut [u8]) -> Reply {
         let info = self.stored.ok_or((ErrorCode::NothingStored, 0))?;
         let total = info.len;
@@ -525,6 +542,7 @@ impl<F: NorFlash> Device<F> {
         Ok((8 + n, Action::None))
     }
 
+    #[inline(never)]
     fn erase(&mut self, out: &mut [u8]) -> Reply {
         if self.state == DeviceState::Running {
             return Err((ErrorCode::Busy, 0));

@@ -279,6 +279,40 @@ impl CalibrationSequence {
         })
     }
 
+    /// Starts this sequence again, in place, over a new schedule, site and settings: the same as replacing it with
+    /// [`CalibrationSequence::new`]'s, without a second sequence (tens of kilobytes) on the stack. On an error the
+    /// sequence is unchanged.
+    pub fn restart(
+        &mut self,
+        schedule: &[Attitude],
+        site: Site,
+        settings: SequenceSettings,
+    ) -> Result<(), SequenceError> {
+        Self::check(schedule, &settings)?;
+        self.collector = DwellCollector::new(&settings.prefilter).map_err(SequenceError::Prefilter)?;
+        self.schedule.clear();
+        for a in schedule {
+            // Capacity checked above.
+            let _ = self.schedule.push(*a);
+        }
+        let c = libm::cosf(settings.max_gravity_angle_rad);
+        let (g, e) = (site.gravity_mps2, settings.max_force_error_mps2);
+        self.up_b = schedule[0].c_b_n().row(2);
+        self.gravity_cos2_max = c * c;
+        self.rate2_max_radps2 = settings.max_rate_radps * settings.max_rate_radps;
+        self.force2_bounds_mps2sq = ((g - e) * (g - e), (g + e) * (g + e));
+        self.settings = settings;
+        self.site = site;
+        self.inputs.clear();
+        self.phase = Phase::WaitingForTable;
+        self.index = 0;
+        self.dwell_sample = 0;
+        self.faults = 0;
+        self.aborts = 0;
+        self.result = None;
+        Ok(())
+    }
+
     /// Whether [`CalibrationSequence::new`] would accept this schedule and these settings, without building the
     /// sequence (tens of kilobytes: a device checks a configuration with this, not with a sequence on its stack).
     pub fn check(schedule: &[Attitude], settings: &SequenceSettings) -> Result<(), SequenceError> {
