@@ -180,7 +180,7 @@ fn bad_messages_get_an_error_reply_and_the_device_keeps_running() {
     assert_eq!(refused(c.request("result", kind::READ_RESULT, &0u32.to_le_bytes())).0, ErrorCode::NoResult);
     // A schedule the core cannot hold (65 positions), and a truncated configuration.
     let head = std::fs::read(replay.path()).unwrap();
-    let header_len = 6 + 14 + 12 + 16 * 6 + 4;
+    let header_len = sinscal::rig::replay::replay_header_bytes(6);
     let good = configuration_body(&head[..header_len]).unwrap();
     let mut too_many = good.clone();
     too_many[10..12].copy_from_slice(&65u16.to_le_bytes());

@@ -120,7 +120,7 @@ impl Bench {
     /// compensated samples the stream would send.
     fn feed(&mut self, replay: &[u8], frames: usize) -> Vec<[f32; 6]> {
         let header = read_header(&mut &replay[..]).unwrap();
-        let start = 6 + 14 + 12 + 16 * header.schedule.len() + 4;
+        let start = sinscal::rig::replay::replay_header_bytes(header.schedule.len());
         let mut imu = Adis::new(ReplayDevice::new(Model::Adis16505_2), Model::Adis16505_2);
         imu.init(&mut sinscal::rig::replay::NoDelay).unwrap();
         let mut queue: heapless::spsc::Queue<QueueItem, QUEUE_SLOTS> = heapless::spsc::Queue::new();
@@ -151,7 +151,7 @@ impl Bench {
 fn every_request_and_refusal_in_order_then_the_record_at_the_next_boot() {
     let rec = Scenario { dwell_s: 30.0, ..Scenario::example() }.recording(5, "example.csv");
     let (replay, _) = sinscal_host::calibration::firmware_path::replay_file(&rec, &Options::default()).unwrap();
-    let header_len = 6 + 14 + 12 + 16 * 6 + 4;
+    let header_len = sinscal::rig::replay::replay_header_bytes(6);
     let config = configuration_body(&replay[..header_len]).unwrap();
     let mut b = Bench::boot(RamFlash(vec![0xFF; 32 * 1024]));
     println!(

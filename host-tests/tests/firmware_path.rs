@@ -17,7 +17,7 @@ fn example(seconds: f64) -> Recording {
 /// Offset of frame k's record in a replay file.
 fn frame_offset(file: &[u8], k: usize) -> usize {
     let header = read_header(&mut &file[..]).unwrap();
-    let header_len = 20 + 12 + 16 * header.schedule.len() + 4;
+    let header_len = sinscal::rig::replay::replay_header_bytes(header.schedule.len());
     header_len + k * (1 + BURST32_LEN)
 }
 

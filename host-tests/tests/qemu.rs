@@ -53,7 +53,7 @@ fn firmware_in_qemu_and_the_host_replay_agree_to_the_bit() {
     ] {
         let (mut file, _) = replay_file(rec, &options).unwrap();
         // Also a corrupted frame (a gyro byte of row 1000, inside dwell 1), so the fault path runs on both.
-        let header_len = 20 + 12 + 16 * 6 + 4;
+        let header_len = sinscal::rig::replay::replay_header_bytes(6);
         let record = 1 + sinscal::sensor::adis::BURST32_LEN;
         assert_eq!(rec.rows[1000].pos, 1);
         file[header_len + 1000 * record + 1 + 4] ^= 0x01;

@@ -52,3 +52,24 @@ fn ferraris_held_out_static_intervals() {
     assert!(rms[2] < rms[0] / 5.0, "scale factors: {:.4} vs biases only {:.4}", rms[2], rms[0]);
     assert!(rms[6] < rms[2] / 2.0, "attitudes estimated: {:.4} vs labels {:.4}", rms[6], rms[2]);
 }
+
+/// Every static term at once on the Ferraris session's six hand-placed poses (headings unknown): more terms than
+/// six faces determine, and the Gauss-Newton passes run away (an accelerometer bias of 1e6 m/s^2 after 12
+/// passes). Such a fit is refused with its reason, never reported (the core's check: the firmware path and the
+/// device refuse it the same way).
+#[test]
+fn ferraris_full_model_diverges_and_is_refused() {
+    let Some(dir) = common::data_dir() else { return };
+    let rec = common::ferraris_session(&dir);
+    let options = Options { model: Model::FULL, ..Options::default() };
+    let err = match calibrate(&rec, &options) {
+        Ok(_) => panic!("the full model on six faces must be refused"),
+        Err(e) => e.to_string(),
+    };
+    println!("direct path: {err}");
+    assert!(err.contains("the fit diverged"), "{err}");
+    // A plausible model on the same data is still reported (its values within every term's bound).
+    let cal = calibrate(&rec, &Options::default()).expect("the default model");
+    let theta = cal.channels.as_ref().expect("the general estimator").parameters_si;
+    assert_eq!(sinscal::calib::channels::implausible_parameter(&theta), None);
+}

@@ -176,6 +176,8 @@ mod firmware {
         w.u8(1).u8(1).f32(45.7796f32.to_radians()).f32(9.8063).u16(6);
         w.u16(sinscal::rig::replay::terms_bits(sinscal::calib::session::DEFAULT_MODEL));
         w.u8(1).u8(0).u8(6).u8(1).f32(1.0).f32(1.0);
+        let rest = sinscal::run::sequence::SequenceSettings::default();
+        w.f32(rest.max_force_error_mps2).f32(rest.max_gravity_angle_rad).f32(rest.max_rate_radps);
         for (k, p) in sinscal::calib::solve::TABLE1_POSITIONS_DEG.iter().enumerate() {
             for angle_deg in p {
                 w.f32(angle_deg.to_radians());

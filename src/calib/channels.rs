@@ -334,6 +334,36 @@ pub enum ChannelError {
     },
     /// The model has no term the data can inform.
     NothingToEstimate,
+    /// The solution left the range any instrument could have (the fit diverged: a model these dwells cannot
+    /// pin down); the first such parameter.
+    Diverged {
+        /// Its index (see [`parameter_name`]).
+        parameter: usize,
+        /// Its value, SI.
+        value: f32,
+    },
+}
+
+/// The largest magnitude of each term that a real instrument's parameter can have, SI, in the order of
+/// [`Term::ALL`]: gyro bias 0.1 rad/s (5.7 deg/s), accelerometer bias 4.9 m/s^2 (0.5 g), scale factors and
+/// misalignments 0.5, g-sensitivity 1e-3 rad/s per m/s^2, reference offset 0.5 rad. A solution beyond any of
+/// them is refused ([`ChannelError::Diverged`]), never reported.
+pub const PLAUSIBLE_MAGNITUDE_SI: [f32; 8] = [0.1, 4.9, 0.5, 0.5, 0.5, 0.5, 1e-3, 0.5];
+
+/// The first parameter of `theta` beyond [`PLAUSIBLE_MAGNITUDE_SI`] (or not finite).
+pub fn implausible_parameter(theta: &[f32; PARAMETERS]) -> Option<usize> {
+    // Parameters per term, in the order of Term::ALL.
+    const COUNTS: [usize; 8] = [3, 3, 3, 6, 3, 6, 9, 3];
+    let mut start = 0;
+    for (count, limit) in COUNTS.iter().zip(PLAUSIBLE_MAGNITUDE_SI) {
+        for p in start..start + count {
+            if !theta[p].is_finite() || theta[p].abs() > limit {
+                return Some(p);
+            }
+        }
+        start += count;
+    }
+    None
 }
 
 impl core::fmt::Display for ChannelError {
@@ -364,6 +394,12 @@ impl core::fmt::Display for ChannelError {
                 degrees_0_360(given_rad)
             ),
             ChannelError::NothingToEstimate => f.write_str("the model has no term these data can inform"),
+            ChannelError::Diverged { parameter, value } => write!(
+                f,
+                "the fit diverged: {} reached {value:e} (SI), beyond what any instrument has; fit fewer terms \
+                 (--model) or add positions that determine them",
+                parameter_name(parameter)
+            ),
         }
     }
 }
@@ -973,6 +1009,9 @@ impl ChannelEstimator {
             }
             previous = largest;
         }
+        if let Some(parameter) = implausible_parameter(&theta) {
+            return Err(ChannelError::Diverged { parameter, value: theta[parameter] });
+        }
         let state = State { theta: &theta, heading: &heading, attitude: &attitude, cols: &cols, n, model };
         Ok(self.finish(&state, &pass, used, iterations, converged))
     }
@@ -1279,5 +1318,31 @@ impl Default for Pass {
             blind_spots: 0,
             gauge: 0,
         }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn implausible_parameters_are_found_at_each_terms_bound() {
+        let zero = [0.0f32; PARAMETERS];
+        assert_eq!(implausible_parameter(&zero), None);
+        // One parameter of each term, just inside and just beyond its bound, of both signs.
+        let first_of_term = [0, 3, 6, 9, 15, 18, 24, 33];
+        for (t, &p) in first_of_term.iter().enumerate() {
+            let limit = PLAUSIBLE_MAGNITUDE_SI[t];
+            for sign in [1.0f32, -1.0] {
+                let mut theta = zero;
+                theta[p] = sign * limit;
+                assert_eq!(implausible_parameter(&theta), None, "{} at its bound", parameter_name(p));
+                theta[p] = sign * limit * 1.01;
+                assert_eq!(implausible_parameter(&theta), Some(p), "{} beyond its bound", parameter_name(p));
+            }
+        }
+        let mut theta = zero;
+        theta[35] = f32::NAN;
+        assert_eq!(implausible_parameter(&theta), Some(35), "not finite");
     }
 }

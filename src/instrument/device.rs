@@ -21,9 +21,10 @@ use crate::run::sequence::{feed_sequence, CalibrationSequence, Event, SequenceFa
 use crate::sensor::adis::Model;
 use crate::sensor::sample::ImuSample;
 
-/// Longest configuration body, bytes: the fixed fields (14 + 12), a schedule of [`MAX_POSITIONS`] (16 each),
-/// and the thresholds (12).
-pub const MAX_CONFIGURATION: usize = 14 + 12 + 16 * MAX_POSITIONS + THRESHOLD_BYTES;
+/// Longest configuration body, bytes: the fixed fields, a schedule of [`MAX_POSITIONS`] (16 each), and the
+/// thresholds (12).
+pub const MAX_CONFIGURATION: usize =
+    crate::rig::replay::CONFIGURATION_FIXED_BYTES + 16 * MAX_POSITIONS + THRESHOLD_BYTES;
 /// Bytes of the thresholds at the end of a configuration body.
 pub const THRESHOLD_BYTES: usize = 12;
 /// The firmware's version, as the identify reply reports it (16 bytes, NUL-padded).
@@ -316,8 +317,12 @@ fn record_of<'a>(
 ) -> Result<Record<'a>, (ErrorCode, u32)> {
     let outcome = outcome.filter(|o| o.result.is_some()).ok_or((ErrorCode::NoResult, 0))?;
     let compensation = match outcome.result {
-        Some(SequenceSolution::Channels(c)) => Compensation::from_channels(c).map_err(|_| (ErrorCode::NoResult, 2))?,
-        Some(SequenceSolution::Angles(r)) => Compensation::from_angles(r).map_err(|_| (ErrorCode::NoResult, 2))?,
+        Some(SequenceSolution::Channels(c)) => {
+            Compensation::from_channels(c).map_err(|_| (ErrorCode::NoCompensation, 0))?
+        }
+        Some(SequenceSolution::Angles(r)) => {
+            Compensation::from_angles(r).map_err(|_| (ErrorCode::NoCompensation, 0))?
+        }
         None => return Err((ErrorCode::NoResult, 0)),
     };
     Ok(Record::new(compensation, configuration, note, outcome))

@@ -68,6 +68,8 @@ pub enum ErrorCode {
     NothingStored = 12,
     /// The note is longer than the device keeps (detail: the largest length accepted).
     NoteTooLong = 13,
+    /// The solution gives no usable compensation (a term beyond what the compensation accepts); nothing stored.
+    NoCompensation = 14,
 }
 
 impl ErrorCode {
@@ -76,7 +78,7 @@ impl ErrorCode {
         use ErrorCode::*;
         [Crc, Frame, Version, UnknownKind, Body, Configuration, Busy, NotConfigured, NoResult, TooLarge, Flash]
             .into_iter()
-            .chain([NothingStored, NoteTooLong])
+            .chain([NothingStored, NoteTooLong, NoCompensation])
             .find(|c| *c as u8 == code)
     }
 }
@@ -97,6 +99,7 @@ impl core::fmt::Display for ErrorCode {
             ErrorCode::Flash => "flash failure",
             ErrorCode::NothingStored => "no calibration record stored",
             ErrorCode::NoteTooLong => "note longer than the device keeps",
+            ErrorCode::NoCompensation => "the solution gives no usable compensation: nothing stored",
         })
     }
 }

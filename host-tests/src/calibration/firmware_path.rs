@@ -106,6 +106,11 @@ pub fn replay_parts(
     head.push(options.estimate_reference_offset as u8);
     head.extend_from_slice(&a_gyro.to_le_bytes());
     head.extend_from_slice(&a_accel.to_le_bytes());
+    // The limits of rest: the force tolerance asked for, the sequence's default gravity angle and rate.
+    let rest = sinscal::run::sequence::SequenceSettings::default();
+    for v in [options.rest_force_tolerance_mps2, rest.max_gravity_angle_rad, rest.max_rate_radps] {
+        head.extend_from_slice(&v.to_le_bytes());
+    }
     let mut attitudes = Vec::new();
     for d in &dwells {
         // The angle method needs every heading; the general estimator estimates an unknown one.

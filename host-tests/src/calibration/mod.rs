@@ -68,6 +68,9 @@ pub struct Options {
     /// recording says; recordings levelled from their own accelerometers are always solved so
     /// (docs/method.md#unknown-attitudes).
     pub estimate_attitudes: bool,
+    /// The firmware path's check of rest: the largest | |f| - g | of a sample in a dwell, m/s^2 (a raw,
+    /// uncalibrated accelerometer can be further from g than the default allows).
+    pub rest_force_tolerance_mps2: f32,
 }
 
 impl Options {
@@ -92,6 +95,7 @@ impl Default for Options {
             method: DEFAULT_METHOD,
             model: DEFAULT_MODEL,
             estimate_attitudes: false,
+            rest_force_tolerance_mps2: sinscal::run::sequence::SequenceSettings::default().max_force_error_mps2,
         }
     }
 }

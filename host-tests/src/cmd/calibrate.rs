@@ -101,6 +101,18 @@ pub struct CalibrationArgs {
     /// second-order error by realigning the bias-compensated dwells.
     #[arg(long, default_value_t = 6, value_parser = clap::value_parser!(u32).range(1..=50))]
     passes: u32,
+    /// Firmware path (`--on`, `device run`): a dwell's sample is at rest while | |f| - g | stays within this,
+    /// m/s^2 (default 0.5); a raw, uncalibrated accelerometer may need more.
+    #[arg(long, value_parser = parse_tolerance)]
+    rest_force_tolerance: Option<f32>,
+}
+
+/// `--rest-force-tolerance`: a positive number of m/s^2 (a bad value is a usage error, exit 2).
+fn parse_tolerance(text: &str) -> Result<f32, String> {
+    match text.parse::<f32>() {
+        Ok(x) if x.is_finite() && x > 0.0 && x < 9.0 => Ok(x),
+        _ => Err(format!("'{text}' is not a tolerance in m/s^2 between 0 and 9")),
+    }
 }
 
 /// `--prefilter-a`: 'auto' or a number in [0, 1] (a bad value is a usage error, exit 2).
@@ -155,6 +167,9 @@ impl CalibrationArgs {
             estimate_reference_offset: !self.no_reference_offset,
             max_passes: self.passes,
             estimate_attitudes: self.estimate_attitudes,
+            rest_force_tolerance_mps2: self
+                .rest_force_tolerance
+                .unwrap_or(sinscal::run::sequence::SequenceSettings::default().max_force_error_mps2),
         })
     }
 }

@@ -189,7 +189,7 @@ pub fn run_calibration<T: Read + Write>(
 fn replay_header_bytes(path: &Path) -> Result<Vec<u8>, anyhow::Error> {
     let mut file = ReadSource(std::io::BufReader::new(std::fs::File::open(path)?));
     let header = read_header(&mut file).map_err(|e| anyhow::anyhow!("replay: {e}"))?;
-    let len = 6 + 14 + 12 + 16 * header.schedule.len() + 4;
+    let len = sinscal::rig::replay::replay_header_bytes(header.schedule.len());
     let mut bytes = vec![0u8; len];
     std::fs::File::open(path)?.read_exact(&mut bytes)?;
     Ok(bytes)

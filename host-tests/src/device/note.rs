@@ -51,6 +51,8 @@ pub struct OptionsNote {
     pub terms: u16,
     /// Whether the attitudes are estimated.
     pub estimate_attitudes: bool,
+    /// The firmware path's tolerance of rest, m/s^2.
+    pub rest_force_tolerance_mps2: f32,
 }
 
 /// Note format written.
@@ -91,6 +93,7 @@ impl Provenance {
                 .into(),
                 terms: terms_bits(options.model),
                 estimate_attitudes: options.estimate_attitudes,
+                rest_force_tolerance_mps2: options.rest_force_tolerance_mps2,
             },
             plan: plan.clone(),
         }
@@ -136,6 +139,7 @@ impl Provenance {
             },
             model: terms_of_bits(o.terms),
             estimate_attitudes: o.estimate_attitudes,
+            rest_force_tolerance_mps2: o.rest_force_tolerance_mps2,
         })
     }
 }

@@ -20,7 +20,17 @@ use crate::sensor::adis::Model;
 /// File magic.
 pub const MAGIC: [u8; 4] = *b"SSRP";
 /// File version.
-pub const VERSION: u16 = 2;
+pub const VERSION: u16 = 3;
+
+/// Bytes of a configuration's fixed part (sensor, estimator, site, positions, terms: 14; run settings: 12; rest
+/// limits: 12); each position adds 16.
+pub const CONFIGURATION_FIXED_BYTES: usize = 14 + 12 + 12;
+
+/// Bytes of a replay file's header with `positions` positions: magic and version, the configuration, the frame
+/// count.
+pub const fn replay_header_bytes(positions: usize) -> usize {
+    6 + CONFIGURATION_FIXED_BYTES + 16 * positions + 4
+}
 
 /// Errors of a replay.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -41,7 +51,7 @@ impl core::fmt::Display for ReplayError {
     fn fmt(&self, f: &mut core::fmt::Formatter<'_>) -> core::fmt::Result {
         match self {
             ReplayError::Read => f.write_str("replay file ended early or could not be read"),
-            ReplayError::Format => f.write_str("not a sinscal replay file (version 2)"),
+            ReplayError::Format => f.write_str("not a sinscal replay file (version 3)"),
             ReplayError::Sequence(e) => write!(f, "calibration sequence: {e:?}"),
             ReplayError::Init => f.write_str("IMU initialisation failed"),
         }
@@ -208,6 +218,15 @@ pub fn read_configuration<R: ByteSource>(source: &mut R) -> Result<ReplayHeader,
         1 => DwellValue::Settled,
         _ => return Err(ReplayError::Format),
     };
+    // The limits of rest of the sequence's checks.
+    let mut rest = [0u8; 12];
+    source.read_exact(&mut rest)?;
+    let (max_force_error_mps2, max_gravity_angle_rad, max_rate_radps) =
+        (f32_at(&rest, 0), f32_at(&rest, 4), f32_at(&rest, 8));
+    let positive = |x: f32| x.is_finite() && x > 0.0;
+    if !(positive(max_force_error_mps2) && positive(max_gravity_angle_rad) && positive(max_rate_radps)) {
+        return Err(ReplayError::Format);
+    }
     let mut schedule = Vec::new();
     let mut labels = Vec::new();
     let mut unknown_headings = 0u64;
@@ -229,7 +248,10 @@ pub fn read_configuration<R: ByteSource>(source: &mut R) -> Result<ReplayHeader,
         estimate_reference_offset: run[3] != 0,
         unknown_headings,
     };
-    let settings = replay_sequence_settings(prefilter, solve);
+    let mut settings = replay_sequence_settings(prefilter, solve);
+    settings.max_force_error_mps2 = max_force_error_mps2;
+    settings.max_gravity_angle_rad = max_gravity_angle_rad;
+    settings.max_rate_radps = max_rate_radps;
     Ok(ReplayHeader { model, site, schedule, labels, settings, frames: 0 })
 }
 
@@ -334,6 +356,7 @@ fn failure_code(f: &Option<SequenceFailure>) -> [u32; 5] {
             ChannelError::GravityDirection { dwell, angle_rad } => (3, dwell, 5, bits(angle_rad, 0.0)),
             ChannelError::HeadingMismatch { dwell, given_rad, fits_rad } => (3, dwell, 6, bits(given_rad, fits_rad)),
             ChannelError::NothingToEstimate => (3, 0, 7, [0, 0]),
+            ChannelError::Diverged { parameter, value } => (3, parameter, 8, bits(value, 0.0)),
         },
     };
     [kind, index as u32, code, x, y]
@@ -365,6 +388,7 @@ fn failure_of_code(words: [u32; 5]) -> Result<Option<SequenceFailure>, ReplayErr
         (3, 5) => channels(ChannelError::GravityDirection { dwell: index, angle_rad: x }),
         (3, 6) => channels(ChannelError::HeadingMismatch { dwell: index, given_rad: x, fits_rad: y }),
         (3, 7) => channels(ChannelError::NothingToEstimate),
+        (3, 8) => channels(ChannelError::Diverged { parameter: index, value: x }),
         _ => return Err(ReplayError::Format),
     })
 }
