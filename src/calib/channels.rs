@@ -334,8 +334,8 @@ pub enum ChannelError {
     },
     /// The model has no term the data can inform.
     NothingToEstimate,
-    /// The solution left the range any instrument could have (the fit diverged: a model these dwells cannot
-    /// pin down); the first such parameter.
+    /// The fit did not converge and left the range any instrument could have (it ran away: a model these dwells
+    /// cannot pin down); the first such parameter.
     Diverged {
         /// Its index (see [`parameter_name`]).
         parameter: usize,
@@ -344,11 +344,12 @@ pub enum ChannelError {
     },
 }
 
-/// The largest magnitude of each term that a real instrument's parameter can have, SI, in the order of
-/// [`Term::ALL`]: gyro bias 0.1 rad/s (5.7 deg/s), accelerometer bias 4.9 m/s^2 (0.5 g), scale factors and
-/// misalignments 0.5, g-sensitivity 1e-3 rad/s per m/s^2, reference offset 0.5 rad. A solution beyond any of
-/// them is refused ([`ChannelError::Diverged`]), never reported.
-pub const PLAUSIBLE_MAGNITUDE_SI: [f32; 8] = [0.1, 4.9, 0.5, 0.5, 0.5, 0.5, 1e-3, 0.5];
+/// The largest magnitude of each term that any instrument's parameter could have, SI, in the order of
+/// [`Term::ALL`]: gyro bias 1 rad/s (57 deg/s), accelerometer bias 9.8 m/s^2 (1 g), scale factors and
+/// misalignments 1 (100 %), g-sensitivity 1e-2 rad/s per m/s^2, reference offset pi/2 rad. A fit that did not
+/// converge and ends beyond any of them ran away: it is refused ([`ChannelError::Diverged`]), never reported.
+/// (An imprecise estimate inside them stays, with its standard error.)
+pub const PLAUSIBLE_MAGNITUDE_SI: [f32; 8] = [1.0, 9.8, 1.0, 1.0, 1.0, 1.0, 1e-2, core::f32::consts::FRAC_PI_2];
 
 /// The first parameter of `theta` beyond [`PLAUSIBLE_MAGNITUDE_SI`] (or not finite).
 pub fn implausible_parameter(theta: &[f32; PARAMETERS]) -> Option<usize> {
@@ -1009,7 +1010,9 @@ impl ChannelEstimator {
             }
             previous = largest;
         }
-        if let Some(parameter) = implausible_parameter(&theta) {
+        // A fit that did not converge and left every instrument's range ran away: refused. (A converged fit
+        // keeps its estimate, however imprecise: its standard error says so.)
+        if let Some(parameter) = implausible_parameter(&theta).filter(|_| !converged) {
             return Err(ChannelError::Diverged { parameter, value: theta[parameter] });
         }
         let state = State { theta: &theta, heading: &heading, attitude: &attitude, cols: &cols, n, model };
