@@ -124,6 +124,16 @@ fn on_target_tests_pass_in_qemu() {
         .unwrap()
         .gain()[0][0];
     assert!(report.contains(&format!("ok prefilter_gain_k00_bits {k:e}")), "host K00 = {k:e}\n{report}");
+    // A move's rotation integrated on the target: the host's bits.
+    let mut m = sinscal::nav::strapdown::MoveIntegrator::new(0.01);
+    for k in 0..1000 {
+        let k = k as f32;
+        m.push([0.3 - 0.0006 * k, 0.1 + 0.0004 * k, -0.2 + 0.0001 * k * k * 0.001]);
+    }
+    for (c, name) in m.rotation().0.iter().zip(["w", "x", "y", "z"]) {
+        let line = format!("ok move_rotation_{name}_bits {c:e}");
+        assert!(report.contains(&line), "host: {line}\n{report}");
+    }
     // The general estimator on the exact session, solved on x86 by the same core: the same bits as on the target.
     use sinscal::calib::channels::{ChannelEstimator, ChannelSettings, Model};
     let mut est = ChannelEstimator::new(

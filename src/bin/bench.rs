@@ -275,6 +275,21 @@ mod firmware {
         ticks_between(t0, t1) * INSTRUCTIONS_PER_TICK / SAMPLES
     }
 
+    /// The rotation update of a move (`MoveIntegrator::push`: the increment, and every second sample the
+    /// coning-corrected quaternion update), `SAMPLES` calls in one timed loop, per call.
+    fn move_integration_loop() -> u32 {
+        let mut m = sinscal::nav::strapdown::MoveIntegrator::new(0.01);
+        let rate = [0.17f32, -0.05, 0.3];
+        let syst = unsafe { &*SYST::PTR };
+        let t0 = syst.cvr.read();
+        for _ in 0..SAMPLES {
+            core::hint::black_box(&mut m).push(core::hint::black_box(rate));
+        }
+        let t1 = syst.cvr.read();
+        core::hint::black_box(m.rotation());
+        ticks_between(t0, t1) * INSTRUCTIONS_PER_TICK / SAMPLES
+    }
+
     /// The parts on their own: the bus transfer (replay device), the driver's decode (checksum, decode,
     /// counter and status checks, conversion to SI: everything after the bus), and the collector update
     /// (prefilter bank and accumulators) without and with the HMM/KF.
@@ -342,6 +357,7 @@ mod firmware {
         let (isr_kf, proc_kf, n_kf) = measure(Prefilter::paper());
         let (bus, decode, collect_none, collect_kf) = parts();
         let compensate = compensation_loop();
+        let move_update = move_integration_loop();
         let (stack_isr, stack_processing) = stack_depths();
         let (stack_status, stack_configure, stack_start, status_instructions) = link_costs();
         let mut text: heapless::String<1024> = heapless::String::new();
@@ -357,7 +373,7 @@ mod firmware {
             text,
             "stack_bytes_data_ready_handler {stack_isr}\nstack_bytes_processing_step {stack_processing}\n"
         );
-        let _ = write!(text, "part_bus_transfer_replay {bus}\npart_driver_decode {decode}\npart_collector_none {collect_none}\npart_collector_hmmkf {collect_kf}\npart_compensation {compensate}\n");
+        let _ = write!(text, "part_bus_transfer_replay {bus}\npart_driver_decode {decode}\npart_collector_none {collect_none}\npart_collector_hmmkf {collect_kf}\npart_compensation {compensate}\npart_move_integration {move_update}\n");
         let _ = write!(
             text,
             "samples {SAMPLES} {n_none} {n_kf}\ntimer_overhead_instructions {overhead}\n\

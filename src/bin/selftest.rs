@@ -236,6 +236,21 @@ mod firmware {
         let _ = semihosting::fs::remove_file(flash.into_path().as_c_str());
     }
 
+    fn move_integration(report: &mut Report) {
+        // A move's rotation from 1000 rate samples that turn and change (the host computes the same sequence and
+        // compares the bits: host-tests/tests/qemu.rs).
+        let mut m = sinscal::nav::strapdown::MoveIntegrator::new(0.01);
+        for k in 0..1000 {
+            let k = k as f32;
+            m.push([0.3 - 0.0006 * k, 0.1 + 0.0004 * k, -0.2 + 0.0001 * k * k * 0.001]);
+        }
+        let q = m.rotation().0;
+        for (i, c) in q.iter().enumerate() {
+            let name = ["move_rotation_w_bits", "move_rotation_x_bits", "move_rotation_y_bits", "move_rotation_z_bits"];
+            report.check(name[i], c.is_finite(), *c);
+        }
+    }
+
     fn watchdog(report: &mut Report) {
         // The board's watchdog: present, counting down from its load value, and fed back to it.
         use sinscal::board::watchdog;
@@ -301,6 +316,7 @@ mod firmware {
         record_store(&mut report);
         bounded_spi(&mut report);
         watchdog(&mut report);
+        move_integration(&mut report);
         let _ = writeln!(report.text, "{} passed, {} failed", report.passed, report.failed);
         if let Some(path) = sinscal::rig::semihost::arg_path(1) {
             sinscal::rig::semihost::write_file(&path, report.text.as_bytes());
