@@ -133,15 +133,13 @@ mod firmware {
                 continue;
             }
             let sampled = frames.as_mut().is_some_and(|f| sample_frame(f, &mut imu, &mut producer, &mut stats));
-            while let Some(out) =
-                process_next(&mut consumer, |item| device.on_sample(item, &stats, |e| log_event(e, None)))
-            {
+            while let Some(out) = process_next(&mut consumer, |item| device.on_sample(item, &stats, log_event)) {
                 if let Some(sample) = out {
                     link.send_sample::<HostFileFlash>(&sample);
                 }
             }
             if !sampled {
-                device.end_of_samples(&stats, |e| log_event(e, None));
+                device.end_of_samples(&stats, log_event);
                 log_counters(&stats, &device);
             }
         }

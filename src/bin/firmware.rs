@@ -147,9 +147,7 @@ mod firmware {
             device.link.rx_overruns = RX_LOST.load(Ordering::Relaxed);
             link.pump(&mut device, &stats);
             if let Some(consumer) = samples.as_mut() {
-                while let Some(out) =
-                    process_next(consumer, |item| device.on_sample(item, &stats, |e| log_event(e, None)))
-                {
+                while let Some(out) = process_next(consumer, |item| device.on_sample(item, &stats, log_event)) {
                     if let Some(sample) = out {
                         link.send_sample::<HostFileFlash>(&sample);
                     }

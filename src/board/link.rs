@@ -10,7 +10,7 @@ use super::uart;
 use crate::instrument::device::{Action, Device};
 use crate::instrument::link::{FrameReceiver, MAX_WIRE};
 use crate::run::sampling::SamplingStats;
-use crate::run::sequence::{Event, SequenceSolution};
+use crate::run::sequence::Event;
 use crate::sensor::sample::ImuSample;
 
 /// The device's end of the link: the receive queue's consumer, the frame receiver and a reply buffer.
@@ -57,7 +57,7 @@ impl LinkPort {
 }
 
 /// Logs an event of the calibration sequence (defmt).
-pub fn log_event(e: &Event, result: Option<&SequenceSolution>) {
+pub fn log_event(e: &Event) {
     match e {
         Event::Settling { index } => defmt::info!("position {=usize}: in position, settling", index + 1),
         Event::DwellStarted { index } => defmt::info!("position {=usize}: collecting", index + 1),
@@ -67,16 +67,7 @@ pub fn log_event(e: &Event, result: Option<&SequenceSolution>) {
         Event::DwellCompleted { index, samples, faults } => {
             defmt::info!("position {=usize}: {=u32} samples, {=u32} faults", index + 1, samples, faults)
         }
-        Event::Solved => match result {
-            Some(SequenceSolution::Channels(c)) => defmt::info!(
-                "solved (general estimator, {=u32} passes): chi-square {=f32} on {=u32} degrees of freedom",
-                c.iterations,
-                c.chi_square,
-                c.degrees_of_freedom
-            ),
-            Some(SequenceSolution::Angles(r)) => defmt::info!("solved (angle method, {=u32} passes)", r.passes),
-            None => defmt::info!("solved"),
-        },
+        Event::Solved => defmt::info!("all positions collected: solved"),
         Event::Failed(_) => defmt::error!("calibration failed"),
     }
 }
