@@ -5,6 +5,8 @@
 //! (scripts/setup installs both); in CI (CI=true) a missing QEMU is a failure, elsewhere the test reports itself
 //! as skipped.
 
+mod common;
+
 use assert_cmd::Command;
 use sinscal::instrument::link::{encode_frame, MAX_WIRE, PROTOCOL_VERSION};
 use sinscal::instrument::message::{kind, DeviceState, ErrorCode};
@@ -16,15 +18,6 @@ use sinscal_host::device::{boot_elf, boot_qemu, calibration_of_record, configura
 use sinscal_host::io::calibration_result::CalibrationJson;
 use sinscal_host::model::synth::Scenario;
 
-fn qemu_available() -> bool {
-    let found = std::process::Command::new(QEMU).arg("--version").output().is_ok_and(|o| o.status.success());
-    if !found {
-        assert!(std::env::var("CI").is_err(), "{QEMU} is missing in CI: scripts/setup must install it");
-        println!("SKIPPED: {QEMU} not found (run scripts/setup)");
-    }
-    found
-}
-
 fn sinscal() -> Command {
     Command::cargo_bin("sinscal").unwrap()
 }
@@ -35,7 +28,7 @@ fn json(path: &std::path::Path) -> serde_json::Value {
 
 #[test]
 fn device_run_then_show_gives_the_host_replay_json() {
-    if !qemu_available() {
+    if !common::qemu_available("") {
         return;
     }
     let dir = tempfile::tempdir().unwrap();
@@ -133,7 +126,7 @@ fn boot_on_pty(flash: &std::path::Path) -> (std::process::Child, String) {
 
 #[test]
 fn bad_messages_get_an_error_reply_and_the_device_keeps_running() {
-    if !qemu_available() {
+    if !common::qemu_available("") {
         return;
     }
     let dir = tempfile::tempdir().unwrap();

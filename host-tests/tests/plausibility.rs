@@ -4,6 +4,8 @@
 //! through the firmware path on x86 (`--on host`) or runs the firmware in QEMU (`--on qemu`). SIMULATION data
 //! (the built-in example) with one error put in.
 
+mod common;
+
 use assert_cmd::Command;
 use sinscal_host::model::synth::Scenario;
 
@@ -14,15 +16,6 @@ fn calibrate_fails(path: &std::path::Path, extra: &[&str]) -> String {
 }
 
 /// Whether QEMU runs here; in CI (CI set) it must.
-fn qemu_available() -> bool {
-    let qemu = sinscal_host::calibration::qemu::QEMU;
-    let found = std::process::Command::new(qemu).arg("--version").output().is_ok_and(|o| o.status.success());
-    if !found {
-        assert!(std::env::var("CI").is_err(), "{qemu} is missing in CI: scripts/setup must install it");
-        println!("SKIPPED (--on qemu only): {qemu} not found (run scripts/setup)");
-    }
-    found
-}
 
 /// Every accelerometer value of the recording's rows times `factor` (columns ax, ay, az: 8, 9, 10).
 fn scale_accelerometers(text: &str, factor: f64) -> String {
@@ -62,7 +55,7 @@ fn implausible_references_and_data_exit_1_with_the_dwell_on_every_path() {
         ("scale.csv", scale_accelerometers(&text, 1.5), 1, ["|f| is 1.50", "|f| is 1.50"], Some("Acceleration")),
     ];
     let mut ons = vec![None, Some("host")];
-    if qemu_available() {
+    if common::qemu_available(" (--on qemu only)") {
         ons.push(Some("qemu"));
     }
     for (name, body, dwell, direct, sequence) in cases {

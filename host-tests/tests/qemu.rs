@@ -3,25 +3,18 @@
 //! and the thumbv7em target (scripts/setup installs both); in CI (CI=true) a missing QEMU is a failure,
 //! elsewhere the test reports itself as skipped.
 
+mod common;
+
 use sinscal::calib::session::{session_estimator, SessionDwell};
 use sinscal::rig::replay::{decode_outcome, encode_outcome, read_header, run_replay, MAX_OUTCOME_BYTES};
 use sinscal::run::sequence::{Estimator, SequenceSolution};
 use sinscal_host::calibration::firmware_path::{calibrate_on_host, replay_file};
 use sinscal_host::calibration::qemu::{
-    calibrate_on_qemu, firmware_binary, firmware_elf, run_firmware, run_with_output, QEMU,
+    calibrate_on_qemu, firmware_binary, firmware_elf, run_firmware, run_with_output,
 };
 use sinscal_host::calibration::Options;
 use sinscal_host::io::calibration_result::CalibrationJson;
 use sinscal_host::model::synth::Scenario;
-
-fn qemu_available() -> bool {
-    let found = std::process::Command::new(QEMU).arg("--version").output().is_ok_and(|o| o.status.success());
-    if !found {
-        assert!(std::env::var("CI").is_err(), "{QEMU} is missing in CI: scripts/setup must install it");
-        println!("SKIPPED: {QEMU} not found (run scripts/setup)");
-    }
-    found
-}
 
 fn json_without_on(c: &sinscal_host::calibration::Calibration) -> serde_json::Value {
     let mut v = serde_json::to_value(CalibrationJson::new(c)).unwrap();
@@ -31,7 +24,7 @@ fn json_without_on(c: &sinscal_host::calibration::Calibration) -> serde_json::Va
 
 #[test]
 fn firmware_in_qemu_and_the_host_replay_agree_to_the_bit() {
-    if !qemu_available() {
+    if !common::qemu_available("") {
         return;
     }
     let elf = firmware_elf().expect("firmware builds");
@@ -99,7 +92,7 @@ fn firmware_in_qemu_and_the_host_replay_agree_to_the_bit() {
 
 #[test]
 fn on_target_tests_pass_in_qemu() {
-    if !qemu_available() {
+    if !common::qemu_available("") {
         return;
     }
     let elf = firmware_binary("sinscal-selftest").expect("firmware builds");

@@ -49,3 +49,15 @@ pub fn imutk_session(dir: &Path) -> sinscal_host::io::recording::Recording {
     let detection = sinscal_host::io::import::StaticDetection::default();
     sinscal_host::io::import::import_imutk(&acc, &gyro, None, &detection).expect("import").recording
 }
+
+/// Whether qemu-system-arm runs here. In CI (CI=true) a missing QEMU is a failure; elsewhere the caller's test is
+/// reported as skipped (`what` says what of it is skipped, e.g. " (--on qemu only)"; empty for all of it).
+pub fn qemu_available(what: &str) -> bool {
+    let qemu = sinscal_host::calibration::qemu::QEMU;
+    let found = std::process::Command::new(qemu).arg("--version").output().is_ok_and(|o| o.status.success());
+    if !found {
+        assert!(std::env::var("CI").is_err(), "{qemu} is missing in CI: scripts/setup must install it");
+        println!("SKIPPED{what}: {qemu} not found (run scripts/setup)");
+    }
+    found
+}
