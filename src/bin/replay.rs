@@ -17,28 +17,14 @@ mod firmware {
     use cortex_m_rt::entry;
     use defmt_full as defmt;
     use sinscal::board::exit;
+    use sinscal::board::link::log_event;
     use sinscal::rig::replay::{encode_outcome, run_replay, MAX_OUTCOME_BYTES};
     use sinscal::rig::semihost::FileSource;
-    use sinscal::run::sequence::{Event, SequenceSolution};
+    use sinscal::run::sequence::SequenceSolution;
 
     fn fail(what: &str) -> ! {
         defmt::error!("sinscal-replay: {=str}", what);
         exit(1)
-    }
-
-    fn log(event: &Event) {
-        match event {
-            Event::Settling { index } => defmt::info!("position {=usize}: settling", index + 1),
-            Event::DwellStarted { index } => defmt::info!("position {=usize}: dwell started", index + 1),
-            Event::DwellAborted { index, at_sample, .. } => {
-                defmt::warn!("position {=usize}: dwell aborted at sample {=u32}", index + 1, at_sample)
-            }
-            Event::DwellCompleted { index, samples, faults } => {
-                defmt::info!("position {=usize}: {=u32} samples, {=u32} faults", index + 1, samples, faults)
-            }
-            Event::Solved => defmt::info!("all positions collected: solved"),
-            Event::Failed(_) => defmt::error!("calibration sequence failed"),
-        }
     }
 
     fn log_result(result: &SequenceSolution) {
@@ -74,7 +60,7 @@ mod firmware {
             fail("usage: sinscal-replay IN OUT (paths up to 255 bytes)")
         };
         let Some(source) = FileSource::open(&input) else { fail("cannot open the replay file") };
-        let outcome = match run_replay(source, log) {
+        let outcome = match run_replay(source, log_event) {
             Ok(o) => o,
             Err(_) => fail("replay file unreadable"),
         };

@@ -61,12 +61,14 @@ const TIMER_CTRL_ENABLE_IRQ: u32 = 0b1001;
 /// TIMER0's interrupt number.
 pub const TIMER0_IRQ: i16 = 8;
 
-fn write(addr: usize, value: u32) {
-    // SAFETY: `addr` is one of the memory-mapped peripheral registers above.
+/// Writes a memory-mapped register of the board's peripherals (this file's, UART0's, the watchdog's).
+pub(crate) fn write(addr: usize, value: u32) {
+    // SAFETY: every caller passes the address of one of the board's memory-mapped peripheral registers.
     unsafe { core::ptr::write_volatile(addr as *mut u32, value) }
 }
 
-fn read(addr: usize) -> u32 {
+/// Reads a memory-mapped register of the board's peripherals.
+pub(crate) fn read(addr: usize) -> u32 {
     // SAFETY: as in `write`.
     unsafe { core::ptr::read_volatile(addr as *const u32) }
 }
@@ -86,8 +88,13 @@ pub fn in_position() -> bool {
 pub fn start_sample_timer(rate_hz: u32) {
     write(TIMER0 + TIMER_RELOAD, CLOCK_HZ / rate_hz - 1);
     write(TIMER0 + TIMER_CTRL, TIMER_CTRL_ENABLE_IRQ);
-    // SAFETY: the interrupt's handler is installed by the binary (`DefaultHandler`) before this is called.
-    unsafe { cortex_m::peripheral::NVIC::unmask(Irq(TIMER0_IRQ as u16)) };
+    unmask_irq(TIMER0_IRQ as u16);
+}
+
+/// Unmasks the board's external interrupt `irq`.
+pub(crate) fn unmask_irq(irq: u16) {
+    // SAFETY: the binary installs the interrupts' handler (`DefaultHandler`) before it starts a peripheral.
+    unsafe { cortex_m::peripheral::NVIC::unmask(Irq(irq)) };
 }
 
 /// Acknowledges TIMER0's interrupt.

@@ -4,7 +4,7 @@
 
 use heapless::spsc::Producer;
 
-use super::mps2_an386::CLOCK_HZ;
+use super::mps2_an386::{read, unmask_irq, write, CLOCK_HZ};
 
 const UART0: usize = 0x4000_4000;
 const UART_DATA: usize = 0x00;
@@ -35,34 +35,12 @@ pub const RX_QUEUE_SLOTS: usize = 512;
 /// host time, not emulated cycles; on a board a host that stops reading costs at most that per byte.
 const TX_WAIT_POLLS: u32 = 5_000_000;
 
-fn write(addr: usize, value: u32) {
-    // SAFETY: `addr` is one of UART0's memory-mapped registers above.
-    unsafe { core::ptr::write_volatile(addr as *mut u32, value) }
-}
-
-fn read(addr: usize) -> u32 {
-    // SAFETY: as in `write`.
-    unsafe { core::ptr::read_volatile(addr as *const u32) }
-}
-
 /// Sets up UART0 (8N1 at [`LINK_BAUD`]; the divider is the clock over the baud rate) with its receive interrupt,
 /// and unmasks the interrupt.
 pub fn init() {
     write(UART0 + UART_BAUDDIV, CLOCK_HZ / LINK_BAUD);
     write(UART0 + UART_CTRL, CTRL_TX_RX_RX_IRQ);
-    // SAFETY: the binary installs the interrupt's handler (`DefaultHandler`) before it calls this.
-    unsafe { cortex_m::peripheral::NVIC::unmask(RxIrq) };
-}
-
-/// UART0's receive interrupt line.
-#[derive(Clone, Copy)]
-struct RxIrq;
-
-// SAFETY: UART0_RX_IRQ is the board's interrupt line of UART0's receiver.
-unsafe impl cortex_m::interrupt::InterruptNumber for RxIrq {
-    fn number(self) -> u16 {
-        UART0_RX_IRQ as u16
-    }
+    unmask_irq(UART0_RX_IRQ as u16);
 }
 
 /// The receive interrupt: the byte into `queue`. Returns whether a byte was lost (queue full or the UART's

@@ -3,7 +3,7 @@
 //! board) and reloads; at zero again with the interrupt still pending and reset enabled, it resets the system.
 //! Registers: ARM's CMSDK technical reference manual.
 
-use super::mps2_an386::CLOCK_HZ;
+use super::mps2_an386::{read, write, CLOCK_HZ};
 
 const WDOG: usize = 0x4000_8000;
 const WDOG_LOAD: usize = 0x000;
@@ -18,16 +18,6 @@ const LOCK_KEY: u32 = 0x1ACC_E551;
 const CONTROL_INT_RESET: u32 = 0b11;
 /// The CMSDK watchdog's peripheral ID 0.
 const PERIPH_ID0: u32 = 0x24;
-
-fn write(addr: usize, value: u32) {
-    // SAFETY: `addr` is one of the watchdog's memory-mapped registers above.
-    unsafe { core::ptr::write_volatile(addr as *mut u32, value) }
-}
-
-fn read(addr: usize) -> u32 {
-    // SAFETY: as in `write`.
-    unsafe { core::ptr::read_volatile(addr as *const u32) }
-}
 
 /// Whether the board has the watchdog (its peripheral ID reads back).
 pub fn present() -> bool {
