@@ -15,8 +15,6 @@ fn calibrate_fails(path: &std::path::Path, extra: &[&str]) -> String {
     String::from_utf8(out.get_output().stderr.clone()).unwrap()
 }
 
-/// Whether QEMU runs here; in CI (CI set) it must.
-
 /// Every accelerometer value of the recording's rows times `factor` (columns ax, ay, az: 8, 9, 10).
 fn scale_accelerometers(text: &str, factor: f64) -> String {
     let lines: Vec<String> = text

@@ -185,7 +185,7 @@ mod firmware {
             w.u16(k as u16 + 1).u16(0);
         }
         w.u32(0).u32(u32::MAX).u32(1000);
-        w.len().unwrap_or(0)
+        w.written().unwrap_or(0)
     }
 
     /// One request as the firmware's main loop handles it: its frame received byte by byte, the device's reply

@@ -135,7 +135,7 @@ mod firmware {
             let sampled = frames.as_mut().is_some_and(|f| sample_frame(f, &mut imu, &mut producer, &mut stats));
             while let Some(out) = process_next(&mut consumer, |item| device.on_sample(item, &stats, log_event)) {
                 if let Some(sample) = out {
-                    link.send_sample::<HostFileFlash>(&sample);
+                    link.send_sample(&sample);
                 }
             }
             if !sampled {

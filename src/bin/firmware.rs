@@ -149,7 +149,7 @@ mod firmware {
             if let Some(consumer) = samples.as_mut() {
                 while let Some(out) = process_next(consumer, |item| device.on_sample(item, &stats, log_event)) {
                     if let Some(sample) = out {
-                        link.send_sample::<HostFileFlash>(&sample);
+                        link.send_sample(&sample);
                     }
                 }
             }

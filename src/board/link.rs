@@ -7,7 +7,7 @@ use embedded_storage::nor_flash::NorFlash;
 use heapless::spsc::Consumer;
 
 use super::uart;
-use crate::instrument::device::{Action, Device};
+use crate::instrument::device::{sample_frame, Action, Device};
 use crate::instrument::link::{FrameReceiver, MAX_WIRE};
 use crate::run::sampling::SamplingStats;
 use crate::run::sequence::Event;
@@ -50,8 +50,8 @@ impl LinkPort {
     }
 
     /// Sends a streamed sample.
-    pub fn send_sample<F: NorFlash>(&mut self, sample: &ImuSample) {
-        let n = Device::<F>::sample_frame(sample, &mut self.wire);
+    pub fn send_sample(&mut self, sample: &ImuSample) {
+        let n = sample_frame(sample, &mut self.wire);
         let _ = uart::send(&self.wire[..n]);
     }
 }

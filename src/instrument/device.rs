@@ -48,17 +48,6 @@ pub struct LinkStats {
     pub rx_overruns: u32,
 }
 
-/// The sequence's thresholds that a configuration sets.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
-pub struct Thresholds {
-    /// Samples ignored after the table reports in position.
-    pub settle_samples: u32,
-    /// Samples of a full dwell (`u32::MAX`: as long as the table stays).
-    pub dwell_samples: u32,
-    /// Fewest samples of a usable dwell.
-    pub min_dwell_samples: u32,
-}
-
 /// What a request asks the board to do besides replying.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum Action {
@@ -296,17 +285,17 @@ impl<F: NorFlash> Device<F> {
         };
         (encode_frame(reply_kind, seq, &body[..len], wire).unwrap_or(0), action)
     }
+}
 
-    /// A sample for the stream, framed (kind [`kind::SAMPLE`]): rate (rad/s) and force (m/s^2), body frame,
-    /// compensated, as f32. Its length in `wire`.
-    pub fn sample_frame(sample: &ImuSample, wire: &mut [u8]) -> usize {
-        let mut body = [0u8; 24];
-        let mut w = BodyWriter::new(&mut body);
-        for v in sample.rate_b_radps.iter().chain(&sample.force_b_mps2) {
-            w.f32(*v);
-        }
-        encode_frame(kind::SAMPLE, 0, &body, wire).unwrap_or(0)
+/// A sample for the stream, framed (kind [`kind::SAMPLE`]): rate (rad/s) and force (m/s^2), body frame,
+/// compensated, as f32. Its length in `wire`.
+pub fn sample_frame(sample: &ImuSample, wire: &mut [u8]) -> usize {
+    let mut body = [0u8; 24];
+    let mut w = BodyWriter::new(&mut body);
+    for v in sample.rate_b_radps.iter().chain(&sample.force_b_mps2) {
+        w.f32(*v);
     }
+    encode_frame(kind::SAMPLE, 0, &body, wire).unwrap_or(0)
 }
 
 /// The record of the last solved calibration (`outcome`), with the compensation it gives.
@@ -338,50 +327,27 @@ fn body_of(len: Option<usize>) -> Reply {
 
 impl<F: NorFlash> Device<F> {
     fn request(&mut self, k: u8, body: &[u8], sampling: &SamplingStats, out: &mut [u8]) -> Reply {
-        let mut r = BodyReader::new(body);
-        let empty = |r: &BodyReader<'_>| if r.is_empty() { Ok(()) } else { Err((ErrorCode::Body, body.len() as u32)) };
+        // A body of exactly `n` bytes, or the refusal (with the body's length).
+        let exact = |n: usize| if body.len() == n { Ok(()) } else { Err((ErrorCode::Body, body.len() as u32)) };
+        let offset = || exact(4).map(|()| u32::from_le_bytes([body[0], body[1], body[2], body[3]]) as usize);
         match k {
-            kind::IDENTIFY => {
-                empty(&r)?;
-                self.identify(out)
-            }
+            kind::IDENTIFY => exact(0).and_then(|()| self.identify(out)),
             kind::CONFIGURE => self.configure(body),
-            kind::ANNOTATE => self.annotate(&mut r),
-            kind::START => {
-                empty(&r)?;
-                self.start(sampling)
-            }
+            kind::ANNOTATE => self.annotate(&mut BodyReader::new(body)),
+            kind::START => exact(0).and_then(|()| self.start(sampling)),
             kind::ABORT => {
-                empty(&r)?;
+                exact(0)?;
                 self.state = if self.header.is_some() { DeviceState::Configured } else { DeviceState::Idle };
                 Ok((0, Action::None))
             }
-            kind::STATUS => {
-                empty(&r)?;
-                self.status(sampling, out)
-            }
-            kind::READ_RESULT => {
-                let offset = r.u32().ok_or((ErrorCode::Body, body.len() as u32))?;
-                empty(&r)?;
-                self.read_result(offset as usize, out)
-            }
-            kind::STORE => {
-                empty(&r)?;
-                self.store_record(out)
-            }
-            kind::READ_RECORD => {
-                let offset = r.u32().ok_or((ErrorCode::Body, body.len() as u32))?;
-                empty(&r)?;
-                self.read_record(offset as usize, out)
-            }
-            kind::ERASE => {
-                empty(&r)?;
-                self.erase(out)
-            }
+            kind::STATUS => exact(0).and_then(|()| self.status(sampling, out)),
+            kind::READ_RESULT => self.read_result(offset()?, out),
+            kind::STORE => exact(0).and_then(|()| self.store_record(out)),
+            kind::READ_RECORD => self.read_record(offset()?, out),
+            kind::ERASE => exact(0).and_then(|()| self.erase(out)),
             kind::STREAM => {
-                let on = r.u8().ok_or((ErrorCode::Body, body.len() as u32))?;
-                empty(&r)?;
-                self.streaming = on != 0;
+                exact(1)?;
+                self.streaming = body[0] != 0;
                 Ok((0, Action::None))
             }
             other => Err((ErrorCode::UnknownKind, other as u32)),
@@ -402,7 +368,7 @@ impl<F: NorFlash> Device<F> {
         });
         w.u16(RECORD_VERSION).u16(MAX_POSITIONS as u16).u16(MAX_CHUNK as u16).u16(MAX_NOTE as u16);
         w.u32(self.store.max_payload() as u32);
-        body_of(w.len())
+        body_of(w.written())
     }
 
     #[inline(never)]
@@ -425,10 +391,9 @@ impl<F: NorFlash> Device<F> {
         }
         let mut t = BodyReader::new(threshold_bytes);
         let (Some(settle), Some(dwell), Some(min_dwell)) = (t.u32(), t.u32(), t.u32()) else { return refused(1) };
-        let thresholds = Thresholds { settle_samples: settle, dwell_samples: dwell, min_dwell_samples: min_dwell };
-        header.settings.settle_samples = thresholds.settle_samples;
-        header.settings.dwell_samples = thresholds.dwell_samples;
-        header.settings.min_dwell_samples = thresholds.min_dwell_samples;
+        header.settings.settle_samples = settle;
+        header.settings.dwell_samples = dwell;
+        header.settings.min_dwell_samples = min_dwell;
         if CalibrationSequence::check(&header.schedule, &header.settings).is_err() {
             return refused(3);
         }
@@ -492,7 +457,7 @@ impl<F: NorFlash> Device<F> {
         }
         w.u8(self.stored.is_some() as u8).u32(self.stored.map_or(0, |s| s.sequence));
         w.u8(self.compensation_from_record as u8).u8(self.streaming as u8);
-        body_of(w.len())
+        body_of(w.written())
     }
 
     #[inline(never)]
@@ -513,7 +478,7 @@ impl<F: NorFlash> Device<F> {
         }
         let record = record_of(outcome_of(self.state, &self.sequence, &self.run), &self.configuration, &self.note)?;
         let compensation = *record.compensation();
-        let len = record.len();
+        let len = record.record_bytes();
         if len > self.store.max_payload() {
             return Err((ErrorCode::TooLarge, len as u32));
         }
@@ -533,7 +498,7 @@ impl<F: NorFlash> Device<F> {
         self.compensation_from_record = true;
         let mut w = BodyWriter::new(out);
         w.u32(report.sequence).u8(report.slot).u32(report.erases).u32(len as u32);
-        body_of(w.len())
+        body_of(w.written())
     }
 
     #[inline(never)]
@@ -558,6 +523,6 @@ impl<F: NorFlash> Device<F> {
         self.compensation_from_record = false;
         let mut w = BodyWriter::new(out);
         w.u32(erases);
-        body_of(w.len())
+        body_of(w.written())
     }
 }

@@ -143,13 +143,9 @@ impl<'a> BodyWriter<'a> {
     pub fn f32(&mut self, v: f32) -> &mut Self {
         self.bytes(&v.to_bits().to_le_bytes())
     }
-    /// The length written, or `None` if something did not fit.
-    pub fn len(&self) -> Option<usize> {
+    /// The bytes written, or `None` if something did not fit.
+    pub fn written(&self) -> Option<usize> {
         self.fits.then_some(self.at)
-    }
-    /// Whether nothing was written.
-    pub fn is_empty(&self) -> bool {
-        self.at == 0
     }
 }
 

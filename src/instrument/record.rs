@@ -118,13 +118,8 @@ impl<'a> Record<'a> {
     }
 
     /// The record's length, bytes.
-    pub fn len(&self) -> usize {
+    pub fn record_bytes(&self) -> usize {
         self.head.record_bytes()
-    }
-
-    /// Whether the record is empty (never: it has a head).
-    pub fn is_empty(&self) -> bool {
-        false
     }
 
     /// Writes the record's bytes from `offset` into `out` (as many as fit, up to the record's end).

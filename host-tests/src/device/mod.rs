@@ -123,7 +123,6 @@ pub fn configuration_body_with(replay_header: &[u8], thresholds: Option<[u32; 3]
     for v in thresholds.unwrap_or(replay) {
         body.extend_from_slice(&v.to_le_bytes());
     }
-    debug_assert_eq!(THRESHOLD_BYTES, 12);
     Ok(body)
 }
 
