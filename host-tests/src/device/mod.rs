@@ -15,7 +15,7 @@ use sinscal::instrument::message::{kind, DeviceState};
 use sinscal::instrument::record::{RecordHead, RECORD_HEAD_BYTES};
 use sinscal::rig::replay::{decode_outcome, read_configuration, read_header, ReplayHeader};
 
-use crate::calibration::firmware_path::{calibration_from_outcome, write_replay_file, ReadSource, ReplayPlan};
+use crate::calibration::firmware_path::{calibration_from_outcome, write_replay_file, ReplayPlan};
 use crate::calibration::qemu::{firmware_binary, QEMU};
 use crate::calibration::{Calibration, Options};
 use crate::io::error::InputError;
@@ -107,20 +107,23 @@ pub fn boot_elf(elf: &Path, flash: &Path, replay: Option<&Path>) -> Result<QemuD
 /// and the thresholds of a replayed sequence (no settling, dwells as long as the table says, the core's fewest
 /// samples), which make a device's result equal to the host replay's.
 pub fn configuration_body(replay_header: &[u8]) -> Result<Vec<u8>, String> {
-    configuration_body_with(replay_header, None)
+    let header = read_header(&mut &replay_header[..]).map_err(|e| e.to_string())?;
+    configuration_body_with(replay_header, replay_thresholds(&header))
 }
 
-/// [`configuration_body`] with the thresholds `[settle samples, dwell samples, fewest samples]` of a real
-/// turntable instead (`None`: the replay's).
-pub fn configuration_body_with(replay_header: &[u8], thresholds: Option<[u32; 3]>) -> Result<Vec<u8>, String> {
+/// The thresholds `[settle samples, dwell samples, fewest samples]` a replay header's reader sets.
+fn replay_thresholds(header: &ReplayHeader) -> [u32; 3] {
+    let s = &header.settings;
+    [s.settle_samples, s.dwell_samples, s.min_dwell_samples]
+}
+
+/// [`configuration_body`] with the thresholds `[settle samples, dwell samples, fewest samples]` given.
+pub fn configuration_body_with(replay_header: &[u8], thresholds: [u32; 3]) -> Result<Vec<u8>, String> {
     if replay_header.len() < 6 + 4 {
         return Err("replay header too short".into());
     }
     let mut body = replay_header[6..replay_header.len() - 4].to_vec();
-    // The thresholds of a replayed sequence, as the replay header's reader sets them.
-    let s = read_header(&mut &replay_header[..]).map_err(|e| e.to_string())?.settings;
-    let replay = [s.settle_samples, s.dwell_samples, s.min_dwell_samples];
-    for v in thresholds.unwrap_or(replay) {
+    for v in thresholds {
         body.extend_from_slice(&v.to_le_bytes());
     }
     Ok(body)
@@ -156,9 +159,9 @@ pub fn run_calibration<T: Read + Write>(
     mut progress: impl FnMut(&client::Status),
 ) -> Result<DeviceRun, anyhow::Error> {
     let source = rec.source();
-    let head = replay_header_bytes(replay.path())?;
-    let header = read_header(&mut head.as_slice()).map_err(|e| InputError::file(source, format!("replay: {e}")))?;
+    let (head, header) = replay_header(replay.path())?;
     client.identify()?;
+    let thresholds = thresholds.unwrap_or(replay_thresholds(&header));
     client.configure(&configuration_body_with(&head, thresholds).map_err(anyhow::Error::msg)?)?;
     let note = Provenance::of(rec, options, plan).to_bytes();
     client.annotate(&note)?;
@@ -184,14 +187,14 @@ pub fn run_calibration<T: Read + Write>(
     Ok(DeviceRun { calibration, stored, status })
 }
 
-/// The replay file's header bytes (everything before the frames).
-fn replay_header_bytes(path: &Path) -> Result<Vec<u8>, anyhow::Error> {
-    let mut file = ReadSource(std::io::BufReader::new(std::fs::File::open(path)?));
-    let header = read_header(&mut file).map_err(|e| anyhow::anyhow!("replay: {e}"))?;
-    let len = sinscal::rig::replay::replay_header_bytes(header.schedule.len());
-    let mut bytes = vec![0u8; len];
-    std::fs::File::open(path)?.read_exact(&mut bytes)?;
-    Ok(bytes)
+/// The replay file's header, its bytes (everything before the frames) and as read: one read of the file's start.
+fn replay_header(path: &Path) -> Result<(Vec<u8>, ReplayHeader), anyhow::Error> {
+    let longest = sinscal::rig::replay::replay_header_bytes(sinscal::calib::solve::MAX_POSITIONS);
+    let mut bytes = Vec::with_capacity(longest);
+    std::fs::File::open(path)?.take(longest as u64).read_to_end(&mut bytes)?;
+    let header = read_header(&mut bytes.as_slice()).map_err(|e| anyhow::anyhow!("replay: {e}"))?;
+    bytes.truncate(sinscal::rig::replay::replay_header_bytes(header.schedule.len()));
+    Ok((bytes, header))
 }
 
 /// The parts of a stored record.
