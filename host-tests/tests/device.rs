@@ -8,7 +8,7 @@
 mod common;
 
 use assert_cmd::Command;
-use sinscal::instrument::link::{encode_frame, MAX_WIRE, PROTOCOL_VERSION};
+use sinscal::instrument::link::{encode_frame, MAX_WIRE_BYTES, PROTOCOL_VERSION};
 use sinscal::instrument::message::{kind, DeviceState, ErrorCode};
 use sinscal_host::calibration::qemu::firmware_binary;
 use sinscal_host::calibration::qemu::QEMU;
@@ -138,7 +138,7 @@ fn bad_messages_get_an_error_reply_and_the_device_keeps_running() {
         Err(LinkError::Refused { code, detail, .. }) => (code, detail),
         other => panic!("expected a refusal, got {other:?}"),
     };
-    let mut wire = vec![0u8; MAX_WIRE];
+    let mut wire = vec![0u8; MAX_WIRE_BYTES];
     // A good frame, then the same frame truncated (its last 6 bytes and delimiter lost) before a good one.
     let n = encode_frame(kind::IDENTIFY, 1, &[], &mut wire).unwrap();
     let mut truncated = wire[..n - 6].to_vec();

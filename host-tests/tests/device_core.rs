@@ -4,7 +4,7 @@
 
 use embedded_storage::nor_flash::{ErrorType, NorFlash, NorFlashErrorKind, ReadNorFlash};
 use sinscal::instrument::device::Device;
-use sinscal::instrument::link::{encode_frame, Frame, FrameReceiver, MAX_WIRE};
+use sinscal::instrument::link::{encode_frame, Frame, FrameReceiver, MAX_WIRE_BYTES};
 use sinscal::instrument::message::{kind, BodyReader, DeviceState, ErrorCode};
 use sinscal::instrument::store::RecordStore;
 use sinscal::rig::replay::{read_header, ReplayDevice};
@@ -78,10 +78,10 @@ impl Bench {
     /// A request through the frame encoding, and the device's reply decoded: (kind, body).
     fn ask(&mut self, k: u8, body: &[u8]) -> (u8, Vec<u8>) {
         self.seq = self.seq.wrapping_add(1);
-        let mut wire = vec![0u8; MAX_WIRE];
+        let mut wire = vec![0u8; MAX_WIRE_BYTES];
         let n = encode_frame(k, self.seq, body, &mut wire).unwrap();
         let (rk, rs, rb) = receive(&wire[..n]);
-        let mut reply = vec![0u8; MAX_WIRE];
+        let mut reply = vec![0u8; MAX_WIRE_BYTES];
         let (m, _) = self.device.on_frame(Ok(Frame { kind: rk, seq: rs, body: &rb }), &self.stats, &mut reply);
         let (fk, fs, fb) = receive(&reply[..m]);
         assert!(fk == kind::ERROR || fs == self.seq, "a reply carries its request's sequence number");

@@ -196,10 +196,10 @@ mod firmware {
         k: u8,
         b: &[u8],
     ) -> usize {
-        use sinscal::instrument::link::{encode_frame, FrameReceiver, MAX_WIRE};
+        use sinscal::instrument::link::{encode_frame, FrameReceiver, MAX_WIRE_BYTES};
         let stats = SamplingStats::default();
-        let mut request = [0u8; MAX_WIRE];
-        let mut reply = [0u8; MAX_WIRE];
+        let mut request = [0u8; MAX_WIRE_BYTES];
+        let mut reply = [0u8; MAX_WIRE_BYTES];
         let len = encode_frame(k, 1, b, &mut request).unwrap_or(0);
         let mut rx = FrameReceiver::new();
         let mut sent = 0;

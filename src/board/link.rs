@@ -8,7 +8,7 @@ use heapless::spsc::Consumer;
 
 use super::uart;
 use crate::instrument::device::{sample_frame, Action, Device};
-use crate::instrument::link::{FrameReceiver, MAX_WIRE};
+use crate::instrument::link::{FrameReceiver, MAX_WIRE_BYTES};
 use crate::run::sampling::SamplingStats;
 use crate::run::sequence::Event;
 use crate::sensor::sample::ImuSample;
@@ -17,13 +17,13 @@ use crate::sensor::sample::ImuSample;
 pub struct LinkPort {
     rx: Consumer<'static, u8>,
     receiver: FrameReceiver,
-    wire: [u8; MAX_WIRE],
+    wire: [u8; MAX_WIRE_BYTES],
 }
 
 impl LinkPort {
     /// The link on the consumer of UART0's receive queue.
     pub fn new(rx: Consumer<'static, u8>) -> LinkPort {
-        LinkPort { rx, receiver: FrameReceiver::new(), wire: [0; MAX_WIRE] }
+        LinkPort { rx, receiver: FrameReceiver::new(), wire: [0; MAX_WIRE_BYTES] }
     }
 
     /// Whether no byte waits.

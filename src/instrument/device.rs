@@ -9,8 +9,8 @@
 use embedded_storage::nor_flash::NorFlash;
 use heapless::Vec;
 
-use super::link::{encode_frame, Frame, FrameError, MAX_BODY};
-use super::message::{kind, BodyReader, BodyWriter, DeviceState, ErrorCode, MAX_CHUNK, MAX_NOTE};
+use super::link::{encode_frame, Frame, FrameError, MAX_BODY_BYTES};
+use super::message::{kind, BodyReader, BodyWriter, DeviceState, ErrorCode, MAX_CHUNK_BYTES, MAX_NOTE_BYTES};
 use super::record::{Record, RecordHead, RECORD_HEAD_BYTES, RECORD_VERSION};
 use super::store::{RecordInfo, RecordStore};
 use crate::calib::compensation::{self, Compensation};
@@ -23,7 +23,7 @@ use crate::sensor::sample::ImuSample;
 
 /// Longest configuration body, bytes: the fixed fields, a schedule of [`MAX_POSITIONS`] (16 each), and the
 /// thresholds (12).
-pub const MAX_CONFIGURATION: usize =
+pub const MAX_CONFIGURATION_BYTES: usize =
     crate::rig::replay::CONFIGURATION_FIXED_BYTES + 16 * MAX_POSITIONS + THRESHOLD_BYTES;
 /// Bytes of the thresholds at the end of a configuration body.
 pub const THRESHOLD_BYTES: usize = 12;
@@ -61,9 +61,9 @@ pub enum Action {
 pub struct Device<F: NorFlash> {
     model: Model,
     state: DeviceState,
-    configuration: Vec<u8, MAX_CONFIGURATION>,
+    configuration: Vec<u8, MAX_CONFIGURATION_BYTES>,
     header: Option<ReplayHeader>,
-    note: Vec<u8, MAX_NOTE>,
+    note: Vec<u8, MAX_NOTE_BYTES>,
     sequence: Option<CalibrationSequence>,
     run: RunCounters,
     store: RecordStore<F>,
@@ -252,7 +252,7 @@ impl<F: NorFlash> Device<F> {
         sampling: &SamplingStats,
         wire: &mut [u8],
     ) -> (usize, Action) {
-        let mut body = [0u8; MAX_BODY];
+        let mut body = [0u8; MAX_BODY_BYTES];
         let (seq, reply_kind, reply) = match frame {
             Err(e) => {
                 let (code, detail) = match e {
@@ -366,7 +366,7 @@ impl<F: NorFlash> Device<F> {
             Model::Adis16470 => 0,
             Model::Adis16505_2 => 1,
         });
-        w.u16(RECORD_VERSION).u16(MAX_POSITIONS as u16).u16(MAX_CHUNK as u16).u16(MAX_NOTE as u16);
+        w.u16(RECORD_VERSION).u16(MAX_POSITIONS as u16).u16(MAX_CHUNK_BYTES as u16).u16(MAX_NOTE_BYTES as u16);
         w.u32(self.store.max_payload() as u32);
         body_of(w.written())
     }
@@ -377,7 +377,7 @@ impl<F: NorFlash> Device<F> {
             return Err((ErrorCode::Busy, 0));
         }
         let refused = |detail| Err((ErrorCode::Configuration, detail));
-        if body.len() < THRESHOLD_BYTES || body.len() > MAX_CONFIGURATION {
+        if body.len() < THRESHOLD_BYTES || body.len() > MAX_CONFIGURATION_BYTES {
             return refused(1);
         }
         let (settings_bytes, threshold_bytes) = body.split_at(body.len() - THRESHOLD_BYTES);
@@ -410,8 +410,8 @@ impl<F: NorFlash> Device<F> {
     fn annotate(&mut self, r: &mut BodyReader<'_>) -> Reply {
         let (Some(offset), Some(total)) = (r.u16(), r.u16()) else { return Err((ErrorCode::Body, 0)) };
         let part = r.rest();
-        if total as usize > MAX_NOTE {
-            return Err((ErrorCode::NoteTooLong, MAX_NOTE as u32));
+        if total as usize > MAX_NOTE_BYTES {
+            return Err((ErrorCode::NoteTooLong, MAX_NOTE_BYTES as u32));
         }
         if offset == 0 {
             self.note.clear();
@@ -464,9 +464,9 @@ impl<F: NorFlash> Device<F> {
     fn read_result(&self, offset: usize, out: &mut [u8]) -> Reply {
         let outcome = self.outcome().ok_or((ErrorCode::NoResult, 0))?;
         let (head, part) = out.split_at_mut(8);
-        let part = &mut part[..MAX_CHUNK];
+        let part = &mut part[..MAX_CHUNK_BYTES];
         let total = encode_outcome_part(&outcome, offset, part);
-        let n = total.saturating_sub(offset).min(MAX_CHUNK);
+        let n = total.saturating_sub(offset).min(MAX_CHUNK_BYTES);
         BodyWriter::new(head).u32(total as u32).u32(offset as u32);
         Ok((8 + n, Action::None))
     }
@@ -505,7 +505,7 @@ impl<F: NorFlash> Device<F> {
     fn read_record(&mut self, offset: usize, out: &mut [u8]) -> Reply {
         let info = self.stored.ok_or((ErrorCode::NothingStored, 0))?;
         let total = info.len;
-        let n = total.saturating_sub(offset).min(MAX_CHUNK);
+        let n = total.saturating_sub(offset).min(MAX_CHUNK_BYTES);
         let (head, part) = out.split_at_mut(8);
         self.store.read(&info, offset, &mut part[..n]).map_err(|_| (ErrorCode::Flash, 0))?;
         BodyWriter::new(head).u32(total as u32).u32(offset as u32);

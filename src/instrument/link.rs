@@ -1,28 +1,28 @@
 //! Frames of the host link: what travels over the serial line between a workstation and the device.
 //!
-//! A frame is `version u8, kind u8, seq u8, body (0 to MAX_BODY bytes), CRC-32 u32 LE` (the CRC of everything
+//! A frame is `version u8, kind u8, seq u8, body (0 to MAX_BODY_BYTES bytes), CRC-32 u32 LE` (the CRC of everything
 //! before it), sent COBS-encoded (consistent-overhead byte stuffing: no zero byte inside) and ended by one zero
 //! byte. A receiver that loses bytes, or starts in the middle of a frame, is in step again at the next zero: a
-//! truncated frame costs that frame only. Frames are bounded ([`MAX_FRAME`]); nothing is allocated.
+//! truncated frame costs that frame only. Frames are bounded ([`MAX_FRAME_BYTES`]); nothing is allocated.
 
 use super::crc::Crc32;
 
 /// Version of the link protocol (the first byte of every frame).
 pub const PROTOCOL_VERSION: u8 = 1;
 /// Longest body of a frame, bytes.
-pub const MAX_BODY: usize = 1100;
+pub const MAX_BODY_BYTES: usize = 1100;
 /// Bytes of a frame around its body: version, kind, seq, CRC.
-pub const FRAME_OVERHEAD: usize = 3 + 4;
+pub const FRAME_OVERHEAD_BYTES: usize = 3 + 4;
 /// Longest frame before stuffing, bytes.
-pub const MAX_FRAME: usize = MAX_BODY + FRAME_OVERHEAD;
+pub const MAX_FRAME_BYTES: usize = MAX_BODY_BYTES + FRAME_OVERHEAD_BYTES;
 /// Longest frame on the wire: COBS adds one byte per 254 and one more, then the zero delimiter.
-pub const MAX_WIRE: usize = MAX_FRAME + MAX_FRAME / 254 + 2;
+pub const MAX_WIRE_BYTES: usize = MAX_FRAME_BYTES + MAX_FRAME_BYTES / 254 + 2;
 
 /// Why a received frame was refused.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 #[cfg_attr(feature = "defmt", derive(defmt::Format))]
 pub enum FrameError {
-    /// Longer than [`MAX_WIRE`] before its delimiter (the rest up to the delimiter was dropped).
+    /// Longer than [`MAX_WIRE_BYTES`] before its delimiter (the rest up to the delimiter was dropped).
     TooLong,
     /// The COBS stuffing is broken (a truncated frame, or noise).
     Stuffing,
@@ -37,7 +37,7 @@ pub enum FrameError {
 impl core::fmt::Display for FrameError {
     fn fmt(&self, f: &mut core::fmt::Formatter<'_>) -> core::fmt::Result {
         match self {
-            FrameError::TooLong => write!(f, "frame longer than {MAX_WIRE} bytes"),
+            FrameError::TooLong => write!(f, "frame longer than {MAX_WIRE_BYTES} bytes"),
             FrameError::Stuffing => f.write_str("broken frame stuffing (truncated frame?)"),
             FrameError::TooShort => f.write_str("frame shorter than its fixed fields"),
             FrameError::Crc => f.write_str("frame CRC mismatch"),
@@ -100,10 +100,10 @@ impl Stuffer<'_> {
 }
 
 /// Encodes a frame of `kind`, `seq` and `body` for the wire (stuffed, with its delimiter) into `out`; the
-/// number of bytes, or `None` if the body is longer than [`MAX_BODY`] or `out` is too short ([`MAX_WIRE`] is
+/// number of bytes, or `None` if the body is longer than [`MAX_BODY_BYTES`] or `out` is too short ([`MAX_WIRE_BYTES`] is
 /// always enough).
 pub fn encode_frame(kind: u8, seq: u8, body: &[u8], out: &mut [u8]) -> Option<usize> {
-    if body.len() > MAX_BODY {
+    if body.len() > MAX_BODY_BYTES {
         return None;
     }
     let head = [PROTOCOL_VERSION, kind, seq];
@@ -141,7 +141,7 @@ fn unstuff(buf: &mut [u8]) -> Result<usize, FrameError> {
 
 /// Checks a decoded frame: length, CRC, version.
 fn check(frame: &[u8]) -> Result<Frame<'_>, FrameError> {
-    if frame.len() < FRAME_OVERHEAD {
+    if frame.len() < FRAME_OVERHEAD_BYTES {
         return Err(FrameError::TooShort);
     }
     let (content, crc) = frame.split_at(frame.len() - 4);
@@ -159,7 +159,7 @@ fn check(frame: &[u8]) -> Result<Frame<'_>, FrameError> {
 /// Collects received bytes into frames: [`FrameReceiver::push`] each byte as it arrives; at a delimiter it
 /// returns the frame, checked, or why it was refused. Empty frames (two delimiters in a row) are skipped.
 pub struct FrameReceiver {
-    buf: [u8; MAX_WIRE],
+    buf: [u8; MAX_WIRE_BYTES],
     len: usize,
     overflow: bool,
 }
@@ -173,7 +173,7 @@ impl Default for FrameReceiver {
 impl FrameReceiver {
     /// A receiver waiting for the first frame.
     pub const fn new() -> FrameReceiver {
-        FrameReceiver { buf: [0; MAX_WIRE], len: 0, overflow: false }
+        FrameReceiver { buf: [0; MAX_WIRE_BYTES], len: 0, overflow: false }
     }
 
     /// Takes one byte; at a frame's end, the frame or its error.
@@ -221,26 +221,26 @@ mod tests {
 
     #[test]
     fn frames_of_every_length_and_content_round_trip() {
-        let mut wire = [0u8; MAX_WIRE];
-        for len in [0, 1, 2, 250, 251, 252, 253, 254, 255, 508, 509, 1000, MAX_BODY] {
+        let mut wire = [0u8; MAX_WIRE_BYTES];
+        for len in [0, 1, 2, 250, 251, 252, 253, 254, 255, 508, 509, 1000, MAX_BODY_BYTES] {
             for fill in [0u8, 1, 0xFF] {
                 let body: std::vec::Vec<u8> =
                     (0..len).map(|i| if fill == 1 { (i * 7 % 256) as u8 } else { fill }).collect();
-                let n = encode_frame(0x42, 7, &body, &mut wire).expect("fits MAX_WIRE");
-                assert!(n <= MAX_WIRE);
+                let n = encode_frame(0x42, 7, &body, &mut wire).expect("fits MAX_WIRE_BYTES");
+                assert!(n <= MAX_WIRE_BYTES);
                 assert_eq!(wire[n - 1], 0, "delimiter");
                 assert!(!wire[..n - 1].contains(&0), "no zero inside a stuffed frame");
                 assert_eq!(receive_all(&wire[..n]), [Ok((0x42, 7, body.clone()))], "length {len}, fill {fill}");
             }
         }
-        assert_eq!(encode_frame(1, 1, &[0; MAX_BODY + 1], &mut wire), None);
+        assert_eq!(encode_frame(1, 1, &[0; MAX_BODY_BYTES + 1], &mut wire), None);
         assert_eq!(encode_frame(1, 1, &[0; 10], &mut wire[..12]), None, "output too short");
     }
 
     #[test]
     fn a_truncated_or_corrupt_frame_costs_that_frame_only() {
-        let mut a = [0u8; MAX_WIRE];
-        let mut b = [0u8; MAX_WIRE];
+        let mut a = [0u8; MAX_WIRE_BYTES];
+        let mut b = [0u8; MAX_WIRE_BYTES];
         let na = encode_frame(1, 1, b"first frame", &mut a).unwrap();
         let nb = encode_frame(2, 2, b"second", &mut b).unwrap();
         // Truncated: the first frame loses its last 5 bytes and its delimiter; the next delimiter ends it.
@@ -271,7 +271,7 @@ mod tests {
 
     #[test]
     fn refusals_name_their_reason() {
-        let mut wire = [0u8; MAX_WIRE];
+        let mut wire = [0u8; MAX_WIRE_BYTES];
         let n = encode_frame(3, 9, b"x", &mut wire).unwrap();
         // Another protocol version with a correct CRC.
         let mut raw = [PROTOCOL_VERSION + 1, 3, 9, b'x', 0, 0, 0, 0];
@@ -283,7 +283,7 @@ mod tests {
         assert_eq!(receive_all(&wire[n..n + m]), [Err(FrameError::Version(PROTOCOL_VERSION + 1))]);
         assert_eq!(receive_all(&[1, 0]), [Err(FrameError::TooShort)]);
         assert_eq!(receive_all(&[5, 1, 0]), [Err(FrameError::Stuffing)]);
-        let long = [1u8; MAX_WIRE + 10];
+        let long = [1u8; MAX_WIRE_BYTES + 10];
         let mut wire_long = long.to_vec();
         wire_long.push(0);
         wire_long.extend_from_slice(&wire[..n]);

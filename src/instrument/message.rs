@@ -197,11 +197,11 @@ impl<'a> BodyReader<'a> {
 }
 
 /// Largest part of a result or record in one reply, bytes (with its total and offset, within
-/// [`MAX_BODY`](super::link::MAX_BODY)).
-pub const MAX_CHUNK: usize = 1024;
+/// [`MAX_BODY_BYTES`](super::link::MAX_BODY_BYTES)).
+pub const MAX_CHUNK_BYTES: usize = 1024;
 
 /// Longest provenance note the device keeps with a record, bytes.
-pub const MAX_NOTE: usize = 2048;
+pub const MAX_NOTE_BYTES: usize = 2048;
 
 /// The state of the device in a status reply.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]

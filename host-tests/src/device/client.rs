@@ -4,8 +4,8 @@
 use std::io::{Read, Write};
 use std::time::{Duration, Instant};
 
-use sinscal::instrument::link::{encode_frame, FrameReceiver, MAX_WIRE};
-use sinscal::instrument::message::{kind, BodyReader, DeviceState, ErrorCode, MAX_CHUNK, MAX_NOTE};
+use sinscal::instrument::link::{encode_frame, FrameReceiver, MAX_WIRE_BYTES};
+use sinscal::instrument::message::{kind, BodyReader, DeviceState, ErrorCode, MAX_CHUNK_BYTES, MAX_NOTE_BYTES};
 
 /// A failure of the link or a refusal of the device.
 #[derive(Debug, thiserror::Error)]
@@ -112,7 +112,7 @@ impl<T: Read + Write> Client<T> {
     /// Sends a request and waits for its reply: the reply's body, or the device's refusal.
     pub fn request(&mut self, what: &'static str, k: u8, body: &[u8]) -> Result<Vec<u8>, LinkError> {
         self.seq = self.seq.wrapping_add(1);
-        let mut wire = vec![0u8; MAX_WIRE];
+        let mut wire = vec![0u8; MAX_WIRE_BYTES];
         let n = encode_frame(k, self.seq, body, &mut wire).ok_or(LinkError::Malformed(what))?;
         self.send_raw(&wire[..n])?;
         let (reply_kind, body) = self.reply(what, k, Some(self.seq))?;
@@ -226,13 +226,17 @@ impl<T: Read + Write> Client<T> {
 
     /// Sends the provenance note in parts.
     pub fn annotate(&mut self, note: &[u8]) -> Result<(), LinkError> {
-        if note.len() > MAX_NOTE {
-            return Err(LinkError::Refused { what: "the note", code: ErrorCode::NoteTooLong, detail: MAX_NOTE as u32 });
+        if note.len() > MAX_NOTE_BYTES {
+            return Err(LinkError::Refused {
+                what: "the note",
+                code: ErrorCode::NoteTooLong,
+                detail: MAX_NOTE_BYTES as u32,
+            });
         }
         let total = note.len() as u16;
         let mut offset = 0;
         loop {
-            let part = &note[offset..(offset + MAX_CHUNK).min(note.len())];
+            let part = &note[offset..(offset + MAX_CHUNK_BYTES).min(note.len())];
             let mut body = Vec::with_capacity(4 + part.len());
             body.extend_from_slice(&(offset as u16).to_le_bytes());
             body.extend_from_slice(&total.to_le_bytes());
