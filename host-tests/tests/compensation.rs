@@ -106,6 +106,9 @@ fn solution(model: Model, theta: &[f32; PARAMETERS]) -> ChannelSolution {
         up_b: [[0.0; 3]; MAX_DWELLS],
         blind_spots: 0,
         gauge: 0,
+        moves: 0,
+        move_residual_rad: [[0.0; 3]; sinscal::calib::moves::MAX_MOVES],
+        move_statistic: [-1.0; sinscal::calib::moves::MAX_MOVES],
     }
 }
 

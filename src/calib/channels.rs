@@ -41,7 +41,9 @@
 use heapless::Vec;
 
 use crate::math::linalg::{cross, dot, norm, rotation, Mat3, Vec3};
+use crate::calib::moves::{swing_about, ChannelMove, MAX_MOVES, MOVE_PARAMETERS};
 use crate::math::lsq::{inverse_gram, jacobi_svd, solve_upper, solve_upper_transposed, SqrtInfo};
+use crate::nav::strapdown::Quat;
 use crate::nav::earth::{Site, EARTH_RATE_RADPS};
 use crate::nav::frames::{heading_rotation, Attitude};
 
@@ -334,6 +336,13 @@ pub enum ChannelError {
     },
     /// The model has no term the data can inform.
     NothingToEstimate,
+    /// More than [`MAX_MOVES`] moves.
+    TooManyMoves,
+    /// A move joins a dwell that was not added, or a number of it is not finite.
+    BadMove {
+        /// Which move (from 0, in the order given).
+        index: usize,
+    },
     /// The fit did not converge and left the range any instrument could have (it ran away: a model these dwells
     /// cannot pin down); the first such parameter.
     Diverged {
@@ -395,6 +404,12 @@ impl core::fmt::Display for ChannelError {
                 degrees_0_360(given_rad)
             ),
             ChannelError::NothingToEstimate => f.write_str("the model has no term these data can inform"),
+            ChannelError::TooManyMoves => write!(f, "more than {MAX_MOVES} moves"),
+            ChannelError::BadMove { index } => write!(
+                f,
+                "move {}: it joins a dwell that was not added, or its rotation, duration or sums are not finite",
+                index + 1
+            ),
             ChannelError::Diverged { parameter, value } => write!(
                 f,
                 "the fit diverged: {} reached {value:e} (SI), beyond what any instrument has; fit fewer terms \
@@ -470,6 +485,14 @@ pub struct ChannelSolution {
     /// Bit i: parameter i is held at zero to fix the body frame ([`GAUGE_PARAMETERS`]); it is also in
     /// `unobservable`, and the other parameters are estimated in that frame.
     pub gauge: u64,
+    /// Moves used (docs/method.md#moves), in the order given.
+    pub moves: usize,
+    /// Per move: the rotation the calibrated gyros measured less the reference rotation, body frame at the
+    /// start of the move, rad (without the part about up when a heading at either end is unknown).
+    pub move_residual_rad: [Vec3; MAX_MOVES],
+    /// Per move: its whitened residual sum of squares (a chi-square of 3 degrees of freedom, 2 without the part
+    /// about up, when the model holds); negative for a move left out.
+    pub move_statistic: [f32; MAX_MOVES],
 }
 
 impl ChannelSolution {
@@ -740,15 +763,45 @@ impl ChannelEstimator {
     /// Solves with every dwell, after the plausibility checks; a dwell whose residuals fit a heading a quarter
     /// or half turn from its reference heading is refused.
     pub fn solve(&self) -> Result<ChannelSolution, ChannelError> {
+        self.solve_with(&[])
+    }
+
+    /// [`ChannelEstimator::solve`] with the moves between dwells as observations of the gyro terms as well
+    /// (docs/method.md#moves).
+    pub fn solve_with(&self, moves: &[ChannelMove]) -> Result<ChannelSolution, ChannelError> {
         self.check_plausible()?;
-        let solution = self.solve_excluding(0)?;
-        self.check_headings(&solution)?;
+        self.check_moves(moves)?;
+        let solution = self.solve_excluding_with(0, moves)?;
+        self.check_headings(&solution, moves)?;
         Ok(solution)
+    }
+
+    /// Each move joins two dwells that were added, and its numbers are finite.
+    fn check_moves(&self, moves: &[ChannelMove]) -> Result<(), ChannelError> {
+        if moves.len() > MAX_MOVES {
+            return Err(ChannelError::TooManyMoves);
+        }
+        for (index, m) in moves.iter().enumerate() {
+            let finite = m.rotation.0.iter().all(|x| x.is_finite())
+                && m.duration_s.is_finite()
+                && m.duration_s > 0.0
+                && m.jacobian.iter().flatten().all(|x| x.is_finite())
+                && m.prior_si.iter().all(|x| x.is_finite())
+                && m.covariance_rad2.is_finite();
+            let ends = match m.closed_up_b {
+                Some(up) => up.iter().all(|x| x.is_finite()) && (norm(up) - 1.0).abs() < 1e-3,
+                None => m.from < self.dwells.len() && m.to < self.dwells.len(),
+            };
+            if !ends || !finite {
+                return Err(ChannelError::BadMove { index });
+            }
+        }
+        Ok(())
     }
 
     /// Suspect dwells with a known heading and tilt: refit without the dwell and test whether its gyro means
     /// fit a heading 90, 180 or 270 deg off far better than the reference's.
-    fn check_headings(&self, solution: &ChannelSolution) -> Result<(), ChannelError> {
+    fn check_headings(&self, solution: &ChannelSolution, moves: &[ChannelMove]) -> Result<(), ChannelError> {
         let unknown_tilt = self.settings.attitude == AttitudeKnowledge::Unknown;
         if !self.settings.use_gyro || !self.settings.earth_rate_resolved || unknown_tilt || solution.suspect == 0 {
             return Ok(());
@@ -758,7 +811,7 @@ impl ChannelEstimator {
             if solution.suspect & (1 << k) == 0 {
                 continue;
             }
-            let without = self.solve_excluding(1 << k)?;
+            let without = self.solve_excluding_with(1 << k, moves)?;
             let cost = |heading: f32| self.heading_cost(d, &d.tilt, &without.parameters_si, heading, without.model);
             let at_given = cost(given);
             for quarter in 1..4 {
@@ -959,6 +1012,11 @@ impl ChannelEstimator {
 
     /// Solves without the dwells marked in `exclude` (bit k = dwell k); no plausibility checks.
     pub fn solve_excluding(&self, exclude: u64) -> Result<ChannelSolution, ChannelError> {
+        self.solve_excluding_with(exclude, &[])
+    }
+
+    /// [`ChannelEstimator::solve_excluding`] with moves; a move to or from a dwell left out is left out too.
+    pub fn solve_excluding_with(&self, exclude: u64, moves: &[ChannelMove]) -> Result<ChannelSolution, ChannelError> {
         if self.dwells.is_empty() {
             return Err(ChannelError::NoDwells);
         }
@@ -991,7 +1049,7 @@ impl ChannelEstimator {
                     attitude[k] = heading_rotation(heading[k]).mul(&d.tilt);
                 }
             }
-            pass = self.pass(&theta, &attitude, &cols, n, used);
+            pass = self.pass(&theta, &attitude, &cols, n, used, moves);
             let mut largest = 0.0f32;
             for c in 0..n {
                 let p = cols[c];
@@ -1016,7 +1074,7 @@ impl ChannelEstimator {
             return Err(ChannelError::Diverged { parameter, value: theta[parameter] });
         }
         let state = State { theta: &theta, heading: &heading, attitude: &attitude, cols: &cols, n, model };
-        Ok(self.finish(&state, &pass, used, iterations, converged))
+        Ok(self.finish(&state, &pass, used, iterations, converged, moves))
     }
 
     /// One Gauss-Newton pass at `theta` and the dwells' `attitude`: structural rank, weighted solution of the
@@ -1028,6 +1086,7 @@ impl ChannelEstimator {
         cols: &[usize; PARAMETERS],
         n: usize,
         used: impl Fn(usize) -> bool,
+        moves: &[ChannelMove],
     ) -> Pass {
         let model = self.model();
         let zero = [0.0f32; PARAMETERS];
@@ -1042,6 +1101,18 @@ impl ChannelEstimator {
             let lin_s = self.linearise(&zero, &attitude[k], model);
             let w = self.rows(d, &lin, cols, n, &ones, false, none);
             let s = self.rows(d, &lin_s, cols, n, &ones, true, none);
+            for c in 0..n {
+                for r in 0..w.rows {
+                    norm_w[c] += w.a[r][c] * w.a[r][c];
+                    norm_s[c] += s.a[r][c] * s.a[r][c];
+                    peak_s[c] = peak_s[c].max(s.a[r][c].abs());
+                }
+            }
+        }
+        let moves_used = || moves.iter().filter(|m| self.settings.use_gyro && move_used(m, &used));
+        for m in moves_used() {
+            let w = self.move_rows(m, theta, attitude, cols, n, &ones, false);
+            let s = self.move_rows(m, theta, attitude, cols, n, &ones, true);
             for c in 0..n {
                 for r in 0..w.rows {
                     norm_w[c] += w.a[r][c] * w.a[r][c];
@@ -1095,6 +1166,14 @@ impl ChannelEstimator {
                 weighted.add_row(&w.a[r], w.y[r]);
             }
             for r in skip_s..s.rows {
+                structure.add_row(&s.a[r], 0.0);
+            }
+        }
+        for m in moves_used() {
+            let w = self.move_rows(m, theta, attitude, cols, n, &scale, false);
+            let s = self.move_rows(m, theta, attitude, cols, n, &scale_s, true);
+            for r in 0..w.rows {
+                weighted.add_row(&w.a[r], w.y[r]);
                 structure.add_row(&s.a[r], 0.0);
             }
         }
@@ -1183,6 +1262,7 @@ impl ChannelEstimator {
         used: impl Fn(usize) -> bool,
         iterations: u32,
         converged: bool,
+        moves: &[ChannelMove],
     ) -> ChannelSolution {
         let State { theta, heading, attitude, cols, n, model } = *state;
         let mut sol = ChannelSolution {
@@ -1207,6 +1287,9 @@ impl ChannelEstimator {
             up_b: [[0.0; 3]; MAX_DWELLS],
             blind_spots: pass.blind_spots,
             gauge: pass.gauge,
+            moves: 0,
+            move_residual_rad: [[0.0; 3]; MAX_MOVES],
+            move_statistic: [-1.0; MAX_MOVES],
         };
         for c in 0..n {
             let p = cols[c];
@@ -1271,9 +1354,166 @@ impl ChannelEstimator {
                 }
             }
         }
+        for (k, m) in moves.iter().enumerate().take(MAX_MOVES) {
+            if !self.settings.use_gyro {
+                break;
+            }
+            let rows = self.move_rows(m, theta, attitude, cols, n, &pass.scale, false);
+            sol.move_residual_rad[k] = rows.residual_rad;
+            sol.moves += 1;
+            if !move_used(m, &used) {
+                continue;
+            }
+            let chi2: f32 = rows.y[..rows.rows].iter().map(|y| y * y).sum();
+            sol.move_statistic[k] = chi2;
+            sol.chi_square += chi2;
+            channels += rows.rows as u32;
+        }
         sol.degrees_of_freedom = channels.saturating_sub(pass.kept_count as u32 + nuisances);
         sol
     }
+
+    /// The rows of one move at `theta` and the dwells' `attitude`: whitened by its covariance, or, `structural`,
+    /// in units of the Earth rate over the move with entries below 1e-6 of it set to zero; model columns `cols`
+    /// scaled by `scale`. Without a heading at either end the part about up at the start is left out (two
+    /// rows): the reference does not say how far the body turned about the vertical.
+    #[allow(clippy::too_many_arguments, reason = "the same arguments as the dwells' rows")]
+    fn move_rows(
+        &self,
+        m: &ChannelMove,
+        theta: &[f32; PARAMETERS],
+        attitude: &[Mat3; MAX_DWELLS],
+        cols: &[usize; PARAMETERS],
+        n: usize,
+        scale: &[f32; PARAMETERS],
+        structural: bool,
+    ) -> MoveRows {
+        let w_n = self.site.earth_rate_n_radps();
+        let (reference, twist_free, up, unresolved) = match m.closed_up_b {
+            // Back where it started: the Earth's rotation, its vertical part about up in the body.
+            Some(up) => {
+                let vertical = w_n[2] * m.duration_s;
+                (rotation(up.map(|u| u * vertical)), false, up, true)
+            }
+            None => {
+                let (c_from, c_to) = (attitude[m.from], attitude[m.to]);
+                // The body's rotation relative to inertial space: the navigation frame turns with the Earth.
+                let earth = rotation(w_n.map(|w| w * m.duration_s));
+                let (from, to) = (&self.dwells[m.from], &self.dwells[m.to]);
+                let unresolved = [from, to].iter().any(|d| d.heading_rad.is_none() && !self.nuisances(d)[2]);
+                let twist_free = from.heading_rad.is_none() || to.heading_rad.is_none();
+                (c_from.transpose().mul(&earth).mul(&c_to), twist_free, c_from.row(2), unresolved)
+            }
+        };
+        let q_ref = Quat::from_mat3(&reference);
+        let misfit = m.rotation.mul(&q_ref.conjugate());
+        let (misfit, basis, rows) = if twist_free {
+            // Two directions at right angles to up.
+            let helper = if up[0].abs() < 0.9 { [1.0, 0.0, 0.0] } else { [0.0, 1.0, 0.0] };
+            let b1 = cross(up, helper);
+            let b1 = b1.map(|x| x / norm(b1));
+            (swing_about(&misfit, up), [b1, cross(up, b1), [0.0; 3]], 2)
+        } else {
+            (misfit, [[1.0, 0.0, 0.0], [0.0, 1.0, 0.0], [0.0, 0.0, 1.0]], 3)
+        };
+        // The rotation error at theta: the prior's plus the linear change since the prior.
+        let mut e = misfit.to_rotation_vector();
+        for (c, &p) in MOVE_PARAMETERS.iter().enumerate() {
+            let delta = theta[p] - m.prior_si[c];
+            for (a, slot) in e.iter_mut().enumerate() {
+                *slot += m.jacobian[a][c] * delta;
+            }
+        }
+        // The covariance in the basis; an unknown heading also leaves the horizontal Earth rate's direction
+        // unknown when it is not estimated: its angle over the move is added as noise.
+        let mut cov = m.covariance_rad2;
+        if unresolved {
+            let horizontal = self.site.earth_rate_north_radps() * m.duration_s;
+            for i in 0..3 {
+                cov.0[i][i] += horizontal * horizontal;
+            }
+        }
+        let mut out = MoveRows { a: [[0.0; PARAMETERS]; 3], y: [0.0; 3], rows, residual_rad: e };
+        let unit = if structural { 1.0 / (EARTH_RATE_RADPS * m.duration_s) } else { 1.0 };
+        for (r, b) in basis.iter().enumerate().take(rows) {
+            out.y[r] = if structural { 0.0 } else { -dot(*b, e) };
+            for (c, &p) in cols.iter().enumerate().take(n) {
+                let Some(mc) = MOVE_PARAMETERS.iter().position(|&q| q == p) else { continue };
+                let x = (0..3).map(|k| b[k] * m.jacobian[k][mc]).sum::<f32>() * unit;
+                out.a[r][c] = if structural && x.abs() < 1e-6 { 0.0 } else { x * scale[c] };
+            }
+        }
+        if structural {
+            return out;
+        }
+        // Whitening: rows times the inverse of the Cholesky factor of B cov B^T.
+        let mut s = [[0.0f32; 3]; 3];
+        for i in 0..rows {
+            for j in 0..rows {
+                s[i][j] = dot(basis[i], cov.mul_vec(basis[j]));
+            }
+        }
+        let Some(l) = cholesky3(&s, rows) else {
+            out.rows = 0;
+            return out;
+        };
+        for c in 0..n + 1 {
+            // Forward substitution on column c (c == n: the right-hand side).
+            let mut x = [0.0f32; 3];
+            for i in 0..rows {
+                let mut v = if c < n { out.a[i][c] } else { out.y[i] };
+                for (j, xj) in x.iter().enumerate().take(i) {
+                    v -= l[i][j] * xj;
+                }
+                x[i] = v / l[i][i];
+            }
+            for (i, xi) in x.iter().enumerate().take(rows) {
+                if c < n {
+                    out.a[i][c] = *xi;
+                } else {
+                    out.y[i] = *xi;
+                }
+            }
+        }
+        out
+    }
+}
+
+/// Whether a move is used when the dwells `used` are: a closed move always, another when both its dwells are.
+fn move_used(m: &ChannelMove, used: &impl Fn(usize) -> bool) -> bool {
+    m.closed_up_b.is_some() || (used(m.from) && used(m.to))
+}
+
+/// The rows of one move (up to three), its residual and its number of rows.
+struct MoveRows {
+    a: [[f32; PARAMETERS]; 3],
+    y: [f32; 3],
+    rows: usize,
+    /// The rotation error at the parameters, start frame, rad.
+    residual_rad: Vec3,
+}
+
+/// The lower Cholesky factor of the leading `n` x `n` block of a symmetric matrix, or `None` when it is not
+/// positive definite.
+fn cholesky3(s: &[[f32; 3]; 3], n: usize) -> Option<[[f32; 3]; 3]> {
+    let mut l = [[0.0f32; 3]; 3];
+    for i in 0..n {
+        for j in 0..=i {
+            let mut v = s[i][j];
+            for k in 0..j {
+                v -= l[i][k] * l[j][k];
+            }
+            if i == j {
+                if !(v > 0.0) {
+                    return None;
+                }
+                l[i][i] = libm::sqrtf(v);
+            } else {
+                l[i][j] = v / l[j][j];
+            }
+        }
+    }
+    Some(l)
 }
 
 /// The state of one solve that [`ChannelEstimator::finish`] reports.

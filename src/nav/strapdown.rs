@@ -76,6 +76,40 @@ impl Quat {
         [k * q[1], k * q[2], k * q[3]]
     }
 
+    /// The quaternion of a rotation matrix (Shepperd's method: from its largest of the four squared
+    /// components, so that no division is by a small number), with a non-negative scalar part.
+    pub fn from_mat3(m: &Mat3) -> Quat {
+        let a = m.0;
+        let trace = a[0][0] + a[1][1] + a[2][2];
+        let candidates = [trace, a[0][0], a[1][1], a[2][2]];
+        let mut k = 0;
+        for i in 1..4 {
+            if candidates[i] > candidates[k] {
+                k = i;
+            }
+        }
+        let q = match k {
+            0 => {
+                let s = 2.0 * libm::sqrtf(1.0 + trace);
+                [0.25 * s, (a[2][1] - a[1][2]) / s, (a[0][2] - a[2][0]) / s, (a[1][0] - a[0][1]) / s]
+            }
+            1 => {
+                let s = 2.0 * libm::sqrtf((1.0 + a[0][0] - a[1][1] - a[2][2]).max(0.0));
+                [(a[2][1] - a[1][2]) / s, 0.25 * s, (a[0][1] + a[1][0]) / s, (a[0][2] + a[2][0]) / s]
+            }
+            2 => {
+                let s = 2.0 * libm::sqrtf((1.0 + a[1][1] - a[0][0] - a[2][2]).max(0.0));
+                [(a[0][2] - a[2][0]) / s, (a[0][1] + a[1][0]) / s, 0.25 * s, (a[1][2] + a[2][1]) / s]
+            }
+            _ => {
+                let s = 2.0 * libm::sqrtf((1.0 + a[2][2] - a[0][0] - a[1][1]).max(0.0));
+                [(a[1][0] - a[0][1]) / s, (a[0][2] + a[2][0]) / s, (a[1][2] + a[2][1]) / s, 0.25 * s]
+            }
+        };
+        let q = if q[0] < 0.0 { q.map(|c| -c) } else { q };
+        Quat(q).normalized()
+    }
+
     /// The rotation matrix (it maps a vector of the body frame now to the body frame at the start).
     pub fn to_mat3(&self) -> Mat3 {
         let [w, x, y, z] = self.0;
@@ -112,8 +146,13 @@ impl MoveIntegrator {
 
     /// One rate sample, body frame, rad/s: the mean rate over the interval that ends with it.
     pub fn push(&mut self, rate_b_radps: Vec3) {
+        self.push_increment(rate_b_radps.map(|w| w * self.dt_s));
+    }
+
+    /// One angle increment, body frame, rad: the rotation vector of one sample interval to first order (the
+    /// rate times its interval, when the intervals differ).
+    pub fn push_increment(&mut self, increment: Vec3) {
         self.samples = self.samples.saturating_add(1);
-        let increment = rate_b_radps.map(|w| w * self.dt_s);
         if !self.coning {
             self.apply(increment);
             return;
@@ -135,6 +174,11 @@ impl MoveIntegrator {
 
     fn apply(&mut self, phi: Vec3) {
         self.attitude = self.attitude.mul(&Quat::from_rotation_vector(phi)).normalized();
+    }
+
+    /// The rotation after the last pair of increments, and the increment waiting for its pair.
+    pub fn paired(&self) -> (Quat, Option<Vec3>) {
+        (self.attitude, self.pending)
     }
 
     /// Samples pushed.
@@ -180,6 +224,15 @@ mod tests {
         // A quarter turn about z takes x to y.
         let y = Quat::from_rotation_vector([0.0, 0.0, core::f32::consts::FRAC_PI_2]).to_mat3().mul_vec([1.0, 0.0, 0.0]);
         assert!((y[1] - 1.0).abs() < 1e-6 && y[0].abs() < 1e-6);
+        // Back from the matrix, also near a half turn and about each axis.
+        for v in [[0.3, -1.1, 0.4], [3.1, 0.0, 0.0], [0.0, -3.0, 0.1], [0.05, 0.1, 3.1], [0.0; 3]] {
+            let q = Quat::from_rotation_vector(v);
+            let q = if q.0[0] < 0.0 { Quat(q.0.map(|c| -c)) } else { q };
+            let back = Quat::from_mat3(&rotation(v));
+            for k in 0..4 {
+                assert!((back.0[k] - q.0[k]).abs() < 2e-6, "{v:?}: {back:?} vs {q:?}");
+            }
+        }
         // Products compose: a then b equals the matrix product.
         let (a, b) = ([0.2, 0.1, -0.3], [-0.4, 0.25, 0.1]);
         let qab = Quat::from_rotation_vector(a).mul(&Quat::from_rotation_vector(b)).to_mat3();

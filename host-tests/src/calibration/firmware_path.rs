@@ -256,6 +256,9 @@ pub fn calibration_from_outcome(
         converged,
         sampling: Some(outcome.sampling),
         on: "host",
+        // The firmware's sequence does not integrate the moves (docs/method.md#moves).
+        moves: Vec::new(),
+        move_passes: 0,
     };
     Ok(match result {
         SequenceSolution::Angles(r) => {
@@ -270,7 +273,7 @@ pub fn calibration_from_outcome(
             };
             let estimator = session_estimator(session_dwells(&positions), site, settings, options.dwell_value)
                 .map_err(|e| channel_error(e, &positions, source))?;
-            let without_suspect = leave_out_suspects(&estimator, c, &positions);
+            let without_suspect = leave_out_suspects(&estimator, c, &positions, &[], [0.0; 3]);
             let estimates = Estimates::from_session(&estimator, c, 0);
             on_firmware(estimates, None, Some(c.clone()), without_suspect, c.iterations, c.converged)
         }

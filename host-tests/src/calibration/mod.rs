@@ -6,6 +6,7 @@ pub mod compare;
 pub mod estimates;
 pub mod firmware_path;
 pub mod montecarlo;
+pub mod moves;
 pub mod qemu;
 
 use sinscal::calib::align::{position_angles, DwellValue, PositionAngles};
@@ -71,6 +72,9 @@ pub struct Options {
     /// The firmware path's check of rest: the largest | |f| - g | of a sample in a dwell, m/s^2 (a raw,
     /// uncalibrated accelerometer can be further from g than the default allows).
     pub rest_force_tolerance_mps2: f32,
+    /// General estimator: use the moves between dwells when the model has gyro scale factors or misalignments
+    /// (docs/method.md#moves).
+    pub use_moves: bool,
 }
 
 impl Options {
@@ -96,6 +100,7 @@ impl Default for Options {
             model: DEFAULT_MODEL,
             estimate_attitudes: false,
             rest_force_tolerance_mps2: sinscal::run::sequence::SequenceSettings::default().max_force_error_mps2,
+            use_moves: true,
         }
     }
 }
@@ -162,6 +167,30 @@ pub struct Calibration {
     pub sampling: Option<sinscal::run::sampling::SamplingStats>,
     /// "recording", "host" or "qemu".
     pub on: &'static str,
+    /// The moves the general estimator used, in order (empty when it used none).
+    pub moves: Vec<UsedMove>,
+    /// Passes of move integration and solution (0 without moves).
+    pub move_passes: u32,
+}
+
+/// A move the general estimator used: between which dwells, where, how long, how far it turned, and how far the
+/// calibrated gyros' rotation is from the reference's.
+#[derive(Clone, Debug, PartialEq)]
+pub struct UsedMove {
+    /// Label of the dwell before it.
+    pub from_pos: u32,
+    /// Label of the dwell after it.
+    pub to_pos: u32,
+    /// Line of its first row.
+    pub first_line: usize,
+    /// Duration, s.
+    pub duration_s: f64,
+    /// The angle the gyros measured, deg.
+    pub angle_deg: f64,
+    /// The rotation error after the fit, body frame at the start of the move, rad.
+    pub residual_rad: [f64; 3],
+    /// Its whitened sum of squares (negative when left out).
+    pub statistic: f64,
 }
 
 fn to_f32(v: [f64; 3]) -> [f32; 3] {
@@ -307,8 +336,20 @@ pub fn calibrate_channels(recording: &impl RowSource, options: &Options) -> Resu
     };
     let estimator = session_estimator(session_dwells(&positions), site, settings, options.dwell_value)
         .map_err(|e| channel_error(e, &positions, source))?;
-    let solution = estimator.solve().map_err(|e| channel_error(e, &positions, source))?;
-    let without_suspect = leave_out_suspects(&estimator, &solution, &positions);
+    let move_samples = if has_gyro && options.use_moves && moves::model_uses_moves(options.model) {
+        moves::collect_moves(recording, MAX_DWELLS)?
+    } else {
+        Vec::new()
+    };
+    let rate_var_radps2 = [noise[0], noise[1], noise[2]];
+    let (solution, integrated, move_passes) = if move_samples.is_empty() {
+        (estimator.solve().map_err(|e| channel_error(e, &positions, source))?, Vec::new(), 0)
+    } else {
+        moves::solve_with_moves(&estimator, &move_samples, rate_var_radps2, 0)
+            .map_err(|e| channel_error(e, &positions, source))?
+    };
+    let used_moves = used_moves(&move_samples, &integrated, &solution, &positions);
+    let without_suspect = leave_out_suspects(&estimator, &solution, &positions, &move_samples, rate_var_radps2);
     Ok(Calibration {
         without_suspect,
         source: source.to_string(),
@@ -326,7 +367,32 @@ pub fn calibrate_channels(recording: &impl RowSource, options: &Options) -> Resu
         has_gyro,
         sampling: None,
         on: "recording",
+        moves: used_moves,
+        move_passes,
     })
+}
+
+/// What the report says of each move used.
+fn used_moves(
+    samples: &[moves::MoveSamples],
+    integrated: &[sinscal::calib::moves::ChannelMove],
+    solution: &ChannelSolution,
+    positions: &[PositionResult],
+) -> Vec<UsedMove> {
+    samples
+        .iter()
+        .zip(integrated)
+        .enumerate()
+        .map(|(k, (m, c))| UsedMove {
+            from_pos: positions[m.from].pos,
+            to_pos: positions[m.to].pos,
+            first_line: m.first_line,
+            duration_s: c.duration_s as f64,
+            angle_deg: (sinscal::math::linalg::norm(c.rotation.to_rotation_vector()) as f64).to_degrees(),
+            residual_rad: solution.move_residual_rad[k].map(|x| x as f64),
+            statistic: solution.move_statistic[k] as f64,
+        })
+        .collect()
 }
 
 /// The positions as the core's session: the reference attitude, whether it gives the heading, the statistics.
@@ -349,6 +415,8 @@ pub fn leave_out_suspects(
     estimator: &ChannelEstimator,
     solution: &ChannelSolution,
     positions: &[PositionResult],
+    move_samples: &[moves::MoveSamples],
+    rate_var_radps2: [f32; 3],
 ) -> Option<(Vec<u32>, Estimates)> {
     let mut mask = 0u64;
     let mut current = solution.clone();
@@ -359,7 +427,11 @@ pub fn leave_out_suspects(
             .max_by(|&a, &b| current.dwell_statistic[a].total_cmp(&current.dwell_statistic[b]))?;
         mask |= 1 << worst;
         out += 1;
-        current = estimator.solve_excluding(mask).ok()?;
+        current = if move_samples.is_empty() {
+            estimator.solve_excluding(mask).ok()?
+        } else {
+            moves::solve_with_moves(estimator, move_samples, rate_var_radps2, mask).ok()?.0
+        };
     }
     if mask == 0 {
         return None;
@@ -432,6 +504,8 @@ pub fn calibrate_angles(recording: &impl RowSource, options: &Options) -> Result
         converged,
         sampling: None,
         on: "recording",
+        moves: Vec::new(),
+        move_passes: 0,
     })
 }
 

@@ -105,6 +105,10 @@ pub struct CalibrationArgs {
     /// m/s^2 (default 0.5); a raw, uncalibrated accelerometer may need more.
     #[arg(long, value_parser = parse_tolerance)]
     rest_force_tolerance: Option<f32>,
+    /// Channel method: do not use the moves between dwells (they are used when the model has gyro scale factors
+    /// or misalignments: docs/method.md#moves).
+    #[arg(long)]
+    no_moves: bool,
 }
 
 /// `--rest-force-tolerance`: a positive number of m/s^2 (a bad value is a usage error, exit 2).
@@ -170,6 +174,7 @@ impl CalibrationArgs {
             rest_force_tolerance_mps2: self
                 .rest_force_tolerance
                 .unwrap_or(sinscal::run::sequence::SequenceSettings::default().max_force_error_mps2),
+            use_moves: !self.no_moves,
         })
     }
 }

@@ -140,6 +140,8 @@ impl Provenance {
             model: terms_of_bits(o.terms),
             estimate_attitudes: o.estimate_attitudes,
             rest_force_tolerance_mps2: o.rest_force_tolerance_mps2,
+            // The device's sequence does not integrate the moves.
+            use_moves: false,
         })
     }
 }

@@ -357,6 +357,8 @@ fn failure_code(f: &Option<SequenceFailure>) -> [u32; 5] {
             ChannelError::HeadingMismatch { dwell, given_rad, fits_rad } => (3, dwell, 6, bits(given_rad, fits_rad)),
             ChannelError::NothingToEstimate => (3, 0, 7, [0, 0]),
             ChannelError::Diverged { parameter, value } => (3, parameter, 8, bits(value, 0.0)),
+            ChannelError::TooManyMoves => (3, 0, 9, [0, 0]),
+            ChannelError::BadMove { index } => (3, index, 10, [0, 0]),
         },
     };
     [kind, index as u32, code, x, y]
@@ -389,6 +391,8 @@ fn failure_of_code(words: [u32; 5]) -> Result<Option<SequenceFailure>, ReplayErr
         (3, 6) => channels(ChannelError::HeadingMismatch { dwell: index, given_rad: x, fits_rad: y }),
         (3, 7) => channels(ChannelError::NothingToEstimate),
         (3, 8) => channels(ChannelError::Diverged { parameter: index, value: x }),
+        (3, 9) => channels(ChannelError::TooManyMoves),
+        (3, 10) => channels(ChannelError::BadMove { index }),
         _ => return Err(ReplayError::Format),
     })
 }
@@ -692,6 +696,9 @@ fn decode_channels(r: &mut Reader<'_>) -> Result<ChannelSolution, ReplayError> {
         up_b: [[0.0; 3]; MAX_DWELLS],
         blind_spots: 0,
         gauge: 0,
+        moves: 0,
+        move_residual_rad: [[0.0; 3]; crate::calib::moves::MAX_MOVES],
+        move_statistic: [-1.0; crate::calib::moves::MAX_MOVES],
     };
     for k in 0..dwells {
         c.heading_rad[k] = r.f32()?;

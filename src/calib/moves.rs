@@ -1,0 +1,257 @@
+//! A move between two dwells as an observation of the gyro terms (docs/method.md#moves): the rotation the gyros
+//! measure over it, integrated with the coning-corrected update of [`crate::nav::strapdown`], and its first-order
+//! sensitivity to every gyro parameter, accumulated sample by sample so that nothing of the move is stored.
+//!
+//! The rates are compensated with a prior calibration `theta_0` before they are integrated (the inverse sensor
+//! model of docs/conventions.md#sensor-model: `w = T_g^-1 (w_meas - b_g - G f)`). A change of the parameters
+//! changes each sample's angle increment by `delta d_k = -P e_i (...)`, `P = T_g0^-1`, and the move's rotation, to
+//! first order, by `delta rho = sum_k C_k delta d_k` in the body frame at the start of the move, where `C_k` is the
+//! body's attitude at the middle of sample k relative to the start. The sums kept are therefore
+//!   `sum C_k dt`, `sum C_k d_k,j` (j = x, y, z) and `sum C_k f_k,j dt`,
+//! nine numbers each, from which the Jacobian of the rotation with respect to the gyro bias (3), scale factors
+//! (3), misalignments (6) and g-sensitivity (9) follows at the end (`P` applied once). The white-noise covariance
+//! of the rotation is `sum_i var_i sum_k (C_k e_i)(C_k e_i)^T dt^2` for a per-sample rate variance `var_i`.
+//!
+//! The model is linear about the prior; its error is second order in the change from the prior (for a rotation
+//! about a sensor axis, a scale factor change is exact). The host integrates the moves again with each new
+//! estimate until the estimate stops changing (docs/method.md#moves).
+//!
+//! Memory: 348 bytes per move being integrated; a finished move ([`ChannelMove`]) is 404 bytes.
+
+use crate::calib::channels::{g_sensitivity_radps_per_mps2, misalignment_index, sensor_matrix, PARAMETERS};
+use crate::math::linalg::{skew, Mat3, Vec3};
+use crate::nav::strapdown::{MoveIntegrator, Quat};
+
+/// Parameters a move observes, in the estimator's order (see [`crate::calib::channels::parameter_name`]): gyro
+/// bias x, y, z, then gyro scale factors, misalignments and g-sensitivity (indices 15 to 32).
+pub const MOVE_PARAMETERS: [usize; MOVE_COLUMNS] =
+    [0, 1, 2, 15, 16, 17, 18, 19, 20, 21, 22, 23, 24, 25, 26, 27, 28, 29, 30, 31, 32];
+/// Number of parameters a move observes.
+pub const MOVE_COLUMNS: usize = 21;
+/// Most moves one solution takes: one between each two dwells.
+pub const MAX_MOVES: usize = crate::calib::channels::MAX_DWELLS;
+
+/// Why a move cannot be integrated.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub enum MoveError {
+    /// The prior's gyro matrix `T_g` is singular or not finite.
+    SingularPrior,
+}
+
+impl core::fmt::Display for MoveError {
+    fn fmt(&self, f: &mut core::fmt::Formatter<'_>) -> core::fmt::Result {
+        match self {
+            MoveError::SingularPrior => f.write_str("the prior gyro matrix T_g is singular or not finite"),
+        }
+    }
+}
+
+/// A move being integrated.
+#[derive(Clone, Debug, PartialEq)]
+pub struct MoveSums {
+    prior_si: [f32; MOVE_COLUMNS],
+    /// `P = T_g0^-1`.
+    inverse: Mat3,
+    bias_b_radps: Vec3,
+    g_sensitivity: Mat3,
+    integrator: MoveIntegrator,
+    /// The attitude after the last pair of increments, `C_b(t)^b(0)`.
+    frame: Mat3,
+    duration_s: f32,
+    /// `sum C_k dt`, s.
+    sum_c_dt_s: Mat3,
+    /// `sum C_k d_k,j` for j = x, y, z, rad.
+    sum_c_angle_rad: [Mat3; 3],
+    /// `sum C_k f_k,j dt` for j = x, y, z, m/s.
+    sum_c_force_mps: [Mat3; 3],
+    /// `sum (C_k e_i)(C_k e_i)^T dt^2` for i = x, y, z, s^2.
+    sum_noise_s2: [Mat3; 3],
+}
+
+/// A finished move: what the estimator needs of it.
+#[derive(Clone, Copy, Debug, PartialEq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub struct ChannelMove {
+    /// The dwell the move starts from (index in the order the dwells were added).
+    pub from: usize,
+    /// The dwell it ends at.
+    pub to: usize,
+    /// A move that ends at the attitude it started from, whatever the dwells (a labelled full turn about one
+    /// axis, as in a Ferraris session): up (the direction of measured gravity) in the body at rest, a unit
+    /// vector. The reference rotation is then the Earth's alone, known about up and unknown about the
+    /// horizontal (added as noise); `from` and `to` are not used.
+    pub closed_up_b: Option<Vec3>,
+    /// The rotation the compensated gyros measured, `C_b(end)^b(start)`.
+    pub rotation: Quat,
+    /// Duration, s.
+    pub duration_s: f32,
+    /// The prior's value of each parameter of [`MOVE_PARAMETERS`], SI.
+    pub prior_si: [f32; MOVE_COLUMNS],
+    /// Row a, column c: the change of the rotation vector's component a (body frame at the start, rad) per SI
+    /// unit of parameter `MOVE_PARAMETERS[c]`, at the prior.
+    pub jacobian: [[f32; MOVE_COLUMNS]; 3],
+    /// Covariance of the rotation vector from white rate noise, start frame, rad^2.
+    pub covariance_rad2: Mat3,
+}
+
+fn add_scaled(m: &mut Mat3, c: &Mat3, k: f32) {
+    for i in 0..3 {
+        for j in 0..3 {
+            m.0[i][j] += c.0[i][j] * k;
+        }
+    }
+}
+
+impl MoveSums {
+    /// A move to integrate with the rates compensated by the prior `prior_si` (the estimator's parameters; only
+    /// the gyro terms are used).
+    pub fn new(prior_si: &[f32; PARAMETERS]) -> Result<MoveSums, MoveError> {
+        let t_g = sensor_matrix(prior_si, 15, 18);
+        let inverse = t_g.inverse().filter(Mat3::is_finite).ok_or(MoveError::SingularPrior)?;
+        let zero = Mat3([[0.0; 3]; 3]);
+        Ok(MoveSums {
+            prior_si: MOVE_PARAMETERS.map(|p| prior_si[p]),
+            inverse,
+            bias_b_radps: [prior_si[0], prior_si[1], prior_si[2]],
+            g_sensitivity: g_sensitivity_radps_per_mps2(prior_si),
+            // The interval is given with each sample.
+            integrator: MoveIntegrator::new(0.0),
+            frame: Mat3::IDENTITY,
+            duration_s: 0.0,
+            sum_c_dt_s: zero,
+            sum_c_angle_rad: [zero; 3],
+            sum_c_force_mps: [zero; 3],
+            sum_noise_s2: [zero; 3],
+        })
+    }
+
+    /// One sample: the gyro and accelerometer outputs (body, rad/s and m/s^2, the means over the interval that
+    /// ends with it) and that interval, s.
+    pub fn push(&mut self, rate_b_radps: Vec3, force_b_mps2: Vec3, dt_s: f32) {
+        let gf = self.g_sensitivity.mul_vec(force_b_mps2);
+        let raw = [0, 1, 2].map(|i| rate_b_radps[i] - self.bias_b_radps[i] - gf[i]);
+        let d = self.inverse.mul_vec(raw).map(|w| w * dt_s);
+        // The attitude at the middle of the interval: the last pair's, turned by the waiting increment and half
+        // of this one (first order; the terms left out are of the order of the squared increment).
+        let (_, pending) = self.integrator.paired();
+        let p = pending.unwrap_or([0.0; 3]);
+        let lead = [0, 1, 2].map(|i| p[i] + 0.5 * d[i]);
+        let c = {
+            let mut c = self.frame.mul(&skew(lead));
+            add_scaled(&mut c, &self.frame, 1.0);
+            c
+        };
+        add_scaled(&mut self.sum_c_dt_s, &c, dt_s);
+        for j in 0..3 {
+            add_scaled(&mut self.sum_c_angle_rad[j], &c, d[j]);
+            add_scaled(&mut self.sum_c_force_mps[j], &c, force_b_mps2[j] * dt_s);
+            let col = c.col(j);
+            let dt2 = dt_s * dt_s;
+            for a in 0..3 {
+                for b in 0..3 {
+                    self.sum_noise_s2[j].0[a][b] += col[a] * col[b] * dt2;
+                }
+            }
+        }
+        self.integrator.push_increment(d);
+        if pending.is_some() {
+            self.frame = self.integrator.paired().0.to_mat3();
+        }
+        self.duration_s += dt_s;
+    }
+
+    /// Samples pushed.
+    pub fn samples(&self) -> u32 {
+        self.integrator.samples()
+    }
+
+    /// The rotation measured so far, `C_b(now)^b(start)`.
+    pub fn rotation(&self) -> Quat {
+        self.integrator.rotation()
+    }
+
+    /// The move from dwell `from` to dwell `to`, with the per-sample variance of each gyro's output,
+    /// (rad/s)^2, for its covariance.
+    pub fn finish(&self, from: usize, to: usize, rate_var_radps2: Vec3) -> ChannelMove {
+        let p = self.inverse;
+        let bias = self.sum_c_dt_s.mul(&p);
+        let angle = self.sum_c_angle_rad.map(|m| m.mul(&p));
+        let force = self.sum_c_force_mps.map(|m| m.mul(&p));
+        let mut jacobian = [[0.0f32; MOVE_COLUMNS]; 3];
+        for (c, &param) in MOVE_PARAMETERS.iter().enumerate() {
+            // The parameter's matrix and the column i of it: `-(M P) e_i`.
+            let (m, i) = match param {
+                0..=2 => (&bias, param),
+                15..=17 => (&angle[param - 15], param - 15),
+                18..=23 => {
+                    let k = param - 18;
+                    let (i, j) = (0..3)
+                        .flat_map(|i| (0..3).map(move |j| (i, j)))
+                        .find(|&(i, j)| i != j && misalignment_index(i, j) == k)
+                        .unwrap_or((0, 1));
+                    (&angle[j], i)
+                }
+                _ => {
+                    let k = param - 24;
+                    (&force[k % 3], k / 3)
+                }
+            };
+            for (a, row) in jacobian.iter_mut().enumerate() {
+                row[c] = -m.0[a][i];
+            }
+        }
+        let mut covariance_rad2 = Mat3([[0.0; 3]; 3]);
+        for (i, n) in self.sum_noise_s2.iter().enumerate() {
+            add_scaled(&mut covariance_rad2, n, rate_var_radps2[i]);
+        }
+        ChannelMove {
+            from,
+            to,
+            closed_up_b: None,
+            rotation: self.rotation(),
+            duration_s: self.duration_s,
+            prior_si: self.prior_si,
+            jacobian,
+            covariance_rad2,
+        }
+    }
+}
+
+/// The part of rotation `q` that is not about the unit axis `u`: `q = t s` with `t` about `u` (the twist) and
+/// `s` (the swing) about an axis at right angles to `u`; returns `s`.
+pub fn swing_about(q: &Quat, u: Vec3) -> Quat {
+    let [w, x, y, z] = q.0;
+    let along = x * u[0] + y * u[1] + z * u[2];
+    let n = libm::sqrtf(w * w + along * along);
+    if n < 1e-12 {
+        // A half turn about an axis at right angles to u: no twist.
+        return *q;
+    }
+    let twist = Quat([w / n, along * u[0] / n, along * u[1] / n, along * u[2] / n]);
+    twist.conjugate().mul(q).normalized()
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn swing_has_no_part_about_the_axis() {
+        let q = Quat::from_rotation_vector([0.3, -0.2, 1.2]);
+        let u = [0.0, 0.0, 1.0];
+        let s = swing_about(&q, u);
+        let v = s.to_rotation_vector();
+        assert!(v[2].abs() < 1e-6, "{v:?}");
+        // A rotation about u alone has no swing.
+        let t = swing_about(&Quat::from_rotation_vector([0.0, 0.0, 2.0]), u).to_rotation_vector();
+        assert!(t.iter().all(|x| x.abs() < 1e-6), "{t:?}");
+    }
+
+    #[test]
+    fn a_singular_prior_is_refused() {
+        let mut prior = [0.0f32; PARAMETERS];
+        prior[15] = -1.0;
+        assert_eq!(MoveSums::new(&prior).err(), Some(MoveError::SingularPrior));
+    }
+}
