@@ -67,6 +67,26 @@ pub struct MoveSums {
     sum_c_force_mps: [Mat3; 3],
     /// `sum (C_k e_i)(C_k e_i)^T dt^2` for i = x, y, z, s^2.
     sum_noise_s2: [Mat3; 3],
+    /// `sum d_k`, rad, and `sum f_k dt`, m/s: the integrals of the compensated rate and of the force.
+    sum_angle_rad: Vec3,
+    sum_force_mps: Vec3,
+    /// `sum dt^2`, s^2.
+    sum_dt2_s2: f32,
+}
+
+/// A turn about one body axis: the integral of the calibrated rate over it is the axis times the turns made (a
+/// full turn is no rotation at all, so the rotation alone would not show the axis: a gyro misalignment tilts
+/// the measured axis, not the end attitude), plus the Earth's rotation about up. The Ferraris method's
+/// observation.
+#[derive(Clone, Copy, Debug, PartialEq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub struct AxisTurn {
+    /// Up (the direction of measured gravity) in the body at rest before the turn, a unit vector.
+    pub up_b: Vec3,
+    /// The reference: the body axis times the whole turns made, rad.
+    pub angle_b_rad: Vec3,
+    /// The integral of the rate compensated by the prior, rad.
+    pub angle_sum_b_rad: Vec3,
 }
 
 /// A finished move: what the estimator needs of it.
@@ -77,11 +97,10 @@ pub struct ChannelMove {
     pub from: usize,
     /// The dwell it ends at.
     pub to: usize,
-    /// A move that ends at the attitude it started from, whatever the dwells (a labelled full turn about one
-    /// axis, as in a Ferraris session): up (the direction of measured gravity) in the body at rest, a unit
-    /// vector. The reference rotation is then the Earth's alone, known about up and unknown about the
-    /// horizontal (added as noise); `from` and `to` are not used.
-    pub closed_up_b: Option<Vec3>,
+    /// A turn about one body axis back to where it started (a labelled full turn of a Ferraris session), whatever
+    /// the dwells: `from` and `to` are not used, and the observation is the integral of the rate instead of the
+    /// rotation ([`AxisTurn`]).
+    pub turn: Option<AxisTurn>,
     /// The rotation the compensated gyros measured, `C_b(end)^b(start)`.
     pub rotation: Quat,
     /// Duration, s.
@@ -123,6 +142,9 @@ impl MoveSums {
             sum_c_angle_rad: [zero; 3],
             sum_c_force_mps: [zero; 3],
             sum_noise_s2: [zero; 3],
+            sum_angle_rad: [0.0; 3],
+            sum_force_mps: [0.0; 3],
+            sum_dt2_s2: 0.0,
         })
     }
 
@@ -154,6 +176,11 @@ impl MoveSums {
                 }
             }
         }
+        for i in 0..3 {
+            self.sum_angle_rad[i] += d[i];
+            self.sum_force_mps[i] += force_b_mps2[i] * dt_s;
+        }
+        self.sum_dt2_s2 += dt_s * dt_s;
         self.integrator.push_increment(d);
         if pending.is_some() {
             self.frame = self.integrator.paired().0.to_mat3();
@@ -178,11 +205,58 @@ impl MoveSums {
         let bias = self.sum_c_dt_s.mul(&p);
         let angle = self.sum_c_angle_rad.map(|m| m.mul(&p));
         let force = self.sum_c_force_mps.map(|m| m.mul(&p));
-        let mut jacobian = [[0.0f32; MOVE_COLUMNS]; 3];
+        let mut covariance_rad2 = Mat3([[0.0; 3]; 3]);
+        for (i, n) in self.sum_noise_s2.iter().enumerate() {
+            add_scaled(&mut covariance_rad2, n, rate_var_radps2[i]);
+        }
+        ChannelMove {
+            from,
+            to,
+            turn: None,
+            rotation: self.rotation(),
+            duration_s: self.duration_s,
+            prior_si: self.prior_si,
+            jacobian: jacobian_of(&bias, &angle, &force),
+            covariance_rad2,
+        }
+    }
+
+    /// The move as a turn about body axis `axis` (0, 1, 2) that ends where it started, with up in the body at
+    /// rest before it: the reference is the axis times the whole turns nearest to the integrated rate.
+    pub fn finish_turn(&self, axis: usize, up_b: Vec3, rate_var_radps2: Vec3) -> ChannelMove {
+        let p = self.inverse;
+        // The integral's sensitivities: `-P e_i` times dt, d_j or f_j dt summed (no transport).
+        let bias = scaled(&p, self.duration_s);
+        let angle = [0, 1, 2].map(|j| scaled(&p, self.sum_angle_rad[j]));
+        let force = [0, 1, 2].map(|j| scaled(&p, self.sum_force_mps[j]));
+        let turns = libm::roundf(self.sum_angle_rad[axis.min(2)] / core::f32::consts::TAU);
+        let mut angle_b_rad = [0.0; 3];
+        angle_b_rad[axis.min(2)] = turns * core::f32::consts::TAU;
+        let mut covariance_rad2 = Mat3([[0.0; 3]; 3]);
+        for i in 0..3 {
+            covariance_rad2.0[i][i] = rate_var_radps2[i] * self.sum_dt2_s2;
+        }
+        ChannelMove {
+            from: 0,
+            to: 0,
+            turn: Some(AxisTurn { up_b, angle_b_rad, angle_sum_b_rad: self.sum_angle_rad }),
+            rotation: self.rotation(),
+            duration_s: self.duration_s,
+            prior_si: self.prior_si,
+            jacobian: jacobian_of(&bias, &angle, &force),
+            covariance_rad2,
+        }
+    }
+}
+
+/// The Jacobian of a move from its sensitivity matrices (each already times `P`): column i of the bias matrix,
+/// of the angle matrix j (for `T_ij`) and of the force matrix j (for `G_ij`), negated.
+fn jacobian_of(bias: &Mat3, angle: &[Mat3; 3], force: &[Mat3; 3]) -> [[f32; MOVE_COLUMNS]; 3] {
+    let mut jacobian = [[0.0f32; MOVE_COLUMNS]; 3];
         for (c, &param) in MOVE_PARAMETERS.iter().enumerate() {
             // The parameter's matrix and the column i of it: `-(M P) e_i`.
             let (m, i) = match param {
-                0..=2 => (&bias, param),
+                0..=2 => (bias, param),
                 15..=17 => (&angle[param - 15], param - 15),
                 18..=23 => {
                     let k = param - 18;
@@ -201,35 +275,27 @@ impl MoveSums {
                 row[c] = -m.0[a][i];
             }
         }
-        let mut covariance_rad2 = Mat3([[0.0; 3]; 3]);
-        for (i, n) in self.sum_noise_s2.iter().enumerate() {
-            add_scaled(&mut covariance_rad2, n, rate_var_radps2[i]);
-        }
-        ChannelMove {
-            from,
-            to,
-            closed_up_b: None,
-            rotation: self.rotation(),
-            duration_s: self.duration_s,
-            prior_si: self.prior_si,
-            jacobian,
-            covariance_rad2,
-        }
-    }
+        jacobian
 }
 
-/// The part of rotation `q` that is not about the unit axis `u`: `q = t s` with `t` about `u` (the twist) and
-/// `s` (the swing) about an axis at right angles to `u`; returns `s`.
-pub fn swing_about(q: &Quat, u: Vec3) -> Quat {
+/// `m` times `k`.
+fn scaled(m: &Mat3, k: f32) -> Mat3 {
+    Mat3(m.0.map(|row| row.map(|x| x * k)))
+}
+
+/// The parts of rotation `q` about the unit axis `u` and across it: `q = t s` with `t` about `u` (the twist) and
+/// `s` (the swing) about an axis at right angles to `u`; returns `(s, t)`. A rotation `r` applied before,
+/// `r q`, changes the swing by `t* r t` to first order: a perturbation turned back by the twist.
+pub fn swing_about(q: &Quat, u: Vec3) -> (Quat, Quat) {
     let [w, x, y, z] = q.0;
     let along = x * u[0] + y * u[1] + z * u[2];
     let n = libm::sqrtf(w * w + along * along);
     if n < 1e-12 {
         // A half turn about an axis at right angles to u: no twist.
-        return *q;
+        return (*q, Quat::IDENTITY);
     }
     let twist = Quat([w / n, along * u[0] / n, along * u[1] / n, along * u[2] / n]);
-    twist.conjugate().mul(q).normalized()
+    (twist.conjugate().mul(q).normalized(), twist)
 }
 
 #[cfg(test)]
@@ -240,11 +306,15 @@ mod tests {
     fn swing_has_no_part_about_the_axis() {
         let q = Quat::from_rotation_vector([0.3, -0.2, 1.2]);
         let u = [0.0, 0.0, 1.0];
-        let s = swing_about(&q, u);
+        let (s, t) = swing_about(&q, u);
+        // Twist then swing is the rotation.
+        let back = t.mul(&s).to_rotation_vector();
+        let v0 = q.to_rotation_vector();
+        assert!((0..3).all(|i| (back[i] - v0[i]).abs() < 1e-5), "{back:?} vs {v0:?}");
         let v = s.to_rotation_vector();
         assert!(v[2].abs() < 1e-6, "{v:?}");
         // A rotation about u alone has no swing.
-        let t = swing_about(&Quat::from_rotation_vector([0.0, 0.0, 2.0]), u).to_rotation_vector();
+        let t = swing_about(&Quat::from_rotation_vector([0.0, 0.0, 2.0]), u).0.to_rotation_vector();
         assert!(t.iter().all(|x| x.abs() < 1e-6), "{t:?}");
     }
 

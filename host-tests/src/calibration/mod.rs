@@ -306,36 +306,7 @@ pub fn calibrate_channels(recording: &impl RowSource, options: &Options) -> Resu
     let header = recording.header();
     let has_gyro = recording.has_gyro();
     let (site, gravity_source) = site_of(header);
-    let prefilter = prefilter_of(options, recording)?;
-    let dwells = collect_dwells(recording, &prefilter, MAX_DWELLS)?;
-    let mut positions = Vec::with_capacity(dwells.len());
-    for (dwell, summary) in dwells {
-        let attitude = dwell.attitude(source)?;
-        let angles = match (has_gyro, attitude.heading_deg) {
-            (true, Some(h)) => {
-                let c = Attitude::from_degrees(attitude.pitch_deg as f32, attitude.roll_deg as f32, h as f32).c_b_n();
-                position_angles(&summary, options.dwell_value, &c, &site).ok()
-            }
-            _ => None,
-        };
-        positions.push(PositionResult { pos: dwell.pos, first_line: dwell.first_line, attitude, summary, angles });
-    }
-    let attitude = if options.estimate_attitudes { AttitudeKnowledge::Unknown } else { attitude_knowledge(header) };
-    // With reference attitudes the Earth rate is always in the gyro model ("unobservable" stays a property of the
-    // schedule). Without any, it is in the model only where the gyros resolve it (docs/method.md#unknown-attitudes).
-    let noise = pool_mean_noise(positions.iter().map(|p| p.summary)).map(|m| m.white_equivalent_var);
-    let earth_rate_resolved = attitude == AttitudeKnowledge::Reference
-        || !has_gyro
-        || gyros_resolve_earth_rate(&noise, positions.iter().map(|p| p.summary.samples));
-    let settings = ChannelSettings {
-        model: options.model,
-        use_gyro: has_gyro,
-        attitude,
-        earth_rate_resolved,
-        ..ChannelSettings::default()
-    };
-    let estimator = session_estimator(session_dwells(&positions), site, settings, options.dwell_value)
-        .map_err(|e| channel_error(e, &positions, source))?;
+    let ChannelSession { estimator, positions, noise_var: noise, prefilter } = channel_session(recording, options)?;
     let move_samples = if has_gyro && options.use_moves && moves::model_uses_moves(options.model) {
         moves::collect_moves(recording, MAX_DWELLS)?
     } else {
@@ -370,6 +341,57 @@ pub fn calibrate_channels(recording: &impl RowSource, options: &Options) -> Resu
         moves: used_moves,
         move_passes,
     })
+}
+
+/// The general estimator of a recording with its dwells loaded, before any solution.
+pub struct ChannelSession {
+    /// The estimator.
+    pub estimator: ChannelEstimator,
+    /// The positions in file order.
+    pub positions: Vec<PositionResult>,
+    /// The pooled per-sample noise variance of the six channels (gyro x, y, z in (rad/s)^2 first).
+    pub noise_var: [f32; 6],
+    /// The prefilter that ran.
+    pub prefilter: Prefilter,
+}
+
+/// The dwells of a recording loaded into the general estimator as `options` say.
+pub fn channel_session(recording: &impl RowSource, options: &Options) -> Result<ChannelSession, InputError> {
+    let source = recording.source();
+    let header = recording.header();
+    let has_gyro = recording.has_gyro();
+    let (site, _) = site_of(header);
+    let prefilter = prefilter_of(options, recording)?;
+    let dwells = collect_dwells(recording, &prefilter, MAX_DWELLS)?;
+    let mut positions = Vec::with_capacity(dwells.len());
+    for (dwell, summary) in dwells {
+        let attitude = dwell.attitude(source)?;
+        let angles = match (has_gyro, attitude.heading_deg) {
+            (true, Some(h)) => {
+                let c = Attitude::from_degrees(attitude.pitch_deg as f32, attitude.roll_deg as f32, h as f32).c_b_n();
+                position_angles(&summary, options.dwell_value, &c, &site).ok()
+            }
+            _ => None,
+        };
+        positions.push(PositionResult { pos: dwell.pos, first_line: dwell.first_line, attitude, summary, angles });
+    }
+    let attitude = if options.estimate_attitudes { AttitudeKnowledge::Unknown } else { attitude_knowledge(header) };
+    // With reference attitudes the Earth rate is always in the gyro model ("unobservable" stays a property of the
+    // schedule). Without any, it is in the model only where the gyros resolve it (docs/method.md#unknown-attitudes).
+    let noise = pool_mean_noise(positions.iter().map(|p| p.summary)).map(|m| m.white_equivalent_var);
+    let earth_rate_resolved = attitude == AttitudeKnowledge::Reference
+        || !has_gyro
+        || gyros_resolve_earth_rate(&noise, positions.iter().map(|p| p.summary.samples));
+    let settings = ChannelSettings {
+        model: options.model,
+        use_gyro: has_gyro,
+        attitude,
+        earth_rate_resolved,
+        ..ChannelSettings::default()
+    };
+    let estimator = session_estimator(session_dwells(&positions), site, settings, options.dwell_value)
+        .map_err(|e| channel_error(e, &positions, source))?;
+    Ok(ChannelSession { estimator, positions, noise_var: noise, prefilter })
 }
 
 /// What the report says of each move used.

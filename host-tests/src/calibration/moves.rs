@@ -2,7 +2,9 @@
 //! start of the next, kept as f32 samples and integrated by the core's [`MoveSums`] with the current estimate,
 //! again after each solution until the estimate stops changing.
 
-use sinscal::calib::channels::{ChannelError, ChannelEstimator, ChannelSolution, Model, Term, PARAMETERS};
+use sinscal::calib::channels::{
+    implausible_parameter, ChannelError, ChannelEstimator, ChannelSolution, Model, Term, PARAMETERS,
+};
 use sinscal::calib::moves::{ChannelMove, MoveSums, MAX_MOVES, MOVE_PARAMETERS};
 
 use crate::io::dwell_tally::DwellTallies;
@@ -18,6 +20,9 @@ pub struct MoveSamples {
     pub to: usize,
     /// Line of the move's first row.
     pub first_line: usize,
+    /// A labelled turn about this body axis (0, 1, 2) back to where it started (a Ferraris turn): `from` and `to`
+    /// are then not used, and up at the start is the direction of the mean force of its first [`REST_SAMPLES`].
+    pub turn_axis: Option<usize>,
     /// Per row: gyro (rad/s), accelerometer (m/s^2), body, and the interval since the row before, s.
     pub samples: Vec<([f32; 3], [f32; 3], f32)>,
 }
@@ -59,6 +64,7 @@ pub fn collect_moves(recording: &impl RowSource, limit: usize) -> Result<Vec<Mov
                     from,
                     to: from,
                     first_line: row.line,
+                    turn_axis: None,
                     samples: Vec::new(),
                 });
                 m.samples.push((
@@ -88,17 +94,38 @@ pub fn integrate(
             for (rate, force, dt_s) in &m.samples {
                 sums.push(*rate, *force, *dt_s);
             }
-            Ok(sums.finish(m.from, m.to, rate_var_radps2))
+            let Some(axis) = m.turn_axis else { return Ok(sums.finish(m.from, m.to, rate_var_radps2)) };
+            let rest = &m.samples[..m.samples.len().min(REST_SAMPLES)];
+            let sum = rest.iter().fold([0.0f32; 3], |a, (_, f, _)| [a[0] + f[0], a[1] + f[1], a[2] + f[2]]);
+            let n = sinscal::math::linalg::norm(sum);
+            if !(n > 0.0) {
+                return Err(ChannelError::BadMove { index });
+            }
+            Ok(sums.finish_turn(axis, sum.map(|x| x / n), rate_var_radps2))
         })
         .collect()
 }
 
+/// Samples at the start of a turn whose mean force gives up in the body (the body is at rest there).
+pub const REST_SAMPLES: usize = 5;
+
+/// A turn about body axis `axis` of the rows `rows` (a labelled turn that starts and ends at rest).
+pub fn axis_turn(rows: &[crate::io::recording::Row], axis: usize, first_line: usize) -> MoveSamples {
+    let samples = rows
+        .windows(2)
+        .map(|w| (w[1].rate_b_radps.map(|x| x as f32), w[1].force_b_mps2.map(|x| x as f32), (w[1].t_s - w[0].t_s) as f32))
+        .collect();
+    MoveSamples { from: 0, to: 0, first_line, turn_axis: Some(axis), samples }
+}
+
 /// Passes of integration and solution at most.
-pub const MAX_MOVE_PASSES: u32 = 8;
+pub const MAX_MOVE_PASSES: u32 = 10;
 
 /// The solution with the moves, without the dwells in `exclude`: the moves integrated with the prior (none at
 /// first), solved, and integrated again with the estimate until no gyro parameter changes by more than 1e-3 of
-/// its standard error. Returns the solution, the moves of its last pass and the passes made.
+/// its standard error, or the change stops shrinking below 0.05 of it (the rounding of f32). The solution's
+/// `converged` is false when the passes ran out first; an estimate that leaves every instrument's range is
+/// refused ([`ChannelError::Diverged`]). Returns the solution, the moves of its last pass and the passes made.
 pub fn solve_with_moves(
     estimator: &ChannelEstimator,
     moves: &[MoveSamples],
@@ -116,7 +143,12 @@ pub fn solve_with_moves(
     };
     let mut solution = solve(&integrated)?;
     let mut passes = 1;
-    while passes < MAX_MOVE_PASSES {
+    let mut previous = f32::INFINITY;
+    let mut settled = false;
+    loop {
+        if let Some(parameter) = implausible_parameter(&solution.parameters_si) {
+            return Err(ChannelError::Diverged { parameter, value: solution.parameters_si[parameter] });
+        }
         let mut largest = 0.0f32;
         for &p in &MOVE_PARAMETERS {
             let Some((value, std)) = solution.estimate(p) else { continue };
@@ -124,12 +156,18 @@ pub fn solve_with_moves(
             largest = largest.max(if std > 0.0 { change / std } else { change });
             prior[p] = value;
         }
-        if largest < 1e-3 {
+        if largest < 1e-3 || (largest < 0.05 && largest > 0.5 * previous) {
+            settled = true;
             break;
         }
+        if passes == MAX_MOVE_PASSES {
+            break;
+        }
+        previous = largest;
         integrated = integrate(moves, &prior, rate_var_radps2)?;
         solution = solve(&integrated)?;
         passes += 1;
     }
+    solution.converged &= settled;
     Ok((solution, integrated, passes))
 }

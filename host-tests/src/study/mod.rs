@@ -43,6 +43,7 @@ pub mod multi_pose;
 pub mod noise;
 pub mod noise_extension;
 pub mod psins;
+pub mod rotations;
 
 use std::path::{Path, PathBuf};
 
@@ -470,7 +471,7 @@ fn study_ferraris(csv: &Path, labels: &Path) -> Result<Study, InputError> {
 
 /// The labelled turns of a Ferraris session as (label, body axis, row range): the rows whose sample index lies
 /// in the label's range, plus one row past the end so that the last labelled sample's interval is integrated.
-fn ferraris_turns(rec: &Recording, labels: &Path) -> Result<Vec<LabelledTurn>, InputError> {
+pub fn ferraris_turns(rec: &Recording, labels: &Path) -> Result<Vec<LabelledTurn>, InputError> {
     let label_text = std::fs::read_to_string(labels).map_err(|e| InputError::io(labels, e))?;
     let ranges = parse_imucal_labels(&label_text, &labels.display().to_string())?;
     let rate = IMUCAL_RATE_HZ;
