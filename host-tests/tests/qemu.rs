@@ -127,6 +127,24 @@ fn on_target_tests_pass_in_qemu() {
         let line = format!("ok move_rotation_{name}_bits {c:e}");
         assert!(report.contains(&line), "host: {line}\n{report}");
     }
+    // A move integrated with MoveSums on the target, compensated by a prior with every gyro term: the host's
+    // finished move, bit for bit (a hash of every f32 of it, and a few of them on their own).
+    use sinscal::calib::moves::MOVE_COLUMNS;
+    let (mv, _) = sinscal::rig::exact::turning_move().unwrap();
+    for check in ["move_sums_rotation_error_rad", "move_sums_jacobian_finite_every_column_observed"] {
+        assert!(report.lines().any(|l| l.starts_with(&format!("ok {check} "))), "{check} missing\n{report}");
+    }
+    let mut lines = vec![format!("ok move_sums_bits_fnv {:#010x}", sinscal::rig::exact::move_bits_hash(&mv))];
+    for (c, name) in mv.rotation.0.iter().zip(["w", "x", "y", "z"]) {
+        lines.push(format!("ok move_sums_rotation_{name}_bits {c:e}"));
+    }
+    lines.push(format!("ok move_sums_duration_bits {:e}", mv.duration_s));
+    lines.push(format!("ok move_sums_jacobian_0_0_bits {:e}", mv.jacobian[0][0]));
+    lines.push(format!("ok move_sums_jacobian_2_20_bits {:e}", mv.jacobian[2][MOVE_COLUMNS - 1]));
+    lines.push(format!("ok move_sums_covariance_0_1_bits {:e}", mv.covariance_rad2.0[0][1]));
+    for line in lines {
+        assert!(report.lines().any(|l| l == line), "host: {line}\n{report}");
+    }
     // The general estimator on the exact session, solved on x86 by the same core: the same bits as on the target.
     use sinscal::calib::channels::{ChannelEstimator, ChannelSettings, Model};
     let mut est = ChannelEstimator::new(

@@ -5,10 +5,11 @@
 //! what the firmware does for every sample: the data-ready handler (burst read through the SPI device,
 //! checksum, decode, counter and status checks, conversion to SI, enqueue) and the processing loop
 //! (queue hand-over by reference, `feed_sequence` with the latched table signal, the calibration sequence's
-//! checks, the HMM/KF bank and the dwell accumulators); on its own, the compensation of a sample with a stored
-//! calibration (docs/compensation.md). The SPI
-//! device is the replay device serving a fixed frame, so the bus itself costs nothing here; on hardware
-//! the burst's 32 bytes at 1 MHz add 256 us of SPI time, not instructions.
+//! checks, the HMM/KF bank and the dwell accumulators); on their own, the compensation of a sample with a stored
+//! calibration (docs/compensation.md), a move's rotation (docs/method.md#a-moves-rotation-from-the-gyro-rates)
+//! and a move's rotation with its sensitivity sums (`MoveSums`, src/calib/moves.rs). The SPI device is the
+//! replay device serving a fixed frame, so the bus itself costs nothing here; on hardware the burst's 32 bytes
+//! at 1 MHz add 256 us of SPI time, not instructions.
 //! The result is written as text to the file named by the first semihosting argument.
 #![cfg_attr(target_os = "none", no_std, no_main)]
 
@@ -290,6 +291,27 @@ mod firmware {
         ticks_between(t0, t1) * INSTRUCTIONS_PER_TICK / SAMPLES
     }
 
+    /// A move's rotation and sensitivity sums (`MoveSums::push`: the compensation with the prior's `b_g`, `G` and
+    /// `T_g^-1`, the increment, the attitude at mid-sample, the sums for every gyro term and the noise, and every
+    /// second sample the coning-corrected update and its matrix), `SAMPLES` calls in one timed loop, per call.
+    fn move_sums_loop() -> u32 {
+        let Ok(mut m) = sinscal::calib::moves::MoveSums::new(&sinscal::rig::exact::move_prior()) else { exit(6) };
+        let rate = [0.17f32, -0.05, 0.3];
+        let force = [0.4f32, -0.2, 9.7];
+        let syst = unsafe { &*SYST::PTR };
+        let t0 = syst.cvr.read();
+        for _ in 0..SAMPLES {
+            core::hint::black_box(&mut m).push(
+                core::hint::black_box(rate),
+                core::hint::black_box(force),
+                core::hint::black_box(0.01),
+            );
+        }
+        let t1 = syst.cvr.read();
+        core::hint::black_box(m.rotation());
+        ticks_between(t0, t1) * INSTRUCTIONS_PER_TICK / SAMPLES
+    }
+
     /// The parts on their own: the bus transfer (replay device), the driver's decode (checksum, decode,
     /// counter and status checks, conversion to SI: everything after the bus), and the collector update
     /// (prefilter bank and accumulators) without and with the HMM/KF.
@@ -358,6 +380,7 @@ mod firmware {
         let (bus, decode, collect_none, collect_kf) = parts();
         let compensate = compensation_loop();
         let move_update = move_integration_loop();
+        let move_sums = move_sums_loop();
         let (stack_isr, stack_processing) = stack_depths();
         let (stack_status, stack_configure, stack_start, status_instructions) = link_costs();
         let mut text: heapless::String<1024> = heapless::String::new();
@@ -373,7 +396,7 @@ mod firmware {
             text,
             "stack_bytes_data_ready_handler {stack_isr}\nstack_bytes_processing_step {stack_processing}\n"
         );
-        let _ = write!(text, "part_bus_transfer_replay {bus}\npart_driver_decode {decode}\npart_collector_none {collect_none}\npart_collector_hmmkf {collect_kf}\npart_compensation {compensate}\npart_move_integration {move_update}\n");
+        let _ = write!(text, "part_bus_transfer_replay {bus}\npart_driver_decode {decode}\npart_collector_none {collect_none}\npart_collector_hmmkf {collect_kf}\npart_compensation {compensate}\npart_move_integration {move_update}\npart_move_sums {move_sums}\n");
         let _ = write!(
             text,
             "samples {SAMPLES} {n_none} {n_kf}\ntimer_overhead_instructions {overhead}\n\

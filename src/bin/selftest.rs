@@ -33,11 +33,23 @@ mod firmware {
 
     impl Report {
         fn check(&mut self, name: &str, ok: bool, value: f32) {
-            let _ = writeln!(self.text, "{} {name} {value:e}", if ok { "ok" } else { "FAILED" });
+            let verdict = self.tally(ok);
+            let _ = writeln!(self.text, "{verdict} {name} {value:e}");
+        }
+
+        /// A check whose value is a 32-bit pattern, printed in hex.
+        fn check_hex(&mut self, name: &str, ok: bool, value: u32) {
+            let verdict = self.tally(ok);
+            let _ = writeln!(self.text, "{verdict} {name} {value:#010x}");
+        }
+
+        fn tally(&mut self, ok: bool) -> &'static str {
             if ok {
                 self.passed += 1;
+                "ok"
             } else {
                 self.failed += 1;
+                "FAILED"
             }
         }
     }
@@ -251,6 +263,35 @@ mod firmware {
         }
     }
 
+    fn move_sums(report: &mut Report) {
+        // A move integrated with the rates compensated by a prior with every gyro term, and its sensitivity sums
+        // (sinscal::rig::exact::turning_move): the compensated rotation must be the true one, every gyro term
+        // observed; the host recomputes the finished move and compares its bits (host-tests/tests/qemu.rs).
+        use sinscal::calib::moves::MOVE_COLUMNS;
+        use sinscal::rig::exact::{move_bits_hash, turning_move, MOVE_DT_S, MOVE_SAMPLES};
+        let Ok((m, truth)) = turning_move() else {
+            report.check("move_sums_prior", false, 0.0);
+            return;
+        };
+        let error_rad = sinscal::math::linalg::norm(m.rotation.conjugate().mul(&truth).to_rotation_vector());
+        report.check("move_sums_rotation_error_rad", error_rad < 2e-6, error_rad);
+        let finite = m.rotation.0.iter().chain(m.jacobian.iter().flatten()).all(|x| x.is_finite())
+            && m.covariance_rad2.is_finite();
+        let observed = (0..MOVE_COLUMNS).all(|c| (0..3).any(|a| m.jacobian[a][c] != 0.0));
+        report.check("move_sums_jacobian_finite_every_column_observed", finite && observed, 0.0);
+        let duration_s = MOVE_SAMPLES as f32 * MOVE_DT_S;
+        report.check("move_sums_duration_bits", (m.duration_s - duration_s).abs() < 1e-3, m.duration_s);
+        report.check_hex("move_sums_bits_fnv", true, move_bits_hash(&m));
+        for (c, name) in m.rotation.0.iter().zip(["w", "x", "y", "z"]) {
+            let mut label: heapless::String<32> = heapless::String::new();
+            let _ = write!(label, "move_sums_rotation_{name}_bits");
+            report.check(&label, true, *c);
+        }
+        report.check("move_sums_jacobian_0_0_bits", true, m.jacobian[0][0]);
+        report.check("move_sums_jacobian_2_20_bits", true, m.jacobian[2][MOVE_COLUMNS - 1]);
+        report.check("move_sums_covariance_0_1_bits", true, m.covariance_rad2.0[0][1]);
+    }
+
     fn watchdog(report: &mut Report) {
         // The board's watchdog: present, counting down from its load value, and fed back to it.
         use sinscal::board::watchdog;
@@ -317,6 +358,7 @@ mod firmware {
         bounded_spi(&mut report);
         watchdog(&mut report);
         move_integration(&mut report);
+        move_sums(&mut report);
         let _ = writeln!(report.text, "{} passed, {} failed", report.passed, report.failed);
         if let Some(path) = sinscal::rig::semihost::arg_path(1) {
             sinscal::rig::semihost::write_file(&path, report.text.as_bytes());
