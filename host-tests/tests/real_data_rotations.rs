@@ -58,4 +58,3 @@ fn imutk_gyro_matrix_from_the_hand_moves() {
     let study = imutk_rotations(&rec).expect("rotations");
     print(&study);
 }
-

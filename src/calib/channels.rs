@@ -40,12 +40,12 @@
 
 use heapless::Vec;
 
-use crate::math::linalg::{cross, dot, norm, rotation, Mat3, Vec3};
 use crate::calib::moves::{swing_about, ChannelMove, MAX_MOVES, MOVE_PARAMETERS};
+use crate::math::linalg::{cross, dot, norm, rotation, Mat3, Vec3};
 use crate::math::lsq::{inverse_gram, jacobi_svd, solve_upper, solve_upper_transposed, SqrtInfo};
-use crate::nav::strapdown::Quat;
 use crate::nav::earth::{Site, EARTH_RATE_RADPS};
 use crate::nav::frames::{heading_rotation, Attitude};
+use crate::nav::strapdown::Quat;
 
 /// Most dwells one solution takes (a bit mask of `u64` marks suspect dwells).
 pub const MAX_DWELLS: usize = 64;
@@ -1388,8 +1388,11 @@ impl ChannelEstimator {
     ) -> [Vec3; MAX_MOVES] {
         let mut attitude = [Mat3::IDENTITY; MAX_DWELLS];
         for (k, d) in self.dwells.iter().enumerate() {
-            let tilt =
-                if self.settings.attitude == AttitudeKnowledge::Unknown { tilt_of_up(solution.up_b[k]) } else { d.tilt };
+            let tilt = if self.settings.attitude == AttitudeKnowledge::Unknown {
+                tilt_of_up(solution.up_b[k])
+            } else {
+                d.tilt
+            };
             attitude[k] = heading_rotation(solution.heading_rad[k]).mul(&tilt);
         }
         let (cols, n) = columns(solution.model);
@@ -1427,7 +1430,13 @@ impl ChannelEstimator {
             let frame = twist.conjugate().to_mat3();
             Misfit { e_rad: swing.to_rotation_vector(), basis, rows: 2, unresolved, frame }
         } else {
-            Misfit { e_rad: misfit.to_rotation_vector(), basis: IDENTITY_BASIS, rows: 3, unresolved, frame: Mat3::IDENTITY }
+            Misfit {
+                e_rad: misfit.to_rotation_vector(),
+                basis: IDENTITY_BASIS,
+                rows: 3,
+                unresolved,
+                frame: Mat3::IDENTITY,
+            }
         }
     }
 
@@ -1569,7 +1578,8 @@ fn cholesky3(s: &[[f32; 3]; 3], n: usize) -> Option<[[f32; 3]; 3]> {
                 v -= l[i][k] * l[j][k];
             }
             if i == j {
-                if !(v > 0.0) {
+                // NaN is refused too.
+                if v.is_nan() || v <= 0.0 {
                     return None;
                 }
                 l[i][i] = libm::sqrtf(v);

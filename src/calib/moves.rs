@@ -253,29 +253,29 @@ impl MoveSums {
 /// of the angle matrix j (for `T_ij`) and of the force matrix j (for `G_ij`), negated.
 fn jacobian_of(bias: &Mat3, angle: &[Mat3; 3], force: &[Mat3; 3]) -> [[f32; MOVE_COLUMNS]; 3] {
     let mut jacobian = [[0.0f32; MOVE_COLUMNS]; 3];
-        for (c, &param) in MOVE_PARAMETERS.iter().enumerate() {
-            // The parameter's matrix and the column i of it: `-(M P) e_i`.
-            let (m, i) = match param {
-                0..=2 => (bias, param),
-                15..=17 => (&angle[param - 15], param - 15),
-                18..=23 => {
-                    let k = param - 18;
-                    let (i, j) = (0..3)
-                        .flat_map(|i| (0..3).map(move |j| (i, j)))
-                        .find(|&(i, j)| i != j && misalignment_index(i, j) == k)
-                        .unwrap_or((0, 1));
-                    (&angle[j], i)
-                }
-                _ => {
-                    let k = param - 24;
-                    (&force[k % 3], k / 3)
-                }
-            };
-            for (a, row) in jacobian.iter_mut().enumerate() {
-                row[c] = -m.0[a][i];
+    for (c, &param) in MOVE_PARAMETERS.iter().enumerate() {
+        // The parameter's matrix and the column i of it: `-(M P) e_i`.
+        let (m, i) = match param {
+            0..=2 => (bias, param),
+            15..=17 => (&angle[param - 15], param - 15),
+            18..=23 => {
+                let k = param - 18;
+                let (i, j) = (0..3)
+                    .flat_map(|i| (0..3).map(move |j| (i, j)))
+                    .find(|&(i, j)| i != j && misalignment_index(i, j) == k)
+                    .unwrap_or((0, 1));
+                (&angle[j], i)
             }
+            _ => {
+                let k = param - 24;
+                (&force[k % 3], k / 3)
+            }
+        };
+        for (a, row) in jacobian.iter_mut().enumerate() {
+            row[c] = -m.0[a][i];
         }
-        jacobian
+    }
+    jacobian
 }
 
 /// `m` times `k`.

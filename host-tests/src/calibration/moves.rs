@@ -57,7 +57,7 @@ pub fn collect_moves(recording: &impl RowSource, limit: usize) -> Result<Vec<Mov
             None => {
                 let Some(from) = last_dwell else { return Ok(()) };
                 let dt_s = dt_s.unwrap_or(0.0);
-                if !(dt_s > 0.0) {
+                if dt_s.is_nan() || dt_s <= 0.0 {
                     return Err(InputError::at(source, row.line, "time does not increase within a move".to_string()));
                 }
                 let m = current.get_or_insert_with(|| MoveSamples {
@@ -67,11 +67,7 @@ pub fn collect_moves(recording: &impl RowSource, limit: usize) -> Result<Vec<Mov
                     turn_axis: None,
                     samples: Vec::new(),
                 });
-                m.samples.push((
-                    row.rate_b_radps.map(|x| x as f32),
-                    row.force_b_mps2.map(|x| x as f32),
-                    dt_s as f32,
-                ));
+                m.samples.push((row.rate_b_radps.map(|x| x as f32), row.force_b_mps2.map(|x| x as f32), dt_s as f32));
             }
         }
         Ok(())
@@ -98,7 +94,7 @@ pub fn integrate(
             let rest = &m.samples[..m.samples.len().min(REST_SAMPLES)];
             let sum = rest.iter().fold([0.0f32; 3], |a, (_, f, _)| [a[0] + f[0], a[1] + f[1], a[2] + f[2]]);
             let n = sinscal::math::linalg::norm(sum);
-            if !(n > 0.0) {
+            if n.is_nan() || n <= 0.0 {
                 return Err(ChannelError::BadMove { index });
             }
             Ok(sums.finish_turn(axis, sum.map(|x| x / n), rate_var_radps2))
@@ -113,7 +109,9 @@ pub const REST_SAMPLES: usize = 5;
 pub fn axis_turn(rows: &[crate::io::recording::Row], axis: usize, first_line: usize) -> MoveSamples {
     let samples = rows
         .windows(2)
-        .map(|w| (w[1].rate_b_radps.map(|x| x as f32), w[1].force_b_mps2.map(|x| x as f32), (w[1].t_s - w[0].t_s) as f32))
+        .map(|w| {
+            (w[1].rate_b_radps.map(|x| x as f32), w[1].force_b_mps2.map(|x| x as f32), (w[1].t_s - w[0].t_s) as f32)
+        })
         .collect();
     MoveSamples { from: 0, to: 0, first_line, turn_axis: Some(axis), samples }
 }
