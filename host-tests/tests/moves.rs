@@ -139,7 +139,14 @@ fn the_moves_determine_the_gyro_matrix_the_dwells_cannot() {
     for i in 15..24 {
         let (value, std_with) = a.estimate(i).unwrap();
         let std_without = b.estimate(i).map_or(f32::INFINITY, |e| e.1);
-        println!("{:<24} {:+.6} ± {:.6} (truth {:+.6}); without the moves ± {:.4}", parameter_name(i), value, std_with, t[i], std_without);
+        println!(
+            "{:<24} {:+.6} ± {:.6} (truth {:+.6}); without the moves ± {:.4}",
+            parameter_name(i),
+            value,
+            std_with,
+            t[i],
+            std_without
+        );
         assert!(std_with < 1e-4, "{}: ± {std_with}", parameter_name(i));
         assert!(std_without > 100.0 * std_with, "{}: {std_without} vs {std_with}", parameter_name(i));
         assert!(((value as f64) - t[i]).abs() < 4.0 * std_with as f64, "{}: {value} vs {}", parameter_name(i), t[i]);

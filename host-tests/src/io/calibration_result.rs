@@ -59,6 +59,29 @@ pub struct PositionJson {
 /// A 3x3 term in the JSON (null entries where undetermined).
 type Matrix = [[Option<f64>; 3]; 3];
 
+/// A move in the calibration JSON.
+#[derive(Clone, Debug, Serialize)]
+pub struct MoveJson {
+    /// Labels of the positions before and after it.
+    pub from_pos: u32,
+    /// See `from_pos`.
+    pub to_pos: u32,
+    /// Line of its first row.
+    pub first_line: usize,
+    /// Duration, s.
+    pub duration_s: f64,
+    /// The angle the gyros measured, deg.
+    pub angle_deg: f64,
+    /// The rotation error after the fit, body frame at the start of the move, rad.
+    pub residual_rad: [f64; 3],
+    /// Its whitened sum of squares.
+    pub statistic: f64,
+}
+
+fn is_zero(x: &u32) -> bool {
+    *x == 0
+}
+
 /// The calibration JSON of docs/formats.md#calibration-json, with extra fields after the contract's.
 #[derive(Debug, Serialize)]
 pub struct CalibrationJson {
@@ -140,6 +163,12 @@ pub struct CalibrationJson {
     pub passes: u32,
     /// Extra: whether the refinement converged.
     pub converged: bool,
+    /// Extra: the moves between dwells the general estimator used (docs/method.md#moves).
+    #[serde(skip_serializing_if = "Vec::is_empty")]
+    pub moves: Vec<MoveJson>,
+    /// Extra: passes of move integration and solution.
+    #[serde(skip_serializing_if = "is_zero")]
+    pub move_passes: u32,
     /// Extra: where it ran: "recording" (values read directly), or the firmware path "host" / "qemu".
     pub on: &'static str,
     /// Extra: sampling counters of the firmware path.
@@ -313,6 +342,20 @@ impl CalibrationJson {
             },
             passes: c.passes,
             converged: c.converged,
+            moves: c
+                .moves
+                .iter()
+                .map(|m| MoveJson {
+                    from_pos: m.from_pos,
+                    to_pos: m.to_pos,
+                    first_line: m.first_line,
+                    duration_s: m.duration_s,
+                    angle_deg: m.angle_deg,
+                    residual_rad: m.residual_rad,
+                    statistic: m.statistic,
+                })
+                .collect(),
+            move_passes: c.move_passes,
             on: c.on,
             sampling: c.sampling.map(|s| SamplingJson {
                 events: s.events,
@@ -417,13 +460,15 @@ pub fn summary(c: &Calibration) -> String {
     };
     let _ = writeln!(out, "method: {method}\nprefilter: {prefilter}; the {value} of each dwell\n");
     positions_table(&mut out, c);
+    moves_table(&mut out, c);
     terms(&mut out, e);
     if c.channels.as_ref().is_some_and(|s| c.has_gyro && !s.earth_rate_resolved) {
         let _ = writeln!(
             out,
             "Gyros: their dwell means do not resolve the Earth rate ({:.1} deg/h): it is left out of the gyro model, \
-             no heading is estimated, and the gyro scale factors and misalignments are not exercised",
-            sinscal::nav::earth::EARTH_RATE_RADPS as f64 / DEG_PER_HOUR
+             no heading is estimated, and the dwells do not exercise the gyro scale factors and misalignments{}",
+            sinscal::nav::earth::EARTH_RATE_RADPS as f64 / DEG_PER_HOUR,
+            if c.moves.is_empty() { "" } else { " (the moves do)" }
         );
     }
     if let Some(s) = c.channels.as_ref().filter(|s| s.gauge != 0) {
@@ -437,6 +482,38 @@ pub fn summary(c: &Calibration) -> String {
     fit(&mut out, e);
     suspects(&mut out, c);
     out
+}
+
+/// The moves used: where, how long, how far they turned, and the rotation error left after the fit.
+fn moves_table(out: &mut String, c: &Calibration) {
+    if c.moves.is_empty() {
+        return;
+    }
+    let _ = writeln!(
+        out,
+        "Moves between positions (the gyro rotation against the reference; {} passes of integration and solution):",
+        c.move_passes
+    );
+    let _ = writeln!(
+        out,
+        " from -> to      line  duration      angle | error after the fit [arcsec]: x    y    z | statistic"
+    );
+    for m in &c.moves {
+        let r = m.residual_rad.map(|x| x * ARCSEC_PER_RAD);
+        let _ = writeln!(
+            out,
+            " {:>4} -> {:<4} {:>6} {:>8.2} s {:>6.1} deg | {:>+9.2} {:>+9.2} {:>+9.2} | {}",
+            m.from_pos,
+            m.to_pos,
+            m.first_line,
+            m.duration_s,
+            m.angle_deg,
+            r[0],
+            r[1],
+            r[2],
+            if m.statistic >= 0.0 { format!("{:.1}", m.statistic) } else { "left out".to_string() }
+        );
+    }
 }
 
 /// The per-position table: channel residuals (channel method) or alignment angles (angle method).

@@ -13,6 +13,7 @@ use crate::io::calibration_result::ARCSEC_PER_RAD;
 use crate::model::synth::MICRO_G;
 use crate::stats::noise::NoiseTerms;
 use crate::study::noise_extension::ExtraTerm;
+use crate::study::rotations::{HeldOut, RotationStudy};
 use crate::study::{
     unit_of, ChannelNoise, Curve, FactoryComparison, NoiseExtension, Pose, PoseStudy, Study, CHANNELS, SCHEMA,
 };
@@ -67,6 +68,9 @@ pub fn summary_markdown(s: &Study, figures: &[String]) -> String {
     gain_section(&mut o, s);
     if let Some(p) = &s.poses {
         factory_section(&mut o, p);
+        if let Some(r) = &p.rotations {
+            rotations_section(&mut o, r);
+        }
     }
     figures_section(&mut o, figures);
     o
@@ -306,7 +310,8 @@ fn gain_section(o: &mut String, s: &Study) {
         if !p.turns.is_empty() {
             let _ = writeln!(
                 o,
-                "- gyro scale factors: one turn per axis, so no held-out turn exists to test them (not measured)."
+                "- gyro scale factors: one turn per axis, so no turn is held out of a fit of the turns; the hand \
+                 moves between the poses are (section 8)."
             );
         }
     }
@@ -339,6 +344,100 @@ fn factory_section(o: &mut String, p: &PoseStudy) {
         fmt3(f.factory_misalignment_inverse, 1.0, 4)
     );
     let _ = writeln!(o, "| offset [counts] | {} | not given | |", fmt3(f.fitted_offset_counts, 1.0, 1));
+}
+
+/// 8. The gyro matrix from the rotations beside the reference, and the held-out rotations.
+fn rotations_section(o: &mut String, r: &RotationStudy) {
+    let _ = writeln!(o, "\n## 8. Gyro matrix from the rotations (docs/method.md#moves)\n");
+    let _ = writeln!(
+        o,
+        "The static poses with their attitudes estimated (biases and accelerometer scale factors) and the gyro \
+         scale factors and misalignments from rotations: T_g = I + S + M, row i = gyro i, ± the standard error \
+         of the fit's noise. Reference: {}.",
+        r.reference_name
+    );
+    let cell = |v: f64, e: Option<f64>| match e {
+        Some(e) => format!("{v:+.5} ± {e:.5}"),
+        None => format!("{v:+.5}"),
+    };
+    for f in &r.fits {
+        let _ = writeln!(
+            o,
+            "\n**Fitted on {}** ({} rotations, {} passes; chi-square {:.1} on {} degrees of freedom)\n",
+            f.name, f.rotations, f.passes, f.chi_square, f.degrees_of_freedom
+        );
+        let _ = writeln!(o, "| T_g | x | y | z | reference x | y | z |\n|---|---|---|---|---|---|---|");
+        for i in 0..3 {
+            let _ = writeln!(
+                o,
+                "| {} | {} | {} | {} | {} | {} | {} |",
+                ["x", "y", "z"][i],
+                cell(f.t_g[i][0], Some(f.t_g_std[i][0])),
+                cell(f.t_g[i][1], Some(f.t_g_std[i][1])),
+                cell(f.t_g[i][2], Some(f.t_g_std[i][2])),
+                cell(r.reference_t_g[i][0], None),
+                cell(r.reference_t_g[i][1], None),
+                cell(r.reference_t_g[i][2], None)
+            );
+        }
+        let worst = (0..9)
+            .map(|k| (k / 3, k % 3))
+            .map(|(i, j)| ((f.t_g[i][j] - r.reference_t_g[i][j]) / f.t_g_std[i][j].max(1e-12)).abs())
+            .fold(0.0f64, f64::max);
+        let _ = writeln!(o, "\nLargest difference from the reference: {worst:.1} standard errors.");
+        if !f.held_out.is_empty() {
+            let _ = writeln!(
+                o,
+                "\n| held out | angle [deg] | error raw [deg] | error calibrated [deg] | components |\n|---|---|---|---|---|"
+            );
+            for h in &f.held_out {
+                let _ = writeln!(
+                    o,
+                    "| {} | {:.1} | {:.3} | {:.3} | {} |",
+                    h.label, h.angle_deg, h.raw_error_deg, h.calibrated_error_deg, h.components
+                );
+            }
+            let rms = |g: &dyn Fn(&HeldOut) -> f64| {
+                (f.held_out.iter().map(|h| g(h) * g(h)).sum::<f64>() / f.held_out.len() as f64).sqrt()
+            };
+            let _ = writeln!(
+                o,
+                "\nRMS error of the held-out rotations: raw {:.3} deg, calibrated {:.3} deg.",
+                rms(&|h| h.raw_error_deg),
+                rms(&|h| h.calibrated_error_deg)
+            );
+        }
+    }
+    for (name, why) in &r.refused {
+        let _ = writeln!(o, "\n**Fitted on {name}: refused** ({why}).");
+    }
+}
+
+/// The rotation part of the study JSON.
+fn rotations_json(r: &RotationStudy) -> Value {
+    json!({
+        "reference": r.reference_name,
+        "reference_t_g": r.reference_t_g,
+        "fits": r.fits.iter().map(|f| json!({
+            "fitted_on": f.name,
+            "rotations": f.rotations,
+            "t_g": f.t_g,
+            "t_g_std": f.t_g_std,
+            "gyro_bias_radps": f.gyro_bias_radps.map(|b| b.0),
+            "gyro_bias_std_radps": f.gyro_bias_radps.map(|b| b.1),
+            "chi_square": f.chi_square,
+            "degrees_of_freedom": f.degrees_of_freedom,
+            "passes": f.passes,
+            "held_out": f.held_out.iter().map(|h| json!({
+                "rotation": h.label,
+                "angle_deg": h.angle_deg,
+                "raw_error_deg": h.raw_error_deg,
+                "calibrated_error_deg": h.calibrated_error_deg,
+                "components": h.components,
+            })).collect::<Vec<_>>(),
+        })).collect::<Vec<_>>(),
+        "refused": r.refused.iter().map(|(n, w)| json!({"fitted_on": n, "reason": w})).collect::<Vec<_>>(),
+    })
 }
 
 /// The links to the figures.
@@ -409,6 +508,7 @@ pub fn study_json(s: &Study, figures: &[String]) -> Value {
         "cause": s.causes.iter().map(|c| json!({"name": c.name, "channels": c.channels, "evidence": c.evidence})).collect::<Vec<_>>(),
         "extended": Value::Object(extended),
         "gain": Value::Object(gain),
+        "rotations": s.poses.as_ref().and_then(|p| p.rotations.as_ref()).map(rotations_json),
         "figures": figures,
     })
 }

@@ -282,6 +282,8 @@ pub struct PoseStudy {
     pub turns: Vec<Turn>,
     /// imu_tk: the fitted accelerometer against the factory calibration.
     pub factory: Option<FactoryComparison>,
+    /// The gyro matrix from the session's rotations beside the data author's (docs/method.md#moves).
+    pub rotations: Option<rotations::RotationStudy>,
 }
 
 /// One labelled 360-degree turn of a Ferraris session.

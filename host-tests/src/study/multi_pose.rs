@@ -50,8 +50,14 @@ pub fn study_multi_pose(
     let (spread, spread_noise) = gyro_spread(&poses, [sigma[0], sigma[1], sigma[2]]);
     let (gyro_models_held_out_radps, gyro_g_sensitivity) =
         if kind == PoseKind::Unlabelled { gyro_models(&poses) } else { (Vec::new(), None) };
+    let labelled_turns = turns;
     let turns = integrate_turns(rec, &poses, turns);
     let factory = (dataset == "imutk").then(|| factory_comparison(&extended));
+    let rotations = match dataset {
+        "ferraris" => Some(super::rotations::ferraris_rotations(rec, labelled_turns)?),
+        "imutk" => Some(super::rotations::imutk_rotations(rec)?),
+        _ => None,
+    };
     let pose_study = PoseStudy {
         gravity_mps2: g,
         method,
@@ -66,6 +72,7 @@ pub fn study_multi_pose(
         gyro_g_sensitivity,
         turns,
         factory,
+        rotations,
         poses,
         base_accel: base,
         extended_accel: extended,

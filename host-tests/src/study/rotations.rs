@@ -69,6 +69,27 @@ pub struct RotationStudy {
     pub reference_t_g: M3,
     /// The fits.
     pub fits: Vec<RotationFit>,
+    /// Fits the estimator refused: (what they used, why).
+    pub refused: Vec<(String, String)>,
+}
+
+impl RotationStudy {
+    fn new(reference_name: &str, reference_t_g: M3) -> RotationStudy {
+        RotationStudy {
+            reference_name: reference_name.to_string(),
+            reference_t_g,
+            fits: Vec::new(),
+            refused: Vec::new(),
+        }
+    }
+
+    /// Adds a fit, or its refusal.
+    fn add(&mut self, fit: Result<RotationFit, (String, String)>) {
+        match fit {
+            Ok(f) => self.fits.push(f),
+            Err(r) => self.refused.push(r),
+        }
+    }
 }
 
 /// The model of the rotation fits.
@@ -102,12 +123,10 @@ fn fit(
     name: &str,
     fitted: &[MoveSamples],
     held_out: &[(String, MoveSamples)],
-    source: &str,
-) -> Result<RotationFit, InputError> {
+) -> Result<RotationFit, (String, String)> {
     let rate_var = [s.noise_var[0], s.noise_var[1], s.noise_var[2]];
-    let (solution, _, passes) = solve_with_moves(&s.estimator, fitted, rate_var, 0)
-        .map_err(|e| InputError::file(source, format!("rotation fit '{name}': {e}")))?;
-    let bad = |e| InputError::file(source, format!("rotation fit '{name}': {e}"));
+    let bad = |e: sinscal::calib::channels::ChannelError| (name.to_string(), e.to_string());
+    let (solution, _, passes) = solve_with_moves(&s.estimator, fitted, rate_var, 0).map_err(bad)?;
     let samples: Vec<MoveSamples> = held_out.iter().map(|(_, m)| m.clone()).collect();
     let raw = integrate(&samples, &[0.0; PARAMETERS], rate_var).map_err(bad)?;
     let calibrated = integrate(&samples, &solution.parameters_si, rate_var).map_err(bad)?;
@@ -193,16 +212,12 @@ pub fn ferraris_rotations(rec: &Recording, turns: &[LabelledTurn]) -> Result<Rot
         collect_moves(rec, MAX_FIT_DWELLS)?.into_iter().map(|m| (move_label(&s.positions, &m), m)).collect();
     let only = |v: &[(String, MoveSamples)]| v.iter().map(|(_, m)| m.clone()).collect::<Vec<_>>();
     let both: Vec<MoveSamples> = only(&closed).into_iter().chain(only(&hand)).collect();
-    let fits = vec![
-        fit(&s, "the three labelled turns", &only(&closed), &hand, &rec.source)?,
-        fit(&s, "the hand moves between the faces", &only(&hand), &closed, &rec.source)?,
-        fit(&s, "the turns and the hand moves", &both, &[], &rec.source)?,
-    ];
-    Ok(RotationStudy {
-        reference_name: "imucal's Ferraris formulas on the same turns".to_string(),
-        reference_t_g: ferraris_gyro_matrix(rec, turns),
-        fits,
-    })
+    let mut study =
+        RotationStudy::new("imucal's Ferraris formulas on the same turns", ferraris_gyro_matrix(rec, turns));
+    study.add(fit(&s, "the three labelled turns", &only(&closed), &hand));
+    study.add(fit(&s, "the hand moves between the faces", &only(&hand), &closed));
+    study.add(fit(&s, "the turns and the hand moves", &both, &[]));
+    Ok(study)
 }
 
 const MAX_FIT_DWELLS: usize = sinscal::calib::channels::MAX_DWELLS;
@@ -217,14 +232,11 @@ pub fn imutk_rotations(rec: &Recording) -> Result<RotationStudy, InputError> {
     let all: Vec<MoveSamples> = hand.iter().map(|(_, m)| m.clone()).collect();
     let even: Vec<MoveSamples> = hand.iter().step_by(2).map(|(_, m)| m.clone()).collect();
     let odd: Vec<(String, MoveSamples)> = hand.iter().skip(1).step_by(2).cloned().collect();
-    let fits = vec![
-        fit(&s, "every hand move", &all, &[], &rec.source)?,
-        fit(&s, "every other hand move (1st, 3rd, ...)", &even, &odd, &rec.source)?,
-    ];
-    Ok(RotationStudy {
-        reference_name: "Xsens factory calibration (gyro misalignment; gains = the importer's nominal gains)"
-            .to_string(),
-        reference_t_g: [[1.0, -0.01, -0.02], [0.0, 1.0, 0.04], [-0.01, 0.01, 1.0]],
-        fits,
-    })
+    let mut study = RotationStudy::new(
+        "Xsens factory calibration (gyro misalignment; gains = the importer's nominal gains)",
+        [[1.0, -0.01, -0.02], [0.0, 1.0, 0.04], [-0.01, 0.01, 1.0]],
+    );
+    study.add(fit(&s, "every hand move", &all, &[]));
+    study.add(fit(&s, "every other hand move (1st, 3rd, ...)", &even, &odd));
+    Ok(study)
 }
