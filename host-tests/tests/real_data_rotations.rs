@@ -42,6 +42,24 @@ fn ferraris_gyro_matrix_from_the_turns_and_the_hand_moves() {
     let turns = ferraris_turns(&rec, &labels).expect("turns");
     let study = ferraris_rotations(&rec, &turns).expect("rotations");
     print(&study);
+    assert_eq!(study.fits.len() + study.refused.len(), 3);
+    // The turns alone: imucal's formulas, entry by entry, within three standard errors (the same data, the same
+    // observation: the integral of the rate over each turn).
+    let turns_fit = study.fits.iter().find(|f| f.name == "the three labelled turns").expect("the turns' fit");
+    for i in 0..3 {
+        for j in 0..3 {
+            let d = (turns_fit.t_g[i][j] - study.reference_t_g[i][j]).abs();
+            assert!(d < 3.0 * turns_fit.t_g_std[i][j], "T_g[{i}][{j}]: {d} vs ± {}", turns_fit.t_g_std[i][j]);
+        }
+    }
+    // Its calibration on the five hand moves it never saw: better than the raw gyros.
+    let rms = |f: &dyn Fn(&sinscal_host::study::rotations::HeldOut) -> f64| {
+        (turns_fit.held_out.iter().map(|h| f(h).powi(2)).sum::<f64>() / turns_fit.held_out.len() as f64).sqrt()
+    };
+    let (raw, calibrated) = (rms(&|h| h.raw_error_deg), rms(&|h| h.calibrated_error_deg));
+    println!("held-out hand moves: RMS raw {raw:.3} deg, calibrated {calibrated:.3} deg");
+    assert_eq!(turns_fit.held_out.len(), 5);
+    assert!(calibrated < raw, "{calibrated} vs {raw}");
 }
 
 #[test]
@@ -57,4 +75,22 @@ fn imutk_gyro_matrix_from_the_hand_moves() {
     .recording;
     let study = imutk_rotations(&rec).expect("rotations");
     print(&study);
+    assert!(study.refused.is_empty(), "{:?}", study.refused);
+    // Every entry within 0.02 of the factory calibration's (its gains are the importer's, so its diagonal is 1).
+    let all = &study.fits[0];
+    for i in 0..3 {
+        for j in 0..3 {
+            let d = (all.t_g[i][j] - study.reference_t_g[i][j]).abs();
+            assert!(d < 0.02, "T_g[{i}][{j}]: {} vs factory {}", all.t_g[i][j], study.reference_t_g[i][j]);
+        }
+    }
+    // Fitted on every other move, checked on the others: ten times better than the raw gyros.
+    let half = &study.fits[1];
+    let rms = |f: &dyn Fn(&sinscal_host::study::rotations::HeldOut) -> f64| {
+        (half.held_out.iter().map(|h| f(h).powi(2)).sum::<f64>() / half.held_out.len() as f64).sqrt()
+    };
+    let (raw, calibrated) = (rms(&|h| h.raw_error_deg), rms(&|h| h.calibrated_error_deg));
+    println!("held-out moves: {} , RMS raw {raw:.3} deg, calibrated {calibrated:.3} deg", half.held_out.len());
+    assert!(half.held_out.len() >= 10);
+    assert!(calibrated < 0.1 * raw, "{calibrated} vs {raw}");
 }

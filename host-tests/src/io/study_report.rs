@@ -351,8 +351,8 @@ fn rotations_section(o: &mut String, r: &RotationStudy) {
     let _ = writeln!(o, "\n## 8. Gyro matrix from the rotations (docs/method.md#moves)\n");
     let _ = writeln!(
         o,
-        "The static poses with their attitudes estimated (biases and accelerometer scale factors) and the gyro \
-         scale factors and misalignments from rotations: T_g = I + S + M, row i = gyro i, ± the standard error \
+        "The static poses with their attitudes estimated (biases, accelerometer scale factors and, where the \
+         poses determine them, misalignments) and the gyro scale factors and misalignments from rotations: T_g = I + S + M, row i = gyro i, ± the standard error \
          of the fit's noise. Reference: {}.",
         r.reference_name
     );

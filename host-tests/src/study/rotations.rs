@@ -92,13 +92,21 @@ impl RotationStudy {
     }
 }
 
-/// The model of the rotation fits.
-pub fn rotation_model() -> Model {
-    Model::BIASES.with(Term::AccelScaleFactor).with(Term::GyroScaleFactor).with(Term::GyroMisalignment)
+/// The model of the rotation fits: the biases, the accelerometer scale factors, the gyro scale factors and
+/// misalignments, and the accelerometer misalignments when the poses determine them (`with_accel_misalignment`:
+/// many poses; six faces with unknown attitudes do not).
+pub fn rotation_model(with_accel_misalignment: bool) -> Model {
+    let m = Model::BIASES.with(Term::AccelScaleFactor).with(Term::GyroScaleFactor).with(Term::GyroMisalignment);
+    if with_accel_misalignment {
+        m.with(Term::AccelMisalignment)
+    } else {
+        m
+    }
 }
 
-fn session(rec: &Recording) -> Result<ChannelSession, InputError> {
-    let options = Options { model: rotation_model(), estimate_attitudes: true, ..Options::default() };
+fn session(rec: &Recording, with_accel_misalignment: bool) -> Result<ChannelSession, InputError> {
+    let model = rotation_model(with_accel_misalignment);
+    let options = Options { model, estimate_attitudes: true, ..Options::default() };
     channel_session(rec, &options)
 }
 
@@ -127,6 +135,9 @@ fn fit(
     let rate_var = [s.noise_var[0], s.noise_var[1], s.noise_var[2]];
     let bad = |e: sinscal::calib::channels::ChannelError| (name.to_string(), e.to_string());
     let (solution, _, passes) = solve_with_moves(&s.estimator, fitted, rate_var, 0).map_err(bad)?;
+    if !solution.converged {
+        return Err((name.to_string(), format!("the fit did not converge in {passes} passes")));
+    }
     let samples: Vec<MoveSamples> = held_out.iter().map(|(_, m)| m.clone()).collect();
     let raw = integrate(&samples, &[0.0; PARAMETERS], rate_var).map_err(bad)?;
     let calibrated = integrate(&samples, &solution.parameters_si, rate_var).map_err(bad)?;
@@ -201,7 +212,7 @@ pub fn ferraris_gyro_matrix(rec: &Recording, turns: &[LabelledTurn]) -> M3 {
 /// The Ferraris session: fitted with its three labelled turns (imucal's data), then with the hand moves
 /// between the faces, each checked on the other's rotations, and with both.
 pub fn ferraris_rotations(rec: &Recording, turns: &[LabelledTurn]) -> Result<RotationStudy, InputError> {
-    let s = session(rec)?;
+    let s = session(rec, false)?;
     let closed: Vec<(String, MoveSamples)> = turns
         .iter()
         .map(|(label, axis, range)| {
@@ -226,7 +237,7 @@ const MAX_FIT_DWELLS: usize = sinscal::calib::channels::MAX_DWELLS;
 /// on the rest. The reference is the Xsens factory gyro misalignment (its gains are the importer's nominal
 /// gains, so its scale factors are 0 here).
 pub fn imutk_rotations(rec: &Recording) -> Result<RotationStudy, InputError> {
-    let s = session(rec)?;
+    let s = session(rec, true)?;
     let hand: Vec<(String, MoveSamples)> =
         collect_moves(rec, MAX_FIT_DWELLS)?.into_iter().map(|m| (move_label(&s.positions, &m), m)).collect();
     let all: Vec<MoveSamples> = hand.iter().map(|(_, m)| m.clone()).collect();
