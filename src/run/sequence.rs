@@ -11,14 +11,21 @@
 //! when too many read faults hit it, or when the table leaves before the dwell is long enough. A position
 //! aborted [`SequenceSettings::max_aborts`] times fails the sequence. The checks compare squared
 //! magnitudes, so no square root or trigonometry runs per sample.
+//!
+//! Moves (docs/method.md#moves): when the general estimator's model has gyro scale factors or misalignments,
+//! the samples between the end of one dwell and the start of the next are integrated into a
+//! [`MoveSums`] (at the ADIS output interval, [`SAMPLE_PERIOD_S`]; no prior calibration, so one pass: the
+//! host's direct path integrates again with each estimate), at most [`MAX_SEQUENCE_MOVES`] of them. A read
+//! fault during a move, or an abort of the position it ends at, drops that move.
 
 use heapless::Vec;
 
 use crate::calib::calibration::{
     calibrate_positions, CalibrationError, CalibrationResult, CalibrationSettings, PositionInput,
 };
-use crate::calib::channels::{ChannelError, ChannelSettings, ChannelSolution};
-use crate::calib::dwell::{DwellCollector, Prefilter, MIN_DWELL_SAMPLES};
+use crate::calib::channels::{ChannelError, ChannelSettings, ChannelSolution, Term, PARAMETERS};
+use crate::calib::dwell::{pool_mean_noise, DwellCollector, Prefilter, MIN_DWELL_SAMPLES};
+use crate::calib::moves::{ChannelMove, MoveSums};
 use crate::calib::prefilter::{HmmKf, PrefilterError};
 use crate::calib::session::{default_channel_settings, session_estimator, SessionDwell};
 use crate::calib::solve::MAX_POSITIONS;
@@ -26,6 +33,13 @@ use crate::math::linalg::{dot, Vec3};
 use crate::nav::earth::Site;
 use crate::nav::frames::Attitude;
 use crate::run::sampling::{QueueItem, TABLE_IN_POSITION};
+
+/// Most moves a sequence integrates (one between each two of the first 17 positions); a move is about 600
+/// bytes.
+pub const MAX_SEQUENCE_MOVES: usize = 16;
+
+/// The interval between two samples of the IMU, s: the ADIS output rate.
+pub const SAMPLE_PERIOD_S: f32 = 1.0 / crate::sensor::adis::OUTPUT_RATE_HZ as f32;
 
 /// Settings of the sequence.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -245,6 +259,12 @@ pub struct CalibrationSequence {
     rate2_max_radps2: f32,
     force2_bounds_mps2sq: (f32, f32),
     result: Option<SequenceSolution>,
+    /// The moves integrated: the position each starts from (it ends at the next) and its sums.
+    moves: Vec<(usize, MoveSums), MAX_SEQUENCE_MOVES>,
+    /// The move being integrated since the last dwell ended.
+    current_move: Option<(usize, MoveSums)>,
+    /// Its samples with the table reported moving (a move without any, between contiguous dwells, is no move).
+    moving_samples: u32,
 }
 
 impl CalibrationSequence {
@@ -276,6 +296,9 @@ impl CalibrationSequence {
             rate2_max_radps2: settings.max_rate_radps * settings.max_rate_radps,
             force2_bounds_mps2sq: ((g - e) * (g - e), (g + e) * (g + e)),
             result: None,
+            moves: Vec::new(),
+            current_move: None,
+            moving_samples: 0,
         })
     }
 
@@ -310,7 +333,38 @@ impl CalibrationSequence {
         self.faults = 0;
         self.aborts = 0;
         self.result = None;
+        self.moves.clear();
+        self.current_move = None;
+        self.moving_samples = 0;
         Ok(())
+    }
+
+    /// Whether the sequence integrates the moves: the general estimator with gyro data and gyro scale factors
+    /// or misalignments in its model.
+    fn uses_moves(&self) -> bool {
+        match self.settings.estimator {
+            Estimator::Channels(s) => {
+                s.use_gyro && (s.model.contains(Term::GyroScaleFactor) || s.model.contains(Term::GyroMisalignment))
+            }
+            Estimator::Angles => false,
+        }
+    }
+
+    /// Moves integrated so far.
+    pub fn moves(&self) -> usize {
+        self.moves.len()
+    }
+
+    /// One sample between two dwells: into the move being integrated; a read fault ends that move.
+    fn on_move_sample(&mut self, item: &QueueItem) {
+        let Some((_, sums)) = self.current_move.as_mut() else { return };
+        if item.table == 0 {
+            self.moving_samples = self.moving_samples.saturating_add(1);
+        }
+        match &item.reading {
+            Ok(r) => sums.push(r.sample.rate_b_radps, r.sample.force_b_mps2, SAMPLE_PERIOD_S),
+            Err(_) => self.current_move = None,
+        }
     }
 
     /// Whether [`CalibrationSequence::new`] would accept this schedule and these settings, without building the
@@ -349,6 +403,10 @@ impl CalibrationSequence {
 
     fn abort(&mut self, reason: AbortReason, in_position: bool) -> Event {
         let event = Event::DwellAborted { index: self.index, reason, at_sample: self.dwell_sample };
+        // The body may have moved: the move that ended at this position no longer has its end.
+        if self.moves.last().is_some_and(|(from, _)| from + 1 == self.index) {
+            self.moves.pop();
+        }
         self.aborts = self.aborts.saturating_add(1);
         if self.aborts >= self.settings.max_aborts {
             self.phase = Phase::Finished;
@@ -374,6 +432,11 @@ impl CalibrationSequence {
         let Some(attitude) = self.schedule.get(self.index) else { return self.abort(AbortReason::TableLeft, false) };
         let _ = self.inputs.push(PositionInput { c_b_n: attitude.c_b_n(), summary });
         let event = Event::DwellCompleted { index: self.index, samples: summary.samples, faults };
+        self.current_move = None;
+        self.moving_samples = 0;
+        if self.uses_moves() && self.index + 1 < self.schedule.len() && self.moves.len() < MAX_SEQUENCE_MOVES {
+            self.current_move = MoveSums::new(&[0.0; PARAMETERS]).ok().map(|s| (self.index, s));
+        }
         self.index += 1;
         self.aborts = 0;
         self.phase = if table_left { Phase::WaitingForTable } else { Phase::WaitingForTableToLeave };
@@ -414,8 +477,15 @@ impl CalibrationSequence {
                     summary: &p.summary,
                 });
                 let dwell_value = self.settings.calibration.dwell_value;
+                // The moves with the gyros' per-sample noise pooled over the dwells.
+                let noise = pool_mean_noise(self.inputs.iter().map(|p| p.summary)).map(|m| m.white_equivalent_var);
+                let mut moves: Vec<ChannelMove, MAX_SEQUENCE_MOVES> = Vec::new();
+                for (from, sums) in &self.moves {
+                    // Capacity: as many as the sums.
+                    let _ = moves.push(sums.finish(*from, from + 1, [noise[0], noise[1], noise[2]]));
+                }
                 session_estimator(dwells, self.site, settings, dwell_value)
-                    .and_then(|estimator| estimator.solve())
+                    .and_then(|estimator| estimator.solve_with(&moves))
                     .map(SequenceSolution::Channels)
                     .map_err(SequenceFailure::Channels)
             }
@@ -425,6 +495,9 @@ impl CalibrationSequence {
     /// One queue item, with the decision whether the table is in the position the sequence works on at that
     /// sample (`item.table` is not read here: [`feed_sequence`] decides from it).
     pub fn on_sample(&mut self, in_position: bool, item: &QueueItem) -> Option<Event> {
+        if matches!(self.phase, Phase::WaitingForTableToLeave | Phase::WaitingForTable | Phase::Settling(_)) {
+            self.on_move_sample(item);
+        }
         match self.phase {
             Phase::Finished => None,
             Phase::WaitingForTableToLeave => {
@@ -472,6 +545,11 @@ impl CalibrationSequence {
         if let Some(attitude) = self.schedule.get(self.index) {
             self.up_b = attitude.c_b_n().row(2);
         }
+        if let Some((from, sums)) = self.current_move.take() {
+            if from + 1 == self.index && self.moving_samples > 0 {
+                let _ = self.moves.push((from, sums));
+            }
+        }
         self.collector.reset();
         self.dwell_sample = 0;
         self.faults = 0;
@@ -481,7 +559,10 @@ impl CalibrationSequence {
     fn collect(&mut self, in_position: bool, item: &QueueItem) -> Option<Event> {
         if !in_position {
             if self.dwell_sample >= self.settings.min_dwell_samples.max(MIN_DWELL_SAMPLES) {
-                return Some(self.complete(true));
+                let event = self.complete(true);
+                // The sample the table left with is the move's first.
+                self.on_move_sample(item);
+                return Some(event);
             }
             return Some(self.abort(AbortReason::TableLeft, false));
         }

@@ -71,6 +71,22 @@ pub fn replay_parts(
              levelled from its own accelerometers: calibrate it without --on (docs/method.md#unknown-attitudes)",
         ));
     }
+    // The sequence integrates the moves at the ADIS's output interval: a recording at another rate would give
+    // every move the wrong angle.
+    let adis_hz = f64::from(sinscal::sensor::adis::OUTPUT_RATE_HZ);
+    let moves = rec.has_gyro()
+        && options.method == Method::Channels
+        && crate::calibration::moves::model_uses_moves(options.model);
+    if let Some(rate_hz) = rec.header().rate_hz.filter(|r| moves && (r / adis_hz - 1.0).abs() > 1e-3) {
+        return Err(InputError::file(
+            source,
+            format!(
+                "the firmware path integrates the moves at the IMU's {adis_hz} Hz and this recording is at \
+                 {rate_hz} Hz: its moves would turn by the wrong angles; calibrate it without --on, or without \
+                 gyro scale factors and misalignments in --model"
+            ),
+        ));
+    }
     let prefilter = prefilter_of(options, rec)?;
     let (dwells, rows) = write_frames(rec, frames)?;
     let frames = u32::try_from(rows)
@@ -256,7 +272,7 @@ pub fn calibration_from_outcome(
         converged,
         sampling: Some(outcome.sampling),
         on: "host",
-        // The firmware's sequence does not integrate the moves (docs/method.md#moves).
+        // The outcome does not carry the moves' residuals.
         moves: Vec::new(),
         move_passes: 0,
     };
