@@ -52,7 +52,7 @@ pub fn collect_moves(recording: &impl RowSource, limit: usize) -> Result<Vec<Mov
             None => {
                 let Some(from) = last_dwell else { return Ok(()) };
                 let dt_s = dt_s.unwrap_or(0.0);
-                if !(dt_s > 0.0) {
+                if dt_s.is_nan() || dt_s <= 0.0 {
                     return Err(InputError::at(source, row.line, "time does not increase within a move".to_string()));
                 }
                 let m = current.get_or_insert_with(|| MoveSamples {
@@ -61,11 +61,7 @@ pub fn collect_moves(recording: &impl RowSource, limit: usize) -> Result<Vec<Mov
                     first_line: row.line,
                     samples: Vec::new(),
                 });
-                m.samples.push((
-                    row.rate_b_radps.map(|x| x as f32),
-                    row.force_b_mps2.map(|x| x as f32),
-                    dt_s as f32,
-                ));
+                m.samples.push((row.rate_b_radps.map(|x| x as f32), row.force_b_mps2.map(|x| x as f32), dt_s as f32));
             }
         }
         Ok(())
@@ -98,7 +94,10 @@ pub const MAX_MOVE_PASSES: u32 = 8;
 
 /// The solution with the moves, without the dwells in `exclude`: the moves integrated with the prior (none at
 /// first), solved, and integrated again with the estimate until no gyro parameter changes by more than 1e-3 of
-/// its standard error. Returns the solution, the moves of its last pass and the passes made.
+/// its standard error, or the largest change, below 0.05 of its standard error, has stopped shrinking (the rule
+/// of the core's Gauss-Newton passes, docs/method.md#how-it-solves: the f32 integration and solution leave
+/// changes of a few thousandths of a standard error from pass to pass). Returns the solution, the moves of its
+/// last pass and the passes made.
 pub fn solve_with_moves(
     estimator: &ChannelEstimator,
     moves: &[MoveSamples],
@@ -116,6 +115,7 @@ pub fn solve_with_moves(
     };
     let mut solution = solve(&integrated)?;
     let mut passes = 1;
+    let mut previous = f32::INFINITY;
     while passes < MAX_MOVE_PASSES {
         let mut largest = 0.0f32;
         for &p in &MOVE_PARAMETERS {
@@ -124,9 +124,10 @@ pub fn solve_with_moves(
             largest = largest.max(if std > 0.0 { change / std } else { change });
             prior[p] = value;
         }
-        if largest < 1e-3 {
+        if largest < 1e-3 || (largest < 0.05 && largest >= previous) {
             break;
         }
+        previous = largest;
         integrated = integrate(moves, &prior, rate_var_radps2)?;
         solution = solve(&integrated)?;
         passes += 1;
