@@ -109,6 +109,8 @@ fn solution(model: Model, theta: &[f32; PARAMETERS]) -> ChannelSolution {
         moves: 0,
         move_residual_rad: [[0.0; 3]; sinscal::calib::moves::MAX_MOVES],
         move_statistic: [-1.0; sinscal::calib::moves::MAX_MOVES],
+        move_rows: [0; sinscal::calib::moves::MAX_MOVES],
+        moves_refused: 0,
     }
 }
 

@@ -3,7 +3,9 @@
 //! means and the moves' rotations computed independently of the core (`calibration::rotation_mc`).
 //!
 //! The acceptance, for every gyro scale factor and misalignment: RMS of error / reported standard error in
-//! [0.8, 1.2] and RMS error / bound at most 1.05, over 200 runs:
+//! [0.8, 1.2] and RMS error / bound at most 1.05, over 2000 runs (the issue asks for at least 200; at 200 an
+//! RMS scatters by 5 %, as much as the band, so the efficient estimator itself misses it on some parameter in
+//! about one run of the campaign in six):
 //! `cargo test --release -p sinscal-host --test rotation_monte_carlo -- --ignored --nocapture` (more runs with
 //! `SINSCAL_MC_RUNS`). The table also gives, per parameter, the RMS error of the efficient reference estimator on
 //! the same runs (the generalised least squares linearised at the truth, whose covariance is the bound):
@@ -200,13 +202,13 @@ fn bound_machinery_and_a_short_monte_carlo() {
     println!("wall time {:.1} s", start.elapsed().as_secs_f64());
 }
 
-/// Runs of the acceptance: 200, or `SINSCAL_MC_RUNS` when larger.
+/// Runs of the acceptance: 2000, or `SINSCAL_MC_RUNS` (at least 200).
 fn runs() -> usize {
-    std::env::var("SINSCAL_MC_RUNS").ok().and_then(|v| v.parse().ok()).filter(|&n| n >= 200).unwrap_or(200)
+    std::env::var("SINSCAL_MC_RUNS").ok().and_then(|v| v.parse().ok()).filter(|&n| n >= 200).unwrap_or(2000)
 }
 
 #[test]
-#[ignore = "200 runs: cargo test --release -p sinscal-host --test rotation_monte_carlo -- --ignored --nocapture"]
+#[ignore = "2000 runs: cargo test --release -p sinscal-host --test rotation_monte_carlo -- --ignored --nocapture"]
 fn gyro_scale_factors_and_misalignments_from_the_moves_meet_the_acceptance() {
     let runs = runs();
     let start = Instant::now();

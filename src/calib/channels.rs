@@ -40,7 +40,7 @@
 
 use heapless::Vec;
 
-use crate::calib::moves::{swing_about, ChannelMove, MAX_MOVES, MOVE_PARAMETERS};
+use crate::calib::moves::{swing_about, ChannelMove, MAX_MOVES, MAX_MOVE_MISFIT_RAD, MOVE_PARAMETERS};
 use crate::math::linalg::{cross, dot, norm, rotation, Mat3, Vec3};
 use crate::math::lsq::{inverse_gram, jacobi_svd, solve_upper, solve_upper_transposed, SqrtInfo};
 use crate::nav::earth::{Site, EARTH_RATE_RADPS};
@@ -490,9 +490,14 @@ pub struct ChannelSolution {
     /// Per move: the rotation the calibrated gyros measured less the reference rotation, body frame at the
     /// start of the move, rad (without the part about up when a heading at either end is unknown).
     pub move_residual_rad: [Vec3; MAX_MOVES],
-    /// Per move: its whitened residual sum of squares (a chi-square of 3 degrees of freedom, 2 without the part
-    /// about up, when the model holds); negative for a move left out.
+    /// Per move: its whitened residual sum of squares (a chi-square of [`ChannelSolution::move_rows`] degrees
+    /// of freedom when the model holds); negative for a move left out.
     pub move_statistic: [f32; MAX_MOVES],
+    /// Per move: its rows in the fit (3, or 2 without the part about up; 0 for a move left out).
+    pub move_rows: [u8; MAX_MOVES],
+    /// Bit k: move k was left out because its rotation at the start was further than
+    /// [`crate::calib::moves::MAX_MOVE_MISFIT_RAD`] from the reference's.
+    pub moves_refused: u64,
 }
 
 impl ChannelSolution {
@@ -1042,6 +1047,7 @@ impl ChannelEstimator {
         let mut iterations = 0;
         let mut converged = false;
         let mut previous = f32::INFINITY;
+        let mut refused = 0u64;
         while iterations < self.settings.max_iterations.max(1) {
             iterations += 1;
             // Every dwell's nuisance angles, the left-out ones too (their residuals are reported).
@@ -1053,7 +1059,10 @@ impl ChannelEstimator {
                     attitude[k] = heading_rotation(heading[k]).mul(&d.tilt);
                 }
             }
-            pass = self.pass(&theta, &attitude, &cols, n, used, moves);
+            if iterations == 1 {
+                refused = self.gross_misfits(moves, &attitude);
+            }
+            pass = self.pass(&theta, &attitude, &cols, n, used, moves, refused);
             let mut largest = 0.0f32;
             for c in 0..n {
                 let p = cols[c];
@@ -1077,7 +1086,7 @@ impl ChannelEstimator {
         if let Some(parameter) = implausible_parameter(&theta).filter(|_| !converged) {
             return Err(ChannelError::Diverged { parameter, value: theta[parameter] });
         }
-        let state = State { theta: &theta, heading: &heading, attitude: &attitude, cols: &cols, n, model };
+        let state = State { theta: &theta, heading: &heading, attitude: &attitude, cols: &cols, n, model, refused };
         Ok(self.finish(&state, &pass, used, iterations, converged, moves))
     }
 
@@ -1091,6 +1100,7 @@ impl ChannelEstimator {
         n: usize,
         used: impl Fn(usize) -> bool,
         moves: &[ChannelMove],
+        refused: u64,
     ) -> Pass {
         let model = self.model();
         let zero = [0.0f32; PARAMETERS];
@@ -1113,8 +1123,15 @@ impl ChannelEstimator {
                 }
             }
         }
-        let moves_used = || moves.iter().filter(|m| self.settings.use_gyro && move_used(m, &used));
-        for m in moves_used() {
+        let use_gyro = self.settings.use_gyro;
+        let used = &used;
+        let moves_used = || {
+            moves
+                .iter()
+                .enumerate()
+                .filter(move |(k, m)| use_gyro && move_used(m, used) && (*k >= 64 || refused & (1 << k) == 0))
+        };
+        for (_, m) in moves_used() {
             let w = self.move_rows(m, theta, attitude, cols, n, &ones, false);
             let s = self.move_rows(m, theta, attitude, cols, n, &ones, true);
             for c in 0..n {
@@ -1173,7 +1190,7 @@ impl ChannelEstimator {
                 structure.add_row(&s.a[r], 0.0);
             }
         }
-        for m in moves_used() {
+        for (_, m) in moves_used() {
             let w = self.move_rows(m, theta, attitude, cols, n, &scale, false);
             let s = self.move_rows(m, theta, attitude, cols, n, &scale_s, true);
             for r in 0..w.rows {
@@ -1268,7 +1285,7 @@ impl ChannelEstimator {
         converged: bool,
         moves: &[ChannelMove],
     ) -> ChannelSolution {
-        let State { theta, heading, attitude, cols, n, model } = *state;
+        let State { theta, heading, attitude, cols, n, model, refused } = *state;
         let mut sol = ChannelSolution {
             model,
             parameters_si: [0.0; PARAMETERS],
@@ -1294,6 +1311,8 @@ impl ChannelEstimator {
             moves: 0,
             move_residual_rad: [[0.0; 3]; MAX_MOVES],
             move_statistic: [-1.0; MAX_MOVES],
+            move_rows: [0; MAX_MOVES],
+            moves_refused: refused,
         };
         for c in 0..n {
             let p = cols[c];
@@ -1365,16 +1384,34 @@ impl ChannelEstimator {
             let rows = self.move_rows(m, theta, attitude, cols, n, &pass.scale, false);
             sol.move_residual_rad[k] = rows.residual_rad;
             sol.moves += 1;
-            if !move_used(m, &used) {
+            if !move_used(m, &used) || refused & (1 << k) != 0 {
                 continue;
             }
             let chi2: f32 = rows.y[..rows.rows].iter().map(|y| y * y).sum();
             sol.move_statistic[k] = chi2;
+            sol.move_rows[k] = rows.rows as u8;
             sol.chi_square += chi2;
             channels += rows.rows as u32;
         }
         sol.degrees_of_freedom = channels.saturating_sub(pass.kept_count as u32 + nuisances);
         sol
+    }
+
+    /// The moves whose rotation at their prior is further than [`MAX_MOVE_MISFIT_RAD`] from the reference's at
+    /// the dwells' `attitude` (bit k: move k).
+    fn gross_misfits(&self, moves: &[ChannelMove], attitude: &[Mat3; MAX_DWELLS]) -> u64 {
+        let mut refused = 0u64;
+        for (k, m) in moves.iter().enumerate().take(MAX_MOVES) {
+            if m.turn.is_some() || m.from >= self.dwells.len() || m.to >= self.dwells.len() {
+                continue;
+            }
+            let e = self.rotation_misfit(m, attitude).e_rad;
+            // NaN is refused too.
+            if norm(e).is_nan() || norm(e) > MAX_MOVE_MISFIT_RAD {
+                refused |= 1 << k;
+            }
+        }
+        refused
     }
 
     /// The rotation error of each of `moves` (at most [`MAX_MOVES`]) at the parameters `parameters_si`, with the
@@ -1600,6 +1637,8 @@ struct State<'a> {
     cols: &'a [usize; PARAMETERS],
     n: usize,
     model: Model,
+    /// Moves left out as gross misfits (bit k: move k).
+    refused: u64,
 }
 
 /// What one Gauss-Newton pass leaves for the next and for the final statistics.

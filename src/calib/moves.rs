@@ -283,6 +283,30 @@ fn scaled(m: &Mat3, k: f32) -> Mat3 {
     Mat3(m.0.map(|row| row.map(|x| x * k)))
 }
 
+/// The per-sample variance of each gyro for the moves' covariance, (rad/s)^2: the raw sample variance pooled
+/// over the dwells (each weighted by its degrees of freedom). The moves are not prefiltered, so the dwell means'
+/// honest noise (with the prefilter's start and the Allan extrapolation) is not theirs.
+pub fn pooled_rate_var_radps2(summaries: impl Iterator<Item = crate::calib::dwell::DwellSummary>) -> Vec3 {
+    let (mut sum, mut dof) = ([0.0f32; 3], 0.0f32);
+    for s in summaries {
+        let n = s.samples.saturating_sub(1) as f32;
+        for (slot, std) in sum.iter_mut().zip(s.rate_sample_std_b_radps) {
+            *slot += n * std * std;
+        }
+        dof += n;
+    }
+    if dof > 0.0 {
+        sum.map(|v| v / dof)
+    } else {
+        sum
+    }
+}
+
+/// A move whose rotation at the prior is further than this from the reference's (rad, 45 deg) is no move of the
+/// reference: rows with `pos = 0` between dwells that do not hold the table's turn (a recording without its
+/// moves), or a move to the wrong position. It is left out of the solution (docs/method.md#moves).
+pub const MAX_MOVE_MISFIT_RAD: f32 = core::f32::consts::FRAC_PI_4;
+
 /// The parts of rotation `q` about the unit axis `u` and across it: `q = t s` with `t` about `u` (the twist) and
 /// `s` (the swing) about an axis at right angles to `u`; returns `(s, t)`. A rotation `r` applied before,
 /// `r q`, changes the swing by `t* r t` to first order: a perturbation turned back by the twist.

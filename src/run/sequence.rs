@@ -24,8 +24,8 @@ use crate::calib::calibration::{
     calibrate_positions, CalibrationError, CalibrationResult, CalibrationSettings, PositionInput,
 };
 use crate::calib::channels::{ChannelError, ChannelSettings, ChannelSolution, Term, PARAMETERS};
-use crate::calib::dwell::{pool_mean_noise, DwellCollector, Prefilter, MIN_DWELL_SAMPLES};
-use crate::calib::moves::{ChannelMove, MoveSums};
+use crate::calib::dwell::{DwellCollector, Prefilter, MIN_DWELL_SAMPLES};
+use crate::calib::moves::{pooled_rate_var_radps2, ChannelMove, MoveSums};
 use crate::calib::prefilter::{HmmKf, PrefilterError};
 use crate::calib::session::{default_channel_settings, session_estimator, SessionDwell};
 use crate::calib::solve::MAX_POSITIONS;
@@ -477,12 +477,12 @@ impl CalibrationSequence {
                     summary: &p.summary,
                 });
                 let dwell_value = self.settings.calibration.dwell_value;
-                // The moves with the gyros' per-sample noise pooled over the dwells.
-                let noise = pool_mean_noise(self.inputs.iter().map(|p| p.summary)).map(|m| m.white_equivalent_var);
+                // The moves with the gyros' raw sample variance pooled over the dwells.
+                let var = pooled_rate_var_radps2(self.inputs.iter().map(|p| p.summary));
                 let mut moves: Vec<ChannelMove, MAX_SEQUENCE_MOVES> = Vec::new();
                 for (from, sums) in &self.moves {
                     // Capacity: as many as the sums.
-                    let _ = moves.push(sums.finish(*from, from + 1, [noise[0], noise[1], noise[2]]));
+                    let _ = moves.push(sums.finish(*from, from + 1, var));
                 }
                 session_estimator(dwells, self.site, settings, dwell_value)
                     .and_then(|estimator| estimator.solve_with(&moves))

@@ -97,6 +97,13 @@ impl Estimates {
             nuisance[0] += i64::from(s.heading_std_rad[k] > 0.0);
             nuisance[1] += if s.attitude == AttitudeKnowledge::Unknown { 2 } else { 0 };
         }
+        // The moves are gyro rows too.
+        for k in 0..s.moves.min(s.move_rows.len()) {
+            if s.move_rows[k] > 0 && s.move_statistic[k] >= 0.0 {
+                chi[0] += s.move_statistic[k] as f64;
+                rows[0] += i64::from(s.move_rows[k]);
+            }
+        }
         let mut params = [0i64; 2];
         for &i in &e.determined {
             params[sensor_of(i)] += 1;

@@ -192,6 +192,8 @@ pub struct UsedMove {
     pub residual_rad: [f64; 3],
     /// Its whitened sum of squares (negative when left out).
     pub statistic: f64,
+    /// Whether it was left out: its rotation was more than 45 deg from the reference's (no move of the table).
+    pub refused: bool,
 }
 
 fn to_f32(v: [f64; 3]) -> [f32; 3] {
@@ -307,13 +309,12 @@ pub fn calibrate_channels(recording: &impl RowSource, options: &Options) -> Resu
     let header = recording.header();
     let has_gyro = recording.has_gyro();
     let (site, gravity_source) = site_of(header);
-    let ChannelSession { estimator, positions, noise_var: noise, prefilter } = channel_session(recording, options)?;
+    let ChannelSession { estimator, positions, rate_var_radps2, prefilter } = channel_session(recording, options)?;
     let move_samples = if has_gyro && options.use_moves && moves::model_uses_moves(options.model) {
         moves::collect_moves(recording, MAX_DWELLS)?
     } else {
         Vec::new()
     };
-    let rate_var_radps2 = [noise[0], noise[1], noise[2]];
     let (solution, integrated, move_passes) = if move_samples.is_empty() {
         (estimator.solve().map_err(|e| channel_error(e, &positions, source))?, Vec::new(), 0)
     } else {
@@ -350,8 +351,8 @@ pub struct ChannelSession {
     pub estimator: ChannelEstimator,
     /// The positions in file order.
     pub positions: Vec<PositionResult>,
-    /// The pooled per-sample noise variance of the six channels (gyro x, y, z in (rad/s)^2 first).
-    pub noise_var: [f32; 6],
+    /// The per-sample variance of each gyro for the moves, (rad/s)^2 (`calib::moves::pooled_rate_var_radps2`).
+    pub rate_var_radps2: [f32; 3],
     /// The prefilter that ran.
     pub prefilter: Prefilter,
 }
@@ -392,7 +393,8 @@ pub fn channel_session(recording: &impl RowSource, options: &Options) -> Result<
     };
     let estimator = session_estimator(session_dwells(&positions), site, settings, options.dwell_value)
         .map_err(|e| channel_error(e, &positions, source))?;
-    Ok(ChannelSession { estimator, positions, noise_var: noise, prefilter })
+    let rate_var_radps2 = sinscal::calib::moves::pooled_rate_var_radps2(positions.iter().map(|p| p.summary));
+    Ok(ChannelSession { estimator, positions, rate_var_radps2, prefilter })
 }
 
 /// What the report says of each move used.
@@ -414,6 +416,7 @@ fn used_moves(
             angle_deg: (sinscal::math::linalg::norm(c.rotation.to_rotation_vector()) as f64).to_degrees(),
             residual_rad: solution.move_residual_rad[k].map(|x| x as f64),
             statistic: solution.move_statistic[k] as f64,
+            refused: k < 64 && solution.moves_refused & (1 << k) != 0,
         })
         .collect()
 }

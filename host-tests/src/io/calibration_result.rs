@@ -76,6 +76,8 @@ pub struct MoveJson {
     pub residual_rad: [f64; 3],
     /// Its whitened sum of squares.
     pub statistic: f64,
+    /// Whether it was left out as no move of the table (more than 45 deg from the reference's rotation).
+    pub refused: bool,
 }
 
 fn is_zero(x: &u32) -> bool {
@@ -353,6 +355,7 @@ impl CalibrationJson {
                     angle_deg: m.angle_deg,
                     residual_rad: m.residual_rad,
                     statistic: m.statistic,
+                    refused: m.refused,
                 })
                 .collect(),
             move_passes: c.move_passes,
@@ -511,7 +514,13 @@ fn moves_table(out: &mut String, c: &Calibration) {
             r[0],
             r[1],
             r[2],
-            if m.statistic >= 0.0 { format!("{:.1}", m.statistic) } else { "left out".to_string() }
+            if m.refused {
+                "left out: more than 45 deg from the reference's rotation, no move of the table".to_string()
+            } else if m.statistic >= 0.0 {
+                format!("{:.1}", m.statistic)
+            } else {
+                "left out".to_string()
+            }
         );
     }
 }

@@ -132,7 +132,7 @@ fn fit(
     fitted: &[MoveSamples],
     held_out: &[(String, MoveSamples)],
 ) -> Result<RotationFit, (String, String)> {
-    let rate_var = [s.noise_var[0], s.noise_var[1], s.noise_var[2]];
+    let rate_var = s.rate_var_radps2;
     let bad = |e: sinscal::calib::channels::ChannelError| (name.to_string(), e.to_string());
     let (solution, _, passes) = solve_with_moves(&s.estimator, fitted, rate_var, 0).map_err(bad)?;
     if !solution.converged {

@@ -699,6 +699,8 @@ fn decode_channels(r: &mut Reader<'_>) -> Result<ChannelSolution, ReplayError> {
         moves: 0,
         move_residual_rad: [[0.0; 3]; crate::calib::moves::MAX_MOVES],
         move_statistic: [-1.0; crate::calib::moves::MAX_MOVES],
+        move_rows: [0; crate::calib::moves::MAX_MOVES],
+        moves_refused: 0,
     };
     for k in 0..dwells {
         c.heading_rad[k] = r.f32()?;
