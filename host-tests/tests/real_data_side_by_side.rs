@@ -27,13 +27,15 @@ use sinscal_host::study::factory::lower_triangular_form;
 const IDENTITY: M3 = [[1.0, 0.0, 0.0], [0.0, 1.0, 0.0], [0.0, 0.0, 1.0]];
 const AXES: [&str; 3] = ["x", "y", "z"];
 
+/// The static poses alone: these comparisons are of the dwells against each data set's static reference (the
+/// moves between them, and the gyro matrix they give, are `real_data_rotations`).
 fn run(rec: &Recording, model: Model) -> Calibration {
-    calibrate(rec, &Options { model, ..Options::default() }).expect("calibrate")
+    calibrate(rec, &Options { model, use_moves: false, ..Options::default() }).expect("calibrate")
 }
 
 /// The fullest determined model of a recording and its calibration (see the top of this file).
 fn fullest_determined_model(rec: &Recording) -> (Model, Calibration) {
-    fullest_determined_model_with(rec, Options::default())
+    fullest_determined_model_with(rec, Options { use_moves: false, ..Options::default() })
 }
 
 /// As [`fullest_determined_model`] with `options` (their model is replaced).
@@ -274,7 +276,7 @@ impl FerrarisRuns {
         ["labels, default", "labels, fullest", "estimated, default", "estimated, fullest", "Ferraris formulas"];
 
     fn new(rec: &Recording) -> FerrarisRuns {
-        let estimated = Options { estimate_attitudes: true, ..Options::default() };
+        let estimated = Options { estimate_attitudes: true, use_moves: false, ..Options::default() };
         let (labels_model, labels_fullest) = fullest_determined_model(rec);
         let (estimated_model, estimated_fullest) = fullest_determined_model_with(rec, estimated);
         let full = Model::BIASES.with(Term::AccelScaleFactor).with(Term::GyroGSensitivity);

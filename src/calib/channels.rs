@@ -1062,7 +1062,7 @@ impl ChannelEstimator {
             if iterations == 1 {
                 refused = self.gross_misfits(moves, &attitude);
             }
-            pass = self.pass(&theta, &attitude, &cols, n, used, moves, refused);
+            pass = self.pass(&theta, &attitude, &cols, n, used, UsedMoves { all: moves, refused });
             let mut largest = 0.0f32;
             for c in 0..n {
                 let p = cols[c];
@@ -1099,9 +1099,9 @@ impl ChannelEstimator {
         cols: &[usize; PARAMETERS],
         n: usize,
         used: impl Fn(usize) -> bool,
-        moves: &[ChannelMove],
-        refused: u64,
+        moves: UsedMoves<'_>,
     ) -> Pass {
+        let UsedMoves { all: moves, refused } = moves;
         let model = self.model();
         let zero = [0.0f32; PARAMETERS];
         let ones = [1.0f32; PARAMETERS];
@@ -1572,6 +1572,13 @@ impl ChannelEstimator {
         }
         out
     }
+}
+
+/// The moves of a pass: all of them, and those left out as gross misfits (bit k: move k).
+#[derive(Clone, Copy)]
+struct UsedMoves<'a> {
+    all: &'a [ChannelMove],
+    refused: u64,
 }
 
 /// The rows of x, y and z.
