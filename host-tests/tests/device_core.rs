@@ -155,9 +155,12 @@ fn every_request_and_refusal_in_order_then_the_record_at_the_next_boot() {
     let config = configuration_body(&replay[..header_len]).unwrap();
     let mut b = Bench::boot(RamFlash(vec![0xFF; 32 * 1024]));
     println!(
-        "memory: Device {} bytes, of which the calibration sequence {} bytes (size_of on the host)",
+        "memory: Device {} bytes, of which the calibration sequence {} bytes; the general estimator {} and its \
+         solution {} bytes (size_of on the host)",
         std::mem::size_of::<Device<RamFlash>>(),
-        std::mem::size_of::<Option<sinscal::CalibrationSequence>>()
+        std::mem::size_of::<Option<sinscal::CalibrationSequence>>(),
+        std::mem::size_of::<sinscal::calib::channels::ChannelEstimator>(),
+        std::mem::size_of::<sinscal::calib::channels::ChannelSolution>()
     );
     assert_eq!(b.state(), DeviceState::Idle);
     assert_eq!(b.refused(kind::START, &[]), ErrorCode::NotConfigured);
