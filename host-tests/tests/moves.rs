@@ -183,3 +183,18 @@ fn the_firmware_path_integrates_the_moves_too() {
         println!("--on qemu: the same JSON as --on host (gyro scale factor x {:+.6} ± {:.6})", sf.0, sf.1);
     }
 }
+
+#[test]
+fn the_firmware_path_refuses_moves_at_another_rate_than_the_imus() {
+    // At 50 Hz the ADIS's 10 ms interval would halve every move's angle: refused with the reason; without the
+    // terms that use the moves the same recording goes through.
+    let mut s = scenario();
+    s.schedule.rate_hz = 50.0;
+    s.schedule.positions_deg.truncate(4);
+    let rec = simulate(&s, 4, "rotations at 50 Hz");
+    let full = Options { model: Model::FULL, ..Options::default() };
+    let err = sinscal_host::calibration::firmware_path::calibrate_on_host(&rec, &full).expect_err("refused");
+    let text = err.to_string();
+    assert!(text.contains("100 Hz") && text.contains("50 Hz"), "{text}");
+    sinscal_host::calibration::firmware_path::calibrate_on_host(&rec, &Options::default()).expect("default model");
+}
