@@ -1285,7 +1285,7 @@ impl ChannelEstimator {
         converged: bool,
         moves: &[ChannelMove],
     ) -> ChannelSolution {
-        let State { theta, heading, attitude, cols, n, model, refused } = *state;
+        let State { theta, heading, attitude, cols, n, model, .. } = *state;
         let mut sol = ChannelSolution {
             model,
             parameters_si: [0.0; PARAMETERS],
@@ -1312,7 +1312,7 @@ impl ChannelEstimator {
             move_residual_rad: [[0.0; 3]; MAX_MOVES],
             move_statistic: [-1.0; MAX_MOVES],
             move_rows: [0; MAX_MOVES],
-            moves_refused: refused,
+            moves_refused: state.refused,
         };
         for c in 0..n {
             let p = cols[c];
@@ -1377,14 +1377,30 @@ impl ChannelEstimator {
                 }
             }
         }
+        if self.settings.use_gyro {
+            channels += self.finish_moves(&mut sol, state, pass, &used, moves);
+        }
+        sol.degrees_of_freedom = channels.saturating_sub(pass.kept_count as u32 + nuisances);
+        sol
+    }
+
+    /// Each move's residual, and the statistics of those used: their chi-square is added to the solution's;
+    /// returns their rows.
+    fn finish_moves(
+        &self,
+        sol: &mut ChannelSolution,
+        state: &State<'_>,
+        pass: &Pass,
+        used: &impl Fn(usize) -> bool,
+        moves: &[ChannelMove],
+    ) -> u32 {
+        let State { theta, attitude, cols, n, refused, .. } = *state;
+        let mut channels = 0;
         for (k, m) in moves.iter().enumerate().take(MAX_MOVES) {
-            if !self.settings.use_gyro {
-                break;
-            }
             let rows = self.move_rows(m, theta, attitude, cols, n, &pass.scale, false);
             sol.move_residual_rad[k] = rows.residual_rad;
             sol.moves += 1;
-            if !move_used(m, &used) || refused & (1 << k) != 0 {
+            if !move_used(m, used) || refused & (1 << k) != 0 {
                 continue;
             }
             let chi2: f32 = rows.y[..rows.rows].iter().map(|y| y * y).sum();
@@ -1393,8 +1409,7 @@ impl ChannelEstimator {
             sol.chi_square += chi2;
             channels += rows.rows as u32;
         }
-        sol.degrees_of_freedom = channels.saturating_sub(pass.kept_count as u32 + nuisances);
-        sol
+        channels
     }
 
     /// The moves whose rotation at their prior is further than [`MAX_MOVE_MISFIT_RAD`] from the reference's at
