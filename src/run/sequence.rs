@@ -493,7 +493,8 @@ impl CalibrationSequence {
     }
 
     /// One queue item, with the decision whether the table is in the position the sequence works on at that
-    /// sample (`item.table` is not read here: [`feed_sequence`] decides from it).
+    /// sample ([`feed_sequence`] decides it from `item.table`; here `item.table` only tells a sample of a move,
+    /// 0 = moving, from one of contiguous dwells).
     pub fn on_sample(&mut self, in_position: bool, item: &QueueItem) -> Option<Event> {
         if matches!(self.phase, Phase::WaitingForTableToLeave | Phase::WaitingForTable | Phase::Settling(_)) {
             self.on_move_sample(item);
