@@ -198,3 +198,20 @@ fn the_firmware_path_refuses_moves_at_another_rate_than_the_imus() {
     assert!(text.contains("100 Hz") && text.contains("50 Hz"), "{text}");
     sinscal_host::calibration::firmware_path::calibrate_on_host(&rec, &Options::default()).expect("default model");
 }
+
+#[test]
+fn a_move_to_a_dwell_that_was_not_added_is_refused_not_a_panic() {
+    let mut s = scenario();
+    s.schedule.positions_deg.truncate(3);
+    let rec = simulate(&s, 5, "three positions");
+    let session =
+        sinscal_host::calibration::channel_session(&rec, &Options { model: Model::FULL, ..Options::default() })
+            .expect("session");
+    let sums = sinscal::calib::moves::MoveSums::new(&[0.0; PARAMETERS]).expect("prior");
+    let mut m = sums.finish(0, 1, [1e-6; 3]);
+    m.duration_s = 1.0;
+    m.to = 99;
+    for result in [session.estimator.solve_with(&[m]), session.estimator.solve_excluding_with(1, &[m])] {
+        assert!(matches!(result, Err(sinscal::calib::channels::ChannelError::BadMove { index: 0 })), "{result:?}");
+    }
+}

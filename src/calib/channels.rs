@@ -1029,6 +1029,8 @@ impl ChannelEstimator {
         if self.dwells.is_empty() {
             return Err(ChannelError::NoDwells);
         }
+        // Each move's dwells exist (an index beyond them would otherwise panic in its rows).
+        self.check_moves(moves)?;
         let model = self.model();
         let (cols, n) = columns(model);
         if n == 0 {
