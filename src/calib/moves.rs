@@ -19,7 +19,7 @@
 //! Memory: 348 bytes per move being integrated; a finished move ([`ChannelMove`]) is 404 bytes.
 
 use crate::calib::channels::{g_sensitivity_radps_per_mps2, misalignment_index, sensor_matrix, PARAMETERS};
-use crate::math::linalg::{skew, Mat3, Vec3};
+use crate::math::linalg::{cross, Mat3, Vec3};
 use crate::nav::strapdown::{MoveIntegrator, Quat};
 
 /// Parameters a move observes, in the estimator's order (see [`crate::calib::channels::parameter_name`]): gyro
@@ -65,7 +65,7 @@ pub struct MoveSums {
     sum_c_angle_rad: [Mat3; 3],
     /// `sum C_k f_k,j dt` for j = x, y, z, m/s.
     sum_c_force_mps: [Mat3; 3],
-    /// `sum (C_k e_i)(C_k e_i)^T dt^2` for i = x, y, z, s^2.
+    /// `sum (C_k e_i)(C_k e_i)^T dt^2` for i = x, y, z, s^2 (upper triangle; symmetric).
     sum_noise_s2: [Mat3; 3],
     /// `sum d_k`, rad, and `sum f_k dt`, m/s: the integrals of the compensated rate and of the force.
     sum_angle_rad: Vec3,
@@ -159,19 +159,20 @@ impl MoveSums {
         let (_, pending) = self.integrator.paired();
         let p = pending.unwrap_or([0.0; 3]);
         let lead = [0, 1, 2].map(|i| p[i] + 0.5 * d[i]);
-        let c = {
-            let mut c = self.frame.mul(&skew(lead));
-            add_scaled(&mut c, &self.frame, 1.0);
-            c
-        };
+        // `F (I + [lead x])`: row r is `F_r + F_r x lead`.
+        let c = Mat3(self.frame.0.map(|f| {
+            let x = cross(f, lead);
+            [f[0] + x[0], f[1] + x[1], f[2] + x[2]]
+        }));
         add_scaled(&mut self.sum_c_dt_s, &c, dt_s);
         for j in 0..3 {
             add_scaled(&mut self.sum_c_angle_rad[j], &c, d[j]);
             add_scaled(&mut self.sum_c_force_mps[j], &c, force_b_mps2[j] * dt_s);
             let col = c.col(j);
             let dt2 = dt_s * dt_s;
+            // Symmetric: the upper triangle here, the lower one at the end.
             for a in 0..3 {
-                for b in 0..3 {
+                for b in a..3 {
                     self.sum_noise_s2[j].0[a][b] += col[a] * col[b] * dt2;
                 }
             }
@@ -207,7 +208,13 @@ impl MoveSums {
         let force = self.sum_c_force_mps.map(|m| m.mul(&p));
         let mut covariance_rad2 = Mat3([[0.0; 3]; 3]);
         for (i, n) in self.sum_noise_s2.iter().enumerate() {
-            add_scaled(&mut covariance_rad2, n, rate_var_radps2[i]);
+            let mut full = *n;
+            for a in 0..3 {
+                for b in 0..a {
+                    full.0[a][b] = n.0[b][a];
+                }
+            }
+            add_scaled(&mut covariance_rad2, &full, rate_var_radps2[i]);
         }
         ChannelMove {
             from,
