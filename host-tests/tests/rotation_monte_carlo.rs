@@ -145,8 +145,7 @@ fn check_reference_estimator(setup: &Setup) {
 }
 
 /// The core's Jacobian of every simulated move (f32, `MoveSums`, its prior at the truth) against the finite
-/// differences of the bound (with the accelerometers' raw output in the g-sensitivity's compensation, as the
-/// core takes it): per column its difference over the column's largest component (columns of at least a tenth
+/// differences of the bound (both with the compensated force in the g-sensitivity): per column its difference over the column's largest component (columns of at least a tenth
 /// of their kind's largest) and over the kind's largest component (all columns). Returns the worst of both.
 fn check_core_jacobian(setup: &Setup) -> (f64, f64) {
     let quiet = simulate(&without_noise(&setup.scenario), 0, "quiet");

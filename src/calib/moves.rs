@@ -35,14 +35,14 @@ pub const MAX_MOVES: usize = crate::calib::channels::MAX_DWELLS;
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 #[cfg_attr(feature = "defmt", derive(defmt::Format))]
 pub enum MoveError {
-    /// The prior's gyro matrix `T_g` is singular or not finite.
+    /// The prior's gyro or accelerometer matrix (`T_g`, `T_a`) is singular or not finite.
     SingularPrior,
 }
 
 impl core::fmt::Display for MoveError {
     fn fmt(&self, f: &mut core::fmt::Formatter<'_>) -> core::fmt::Result {
         match self {
-            MoveError::SingularPrior => f.write_str("the prior gyro matrix T_g is singular or not finite"),
+            MoveError::SingularPrior => f.write_str("the prior's T_g or T_a is singular or not finite"),
         }
     }
 }
@@ -55,6 +55,9 @@ pub struct MoveSums {
     inverse: Mat3,
     bias_b_radps: Vec3,
     g_sensitivity: Mat3,
+    /// `T_a0^-1` and `b_a0`: the force the g-sensitivity sees is the compensated one.
+    accel_inverse: Mat3,
+    accel_bias_b_mps2: Vec3,
     integrator: MoveIntegrator,
     /// The attitude after the last pair of increments, `C_b(t)^b(0)`.
     frame: Mat3,
@@ -123,17 +126,22 @@ fn add_scaled(m: &mut Mat3, c: &Mat3, k: f32) {
 }
 
 impl MoveSums {
-    /// A move to integrate with the rates compensated by the prior `prior_si` (the estimator's parameters; only
-    /// the gyro terms are used).
+    /// A move to integrate with the rates compensated by the prior `prior_si` (the estimator's parameters: the
+    /// gyro terms, and the accelerometer bias and matrix for the force the g-sensitivity sees,
+    /// `f = T_a^-1 (f_meas - b_a)`, as docs/conventions.md#sensor-model writes the model).
     pub fn new(prior_si: &[f32; PARAMETERS]) -> Result<MoveSums, MoveError> {
         let t_g = sensor_matrix(prior_si, 15, 18);
         let inverse = t_g.inverse().filter(Mat3::is_finite).ok_or(MoveError::SingularPrior)?;
+        let t_a = sensor_matrix(prior_si, 6, 9);
+        let accel_inverse = t_a.inverse().filter(Mat3::is_finite).ok_or(MoveError::SingularPrior)?;
         let zero = Mat3([[0.0; 3]; 3]);
         Ok(MoveSums {
             prior_si: MOVE_PARAMETERS.map(|p| prior_si[p]),
             inverse,
             bias_b_radps: [prior_si[0], prior_si[1], prior_si[2]],
             g_sensitivity: g_sensitivity_radps_per_mps2(prior_si),
+            accel_inverse,
+            accel_bias_b_mps2: [prior_si[3], prior_si[4], prior_si[5]],
             // The interval is given with each sample.
             integrator: MoveIntegrator::new(0.0),
             frame: Mat3::IDENTITY,
@@ -150,7 +158,9 @@ impl MoveSums {
 
     /// One sample: the gyro and accelerometer outputs (body, rad/s and m/s^2, the means over the interval that
     /// ends with it) and that interval, s.
-    pub fn push(&mut self, rate_b_radps: Vec3, force_b_mps2: Vec3, dt_s: f32) {
+    pub fn push(&mut self, rate_b_radps: Vec3, force_meas_b_mps2: Vec3, dt_s: f32) {
+        let b_a = self.accel_bias_b_mps2;
+        let force_b_mps2 = self.accel_inverse.mul_vec([0, 1, 2].map(|i| force_meas_b_mps2[i] - b_a[i]));
         let gf = self.g_sensitivity.mul_vec(force_b_mps2);
         let raw = [0, 1, 2].map(|i| rate_b_radps[i] - self.bias_b_radps[i] - gf[i]);
         let d = self.inverse.mul_vec(raw).map(|w| w * dt_s);
@@ -353,6 +363,10 @@ mod tests {
     fn a_singular_prior_is_refused() {
         let mut prior = [0.0f32; PARAMETERS];
         prior[15] = -1.0;
+        assert_eq!(MoveSums::new(&prior).err(), Some(MoveError::SingularPrior));
+        // The accelerometer matrix too (it compensates the force the g-sensitivity sees).
+        let mut prior = [0.0f32; PARAMETERS];
+        prior[6] = -1.0;
         assert_eq!(MoveSums::new(&prior).err(), Some(MoveError::SingularPrior));
     }
 }

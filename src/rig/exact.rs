@@ -153,7 +153,7 @@ pub fn move_motion(k: u32) -> (Vec3, Vec3) {
     (rate_b_radps, force_b_mps2)
 }
 
-/// A move of [`MOVE_SAMPLES`] samples from dwell 0 to dwell 1: the gyro outputs `T_g w + b_g + G f` of
+/// A move of [`MOVE_SAMPLES`] samples from dwell 0 to dwell 1: the outputs `T_g w + b_g + G f` and `T_a f + b_a` of
 /// [`move_motion`] under [`move_prior`], integrated with [`MoveSums`] compensated by that prior and finished
 /// with [`MOVE_RATE_VAR_RADPS2`] on every axis; and beside it the rotation of the true rates
 /// ([`MoveIntegrator`]), which the compensated rotation must equal to the f32 rounding of the compensation.
@@ -161,12 +161,15 @@ pub fn turning_move() -> Result<(ChannelMove, Quat), MoveError> {
     let prior = move_prior();
     let t_g = sensor_matrix(&prior, 15, 18);
     let g = g_sensitivity_radps_per_mps2(&prior);
+    let t_a = sensor_matrix(&prior, 6, 9);
     let mut sums = MoveSums::new(&prior)?;
     let mut truth = MoveIntegrator::new(MOVE_DT_S);
     for k in 0..MOVE_SAMPLES {
         let (w, f) = move_motion(k);
-        let (tw, gf) = (t_g.mul_vec(w), g.mul_vec(f));
-        sums.push([0, 1, 2].map(|i| tw[i] + prior[i] + gf[i]), f, MOVE_DT_S);
+        let (tw, gf, ta) = (t_g.mul_vec(w), g.mul_vec(f), t_a.mul_vec(f));
+        // The outputs of the sensor model: `T_g w + b_g + G f` and `T_a f + b_a`.
+        let f_meas = [0, 1, 2].map(|i| ta[i] + prior[3 + i]);
+        sums.push([0, 1, 2].map(|i| tw[i] + prior[i] + gf[i]), f_meas, MOVE_DT_S);
         truth.push(w);
     }
     Ok((sums.finish(0, 1, [MOVE_RATE_VAR_RADPS2; 3]), truth.rotation()))

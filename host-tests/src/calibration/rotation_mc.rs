@@ -356,10 +356,8 @@ fn kind_of(p: usize) -> usize {
 }
 
 /// The core's Jacobian of one move (`sinscal::calib::moves::MoveSums`, f32, its prior at `theta`) against
-/// [`move_jacobian`], column by column, and the angle between the two integrated rotations, rad. The core
-/// compensates the gyros' g-sensitivity with the accelerometers' raw output; the finite differences here are
-/// taken so too (the accelerometer terms of `theta` at zero in their compensation), so that only the
-/// Jacobians differ.
+/// [`move_jacobian`], column by column, and the angle between the two integrated rotations, rad. Both
+/// compensate the force the g-sensitivity sees with the accelerometer terms of `theta`.
 pub fn core_jacobian_agreement(samples: &[MoveSample], theta: &[f64; PARAMETERS]) -> (Vec<ColumnAgreement>, f64) {
     let prior = theta.map(|x| x as f32);
     let mut sums = MoveSums::new(&prior).expect("a regular prior");
@@ -367,9 +365,7 @@ pub fn core_jacobian_agreement(samples: &[MoveSample], theta: &[f64; PARAMETERS]
         sums.push(s.rate_b_radps.map(|x| x as f32), s.force_b_mps2.map(|x| x as f32), s.dt_s as f32);
     }
     let core = sums.finish(0, 1, [0.0; 3]);
-    let mut raw_force = *theta;
-    raw_force[3..15].fill(0.0);
-    let mine = move_jacobian(samples, &raw_force);
+    let mine = move_jacobian(samples, theta);
     let column_scale = |p: usize| (0..3).map(|a| mine[a][p].abs()).fold(0.0, f64::max);
     let kind_scale =
         |k: usize| MOVE_PARAMETERS.iter().filter(|&&p| kind_of(p) == k).map(|&p| column_scale(p)).fold(0.0, f64::max);
@@ -384,7 +380,7 @@ pub fn core_jacobian_agreement(samples: &[MoveSample], theta: &[f64; PARAMETERS]
         })
         .collect();
     let r_core: M3 = core::array::from_fn(|i| core::array::from_fn(|j| core.rotation.to_mat3().0[i][j] as f64));
-    let between = rotation_vector(&mul(&r_core, &transpose(&integrate(samples, &raw_force))));
+    let between = rotation_vector(&mul(&r_core, &transpose(&integrate(samples, theta))));
     (columns, between.iter().map(|x| x * x).sum::<f64>().sqrt())
 }
 
