@@ -175,8 +175,8 @@ pub struct Calibration {
 }
 
 /// A move the general estimator used: between which dwells, where, how long, how far it turned, and how far the
-/// calibrated gyros' rotation is from the reference's.
-#[derive(Clone, Debug, PartialEq)]
+/// calibrated gyros' rotation is from the reference's. Its fields are the calibration JSON's `moves` entries.
+#[derive(Clone, Debug, PartialEq, serde::Serialize)]
 pub struct UsedMove {
     /// Label of the dwell before it.
     pub from_pos: u32,

@@ -59,27 +59,6 @@ pub struct PositionJson {
 /// A 3x3 term in the JSON (null entries where undetermined).
 type Matrix = [[Option<f64>; 3]; 3];
 
-/// A move in the calibration JSON.
-#[derive(Clone, Debug, Serialize)]
-pub struct MoveJson {
-    /// Labels of the positions before and after it.
-    pub from_pos: u32,
-    /// See `from_pos`.
-    pub to_pos: u32,
-    /// Line of its first row.
-    pub first_line: usize,
-    /// Duration, s.
-    pub duration_s: f64,
-    /// The angle the gyros measured, deg.
-    pub angle_deg: f64,
-    /// The rotation error after the fit, body frame at the start of the move, rad.
-    pub residual_rad: [f64; 3],
-    /// Its whitened sum of squares.
-    pub statistic: f64,
-    /// Whether it was left out as no move of the table (more than 45 deg from the reference's rotation).
-    pub refused: bool,
-}
-
 fn is_zero(x: &u32) -> bool {
     *x == 0
 }
@@ -167,7 +146,7 @@ pub struct CalibrationJson {
     pub converged: bool,
     /// Extra: the moves between dwells the general estimator used (docs/method.md#moves).
     #[serde(skip_serializing_if = "Vec::is_empty")]
-    pub moves: Vec<MoveJson>,
+    pub moves: Vec<crate::calibration::UsedMove>,
     /// Extra: passes of move integration and solution.
     #[serde(skip_serializing_if = "is_zero")]
     pub move_passes: u32,
@@ -344,20 +323,7 @@ impl CalibrationJson {
             },
             passes: c.passes,
             converged: c.converged,
-            moves: c
-                .moves
-                .iter()
-                .map(|m| MoveJson {
-                    from_pos: m.from_pos,
-                    to_pos: m.to_pos,
-                    first_line: m.first_line,
-                    duration_s: m.duration_s,
-                    angle_deg: m.angle_deg,
-                    residual_rad: m.residual_rad,
-                    statistic: m.statistic,
-                    refused: m.refused,
-                })
-                .collect(),
+            moves: c.moves.clone(),
             move_passes: c.move_passes,
             on: c.on,
             sampling: c.sampling.map(|s| SamplingJson {
