@@ -17,7 +17,7 @@
 use rand::{Rng, SeedableRng};
 use rand_chacha::ChaCha8Rng;
 use sinscal::calib::calibration::CalibrationResult;
-use sinscal::calib::channels::{AttitudeKnowledge, ChannelSolution, Model, MAX_DWELLS, PARAMETERS};
+use sinscal::calib::channels::{ChannelSolution, Model, PARAMETERS};
 use sinscal::calib::compensation::{Compensation, ENCODED_BYTES};
 use sinscal::sensor::sample::ImuSample;
 use sinscal_host::calibration::{calibrate, Calibration, Options};
@@ -84,34 +84,12 @@ fn solution(model: Model, theta: &[f32; PARAMETERS]) -> ChannelSolution {
             parameters_si[i] = theta[i];
         }
     }
-    ChannelSolution {
-        model,
-        parameters_si,
-        observable,
-        unobservable: 0,
-        covariance_si: [[0.0; PARAMETERS]; PARAMETERS],
-        dwells: 0,
-        heading_rad: [0.0; MAX_DWELLS],
-        heading_std_rad: [0.0; MAX_DWELLS],
-        residual_rate_b_radps: [[0.0; 3]; MAX_DWELLS],
-        residual_force_b_mps2: [[0.0; 3]; MAX_DWELLS],
-        dwell_statistic: [-1.0; MAX_DWELLS],
-        suspect: 0,
-        chi_square: 0.0,
-        degrees_of_freedom: 0,
-        iterations: 1,
-        converged: true,
-        attitude: AttitudeKnowledge::Reference,
-        earth_rate_resolved: true,
-        up_b: [[0.0; 3]; MAX_DWELLS],
-        blind_spots: 0,
-        gauge: 0,
-        moves: 0,
-        move_residual_rad: [[0.0; 3]; sinscal::calib::moves::MAX_MOVES],
-        move_statistic: [-1.0; sinscal::calib::moves::MAX_MOVES],
-        move_rows: [0; sinscal::calib::moves::MAX_MOVES],
-        moves_refused: 0,
-    }
+    let mut s = ChannelSolution::empty(model, 0);
+    s.parameters_si = parameters_si;
+    s.observable = observable;
+    s.iterations = 1;
+    s.converged = true;
+    s
 }
 
 /// True samples: the even ones at rest in random attitudes (Earth rate and g), the odd ones moving (rates up to 8 rad/s, specific

@@ -501,6 +501,39 @@ pub struct ChannelSolution {
 }
 
 impl ChannelSolution {
+    /// A solution of `model` over `dwells` dwells with nothing in it yet: every parameter, residual and
+    /// statistic zero (the dwells' and moves' statistics -1: none), reference attitudes, the Earth rate resolved.
+    pub fn empty(model: Model, dwells: usize) -> ChannelSolution {
+        ChannelSolution {
+            model,
+            parameters_si: [0.0; PARAMETERS],
+            observable: 0,
+            unobservable: 0,
+            covariance_si: [[0.0; PARAMETERS]; PARAMETERS],
+            dwells,
+            heading_rad: [0.0; MAX_DWELLS],
+            heading_std_rad: [0.0; MAX_DWELLS],
+            residual_rate_b_radps: [[0.0; 3]; MAX_DWELLS],
+            residual_force_b_mps2: [[0.0; 3]; MAX_DWELLS],
+            dwell_statistic: [-1.0; MAX_DWELLS],
+            suspect: 0,
+            chi_square: 0.0,
+            degrees_of_freedom: 0,
+            iterations: 0,
+            converged: false,
+            attitude: AttitudeKnowledge::Reference,
+            earth_rate_resolved: true,
+            up_b: [[0.0; 3]; MAX_DWELLS],
+            blind_spots: 0,
+            gauge: 0,
+            moves: 0,
+            move_residual_rad: [[0.0; 3]; MAX_MOVES],
+            move_statistic: [-1.0; MAX_MOVES],
+            move_rows: [0; MAX_MOVES],
+            moves_refused: 0,
+        }
+    }
+
     /// Value and standard error of parameter `index`, or `None` when it is not in the model or undetermined.
     pub fn estimate(&self, index: usize) -> Option<(f32, f32)> {
         if index < PARAMETERS && self.observable & (1 << index) != 0 {
@@ -1288,34 +1321,15 @@ impl ChannelEstimator {
         moves: &[ChannelMove],
     ) -> ChannelSolution {
         let State { theta, heading, attitude, cols, n, model, .. } = *state;
-        let mut sol = ChannelSolution {
-            model,
-            parameters_si: [0.0; PARAMETERS],
-            observable: 0,
-            unobservable: 0,
-            covariance_si: [[0.0; PARAMETERS]; PARAMETERS],
-            dwells: self.dwells.len(),
-            heading_rad: *heading,
-            heading_std_rad: [0.0; MAX_DWELLS],
-            residual_rate_b_radps: [[0.0; 3]; MAX_DWELLS],
-            residual_force_b_mps2: [[0.0; 3]; MAX_DWELLS],
-            dwell_statistic: [-1.0; MAX_DWELLS],
-            suspect: 0,
-            chi_square: 0.0,
-            degrees_of_freedom: 0,
-            iterations,
-            converged,
-            attitude: self.settings.attitude,
-            earth_rate_resolved: self.settings.earth_rate_resolved,
-            up_b: [[0.0; 3]; MAX_DWELLS],
-            blind_spots: pass.blind_spots,
-            gauge: pass.gauge,
-            moves: 0,
-            move_residual_rad: [[0.0; 3]; MAX_MOVES],
-            move_statistic: [-1.0; MAX_MOVES],
-            move_rows: [0; MAX_MOVES],
-            moves_refused: state.refused,
-        };
+        let mut sol = ChannelSolution::empty(model, self.dwells.len());
+        sol.heading_rad = *heading;
+        sol.iterations = iterations;
+        sol.converged = converged;
+        sol.attitude = self.settings.attitude;
+        sol.earth_rate_resolved = self.settings.earth_rate_resolved;
+        sol.blind_spots = pass.blind_spots;
+        sol.gauge = pass.gauge;
+        sol.moves_refused = state.refused;
         for c in 0..n {
             let p = cols[c];
             if pass.determined[c] {

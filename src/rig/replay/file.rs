@@ -674,34 +674,11 @@ fn decode_channels(r: &mut Reader<'_>) -> Result<ChannelSolution, ReplayError> {
     if dwells > MAX_DWELLS {
         return Err(ReplayError::Format);
     }
-    let mut c = ChannelSolution {
-        model,
-        parameters_si,
-        observable,
-        unobservable,
-        covariance_si,
-        dwells,
-        heading_rad: [0.0; MAX_DWELLS],
-        heading_std_rad: [0.0; MAX_DWELLS],
-        residual_rate_b_radps: [[0.0; 3]; MAX_DWELLS],
-        residual_force_b_mps2: [[0.0; 3]; MAX_DWELLS],
-        dwell_statistic: [0.0; MAX_DWELLS],
-        suspect: 0,
-        chi_square: 0.0,
-        degrees_of_freedom: 0,
-        iterations: 0,
-        converged: false,
-        attitude: AttitudeKnowledge::Reference,
-        earth_rate_resolved: true,
-        up_b: [[0.0; 3]; MAX_DWELLS],
-        blind_spots: 0,
-        gauge: 0,
-        moves: 0,
-        move_residual_rad: [[0.0; 3]; crate::calib::moves::MAX_MOVES],
-        move_statistic: [-1.0; crate::calib::moves::MAX_MOVES],
-        move_rows: [0; crate::calib::moves::MAX_MOVES],
-        moves_refused: 0,
-    };
+    let mut c = ChannelSolution::empty(model, dwells);
+    c.parameters_si = parameters_si;
+    c.observable = observable;
+    c.unobservable = unobservable;
+    c.covariance_si = covariance_si;
     for k in 0..dwells {
         c.heading_rad[k] = r.f32()?;
     }
