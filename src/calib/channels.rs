@@ -40,7 +40,7 @@
 
 use heapless::Vec;
 
-use crate::calib::moves::{swing_about, ChannelMove, MAX_MOVES, MAX_MOVE_MISFIT_RAD, MOVE_PARAMETERS};
+use crate::calib::moves::{move_column, swing_about, ChannelMove, MAX_MOVES, MAX_MOVE_MISFIT_RAD, MOVE_PARAMETERS};
 use crate::math::linalg::{cross, dot, norm, rotation, Mat3, Vec3};
 use crate::math::lsq::{inverse_gram, jacobi_svd, solve_upper, solve_upper_transposed, SqrtInfo};
 use crate::nav::earth::{Site, EARTH_RATE_RADPS};
@@ -808,7 +808,6 @@ impl ChannelEstimator {
     /// (docs/method.md#moves).
     pub fn solve_with(&self, moves: &[ChannelMove]) -> Result<ChannelSolution, ChannelError> {
         self.check_plausible()?;
-        self.check_moves(moves)?;
         let solution = self.solve_excluding_with(0, moves)?;
         self.check_headings(&solution, moves)?;
         Ok(solution)
@@ -1564,7 +1563,7 @@ impl ChannelEstimator {
         for (r, b) in basis.iter().enumerate().take(rows) {
             out.y[r] = if structural { 0.0 } else { -dot(*b, e) };
             for (c, &p) in cols.iter().enumerate().take(n) {
-                let Some(mc) = MOVE_PARAMETERS.iter().position(|&q| q == p) else { continue };
+                let Some(mc) = move_column(p) else { continue };
                 let x = (0..3).map(|k| b[k] * jacobian[k][mc]).sum::<f32>() * unit;
                 out.a[r][c] = if structural && x.abs() < 1e-6 { 0.0 } else { x * scale[c] };
             }

@@ -28,6 +28,15 @@ pub const MOVE_PARAMETERS: [usize; MOVE_COLUMNS] =
     [0, 1, 2, 15, 16, 17, 18, 19, 20, 21, 22, 23, 24, 25, 26, 27, 28, 29, 30, 31, 32];
 /// Number of parameters a move observes.
 pub const MOVE_COLUMNS: usize = 21;
+
+/// The column of parameter `p` among [`MOVE_PARAMETERS`], if a move observes it.
+pub const fn move_column(p: usize) -> Option<usize> {
+    match p {
+        0..=2 => Some(p),
+        15..=32 => Some(p - 12),
+        _ => None,
+    }
+}
 /// Most moves one solution takes: one between each two dwells.
 pub const MAX_MOVES: usize = crate::calib::channels::MAX_DWELLS;
 
@@ -357,6 +366,14 @@ mod tests {
         // A rotation about u alone has no swing.
         let t = swing_about(&Quat::from_rotation_vector([0.0, 0.0, 2.0]), u).0.to_rotation_vector();
         assert!(t.iter().all(|x| x.abs() < 1e-6), "{t:?}");
+    }
+
+    #[test]
+    fn move_columns_are_the_move_parameters() {
+        for (c, &p) in MOVE_PARAMETERS.iter().enumerate() {
+            assert_eq!(move_column(p), Some(c));
+        }
+        assert_eq!((0..PARAMETERS).filter(|&p| move_column(p).is_some()).count(), MOVE_COLUMNS);
     }
 
     #[test]
