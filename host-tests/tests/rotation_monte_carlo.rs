@@ -21,10 +21,10 @@ use sinscal_host::calibration::bound::{
 };
 use sinscal_host::calibration::rotation_mc::{
     core_jacobian_agreement, figures, gyro_parameters, integrate, move_covariance_rad2, moves_of, reference_errors,
-    rotation_vector, run_all, scenario, setup, table, truth_si, without_noise, Setup,
+    run_all, scenario, setup, table, truth_si, without_noise, Setup,
 };
 use sinscal_host::model::simulator::simulate;
-use sinscal_host::model::synth::{mul, transpose};
+use sinscal_host::model::synth::{mul, rotation_vector, transpose};
 
 /// The gyro scale factors (15-17) and misalignments (18-23): the terms the moves are for.
 fn moved_terms() -> std::ops::Range<usize> {

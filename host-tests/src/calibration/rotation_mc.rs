@@ -41,7 +41,7 @@ use crate::calibration::bound::{channel_noises, design, dwell_spans, predict, Se
 use crate::calibration::{calibrate_channels, Options};
 use crate::io::recording::Recording;
 use crate::model::simulator::{simulate, ScenarioFile, ScheduleSpec, SiteSpec};
-use crate::model::synth::{mul, mul_vec, rotation, transpose, DEG_PER_HOUR, M3, MICRO_G};
+use crate::model::synth::{mul, mul_vec, rotation, rotation_vector, transpose, DEG_PER_HOUR, M3, MICRO_G};
 use crate::stats::solve::solve_spd;
 
 /// The schedule: pitch, roll, heading of each position, degrees (every quarter turn about each table axis).
@@ -264,16 +264,6 @@ impl Compensation {
 pub fn integrate(samples: &[MoveSample], theta: &[f64; PARAMETERS]) -> M3 {
     let comp = Compensation::new(theta);
     samples.iter().fold(rotation([0.0; 3]), |r, s| mul(&r, &rotation(comp.rate_b_radps(s).map(|w| w * s.dt_s))))
-}
-
-/// The rotation vector of a rotation matrix of angle below pi.
-pub fn rotation_vector(r: &M3) -> [f64; 3] {
-    let v = [r[2][1] - r[1][2], r[0][2] - r[2][0], r[1][0] - r[0][1]];
-    let s = 0.5 * (v[0] * v[0] + v[1] * v[1] + v[2] * v[2]).sqrt();
-    let c = 0.5 * (r[0][0] + r[1][1] + r[2][2] - 1.0);
-    let angle = s.atan2(c);
-    let k = if s > 1e-300 { angle / (2.0 * s) } else { 0.5 };
-    v.map(|x| x * k)
 }
 
 /// The finite-difference step of parameter `p`: small against the parameter's effect's nonlinearity, large

@@ -43,7 +43,9 @@ use crate::io::dwell_tally::angle_step_deg;
 use crate::io::error::InputError;
 use crate::io::recording::{Header, Recording, Row, SimulationTruth};
 use crate::model::sensor::Triad;
-use crate::model::synth::{c_b_n, earth_rate_n_radps, mul, mul_t_vec, rotation, transpose, M3, TABLE1_DEG};
+use crate::model::synth::{
+    c_b_n, earth_rate_n_radps, mul, mul_t_vec, rotation, rotation_vector, transpose, M3, TABLE1_DEG,
+};
 
 /// A scenario file.
 #[derive(Clone, Debug, Default, Deserialize, PartialEq)]
@@ -522,17 +524,6 @@ impl TriadState {
         }
         out
     }
-}
-
-/// The rotation vector of `r` (inverse of [`rotation`]), for the small rotations of one sample interval and
-/// any angle below pi.
-fn rotation_vector(r: &M3) -> [f64; 3] {
-    let v = [r[2][1] - r[1][2], r[0][2] - r[2][0], r[1][0] - r[0][1]];
-    let s = 0.5 * (v[0] * v[0] + v[1] * v[1] + v[2] * v[2]).sqrt();
-    let c = 0.5 * (r[0][0] + r[1][1] + r[2][2] - 1.0);
-    let angle = s.atan2(c);
-    let k = if s > 1e-300 { angle / (2.0 * s) } else { 0.5 };
-    v.map(|x| x * k)
 }
 
 /// The true body rate and specific force of the interval from attitude `c0` to `c1` (`C_b^n`) over `dt`: the

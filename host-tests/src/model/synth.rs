@@ -76,6 +76,16 @@ pub fn rotation(v: [f64; 3]) -> M3 {
     r
 }
 
+/// The rotation vector of `r` (inverse of [`rotation`]), any angle below pi.
+pub fn rotation_vector(r: &M3) -> [f64; 3] {
+    let v = [r[2][1] - r[1][2], r[0][2] - r[2][0], r[1][0] - r[0][1]];
+    let s = 0.5 * (v[0] * v[0] + v[1] * v[1] + v[2] * v[2]).sqrt();
+    let c = 0.5 * (r[0][0] + r[1][1] + r[2][2] - 1.0);
+    let angle = s.atan2(c);
+    let k = if s > 1e-300 { angle / (2.0 * s) } else { 0.5 };
+    v.map(|x| x * k)
+}
+
 /// `C_b^n` from turntable angles in degrees: heading clockwise from north is a rotation by -heading about
 /// up, pitch a rotation about body x, roll about body y (docs/conventions.md).
 ///
