@@ -205,7 +205,7 @@ fn a_move_to_a_dwell_that_was_not_added_is_refused_not_a_panic() {
     s.schedule.positions_deg.truncate(3);
     let rec = simulate(&s, 5, "three positions");
     let session =
-        sinscal_host::calibration::channel_session(&rec, &Options { model: Model::FULL, ..Options::default() })
+        sinscal_host::calibration::channel_session(&rec, &Options { model: Model::FULL, ..Options::default() }, false)
             .expect("session");
     let sums = sinscal::calib::moves::MoveSums::new(&[0.0; PARAMETERS]).expect("prior");
     let mut m = sums.finish(0, 1, [1e-6; 3]);

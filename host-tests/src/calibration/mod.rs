@@ -262,18 +262,24 @@ pub fn prefilter_of(options: &Options, recording: &impl RowSource) -> Result<Pre
 }
 
 /// The dwells of a recording in one pass, at least one and at most `limit`: each dwell's tally and its
-/// statistics from the core's collector, fed its rows in file order.
+/// statistics from the core's collector, fed its rows in file order; the moves between them in the same pass
+/// when `moves` is given.
 pub fn collect_dwells(
     recording: &impl RowSource,
     prefilter: &Prefilter,
     limit: usize,
+    mut moves: Option<&mut moves::MoveCollector>,
 ) -> Result<Vec<(DwellTally, DwellSummary)>, InputError> {
     let source = recording.source();
     let fresh = DwellCollector::new(prefilter).map_err(|e| InputError::file(source, format!("prefilter: {e}")))?;
     let mut tallies = DwellTallies::new(limit, "the core's limit");
     let mut collectors: Vec<DwellCollector> = Vec::new();
     recording.for_each_row(&mut |row| {
-        let Some(i) = tallies.push(row, source)? else { return Ok(()) };
+        let dwell = tallies.push(row, source)?;
+        if let Some(m) = moves.as_deref_mut() {
+            m.push(row, dwell, source)?;
+        }
+        let Some(i) = dwell else { return Ok(()) };
         if i == collectors.len() {
             collectors.push(fresh.clone());
         }
@@ -309,12 +315,9 @@ pub fn calibrate_channels(recording: &impl RowSource, options: &Options) -> Resu
     let header = recording.header();
     let has_gyro = recording.has_gyro();
     let (site, gravity_source) = site_of(header);
-    let ChannelSession { estimator, positions, rate_var_radps2, prefilter } = channel_session(recording, options)?;
-    let move_samples = if has_gyro && options.use_moves && moves::model_uses_moves(options.model) {
-        moves::collect_moves(recording, MAX_DWELLS)?
-    } else {
-        Vec::new()
-    };
+    let with_moves = has_gyro && options.use_moves && moves::model_uses_moves(options.model);
+    let ChannelSession { estimator, positions, rate_var_radps2, prefilter, moves: move_samples } =
+        channel_session(recording, options, with_moves)?;
     let (solution, integrated, move_passes) = if move_samples.is_empty() {
         (estimator.solve().map_err(|e| channel_error(e, &positions, source))?, Vec::new(), 0)
     } else {
@@ -355,16 +358,25 @@ pub struct ChannelSession {
     pub rate_var_radps2: [f32; 3],
     /// The prefilter that ran.
     pub prefilter: Prefilter,
+    /// The moves between the dwells, when asked for (gathered in the dwells' pass).
+    pub moves: Vec<moves::MoveSamples>,
 }
 
-/// The dwells of a recording loaded into the general estimator as `options` say.
-pub fn channel_session(recording: &impl RowSource, options: &Options) -> Result<ChannelSession, InputError> {
+/// The dwells of a recording loaded into the general estimator as `options` say, and with `with_moves` the
+/// moves between them, in one pass over the rows.
+pub fn channel_session(
+    recording: &impl RowSource,
+    options: &Options,
+    with_moves: bool,
+) -> Result<ChannelSession, InputError> {
     let source = recording.source();
     let header = recording.header();
     let has_gyro = recording.has_gyro();
     let (site, _) = site_of(header);
     let prefilter = prefilter_of(options, recording)?;
-    let dwells = collect_dwells(recording, &prefilter, MAX_DWELLS)?;
+    let mut collector = with_moves.then(moves::MoveCollector::default);
+    let dwells = collect_dwells(recording, &prefilter, MAX_DWELLS, collector.as_mut())?;
+    let moves = collector.map_or_else(Vec::new, moves::MoveCollector::finish);
     let mut positions = Vec::with_capacity(dwells.len());
     for (dwell, summary) in dwells {
         let attitude = dwell.attitude(source)?;
@@ -394,7 +406,7 @@ pub fn channel_session(recording: &impl RowSource, options: &Options) -> Result<
     let estimator = session_estimator(session_dwells(&positions), site, settings, options.dwell_value)
         .map_err(|e| channel_error(e, &positions, source))?;
     let rate_var_radps2 = sinscal::calib::moves::pooled_rate_var_radps2(positions.iter().map(|p| p.summary));
-    Ok(ChannelSession { estimator, positions, rate_var_radps2, prefilter })
+    Ok(ChannelSession { estimator, positions, rate_var_radps2, prefilter, moves })
 }
 
 /// What the report says of each move used.
@@ -490,7 +502,7 @@ pub fn calibrate_angles(recording: &impl RowSource, options: &Options) -> Result
     }
     let (site, gravity_source) = site_of(header);
     let prefilter = prefilter_of(options, recording)?;
-    let dwells = collect_dwells(recording, &prefilter, MAX_POSITIONS)?;
+    let dwells = collect_dwells(recording, &prefilter, MAX_POSITIONS, None)?;
     let settings = CalibrationSettings {
         solver: SolverSettings {
             estimate_reference_offset: options.estimate_reference_offset,

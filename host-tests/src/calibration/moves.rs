@@ -7,9 +7,8 @@ use sinscal::calib::channels::{
 };
 use sinscal::calib::moves::{ChannelMove, MoveSums, MAX_MOVES, MOVE_PARAMETERS};
 
-use crate::io::dwell_tally::DwellTallies;
 use crate::io::error::InputError;
-use crate::io::recording::RowSource;
+use crate::io::recording::Row;
 
 /// The samples of one move, as the core reads them (f32).
 #[derive(Clone, Debug, PartialEq)]
@@ -33,34 +32,36 @@ pub fn model_uses_moves(model: Model) -> bool {
 }
 
 /// The moves of a recording: every run of rows with `pos = 0` between two dwells (a run before the first dwell
-/// or after the last is not a move). `limit` is the core's limit of dwells.
-pub fn collect_moves(recording: &impl RowSource, limit: usize) -> Result<Vec<MoveSamples>, InputError> {
-    let source = recording.source();
-    let mut tallies = DwellTallies::new(limit, "the core's limit");
-    let mut moves = Vec::new();
-    let mut current: Option<MoveSamples> = None;
-    let mut last_dwell: Option<usize> = None;
-    let mut previous_t_s: Option<f64> = None;
-    recording.for_each_row(&mut |row| {
-        let dwell = tallies.push(row, source)?;
-        let dt_s = previous_t_s.map(|t| row.t_s - t);
-        previous_t_s = Some(row.t_s);
+/// or after the last is not a move), gathered row by row beside the dwells' pass ([`MoveCollector::push`]).
+#[derive(Debug, Default)]
+pub struct MoveCollector {
+    moves: Vec<MoveSamples>,
+    current: Option<MoveSamples>,
+    last_dwell: Option<usize>,
+    previous_t_s: Option<f64>,
+}
+
+impl MoveCollector {
+    /// One row, with the index of its dwell (`None` for `pos = 0`).
+    pub fn push(&mut self, row: &Row, dwell: Option<usize>, source: &str) -> Result<(), InputError> {
+        let dt_s = self.previous_t_s.map(|t| row.t_s - t);
+        self.previous_t_s = Some(row.t_s);
         match dwell {
             Some(i) => {
-                if let Some(m) = current.take() {
-                    if m.from != i && !m.samples.is_empty() && moves.len() < MAX_MOVES {
-                        moves.push(MoveSamples { to: i, ..m });
+                if let Some(m) = self.current.take() {
+                    if m.from != i && !m.samples.is_empty() && self.moves.len() < MAX_MOVES {
+                        self.moves.push(MoveSamples { to: i, ..m });
                     }
                 }
-                last_dwell = Some(i);
+                self.last_dwell = Some(i);
             }
             None => {
-                let Some(from) = last_dwell else { return Ok(()) };
+                let Some(from) = self.last_dwell else { return Ok(()) };
                 let dt_s = dt_s.unwrap_or(0.0);
                 if dt_s.is_nan() || dt_s <= 0.0 {
                     return Err(InputError::at(source, row.line, "time does not increase within a move".to_string()));
                 }
-                let m = current.get_or_insert_with(|| MoveSamples {
+                let m = self.current.get_or_insert_with(|| MoveSamples {
                     from,
                     to: from,
                     first_line: row.line,
@@ -71,8 +72,12 @@ pub fn collect_moves(recording: &impl RowSource, limit: usize) -> Result<Vec<Mov
             }
         }
         Ok(())
-    })?;
-    Ok(moves)
+    }
+
+    /// The moves gathered (a run after the last dwell is dropped).
+    pub fn finish(self) -> Vec<MoveSamples> {
+        self.moves
+    }
 }
 
 /// The moves integrated by the core with the rates compensated by `prior_si`; `rate_var_radps2` is the

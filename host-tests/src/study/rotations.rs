@@ -16,7 +16,7 @@ use sinscal::calib::moves::ChannelMove;
 use sinscal::math::linalg::norm;
 
 use super::LabelledTurn;
-use crate::calibration::moves::{axis_turn, collect_moves, integrate, solve_with_moves, MoveSamples};
+use crate::calibration::moves::{axis_turn, integrate, solve_with_moves, MoveSamples};
 use crate::calibration::{channel_session, ChannelSession, Options};
 use crate::io::error::InputError;
 use crate::io::recording::Recording;
@@ -104,10 +104,11 @@ pub fn rotation_model(with_accel_misalignment: bool) -> Model {
     }
 }
 
+/// The static poses in the general estimator, and the hand moves between them.
 fn session(rec: &Recording, with_accel_misalignment: bool) -> Result<ChannelSession, InputError> {
     let model = rotation_model(with_accel_misalignment);
     let options = Options { model, estimate_attitudes: true, ..Options::default() };
-    channel_session(rec, &options)
+    channel_session(rec, &options, true)
 }
 
 /// `T_g` and its standard errors from a solution.
@@ -219,8 +220,7 @@ pub fn ferraris_rotations(rec: &Recording, turns: &[LabelledTurn]) -> Result<Rot
             (label.clone(), axis_turn(&rec.rows[range.clone()], *axis, rec.rows[range.start].line))
         })
         .collect();
-    let hand: Vec<(String, MoveSamples)> =
-        collect_moves(rec, MAX_FIT_DWELLS)?.into_iter().map(|m| (move_label(&s.positions, &m), m)).collect();
+    let hand: Vec<(String, MoveSamples)> = s.moves.iter().map(|m| (move_label(&s.positions, m), m.clone())).collect();
     let only = |v: &[(String, MoveSamples)]| v.iter().map(|(_, m)| m.clone()).collect::<Vec<_>>();
     let both: Vec<MoveSamples> = only(&closed).into_iter().chain(only(&hand)).collect();
     let mut study =
@@ -231,15 +231,12 @@ pub fn ferraris_rotations(rec: &Recording, turns: &[LabelledTurn]) -> Result<Rot
     Ok(study)
 }
 
-const MAX_FIT_DWELLS: usize = sinscal::calib::channels::MAX_DWELLS;
-
 /// The imu_tk session: fitted with every hand move between its static poses, and with every other move, checked
 /// on the rest. The reference is the Xsens factory gyro misalignment (its gains are the importer's nominal
 /// gains, so its scale factors are 0 here).
 pub fn imutk_rotations(rec: &Recording) -> Result<RotationStudy, InputError> {
     let s = session(rec, true)?;
-    let hand: Vec<(String, MoveSamples)> =
-        collect_moves(rec, MAX_FIT_DWELLS)?.into_iter().map(|m| (move_label(&s.positions, &m), m)).collect();
+    let hand: Vec<(String, MoveSamples)> = s.moves.iter().map(|m| (move_label(&s.positions, m), m.clone())).collect();
     let all: Vec<MoveSamples> = hand.iter().map(|(_, m)| m.clone()).collect();
     let even: Vec<MoveSamples> = hand.iter().step_by(2).map(|(_, m)| m.clone()).collect();
     let odd: Vec<(String, MoveSamples)> = hand.iter().skip(1).step_by(2).cloned().collect();
