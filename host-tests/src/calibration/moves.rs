@@ -22,8 +22,30 @@ pub struct MoveSamples {
     /// A labelled turn about this body axis (0, 1, 2) back to where it started (a Ferraris turn): `from` and `to`
     /// are then not used, and up at the start is the direction of the mean force of its first [`REST_SAMPLES`].
     pub turn_axis: Option<usize>,
-    /// Per row: gyro (rad/s), accelerometer (m/s^2), body, and the interval since the row before, s.
-    pub samples: Vec<([f32; 3], [f32; 3], f32)>,
+    /// Its rows.
+    pub samples: Vec<MoveRow>,
+}
+
+/// One row of a move as the core reads it (f32).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct MoveRow {
+    /// Gyro output, body, rad/s.
+    pub rate_b_radps: [f32; 3],
+    /// Accelerometer output, body, m/s^2.
+    pub force_b_mps2: [f32; 3],
+    /// The interval since the row before, s.
+    pub dt_s: f32,
+}
+
+impl MoveRow {
+    /// The row of `row`, `dt_s` after the one before.
+    fn of(row: &Row, dt_s: f64) -> MoveRow {
+        MoveRow {
+            rate_b_radps: row.rate_b_radps.map(|x| x as f32),
+            force_b_mps2: row.force_b_mps2.map(|x| x as f32),
+            dt_s: dt_s as f32,
+        }
+    }
 }
 
 /// Whether the model has a term that only the moves determine well: a gyro scale factor or misalignment.
@@ -68,7 +90,7 @@ impl MoveCollector {
                     turn_axis: None,
                     samples: Vec::new(),
                 });
-                m.samples.push((row.rate_b_radps.map(|x| x as f32), row.force_b_mps2.map(|x| x as f32), dt_s as f32));
+                m.samples.push(MoveRow::of(row, dt_s));
             }
         }
         Ok(())
@@ -92,12 +114,13 @@ pub fn integrate(
         .enumerate()
         .map(|(index, m)| {
             let mut sums = MoveSums::new(prior_si).map_err(|_| ChannelError::BadMove { index })?;
-            for (rate, force, dt_s) in &m.samples {
-                sums.push(*rate, *force, *dt_s);
+            for r in &m.samples {
+                sums.push(r.rate_b_radps, r.force_b_mps2, r.dt_s);
             }
             let Some(axis) = m.turn_axis else { return Ok(sums.finish(m.from, m.to, rate_var_radps2)) };
             let rest = &m.samples[..m.samples.len().min(REST_SAMPLES)];
-            let sum = rest.iter().fold([0.0f32; 3], |a, (_, f, _)| [a[0] + f[0], a[1] + f[1], a[2] + f[2]]);
+            let sum =
+                rest.iter().map(|r| r.force_b_mps2).fold([0.0f32; 3], |a, f| [a[0] + f[0], a[1] + f[1], a[2] + f[2]]);
             let n = sinscal::math::linalg::norm(sum);
             if n.is_nan() || n <= 0.0 {
                 return Err(ChannelError::BadMove { index });
@@ -111,13 +134,8 @@ pub fn integrate(
 pub const REST_SAMPLES: usize = 5;
 
 /// A turn about body axis `axis` of the rows `rows` (a labelled turn that starts and ends at rest).
-pub fn axis_turn(rows: &[crate::io::recording::Row], axis: usize, first_line: usize) -> MoveSamples {
-    let samples = rows
-        .windows(2)
-        .map(|w| {
-            (w[1].rate_b_radps.map(|x| x as f32), w[1].force_b_mps2.map(|x| x as f32), (w[1].t_s - w[0].t_s) as f32)
-        })
-        .collect();
+pub fn axis_turn(rows: &[Row], axis: usize, first_line: usize) -> MoveSamples {
+    let samples = rows.windows(2).map(|w| MoveRow::of(&w[1], w[1].t_s - w[0].t_s)).collect();
     MoveSamples { from: 0, to: 0, first_line, turn_axis: Some(axis), samples }
 }
 
