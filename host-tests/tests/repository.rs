@@ -67,12 +67,42 @@ fn core_layers_use_only_the_layers_below_them() {
     assert_eq!(top, BTreeSet::from(["bin".to_string(), "lib.rs".to_string()]), "files beside the layers in src/");
 }
 
+/// A real board is a package of its own (boards/): no code of the core names a board's crates (its HAL, its
+/// framework, its chip), so that every board runs the same core. QEMU's board (src/board, register level, no crate
+/// of its own) is the one board inside the core package.
+#[test]
+fn nothing_board_specific_leaks_into_the_core() {
+    let mut rs = Vec::new();
+    files(&root().join("src"), &[".rs"], &mut rs);
+    let board_crates = ["stm32", "rtic", "embassy", "probe_rs", "defmt_rtt", "panic_probe"];
+    let mut leaks = Vec::new();
+    for file in &rs {
+        let text = fs::read_to_string(file).unwrap();
+        for (n, line) in text.lines().enumerate() {
+            let code = line.split("//").next().unwrap_or("").to_lowercase();
+            let mut words = code.split(|c: char| !c.is_alphanumeric() && c != '_');
+            if words.any(|w| board_crates.iter().any(|c| w == *c || (w.starts_with(c) && !c.contains('_')))) {
+                leaks.push(format!("{}:{}: {}", file.display(), n + 1, line.trim()));
+            }
+        }
+    }
+    println!("board crates: {} core files checked, {} leaks", rs.len(), leaks.len());
+    assert!(rs.len() > 40, "only {} files under src/: the scan is not reading the core", rs.len());
+    assert!(leaks.is_empty(), "the core names a board's crate:\n{}", leaks.join("\n"));
+    // And the core's manifest depends on none of them.
+    let manifest = fs::read_to_string(root().join("Cargo.toml")).unwrap();
+    let deps: Vec<&str> = manifest.lines().filter(|l| !l.trim_start().starts_with('#')).collect();
+    for c in ["stm32", "rtic", "embassy", "defmt-rtt", "panic-probe"] {
+        assert!(!deps.iter().any(|l| l.contains(c)), "the core's Cargo.toml depends on {c}");
+    }
+}
+
 /// The files whose text users and developers read: code, scripts, manifests, README and docs. (`.ci/run`, the
 /// CI wiring, is left out: it names where CI puts the measured data, beside the clone.)
 fn project_texts() -> Vec<PathBuf> {
     let r = root();
     let mut out = Vec::new();
-    for dir in ["src", "host-tests", "scripts", "docs", ".cargo"] {
+    for dir in ["src", "host-tests", "scripts", "docs", ".cargo", "boards"] {
         files(&r.join(dir), &[".rs", ".md", ".toml", ""], &mut out);
     }
     for f in ["README.md", "Cargo.toml", "build.rs", "memory.x"] {

@@ -363,6 +363,59 @@ mod firmware {
         (per(t_bus), per(t_decode), per(t_collect_none), per(t_collect_kf))
     }
 
+    /// Instructions of the longest processing step of a whole calibration sequence through the general
+    /// estimator with `model`: the step that completes the last dwell and solves (the main loop spends them in
+    /// one turn, so a board's watchdog must allow them; docs/board.md). The six positions of Table 1 at
+    /// 45.7796 N, `SOLVE_DWELL_SAMPLES` samples each of the exact specific force and Earth rate with a small
+    /// deterministic dither (the solve's cost does not depend on the values), 20 samples of "moving" between
+    /// dwells (no rotation: with the full model the moves are measured and left out as gross misfits).
+    fn solve_cost(model: sinscal::calib::channels::Model) -> u32 {
+        const SOLVE_DWELL_SAMPLES: u32 = 300;
+        let site = Site::with_normal_gravity(45.7796f32.to_radians(), 0.0);
+        let mut schedule = [Attitude::from_degrees(0.0, 0.0, 0.0); 6];
+        for (a, p) in schedule.iter_mut().zip(sinscal::calib::solve::TABLE1_POSITIONS_DEG.iter()) {
+            *a = Attitude::from_degrees(p[0], p[1], p[2]);
+        }
+        let channels = sinscal::calib::channels::ChannelSettings { model, ..Default::default() };
+        let settings = sinscal::run::sequence::SequenceSettings {
+            settle_samples: 0,
+            dwell_samples: SOLVE_DWELL_SAMPLES,
+            estimator: Estimator::Channels(channels),
+            ..Default::default()
+        };
+        let Ok(mut sequence) = CalibrationSequence::new(&schedule, site, settings) else { exit(6) };
+        let syst = unsafe { &*SYST::PTR };
+        let (mut longest, mut dither, mut counter) = (0u32, 12345u32, 0u16);
+        for (k, attitude) in schedule.iter().enumerate() {
+            let c_n_b = attitude.c_b_n().transpose();
+            let force = c_n_b.mul_vec(site.force_at_rest_n_mps2());
+            let rate = c_n_b.mul_vec(site.earth_rate_n_radps());
+            for i in 0..SOLVE_DWELL_SAMPLES + 20 {
+                dither = dither.wrapping_mul(1_664_525).wrapping_add(1_013_904_223);
+                let e = ((dither >> 8) as f32 / 16_777_216.0 - 0.5) * 2e-3;
+                let sample = ImuSample {
+                    rate_b_radps: [rate[0] + e * 1e-3, rate[1] - e * 1e-3, rate[2] + e * 1e-3],
+                    force_b_mps2: [force[0] + e, force[1] - e, force[2] + e],
+                };
+                counter = counter.wrapping_add(1);
+                let reading = sinscal::sensor::sample::ImuReading { sample, counter, missed: 0, temperature_c: 25.0 };
+                let table = if i < SOLVE_DWELL_SAMPLES { k as u8 + 1 } else { 0 };
+                let item = QueueItem { reading: Ok(reading), table };
+                let t0 = syst.cvr.read();
+                let events = feed_sequence(&mut sequence, core::hint::black_box(&item));
+                let t1 = syst.cvr.read();
+                longest = longest.max(ticks_between(t0, t1));
+                if events.iter().flatten().any(|e| matches!(e, sinscal::run::sequence::Event::Failed(_))) {
+                    exit(7)
+                }
+            }
+        }
+        if sequence.result().is_none() {
+            exit(8)
+        }
+        longest * INSTRUCTIONS_PER_TICK
+    }
+
     #[entry]
     fn main() -> ! {
         let mut p = cortex_m::Peripherals::take().unwrap_or_else(|| exit(2));
@@ -383,13 +436,19 @@ mod firmware {
         let move_sums = move_sums_loop();
         let (stack_isr, stack_processing) = stack_depths();
         let (stack_status, stack_configure, stack_start, status_instructions) = link_costs();
-        let mut text: heapless::String<1024> = heapless::String::new();
+        let solve_default = solve_cost(sinscal::calib::session::DEFAULT_MODEL);
+        let solve_full = solve_cost(sinscal::calib::channels::Model::FULL);
+        let mut text: heapless::String<1536> = heapless::String::new();
         let _ = write!(
             text,
             "stack_bytes_link_status {stack_status}\nstack_bytes_link_configure {stack_configure}\n\
              stack_bytes_link_start {stack_start}\nlink_status_request_instructions {status_instructions}\n\
              device_bytes {}\n",
             core::mem::size_of::<sinscal::instrument::device::Device<sinscal::rig::semihost::HostFileFlash>>()
+        );
+        let _ = write!(
+            text,
+            "solve_step_instructions_default_model {solve_default}\nsolve_step_instructions_full_model {solve_full}\n"
         );
         let _ = writeln!(text, "part_queue_handover {}", HANDOVER.load(core::sync::atomic::Ordering::Relaxed));
         let _ = write!(

@@ -23,9 +23,9 @@ mod firmware {
     use cortex_m_rt::{entry, exception};
     use defmt_full as defmt;
     use heapless::spsc::{Consumer, Producer, Queue};
-    use sinscal::board::link::{log_counters, log_event, LinkPort};
     use sinscal::board::{exit, uart};
     use sinscal::instrument::device::{Action, Device};
+    use sinscal::instrument::main_loop::{log_counters, log_event, LinkPort};
     use sinscal::instrument::store::RecordStore;
     use sinscal::rig::replay::{read_header, ByteSource, ReplayDevice};
     use sinscal::rig::semihost::{arg_path, FileSource, HostFileFlash};
@@ -111,7 +111,7 @@ mod firmware {
         cortex_m::interrupt::free(|cs| {
             RX.borrow(cs).replace(Some(rx_producer));
         });
-        let mut link = LinkPort::new(rx_consumer);
+        let mut link = LinkPort::new(rx_consumer, uart::Uart0);
         uart::init();
         sinscal::board::mps2_an386::start_sample_timer(IDLE_TICK_HZ);
         let mut queue: Queue<QueueItem, QUEUE_SLOTS> = Queue::new();

@@ -30,16 +30,14 @@ mod firmware {
     use cortex_m_rt::{entry, exception};
     use defmt_full as defmt;
     use heapless::spsc::{Consumer, Producer, Queue};
-    use sinscal::board::link::{log_counters, log_event, LinkPort};
     use sinscal::board::mps2_an386::{self as board, exit, CycleDelay, Pl022, TIMER0_IRQ};
     use sinscal::board::{uart, watchdog};
     use sinscal::instrument::device::Device;
+    use sinscal::instrument::main_loop::{log_init_error, Instrument, LinkPort};
     use sinscal::instrument::store::RecordStore;
     use sinscal::rig::semihost::{arg_path, CPath, HostFileFlash};
-    use sinscal::run::sampling::{
-        on_data_ready, process_next, QueueItem, SamplingStats, QUEUE_SLOTS, TABLE_IN_POSITION,
-    };
-    use sinscal::sensor::adis::{Adis, AdisError, Model, OUTPUT_RATE_HZ};
+    use sinscal::run::sampling::{on_data_ready, QueueItem, SamplingStats, QUEUE_SLOTS, TABLE_IN_POSITION};
+    use sinscal::sensor::adis::{Adis, Model, OUTPUT_RATE_HZ};
 
     /// The watchdog's period, microseconds (see the module's documentation for why not two sample periods).
     const WATCHDOG_PERIOD_US: u32 = 500_000;
@@ -85,26 +83,12 @@ mod firmware {
         cortex_m::peripheral::SCB::sys_reset();
     }
 
-    fn log_init_error(e: AdisError<sinscal::board::mps2_an386::SpiError>) {
-        match e {
-            AdisError::WrongProduct { expected, found } => {
-                defmt::error!("IMU: PROD_ID {=u16}, expected {=u16}", found, expected)
-            }
-            AdisError::SelfTest { diag_stat } => defmt::error!("IMU: self-test failed, DIAG_STAT {=u16:#x}", diag_stat),
-            AdisError::ReadBack { register, written, read } => {
-                defmt::error!("IMU: register {=u8:#x} reads back {=u16:#x}, {=u16:#x} written", register, read, written)
-            }
-            AdisError::Spi(_) => defmt::error!("IMU: SPI timeout"),
-            _ => defmt::error!("IMU initialisation failed"),
-        }
-    }
-
     /// Starts sampling: the IMU initialised, the data-ready timer at its output rate; `None` if the IMU does not
     /// start (the link still answers; the status shows no samples).
     fn start_sampling() -> Option<Consumer<'static, QueueItem>> {
         let mut imu = Adis::new(Pl022::init(), Model::Adis16505_2);
         if let Err(e) = imu.init(&mut CycleDelay) {
-            log_init_error(e);
+            log_init_error(&e);
             return None;
         }
         let queue: &'static mut Queue<QueueItem, QUEUE_SLOTS> =
@@ -131,7 +115,7 @@ mod firmware {
         cortex_m::interrupt::free(|cs| {
             RX.borrow(cs).replace(Some(rx_producer));
         });
-        let mut link = LinkPort::new(rx_consumer);
+        let mut instrument = Instrument::new(&mut device, LinkPort::new(rx_consumer, uart::Uart0));
         uart::init();
         let mut samples = start_sampling();
         // The data-ready timer at the IMU's output rate (100 Hz); without an IMU, the main loop's tick.
@@ -139,25 +123,11 @@ mod firmware {
         if watchdog::present() {
             watchdog::start(WATCHDOG_PERIOD_US);
         }
-        let mut reported = false;
         loop {
             watchdog::feed();
             let stats = cortex_m::interrupt::free(|cs| SAMPLER.borrow(cs).borrow().as_ref().map(|s| s.stats))
                 .unwrap_or_default();
-            device.link.rx_overruns = RX_LOST.load(Ordering::Relaxed);
-            link.pump(&mut device, &stats);
-            if let Some(consumer) = samples.as_mut() {
-                while let Some(out) = process_next(consumer, |item| device.on_sample(item, &stats, log_event)) {
-                    if let Some(sample) = out {
-                        link.send_sample(&sample);
-                    }
-                }
-            }
-            let done = !device.running() && device.state() != sinscal::instrument::message::DeviceState::Idle;
-            if done && !reported {
-                log_counters(&stats, &device);
-            }
-            reported = done;
+            instrument.turn(samples.as_mut(), &stats, RX_LOST.load(Ordering::Relaxed));
             cortex_m::asm::wfi();
         }
     }

@@ -17,7 +17,7 @@ mod firmware {
     use cortex_m_rt::entry;
     use defmt_full as defmt;
     use sinscal::board::exit;
-    use sinscal::board::link::log_event;
+    use sinscal::instrument::main_loop::log_event;
     use sinscal::rig::replay::{encode_outcome, run_replay, MAX_OUTCOME_BYTES};
     use sinscal::rig::semihost::FileSource;
     use sinscal::run::sequence::SequenceSolution;

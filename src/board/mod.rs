@@ -7,7 +7,6 @@
 use defmt_full as defmt;
 use defmt_semihosting as _;
 
-pub mod link;
 pub mod mps2_an386;
 pub mod uart;
 pub mod watchdog;

@@ -4,6 +4,8 @@
 
 use heapless::spsc::Producer;
 
+use crate::instrument::main_loop::LinkTx;
+
 use super::mps2_an386::{read, unmask_irq, write, CLOCK_HZ};
 
 const UART0: usize = 0x4000_4000;
@@ -60,7 +62,7 @@ pub fn on_receive(queue: &mut Producer<'_, u8>) -> bool {
     lost
 }
 
-/// Sends `bytes`, waiting for room in the transmit buffer at most [`TX_WAIT_POLLS`] polls per byte; `false` if a
+/// Sends `bytes`, waiting for room in the transmit buffer at most `TX_WAIT_POLLS` polls per byte; `false` if a
 /// wait ran out (the rest is not sent).
 pub fn send(bytes: &[u8]) -> bool {
     for &b in bytes {
@@ -74,4 +76,14 @@ pub fn send(bytes: &[u8]) -> bool {
         write(UART0 + UART_DATA, b as u32);
     }
     true
+}
+
+/// UART0 as the link's transmitter.
+#[derive(Clone, Copy, Debug, Default)]
+pub struct Uart0;
+
+impl LinkTx for Uart0 {
+    fn send(&mut self, bytes: &[u8]) -> bool {
+        send(bytes)
+    }
 }

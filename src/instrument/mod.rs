@@ -7,10 +7,13 @@
 //! - [`store`]: the power-safe A/B store of the calibration record in NOR flash (docs/storage.md).
 //! - [`record`]: the calibration record's layout (compensation, configuration, note, outcome).
 //! - [`device`]: the device behind the link (requests, the calibration, the record, compensation).
+//! - `main_loop` (target only): the instrument's main loop and its link port, the same on every board.
 
 pub mod crc;
 pub mod device;
 pub mod link;
+#[cfg(target_os = "none")]
+pub mod main_loop;
 pub mod message;
 pub mod record;
 pub mod store;
