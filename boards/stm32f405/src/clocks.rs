@@ -4,6 +4,8 @@
 //! 84 MHz (the STM32F405's maxima). SPI1 and USART1 are on APB2.
 
 use embedded_hal::delay::DelayNs;
+use stm32f4xx_hal::prelude::*;
+use stm32f4xx_hal::rcc;
 
 /// The board's crystal, Hz: 8 MHz on most STM32F405 boards (flight controllers, Olimex STM32-H405); change it for a
 /// board with another crystal (the bring-up checklist, docs/board.md, checks the resulting clocks).
@@ -14,6 +16,16 @@ pub const SYSCLK_HZ: u32 = 168_000_000;
 pub const PCLK1_HZ: u32 = 42_000_000;
 /// APB2, Hz.
 pub const PCLK2_HZ: u32 = 84_000_000;
+
+/// The clock configuration: the tree above; built for QEMU's model (feature `qemu-netduinoplus2`), the 16 MHz HSI
+/// alone, since QEMU models no RCC ready flags.
+pub fn config() -> rcc::Config {
+    if cfg!(feature = "qemu-netduinoplus2") {
+        rcc::Config::hsi()
+    } else {
+        rcc::Config::hse(HSE_HZ.Hz()).sysclk(SYSCLK_HZ.Hz()).pclk1(PCLK1_HZ.Hz()).pclk2(PCLK2_HZ.Hz())
+    }
+}
 
 /// A delay counted in core cycles at [`SYSCLK_HZ`] (`cortex_m::asm::delay` runs at least the given number of
 /// cycles). Interrupts taken meanwhile lengthen it, never shorten it. The ADIS driver's start-up waits and stall

@@ -41,12 +41,11 @@ mod app {
     use stm32f4xx_hal::gpio::{Edge, Input, PC0, PC4};
     use stm32f4xx_hal::pac::{self, USART1};
     use stm32f4xx_hal::prelude::*;
-    use stm32f4xx_hal::rcc;
     use stm32f4xx_hal::serial::{self, Rx, Serial, Tx};
     use stm32f4xx_hal::spi::Spi;
 
     use crate::adis_spi::{self, AdisSpi};
-    use crate::clocks::{cycles_now, us_since, CycleDelay, HSE_HZ, PCLK1_HZ, PCLK2_HZ, SYSCLK_HZ};
+    use crate::clocks::{cycles_now, us_since, CycleDelay};
     use crate::flash::{RecordFlash, SECTOR_BYTES};
     use crate::link::{self, UsartTx, LINK_BAUD, RX_QUEUE_SLOTS};
     use crate::watchdog;
@@ -122,8 +121,7 @@ mod app {
         dp.RCC.csr().modify(|_, w| w.rmvf().set_bit());
         core.DCB.enable_trace();
         core.DWT.enable_cycle_counter();
-        let clocks = rcc::Config::hse(HSE_HZ.Hz()).sysclk(SYSCLK_HZ.Hz()).pclk1(PCLK1_HZ.Hz()).pclk2(PCLK2_HZ.Hz());
-        let mut rcc = dp.RCC.freeze(clocks);
+        let mut rcc = dp.RCC.freeze(crate::clocks::config());
         defmt::info!(
             "sinscal-stm32f405: SYSCLK {=u32} Hz, PCLK1 {=u32} Hz, PCLK2 {=u32} Hz",
             rcc.clocks.sysclk().raw(),
@@ -172,7 +170,7 @@ mod app {
             // No IMU, no data ready: SysTick ticks at the sample rate instead, for the watchdog and the main loop
             // (the link still answers; the status shows no samples).
             core.SYST.set_clock_source(cortex_m::peripheral::syst::SystClkSource::Core);
-            core.SYST.set_reload(SYSCLK_HZ / sinscal::sensor::adis::OUTPUT_RATE_HZ as u32 - 1);
+            core.SYST.set_reload(rcc.clocks.sysclk().raw() / sinscal::sensor::adis::OUTPUT_RATE_HZ as u32 - 1);
             core.SYST.clear_current();
             core.SYST.enable_interrupt();
             core.SYST.enable_counter();

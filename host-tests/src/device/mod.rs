@@ -58,19 +58,32 @@ pub fn boot_qemu(flash: &Path, replay: Option<&Path>) -> Result<QemuDevice, Stri
 /// Boots a firmware ELF of this workspace's instrument (`sinscal-device`, or `sinscal-firmware`, which takes
 /// no replay and whose IMU is the board's SPI port) in QEMU with its flash file and UART0 on a Unix socket.
 pub fn boot_elf(elf: &Path, flash: &Path, replay: Option<&Path>) -> Result<QemuDevice, String> {
-    let dir = ScratchFile::new("link");
-    std::fs::create_dir_all(dir.path()).map_err(|e| format!("{}: {e}", dir.path().display()))?;
-    let socket = dir.path().join("uart0");
-    let listener = UnixListener::bind(&socket).map_err(|e| format!("{}: {e}", socket.display()))?;
     let semihosting = format!(
         "enable=on,target=native,arg={DEVICE_FIRMWARE},arg={},arg={}",
         flash.display(),
         replay.map_or_else(|| "-".to_string(), |p| p.display().to_string())
     );
+    boot_machine(&["-cpu", "cortex-m4", "-machine", "mps2-an386", "-semihosting-config", &semihosting], elf)
+}
+
+/// Boots the STM32F405 board's firmware (`boards/stm32f405`, built with its feature `qemu-netduinoplus2`) in
+/// QEMU's model of that MCU, with USART1, its link, on a Unix socket. QEMU models no EXTI edge, no flash
+/// programming and no IWDG there: the link, the main loop and the record's read path are what run.
+pub fn boot_stm32f405(elf: &Path) -> Result<QemuDevice, String> {
+    boot_machine(&["-machine", "netduinoplus2"], elf)
+}
+
+/// Boots `elf` in QEMU with `machine_args`, its first serial port on a Unix socket, and connects the link.
+fn boot_machine(machine_args: &[&str], elf: &Path) -> Result<QemuDevice, String> {
+    let dir = ScratchFile::new("link");
+    std::fs::create_dir_all(dir.path()).map_err(|e| format!("{}: {e}", dir.path().display()))?;
+    let socket = dir.path().join("uart0");
+    let listener = UnixListener::bind(&socket).map_err(|e| format!("{}: {e}", socket.display()))?;
     let mut child = Command::new(QEMU)
-        .args(["-cpu", "cortex-m4", "-machine", "mps2-an386", "-nographic", "-monitor", "none"])
+        .args(machine_args)
+        .args(["-nographic", "-monitor", "none"])
         .args(["-serial", &format!("unix:{}", socket.display())])
-        .args(["-semihosting-config", &semihosting, "-kernel"])
+        .arg("-kernel")
         .arg(elf)
         .stdin(Stdio::null())
         .stdout(Stdio::null())
