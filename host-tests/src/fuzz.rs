@@ -109,6 +109,32 @@ pub fn read_burst(bytes: &[u8]) -> Result<bool, String> {
     Ok(decoded.is_ok())
 }
 
+/// The MAT-file reader (`io::import::mat::read_mat`): what it accepts is at least one matrix whose value count is
+/// its rows times its columns, every value finite.
+pub fn read_mat(bytes: &[u8]) -> Result<bool, String> {
+    match crate::io::import::mat::read_mat(bytes, "fuzz.mat") {
+        Err(_) => Ok(false),
+        Ok(matrices) if matrices.is_empty() => Err("a MAT-file without a matrix was accepted".into()),
+        Ok(matrices) => {
+            for m in &matrices {
+                if m.rows.checked_mul(m.cols) != Some(m.data.len()) {
+                    return Err(format!(
+                        "'{}': {}x{} with {} values was accepted",
+                        m.name,
+                        m.rows,
+                        m.cols,
+                        m.data.len()
+                    ));
+                }
+                if !m.data.iter().all(|v| v.is_finite()) {
+                    return Err(format!("'{}': a non-finite value was accepted", m.name));
+                }
+            }
+            Ok(true)
+        }
+    }
+}
+
 /// The valid inputs the fuzzing starts from, per target: its name, its reader and a valid input that sinscal
 /// writes itself.
 pub fn seeds() -> Vec<(&'static str, Reader, Vec<u8>)> {
@@ -134,6 +160,13 @@ pub fn seeds() -> Vec<(&'static str, Reader, Vec<u8>)> {
         data_counter: 7,
     };
     encode_burst(Model::Adis16505_2, &b, &mut burst);
+    // Two small MAT-files: little-endian and uncompressed (a 1x1 with a small-element name, a 3x2), and
+    // big-endian with compressed elements (MATLAB's default -v7 layout).
+    use crate::io::import::mat::{write_mat, ByteOrder};
+    let values = [0.25, -1.5, 3.0, 1e-3, 9.81, -0.0];
+    let matrices: [crate::io::import::mat::NamedMatrix<'_>; 2] = [("t", 1, 1, &[2.5]), ("acc_counts", 3, 2, &values)];
+    let mat = write_mat(&matrices, ByteOrder::Little, false).expect("the seed MAT-file is written");
+    let mat_compressed = write_mat(&matrices, ByteOrder::Big, true).expect("the seed MAT-file is written");
     vec![
         ("recording", read_recording as Reader, rec.to_csv().into_bytes()),
         ("recording-file", read_recording_file as Reader, rec.to_csv().into_bytes()),
@@ -142,5 +175,7 @@ pub fn seeds() -> Vec<(&'static str, Reader, Vec<u8>)> {
         ("calibration", read_calibration as Reader, cal_json.into_bytes()),
         ("replay", read_replay as Reader, replay),
         ("burst", read_burst as Reader, burst),
+        ("mat", read_mat as Reader, mat),
+        ("mat-compressed", read_mat as Reader, mat_compressed),
     ]
 }

@@ -9,6 +9,10 @@
 //! - [`Format::Imutk`]: imu_tk text counts of an accelerometer and a gyro, without labels: static intervals are
 //!   detected ([`detect_static_intervals`]) and levelled by their mean specific force, [`parse_imutk`].
 //!
+//! [`mat`] reads the numeric matrices of a MATLAB MAT-file (level 5: MATLAB's `-v6` and `-v7`, compressed or
+//! not), [`mat::read_mat`]; it refuses text files named `.mat` (such as imu_tk's) and names version 4 and 7.3
+//! files.
+//!
 //! Every recording says where it came from in its header comments (`# source: ...`, `# source_format: ...`,
 //! `# latitude_source: ...`, `# attitude_source: ...`, and the nominal scales used). Malformed input is reported as
 //! an [`InputError`] naming the file, the line and the reason; nothing here panics on bad input.
@@ -23,6 +27,7 @@ use crate::io::recording::{Header, Recording, Row};
 
 mod imucal;
 mod imutk;
+pub mod mat;
 mod psins;
 
 pub use imucal::*;
