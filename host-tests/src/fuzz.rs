@@ -135,6 +135,57 @@ pub fn read_mat(bytes: &[u8]) -> Result<bool, String> {
     }
 }
 
+/// The layout file of `sinscal import columns` (`io::import::Layout::parse`): what it accepts names three
+/// different fields per sensor, finite non-zero scales and a body-from-sensor matrix that is a rotation.
+pub fn read_layout(bytes: &[u8]) -> Result<bool, String> {
+    let Some(t) = text(bytes) else { return Ok(false) };
+    match crate::io::import::Layout::parse(t, "fuzz.toml") {
+        Err(_) => Ok(false),
+        Ok(layout) => {
+            let m = layout.axes;
+            let det = m[0][0] * (m[1][1] * m[2][2] - m[1][2] * m[2][1])
+                - m[0][1] * (m[1][0] * m[2][2] - m[1][2] * m[2][0])
+                + m[0][2] * (m[1][0] * m[2][1] - m[1][1] * m[2][0]);
+            let scales_ok = [&layout.gyro, &layout.accel].iter().all(|c| {
+                c.scale.iter().chain(&c.counts_per_unit).all(|s| s.is_finite() && *s != 0.0)
+                    && c.fields[0] != c.fields[1]
+                    && c.fields[1] != c.fields[2]
+                    && c.fields[0] != c.fields[2]
+            });
+            if det != 1.0 {
+                Err(format!("an axis mapping of determinant {det} was accepted"))
+            } else if !scales_ok {
+                Err("a zero or non-finite scale, or a field used twice, was accepted".into())
+            } else {
+                Ok(true)
+            }
+        }
+    }
+}
+
+/// The labels file of `sinscal import columns` (`io::import::parse_labels`): what it accepts are finite ranges
+/// that do not overlap, with pitch in [-90, 90].
+pub fn read_labels(bytes: &[u8]) -> Result<bool, String> {
+    let Some(t) = text(bytes) else { return Ok(false) };
+    match crate::io::import::parse_labels(t, "fuzz.csv") {
+        Err(_) => Ok(false),
+        Ok(labels) => {
+            for (i, a) in labels.iter().enumerate() {
+                if !(a.start_s.is_finite() && a.end_s.is_finite() && a.start_s < a.end_s) {
+                    return Err(format!("range [{}, {}) was accepted", a.start_s, a.end_s));
+                }
+                if !(-90.0..=90.0).contains(&a.pitch_deg) || !a.roll_deg.is_finite() {
+                    return Err(format!("pitch {} roll {} was accepted", a.pitch_deg, a.roll_deg));
+                }
+                if labels[i + 1..].iter().any(|b| b.start_s < a.end_s && a.start_s < b.end_s) {
+                    return Err("overlapping ranges were accepted".into());
+                }
+            }
+            Ok(true)
+        }
+    }
+}
+
 /// The valid inputs the fuzzing starts from, per target: its name, its reader and a valid input that sinscal
 /// writes itself.
 pub fn seeds() -> Vec<(&'static str, Reader, Vec<u8>)> {
@@ -177,5 +228,11 @@ pub fn seeds() -> Vec<(&'static str, Reader, Vec<u8>)> {
         ("burst", read_burst as Reader, burst),
         ("mat", read_mat as Reader, mat),
         ("mat-compressed", read_mat as Reader, mat_compressed),
+        ("layout", read_layout as Reader, include_str!("../layouts/imutk.toml").as_bytes().to_vec()),
+        (
+            "labels",
+            read_labels as Reader,
+            b"pos,start_s,end_s,pitch_deg,roll_deg,heading_deg\n1,0,4.5,0,-90,?\n2,5,9,90,0,12.5\n".to_vec(),
+        ),
     ]
 }

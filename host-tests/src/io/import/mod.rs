@@ -25,13 +25,17 @@ use crate::io::calibration_result::ARCSEC_PER_RAD;
 use crate::io::error::InputError;
 use crate::io::recording::{Header, Recording, Row};
 
+mod columns;
 mod imucal;
 mod imutk;
+pub mod layout;
 pub mod mat;
 mod psins;
 
+pub use columns::*;
 pub use imucal::*;
 pub use imutk::*;
+pub use layout::Layout;
 pub use psins::*;
 
 /// Standard gravity, m/s^2: the "g" of accelerometer ranges given in LSB/g. The f64 twin of the core's
@@ -124,6 +128,9 @@ pub enum Format {
     ImucalRaw,
     /// imu_tk text counts: accelerometer file and gyro file (t_s x y z), static intervals detected.
     Imutk,
+    /// Any layout described by a TOML file (`--layout`): text, binary records or a MAT-file matrix, units, rates or
+    /// increments, axes; positions from `--labels` or detected (docs/data.md#described-layouts).
+    Columns,
 }
 
 /// Arguments of `sinscal import`.
@@ -132,7 +139,8 @@ pub struct ImportArgs {
     /// Input format.
     #[arg(value_enum)]
     pub format: Format,
-    /// Input file(s): one for psins, imucal and imucal-raw; two (accelerometer, then gyro) for imutk.
+    /// Input file(s): one for psins, imucal and imucal-raw; two (accelerometer, then gyro) for imutk; for columns,
+    /// one, or several text files read side by side (their fields numbered on from one file to the next).
     #[arg(required = true, num_args = 1..)]
     pub inputs: Vec<PathBuf>,
     /// The recording to write (docs/formats.md#recording).
@@ -141,9 +149,25 @@ pub struct ImportArgs {
     /// Latitude, degrees north. Default: the file's (psins), 49.6 (imucal, inferred: Erlangen), 45 (imutk, unknown).
     #[arg(long, allow_negative_numbers = true)]
     pub latitude_deg: Option<f64>,
-    /// imucal: the JSON label file (default: INPUT with '.csv' replaced by '_list.json').
+    /// imucal: the JSON label file (default: INPUT with '.csv' replaced by '_list.json'). columns: a CSV of
+    /// positions (start_s, end_s, pitch_deg, roll_deg, heading_deg, pos); without it static intervals are detected.
     #[arg(long)]
     pub labels: Option<PathBuf>,
+    /// columns: the layout file (TOML, docs/data.md#described-layouts).
+    #[arg(long)]
+    pub layout: Option<PathBuf>,
+    /// Static detection (imutk, columns without --labels): length of the sliding window, s.
+    #[arg(long, default_value_t = StaticDetection::default().window_s)]
+    pub static_window_s: f64,
+    /// Static detection: length of the static period at the start that sets the noise level, s.
+    #[arg(long, default_value_t = StaticDetection::default().init_static_s)]
+    pub static_init_s: f64,
+    /// Static detection: threshold as a multiple of that period's variance.
+    #[arg(long, default_value_t = StaticDetection::default().threshold_factor)]
+    pub static_threshold: f64,
+    /// Static detection: shortest static interval kept, s.
+    #[arg(long, default_value_t = StaticDetection::default().min_static_s)]
+    pub static_min_s: f64,
 }
 
 impl ImportArgs {
@@ -157,15 +181,28 @@ impl ImportArgs {
             ))
         };
         let wanted = if self.format == Format::Imutk { 2 } else { 1 };
-        if self.inputs.len() != wanted {
+        if self.format == Format::Columns {
+            if self.layout.is_none() {
+                return usage("columns needs --layout FILE (docs/data.md#described-layouts)".to_string());
+            }
+        } else if self.layout.is_some() {
+            return usage("--layout applies only to the columns format".to_string());
+        } else if self.inputs.len() != wanted {
             let what = match self.format {
                 Format::Imutk => "imutk needs two inputs: the accelerometer file, then the gyro file",
                 _ => "this format needs exactly one input file",
             };
             return usage(format!("{what} (got {})", self.inputs.len()));
         }
-        if self.labels.is_some() && self.format != Format::Imucal {
-            return usage("--labels applies only to the imucal format".to_string());
+        if self.labels.is_some() && !matches!(self.format, Format::Imucal | Format::Columns) {
+            return usage("--labels applies only to the imucal and columns formats".to_string());
+        }
+        let d = self.static_detection();
+        let positive = [d.window_s, d.init_static_s, d.threshold_factor, d.min_static_s];
+        if positive.iter().any(|v| !(v.is_finite() && *v > 0.0)) {
+            return usage(
+                "--static-window-s, --static-init-s, --static-threshold and --static-min-s are positive".into(),
+            );
         }
         if let Some(lat) = self.latitude_deg {
             if !(lat.is_finite() && (-90.0..=90.0).contains(&lat)) {
@@ -173,6 +210,18 @@ impl ImportArgs {
             }
         }
         Ok(())
+    }
+}
+
+impl ImportArgs {
+    /// The static detection of the `--static-*` options.
+    pub fn static_detection(&self) -> StaticDetection {
+        StaticDetection {
+            window_s: self.static_window_s,
+            init_static_s: self.static_init_s,
+            threshold_factor: self.static_threshold,
+            min_static_s: self.static_min_s,
+        }
     }
 }
 
@@ -185,6 +234,10 @@ pub fn run(args: &ImportArgs) -> Result<String, InputError> {
     if args.format == Format::Imucal {
         inputs.push(&labels);
     }
+    if args.format == Format::Columns {
+        inputs.extend(args.labels.iter().map(|p| p.as_path()));
+        inputs.extend(args.layout.iter().map(|p| p.as_path()));
+    }
     refuse_output_onto_input(&args.out, &inputs)?;
     let imported = match args.format {
         Format::Psins => import_psins(first, args.latitude_deg)?,
@@ -195,11 +248,34 @@ pub fn run(args: &ImportArgs) -> Result<String, InputError> {
                 .inputs
                 .get(1)
                 .ok_or_else(|| InputError::file("sinscal import", "imutk needs the gyro file as second input"))?;
-            import_imutk(first, gyro, args.latitude_deg, &StaticDetection::default())?
+            import_imutk(first, gyro, args.latitude_deg, &args.static_detection())?
         }
+        Format::Columns => run_columns(args)?,
     };
     imported.recording.write(&args.out)?;
     Ok(format!("{}wrote {}\n", imported.summary, args.out.display()))
+}
+
+/// `sinscal import columns`: the layout, the positions (labels file or detection) and the inputs.
+fn run_columns(args: &ImportArgs) -> Result<Imported, InputError> {
+    let layout_path = args.layout.as_deref().ok_or_else(|| InputError::file("sinscal import", "no --layout"))?;
+    let layout_source = layout_path.display().to_string();
+    let layout = Layout::parse(&read_text(layout_path)?, &layout_source)?;
+    let labels_source = args.labels.as_ref().map(|p| p.display().to_string());
+    let positions = match &args.labels {
+        Some(p) => Positions::Labels(parse_labels(&read_text(p)?, &p.display().to_string())?),
+        None => Positions::Detect(args.static_detection()),
+    };
+    let latitude_deg = option_latitude(args.latitude_deg, "--latitude-deg")?;
+    let import = ColumnsImport {
+        layout: &layout,
+        layout_source: &layout_source,
+        positions,
+        labels_source: labels_source.as_deref(),
+        latitude_deg,
+    };
+    let inputs: Vec<&Path> = args.inputs.iter().map(|p| p.as_path()).collect();
+    import_columns(&inputs, &import)
 }
 
 /// The output must not be one of the inputs: the import would overwrite what it reads.
