@@ -501,28 +501,7 @@ fn detect_positions(
             ),
         ));
     }
-    for (k, range) in intervals.ranges.iter().enumerate() {
-        let count = range.len() as f64;
-        let mut mean = [0.0; 3];
-        for f in &force[range.clone()] {
-            for i in 0..3 {
-                mean[i] += f[i] / count;
-            }
-        }
-        let (pitch_deg, roll_deg) = level_attitude_deg(mean).ok_or_else(|| {
-            InputError::at(
-                source,
-                rows[range.start].line,
-                "static interval with zero mean specific force: cannot level",
-            )
-        })?;
-        for row in &mut rows[range.clone()] {
-            row.pos = k as u32 + 1;
-            row.pitch_deg = pitch_deg;
-            row.roll_deg = roll_deg;
-            row.heading_deg = None;
-        }
-    }
+    level_intervals(rows, &intervals.ranges, source)?;
     Ok(format!(
         "sliding {} s window, sum of the 3 accel variances < {} x the first {} s ({:.3e} (m/s^2)^2, threshold {:.3e}), \
          at least {} s: {} interval(s)",

@@ -268,27 +268,7 @@ fn levelled_rows(
             line: *n,
         })
         .collect();
-    for (k, range) in intervals.ranges.iter().enumerate() {
-        let count = range.len() as f64;
-        let mut mean = [0.0; 3];
-        for f in &force[range.clone()] {
-            for i in 0..3 {
-                mean[i] += f[i] / count;
-            }
-        }
-        let (pitch_deg, roll_deg) = level_attitude_deg(mean).ok_or_else(|| {
-            InputError::at(
-                acc_source,
-                acc[range.start].0,
-                "static interval with zero mean specific force: cannot level",
-            )
-        })?;
-        for row in &mut rows[range.clone()] {
-            row.pos = k as u32 + 1;
-            row.pitch_deg = pitch_deg;
-            row.roll_deg = roll_deg;
-        }
-    }
+    level_intervals(&mut rows, &intervals.ranges, acc_source)?;
     Ok(rows)
 }
 

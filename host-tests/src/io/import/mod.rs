@@ -382,6 +382,34 @@ pub fn level_attitude_deg(force_b_mps2: [f64; 3]) -> Option<(f64, f64)> {
     Some((pitch_deg + 0.0, roll_deg + 0.0))
 }
 
+/// Interval k of `ranges` (rows in time order) becomes position k + 1, levelled from its mean specific force
+/// ([`level_attitude_deg`]), heading unknown. The error names the row's line where the mean force is zero.
+fn level_intervals(rows: &mut [Row], ranges: &[Range<usize>], source: &str) -> Result<(), InputError> {
+    for (k, range) in ranges.iter().enumerate() {
+        let count = range.len() as f64;
+        let mut mean = [0.0; 3];
+        for row in &rows[range.clone()] {
+            for i in 0..3 {
+                mean[i] += row.force_b_mps2[i] / count;
+            }
+        }
+        let (pitch_deg, roll_deg) = level_attitude_deg(mean).ok_or_else(|| {
+            InputError::at(
+                source,
+                rows[range.start].line,
+                "static interval with zero mean specific force: cannot level",
+            )
+        })?;
+        for row in &mut rows[range.clone()] {
+            row.pos = k as u32 + 1;
+            row.pitch_deg = pitch_deg;
+            row.roll_deg = roll_deg;
+            row.heading_deg = None;
+        }
+    }
+    Ok(())
+}
+
 /// An angle in degrees brought into [0, 360).
 fn normalise_deg(angle_deg: f64) -> f64 {
     let r = angle_deg.rem_euclid(360.0);
