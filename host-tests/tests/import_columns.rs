@@ -444,6 +444,28 @@ fn the_command_line_reads_a_layout_and_labels_and_refuses_a_missing_layout() {
     assert_same_rows(&back.rows, &rec.rows, "through the command line and the recording file", &|_, v| {
         f64::EPSILON * v.abs()
     });
+    // The same positions as --position flags instead of a labels file.
+    let dt_s = 0.01;
+    let flags: Vec<String> = rec
+        .dwells()
+        .iter()
+        .map(|d| {
+            let (a, b) = (d.rows[0], d.rows[d.rows.len() - 1]);
+            let heading = a.heading_deg.map_or("?".to_string(), |h| format!("{h:?}"));
+            format!("{:?},{:?},{:?},{:?},{heading}", a.t_s - dt_s / 2.0, b.t_s + dt_s / 2.0, a.pitch_deg, a.roll_deg)
+        })
+        .collect();
+    let out_flags = dir.path().join("out-flags.csv");
+    let mut cmd = sinscal();
+    cmd.args(["import", "columns"]).arg(&input).arg("--layout").arg(&layout_path).arg("--out").arg(&out_flags);
+    for f in &flags {
+        cmd.arg("--position").arg(f);
+    }
+    let run = cmd.output().unwrap();
+    assert!(run.status.success(), "{}", String::from_utf8_lossy(&run.stderr));
+    assert_same_rows(&Recording::read(&out_flags).unwrap().rows, &rec.rows, "--position flags", &|_, v| {
+        f64::EPSILON * v.abs()
+    });
     let missing = sinscal().args(["import", "columns"]).arg(&input).arg("--out").arg(&out).output().unwrap();
     assert_eq!(missing.status.code(), Some(2));
     assert!(String::from_utf8_lossy(&missing.stderr).contains("--layout"));

@@ -156,6 +156,10 @@ pub struct ImportArgs {
     /// columns: the layout file (TOML, docs/data.md#described-layouts).
     #[arg(long)]
     pub layout: Option<PathBuf>,
+    /// columns: a position as START_S,END_S,PITCH_DEG,ROLL_DEG[,HEADING_DEG] (heading empty or '?' = unknown),
+    /// instead of a labels file; repeat it for each position (numbered 1, 2, ... in order).
+    #[arg(long, value_name = "START_S,END_S,PITCH_DEG,ROLL_DEG[,HEADING_DEG]")]
+    pub position: Vec<String>,
     /// Static detection (imutk, columns without --labels): length of the sliding window, s.
     #[arg(long, default_value_t = StaticDetection::default().window_s)]
     pub static_window_s: f64,
@@ -196,6 +200,9 @@ impl ImportArgs {
         }
         if self.labels.is_some() && !matches!(self.format, Format::Imucal | Format::Columns) {
             return usage("--labels applies only to the imucal and columns formats".to_string());
+        }
+        if !self.position.is_empty() && (self.format != Format::Columns || self.labels.is_some()) {
+            return usage("--position applies only to the columns format, and not with --labels".to_string());
         }
         let d = self.static_detection();
         let positive = [d.window_s, d.init_static_s, d.threshold_factor, d.min_static_s];
@@ -261,9 +268,19 @@ fn run_columns(args: &ImportArgs) -> Result<Imported, InputError> {
     let layout_path = args.layout.as_deref().ok_or_else(|| InputError::file("sinscal import", "no --layout"))?;
     let layout_source = layout_path.display().to_string();
     let layout = Layout::parse(&read_text(layout_path)?, &layout_source)?;
-    let labels_source = args.labels.as_ref().map(|p| p.display().to_string());
+    let labels_source = match &args.labels {
+        Some(p) => Some(p.display().to_string()),
+        None if !args.position.is_empty() => Some("--position flags".to_string()),
+        None => None,
+    };
     let positions = match &args.labels {
         Some(p) => Positions::Labels(parse_labels(&read_text(p)?, &p.display().to_string())?),
+        None if !args.position.is_empty() => {
+            // The flags as the lines of a labels file (line k + 1 of it is the k-th --position).
+            let lines: Vec<&str> = args.position.iter().map(|p| p.as_str()).collect();
+            let text = format!("start_s,end_s,pitch_deg,roll_deg,heading_deg\n{}\n", lines.join("\n"));
+            Positions::Labels(parse_labels(&text, "--position")?)
+        }
         None => Positions::Detect(args.static_detection()),
     };
     let latitude_deg = option_latitude(args.latitude_deg, "--latitude-deg")?;
