@@ -211,13 +211,15 @@ pub fn seeds() -> Vec<(&'static str, Reader, Vec<u8>)> {
         data_counter: 7,
     };
     encode_burst(Model::Adis16505_2, &b, &mut burst);
-    // Two small MAT-files: little-endian and uncompressed (a 1x1 with a small-element name, a 3x2), and
+    // Small MAT-files: little-endian and uncompressed (a 1x1 with a small-element name, a 3x2), and
     // big-endian with compressed elements (MATLAB's default -v7 layout).
     use crate::io::import::mat::{write_mat, ByteOrder};
     let values = [0.25, -1.5, 3.0, 1e-3, 9.81, -0.0];
     let matrices: [crate::io::import::mat::NamedMatrix<'_>; 2] = [("t", 1, 1, &[2.5]), ("acc_counts", 3, 2, &values)];
     let mat = write_mat(&matrices, ByteOrder::Little, false).expect("the seed MAT-file is written");
     let mat_compressed = write_mat(&matrices, ByteOrder::Big, true).expect("the seed MAT-file is written");
+    // And a version 7.3 file (HDF5 behind MATLAB's user block), its datasets compressed as MATLAB writes them.
+    let mat_v73 = crate::io::import::mat::write_mat_v73(&matrices, true).expect("the seed MAT-file is written");
     vec![
         ("recording", read_recording as Reader, rec.to_csv().into_bytes()),
         ("recording-file", read_recording_file as Reader, rec.to_csv().into_bytes()),
@@ -234,5 +236,6 @@ pub fn seeds() -> Vec<(&'static str, Reader, Vec<u8>)> {
             read_labels as Reader,
             b"pos,start_s,end_s,pitch_deg,roll_deg,heading_deg\n1,0,4.5,0,-90,?\n2,5,9,90,0,12.5\n".to_vec(),
         ),
+        ("mat-v73", read_mat as Reader, mat_v73),
     ]
 }

@@ -37,8 +37,8 @@ fn imutk_mat_files_are_text_and_refused_as_such() {
     }
 }
 
-/// Every file of the data directory: a file with a level-5 MAT-file header must read (at least one finite
-/// matrix); every other one must be refused. Prints what each file is.
+/// Every file of the data directory: a file with a MAT-file header (level 5 or 7.3) must read (at least one
+/// finite matrix); every other one must be refused. Prints what each file is.
 #[test]
 fn every_shared_data_file_is_read_or_refused_as_what_it_is() {
     let Some(dir) = data_dir() else { return };
@@ -46,19 +46,20 @@ fn every_shared_data_file_is_read_or_refused_as_what_it_is() {
     files(&dir, &mut all);
     assert!(all.len() >= 3, "SINSCAL_DATA is set but holds {} files", all.len());
     let mut mat_files = 0;
+    let is_mat = |b: &[u8]| b.starts_with(b"MATLAB 5.0 MAT-file") || b.starts_with(b"MATLAB 7.3 MAT-file");
     for path in &all {
         let bytes = std::fs::read(path).unwrap();
         let name = path.strip_prefix(&dir).unwrap().display().to_string();
         match read_mat(&bytes, &name) {
             Ok(matrices) => {
-                assert!(bytes.starts_with(b"MATLAB 5.0 MAT-file"), "{name} read without a MAT-file header");
+                assert!(is_mat(&bytes), "{name} read without a MAT-file header");
                 mat_files += 1;
                 for m in matrices {
                     println!("{name}: '{}' {}x{}", m.name, m.rows, m.cols);
                 }
             }
             Err(e) => {
-                assert!(!bytes.starts_with(b"MATLAB 5.0 MAT-file"), "a MAT-file refused: {e}");
+                assert!(!is_mat(&bytes), "a MAT-file refused: {e}");
                 println!("{e}");
             }
         }

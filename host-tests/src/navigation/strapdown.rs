@@ -112,7 +112,7 @@ impl StaticNavigator {
         let c_new = mul(&mul(&rotation(w_in.map(|x| -x * dt_s)), &c_old), &rotation(rate_b_radps.map(|x| x * dt_s)));
         self.c_b_n = c_new;
         self.steps += 1;
-        if self.steps % 1000 == 0 {
+        if self.steps.is_multiple_of(1000) {
             self.c_b_n = orthonormalise(&self.c_b_n);
         }
 

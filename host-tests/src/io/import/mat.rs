@@ -1,7 +1,7 @@
 //! MATLAB MAT-files, level 5 (MathWorks' "MAT-File Format"; MATLAB's `-v6` and `-v7`, which is level 5 with
-//! compressed elements): [`read_mat`] reads every numeric 2-D real matrix of a file, [`write_mat_v5`] and
-//! [`write_mat`] write matrices (for tests, examples and fuzz seeds). docs/formats.md#mat-files says what is
-//! read, what is skipped and what is refused.
+//! compressed elements) and version 7.3 (HDF5, read by the submodule `v73`): [`read_mat`] reads every numeric
+//! 2-D real matrix of a file, [`write_mat_v5`], [`write_mat`] and [`write_mat_v73`] write matrices (for tests,
+//! examples and fuzz seeds). docs/formats.md#mat-files says what is read, what is skipped and what is refused.
 //!
 //! The layout: a 128-byte header (116 bytes of text starting `MATLAB 5.0 MAT-file`, an 8-byte subsystem offset,
 //! the version 0x0100 and the endian indicator, the bytes `IM` in a little-endian file and `MI` in a big-endian
@@ -17,6 +17,9 @@
 use std::io::{Read as _, Write as _};
 
 use crate::io::error::InputError;
+
+mod v73;
+pub use v73::write_mat_v73;
 
 /// Largest inflated size of one compressed element, bytes (2 GiB): a larger one is refused.
 pub const MAX_INFLATED_BYTES: usize = 1 << 31;
@@ -104,21 +107,35 @@ impl MatMatrix {
 }
 
 /// Every numeric 2-D real matrix of a level-5 MAT-file (the header text `MATLAB 5.0 MAT-file`; MATLAB's
-/// `-v6` and `-v7` files, compressed or not, either byte order), in file order. Numeric means the classes
+/// `-v6` and `-v7` files, compressed or not, either byte order), in file order, or of a version 7.3 MAT-file
+/// (the header text `MATLAB 7.3 MAT-file`, HDF5 from byte 512; `-v7.3`), in the order of its root group (by
+/// name in MATLAB's files: the submodule `v73` says how the variables are found and transposed). Numeric means the classes
 /// double, single and the eight integer classes (a logical array is uint8 and reads as 0 and 1); the values
 /// of every storage type are converted to f64 (64-bit integers beyond 2^53 round to the nearest f64).
 /// Other variables (char arrays, cells, structs, sparse and complex arrays, N-d arrays, objects, the unnamed
 /// subsystem data) are skipped, and named in the refusal when no matrix is left.
 ///
 /// Refused with a reason (`source` names the file in it): a file that is not a MAT-file (text, a version 4
-/// or a version 7.3 file, which is HDF5, are named as such), an element cut short or larger than the bytes
+/// file and an HDF5 file without MATLAB's header are named as such), HDF5 data that do not read, a dataset
+/// larger than the file can hold, an element cut short or larger than the bytes
 /// left, a compressed element that does not inflate or inflates beyond [`MAX_INFLATED_BYTES`], dimensions
 /// whose product overflows or disagrees with the number of values, and a NaN or infinite value (named by its
 /// variable, row and column: sinscal reads finite values only).
 pub fn read_mat(bytes: &[u8], source: &str) -> Result<Vec<MatMatrix>, InputError> {
+    if bytes.starts_with(V73_TEXT) {
+        if bytes.get(HDF5_SIGNATURE_OFFSET..HDF5_SIGNATURE_OFFSET + 8) != Some(HDF5_SIGNATURE) {
+            let reason = format!(
+                "a MATLAB 7.3 header without the HDF5 signature at byte {HDF5_SIGNATURE_OFFSET}: the file is cut \
+                 short or not a MAT-file ({} bytes)",
+                bytes.len()
+            );
+            return Err(InputError::file(source, reason));
+        }
+        let variables = v73::read_variables(bytes).map_err(|r| InputError::file(source, format!("MATLAB 7.3: {r}")))?;
+        return matrices_or_refused(variables, source);
+    }
     let order = header_byte_order(bytes).map_err(|reason| InputError::file(source, reason))?;
-    let mut matrices = Vec::new();
-    let mut skipped = Vec::new();
+    let mut variables = Vec::new();
     let mut cursor = Cursor { bytes, pos: HEADER_BYTES, order };
     while cursor.pos < bytes.len() {
         let at = cursor.pos;
@@ -127,7 +144,17 @@ pub fn read_mat(bytes: &[u8], source: &str) -> Result<Vec<MatMatrix>, InputError
         }
         let element = top_level_element(&mut cursor)
             .map_err(|reason| InputError::file(source, format!("element at byte {at}: {reason}")))?;
-        match element {
+        variables.push(element);
+    }
+    matrices_or_refused(variables, source)
+}
+
+/// The matrices among `variables`; refused when there is none, naming what was skipped.
+fn matrices_or_refused(variables: Vec<Variable>, source: &str) -> Result<Vec<MatMatrix>, InputError> {
+    let mut matrices = Vec::new();
+    let mut skipped = Vec::new();
+    for v in variables {
+        match v {
             Variable::Matrix(m) => matrices.push(m),
             Variable::Skipped(what) => skipped.push(what),
         }
@@ -350,8 +377,14 @@ fn variable(content: &[u8], order: ByteOrder) -> Result<Variable, String> {
     let at = c.pos;
     let real = c.element(true).map_err(|r| format!("'{name}': the real part at byte {at}: {r}"))?;
     let data = values(real.ty, real.data, order, count).map_err(|r| format!("'{name}' ({shape}): {r}"))?;
+    finite_or_refused(&name, rows, &data)?;
+    Ok(Variable::Matrix(MatMatrix { name, rows, cols, data }))
+}
+
+/// Refuses the first NaN or infinite value of a matrix of `rows` rows (column-major `data`), by place.
+fn finite_or_refused(name: &str, rows: usize, data: &[f64]) -> Result<(), String> {
     if let Some(i) = data.iter().position(|v| !v.is_finite()) {
-        let (row, col) = (i % rows, i / rows);
+        let (row, col) = (i % rows.max(1), i / rows.max(1));
         return Err(format!(
             "'{name}': the value at row {}, column {} is {}: sinscal reads finite values only",
             row + 1,
@@ -359,12 +392,12 @@ fn variable(content: &[u8], order: ByteOrder) -> Result<Variable, String> {
             data[i]
         ));
     }
-    Ok(Variable::Matrix(MatMatrix { name, rows, cols, data }))
+    Ok(())
 }
 
 /// The dimensions of an array: at least two, none negative.
 fn dimensions(bytes: &[u8], order: ByteOrder) -> Result<Vec<usize>, String> {
-    if bytes.len() % 4 != 0 || bytes.len() < 8 {
+    if !bytes.len().is_multiple_of(4) || bytes.len() < 8 {
         return Err(format!("dimensions of {} bytes: at least two 4-byte integers are needed", bytes.len()));
     }
     let c = Cursor { bytes, pos: 0, order };
@@ -398,7 +431,7 @@ fn values(ty: u32, bytes: &[u8], order: ByteOrder, count: usize) -> Result<Vec<f
         MI_DOUBLE | MI_INT64 | MI_UINT64 => 8,
         _ => return Err(format!("the real part has type {ty}, not a numeric type")),
     };
-    if bytes.len() % width != 0 || bytes.len() / width != count {
+    if !bytes.len().is_multiple_of(width) || bytes.len() / width != count {
         return Err(format!(
             "the dimensions give {count} values, the real part holds {} bytes ({} values of {width} bytes)",
             bytes.len(),
@@ -436,16 +469,16 @@ fn decode<const N: usize>(bytes: &[u8], big: bool, out: &mut Vec<f64>, f: impl F
 }
 
 /// The byte order of a level-5 MAT-file from its header; the refusal names what the bytes are instead
-/// (text, a version 4 or a version 7.3 MAT-file, a cut header).
+/// (text, a version 4 MAT-file, HDF5 without MATLAB's header, a cut header).
 fn header_byte_order(bytes: &[u8]) -> Result<ByteOrder, String> {
     if bytes.is_empty() {
         return Err("an empty file, not a MAT-file".to_string());
     }
     let hdf5_at_512 = bytes.get(HDF5_SIGNATURE_OFFSET..HDF5_SIGNATURE_OFFSET + 8) == Some(HDF5_SIGNATURE);
-    if bytes.starts_with(V73_TEXT) || hdf5_at_512 || bytes.starts_with(HDF5_SIGNATURE) {
-        return Err(format!(
-            "a MATLAB 7.3 MAT-file, which is an HDF5 file: sinscal does not read HDF5; {SAVE_V7_HINT}"
-        ));
+    if hdf5_at_512 || bytes.starts_with(HDF5_SIGNATURE) {
+        return Err("an HDF5 file without MATLAB's header (a version 7.3 MAT-file starts with the text 'MATLAB 7.3 \
+             MAT-file'): not a MAT-file"
+            .to_string());
     }
     if bytes.starts_with(V5_TEXT) {
         let Some(tail) = bytes.get(HEADER_TEXT_BYTES + 8..HEADER_BYTES) else {
@@ -469,7 +502,7 @@ fn header_byte_order(bytes: &[u8]) -> Result<ByteOrder, String> {
     if looks_like_v4(bytes) {
         return Err(format!(
             "a version 4 MAT-file (MATLAB 4 format: no 128-byte text header): sinscal reads level-5 MAT-files \
-             (versions 6 and 7); {SAVE_V7_HINT}"
+             (versions 6 and 7) and version 7.3; {SAVE_V7_HINT}"
         ));
     }
     let head = &bytes[..bytes.len().min(512)];
@@ -790,18 +823,22 @@ mod tests {
     }
 
     #[test]
-    fn version_7_3_and_hdf5_are_refused_with_the_way_out() {
-        let mut v73 =
+    fn version_7_3_is_read_and_a_bad_one_refused_with_a_reason() {
+        let v73 = write_mat_v73(&[("acc", 3, 2, &[1.0, 2.0, 3.0, 4.0, 5.0, 6.0])], true).unwrap();
+        assert!(v73.starts_with(V73_TEXT));
+        let read = read_mat(&v73, "test.mat").unwrap();
+        assert_same(&read, &[("acc", 3, 2, &[1.0, 2.0, 3.0, 4.0, 5.0, 6.0])]);
+        let mut garbage = v73[..520].to_vec();
+        garbage.resize(2048, 0x5a);
+        let e = refusal(&garbage);
+        assert!(e.contains("MATLAB 7.3: the HDF5 data do not read"), "{e}");
+        let mut header_only =
             b"MATLAB 7.3 MAT-file, Platform: GLNXA64, Created on: Mon Jan  1 00:00:00 2024 HDF5 schema 1.00 .".to_vec();
-        v73.resize(512, b' ');
-        v73.extend_from_slice(HDF5_SIGNATURE);
-        v73.resize(2048, 0);
+        header_only.resize(128, b' ');
+        assert!(refusal(&header_only).contains("without the HDF5 signature at byte 512"));
         let mut signature_only = vec![0u8; 512];
         signature_only.extend_from_slice(HDF5_SIGNATURE);
-        for bytes in [&v73[..], &v73[..128], &signature_only] {
-            let e = refusal(bytes);
-            assert!(e.contains("MATLAB 7.3") && e.contains("HDF5") && e.contains("'-v7'"), "{e}");
-        }
+        assert!(refusal(&signature_only).contains("an HDF5 file without MATLAB's header"));
     }
 
     #[test]

@@ -10,8 +10,8 @@
 //!   detected ([`detect_static_intervals`]) and levelled by their mean specific force, [`parse_imutk`].
 //!
 //! [`mat`] reads the numeric matrices of a MATLAB MAT-file (level 5: MATLAB's `-v6` and `-v7`, compressed or
-//! not), [`mat::read_mat`]; it refuses text files named `.mat` (such as imu_tk's) and names version 4 and 7.3
-//! files.
+//! not; version 7.3, HDF5), [`mat::read_mat`]; it refuses text files named `.mat` (such as imu_tk's) and names
+//! version 4 files.
 //!
 //! Every recording says where it came from in its header comments (`# source: ...`, `# source_format: ...`,
 //! `# latitude_source: ...`, `# attitude_source: ...`, and the nominal scales used). Malformed input is reported as
