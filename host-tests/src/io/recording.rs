@@ -163,13 +163,25 @@ impl Recording {
     /// (docs/formats.md#bad-input): the header's numbers within their bounds, every value finite, times strictly
     /// increasing, and `rate_hz` agreeing with them. Nothing is written when a rule is broken.
     pub fn write(&self, path: &Path) -> Result<(), InputError> {
-        let refused = |e: WriteError| e.writing(path);
-        let mut text = Vec::new();
-        let mut w =
-            RecordingWriter::new(&mut text, &self.header, self.has_gyro, RowSource::has_temp(self)).map_err(refused)?;
-        self.rows.iter().try_for_each(|r| w.row(r)).map_err(refused)?;
-        w.finish().map_err(refused)?;
-        std::fs::write(path, text).map_err(|e| InputError::io(path, e))
+        // Streamed through a buffer into a file beside `path`, renamed over it once every row was written and the
+        // writer's checks passed: a refused recording or an I/O error leaves `path` as it was, and the text is
+        // never whole in memory.
+        let name = path.file_name().map(|n| n.to_string_lossy().into_owned()).unwrap_or_default();
+        let partial = path.with_file_name(format!(".{name}.partial"));
+        let file = std::fs::File::create(&partial).map_err(|e| InputError::io(path, e))?;
+        let written = (|| {
+            let out = std::io::BufWriter::with_capacity(1 << 20, file);
+            let mut w = RecordingWriter::new(out, &self.header, self.has_gyro, RowSource::has_temp(self))?;
+            self.rows.iter().try_for_each(|r| w.row(r))?;
+            w.finish()?.into_inner().map_err(|e| WriteError::Io(e.into_error()))?.sync_all().map_err(WriteError::Io)
+        })();
+        let renamed = written
+            .map_err(|e| e.writing(path))
+            .and_then(|()| std::fs::rename(&partial, path).map_err(|e| InputError::io(path, e)));
+        if renamed.is_err() {
+            let _ = std::fs::remove_file(&partial);
+        }
+        renamed
     }
 
     /// The dwells, in order of first appearance of their label. Rows with the same non-zero label form
