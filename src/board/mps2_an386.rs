@@ -214,36 +214,7 @@ impl Pl022 {
 
     /// The operations of one transaction, stopping at the first failure.
     fn run(operations: &mut [Operation<'_, u8>]) -> Result<(), SpiError> {
-        for op in operations.iter_mut() {
-            match op {
-                Operation::Write(bytes) => {
-                    for &b in bytes.iter() {
-                        Self::transfer_byte(b)?;
-                    }
-                }
-                Operation::Read(bytes) => {
-                    for b in bytes.iter_mut() {
-                        *b = Self::transfer_byte(0)?;
-                    }
-                }
-                Operation::Transfer(r, w) => {
-                    // As long as the longer of the two: missing write bytes are 0, extra read bytes dropped.
-                    for i in 0..r.len().max(w.len()) {
-                        let received = Self::transfer_byte(w.get(i).copied().unwrap_or(0))?;
-                        if let Some(rb) = r.get_mut(i) {
-                            *rb = received;
-                        }
-                    }
-                }
-                Operation::TransferInPlace(bytes) => {
-                    for b in bytes.iter_mut() {
-                        *b = Self::transfer_byte(*b)?;
-                    }
-                }
-                Operation::DelayNs(ns) => CycleDelay.delay_ns(*ns),
-            }
-        }
-        Ok(())
+        crate::sensor::spi::run_operations(operations, Self::transfer_byte, |ns| CycleDelay.delay_ns(ns))
     }
 }
 

@@ -92,35 +92,7 @@ impl AdisSpi {
     }
 
     fn run(&mut self, operations: &mut [Operation<'_, u8>]) -> Result<(), AdisSpiError> {
-        for op in operations.iter_mut() {
-            match op {
-                Operation::Write(bytes) => {
-                    for &b in bytes.iter() {
-                        self.transfer_byte(b)?;
-                    }
-                }
-                Operation::Read(bytes) => {
-                    for b in bytes.iter_mut() {
-                        *b = self.transfer_byte(0)?;
-                    }
-                }
-                Operation::Transfer(r, w) => {
-                    for i in 0..r.len().max(w.len()) {
-                        let received = self.transfer_byte(w.get(i).copied().unwrap_or(0))?;
-                        if let Some(rb) = r.get_mut(i) {
-                            *rb = received;
-                        }
-                    }
-                }
-                Operation::TransferInPlace(bytes) => {
-                    for b in bytes.iter_mut() {
-                        *b = self.transfer_byte(*b)?;
-                    }
-                }
-                Operation::DelayNs(ns) => CycleDelay.delay_ns(*ns),
-            }
-        }
-        Ok(())
+        sinscal::sensor::spi::run_operations(operations, |b| self.transfer_byte(b), |ns| CycleDelay.delay_ns(ns))
     }
 }
 
