@@ -1,5 +1,5 @@
-//! Build script: for bare-metal targets with QEMU's board (feature `mps2-an386`) only, put `memory.x` on the linker search path and link with the
-//! cortex-m-rt and defmt scripts.
+//! Build script: for bare-metal targets with QEMU's board (feature `mps2-an386`) only, put `memory.x` on the
+//! linker search path and link with the cortex-m-rt and defmt scripts.
 //! Host builds (tests, the `sinscal` tool) are left untouched.
 use std::{env, fs, path::PathBuf};
 
