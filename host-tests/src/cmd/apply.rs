@@ -6,7 +6,7 @@ use std::path::{Path, PathBuf};
 
 use crate::io::calibration_model::{CalibrationModel, M3};
 use crate::io::error::InputError;
-use crate::io::recording::{RecordingFile, RecordingWriter, RowSource, WriteError};
+use crate::io::recording::{write_file, RecordingFile, RowSource, WriteError};
 use crate::model::synth::{DEG_PER_HOUR, MICRO_G};
 
 /// Arguments of `sinscal apply`.
@@ -46,20 +46,13 @@ pub fn run(args: Args) -> anyhow::Result<()> {
 /// recording has gyros (docs/conventions.md#sensor-model). The header keeps every key of the input and adds
 /// `calibration: <file name>` (`calibration_2`, `calibration_3`, ... when the input was compensated before).
 /// The rows go through one at a time into a scratch file beside `out`, renamed to `out` when every row is
-/// written: a refusal leaves no partial file. Returns the number of rows.
+/// written: a refusal leaves no partial file ([`write_file`]). Returns the number of rows.
 pub fn apply(rec: &impl RowSource, model: &CalibrationModel, out: &Path) -> Result<usize, InputError> {
     let refused = |e: WriteError| e.writing(out);
     let mut header = rec.header().clone();
     let key = calibration_key(&header.comments);
     header.comments.push(format!("{key}: {}", model.source));
-    let partial = out.with_file_name(format!(
-        ".{}.partial",
-        out.file_name().map_or("out".into(), |n| n.to_string_lossy().into_owned())
-    ));
-    let file = std::fs::File::create(&partial).map_err(|e| InputError::io(out, e))?;
-    let written = (|| {
-        let mut writer = RecordingWriter::new(std::io::BufWriter::new(file), &header, rec.has_gyro(), rec.has_temp())
-            .map_err(refused)?;
+    write_file(out, &header, rec.has_gyro(), rec.has_temp(), |writer| {
         let mut rows = 0;
         rec.for_each_row(&mut |row| {
             let mut row = row.clone();
@@ -71,14 +64,8 @@ pub fn apply(rec: &impl RowSource, model: &CalibrationModel, out: &Path) -> Resu
             rows += 1;
             writer.row(&row).map_err(refused)
         })?;
-        writer.finish().map_err(refused)?;
-        std::fs::rename(&partial, out).map_err(|e| InputError::io(out, e))?;
         Ok(rows)
-    })();
-    if written.is_err() {
-        let _ = std::fs::remove_file(&partial);
-    }
-    written
+    })
 }
 
 /// `calibration`, or the first free `calibration_N` (N = 2, 3, ...) when the header already names one.

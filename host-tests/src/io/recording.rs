@@ -161,27 +161,11 @@ impl Recording {
 
     /// Writes the recording to a file, after the reader's rules on what would be written
     /// (docs/formats.md#bad-input): the header's numbers within their bounds, every value finite, times strictly
-    /// increasing, and `rate_hz` agreeing with them. Nothing is written when a rule is broken.
+    /// increasing, and `rate_hz` agreeing with them. Nothing is written when a rule is broken ([`write_file`]).
     pub fn write(&self, path: &Path) -> Result<(), InputError> {
-        // Streamed through a buffer into a file beside `path`, renamed over it once every row was written and the
-        // writer's checks passed: a refused recording or an I/O error leaves `path` as it was, and the text is
-        // never whole in memory.
-        let name = path.file_name().map(|n| n.to_string_lossy().into_owned()).unwrap_or_default();
-        let partial = path.with_file_name(format!(".{name}.partial"));
-        let file = std::fs::File::create(&partial).map_err(|e| InputError::io(path, e))?;
-        let written = (|| {
-            let out = std::io::BufWriter::with_capacity(1 << 20, file);
-            let mut w = RecordingWriter::new(out, &self.header, self.has_gyro, RowSource::has_temp(self))?;
-            self.rows.iter().try_for_each(|r| w.row(r))?;
-            w.finish()?.into_inner().map_err(|e| WriteError::Io(e.into_error()))?.sync_all().map_err(WriteError::Io)
-        })();
-        let renamed = written
-            .map_err(|e| e.writing(path))
-            .and_then(|()| std::fs::rename(&partial, path).map_err(|e| InputError::io(path, e)));
-        if renamed.is_err() {
-            let _ = std::fs::remove_file(&partial);
-        }
-        renamed
+        write_file(path, &self.header, self.has_gyro, RowSource::has_temp(self), |w| {
+            self.rows.iter().try_for_each(|r| w.row(r)).map_err(|e| e.writing(path))
+        })
     }
 
     /// The dwells, in order of first appearance of their label. Rows with the same non-zero label form
@@ -338,6 +322,34 @@ impl<W: std::io::Write> RecordingWriter<W> {
         self.out.flush().map_err(WriteError::Io)?;
         Ok(self.out)
     }
+}
+
+/// Writes a recording file at `path`: `rows` writes the rows through the writer (with the reader's rules), which
+/// streams them through a buffer into a scratch file beside `path`, renamed to `path` once every row is written and
+/// the writer's closing checks pass. A refusal or an I/O error leaves `path` as it was and no scratch file, and the
+/// text is never whole in memory. Returns what `rows` returns.
+pub fn write_file<T>(
+    path: &Path,
+    header: &Header,
+    has_gyro: bool,
+    with_temp: bool,
+    rows: impl FnOnce(&mut RecordingWriter<std::io::BufWriter<std::fs::File>>) -> Result<T, InputError>,
+) -> Result<T, InputError> {
+    let name = path.file_name().map_or("out".into(), |n| n.to_string_lossy().into_owned());
+    let partial = path.with_file_name(format!(".{name}.partial"));
+    let file = std::fs::File::create(&partial).map_err(|e| InputError::io(path, e))?;
+    let written = (|| {
+        let out = std::io::BufWriter::with_capacity(1 << 20, file);
+        let mut writer = RecordingWriter::new(out, header, has_gyro, with_temp).map_err(|e| e.writing(path))?;
+        let value = rows(&mut writer)?;
+        writer.finish().map_err(|e| e.writing(path))?;
+        std::fs::rename(&partial, path).map_err(|e| InputError::io(path, e))?;
+        Ok(value)
+    })();
+    if written.is_err() {
+        let _ = std::fs::remove_file(&partial);
+    }
+    written
 }
 
 /// The reader's rules on a header to be written: latitude, height, rate and gravity within their bounds.
