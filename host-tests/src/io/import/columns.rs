@@ -164,7 +164,7 @@ fn read_text_records(
     let Storage::Text { delimiter, skip_lines, comment } = &layout.storage else {
         return Err(InputError::file(&sources.join(" + "), "not a text layout"));
     };
-    let wanted = slots(layout);
+    let wanted = layout.slots();
     let mut records: Vec<RawRecord> = Vec::new();
     let mut lines: Vec<usize> = Vec::new();
     let mut first_field = 0usize;
@@ -233,19 +233,6 @@ fn split_fields(line: &str, delimiter: Option<char>) -> Vec<&str> {
     }
 }
 
-/// The slots of [`RawRecord`] and the fields that fill them.
-fn slots(layout: &Layout) -> Vec<(usize, usize)> {
-    let mut out = Vec::with_capacity(7);
-    if let TimeSource::Field { field, .. } | TimeSource::Samples { field, .. } = layout.time {
-        out.push((0, field));
-    }
-    for i in 0..3 {
-        out.push((1 + i, layout.gyro.fields[i]));
-        out.push((4 + i, layout.accel.fields[i]));
-    }
-    out
-}
-
 /// A binary layout's record format.
 struct BinarySpec {
     kind: BinaryType,
@@ -271,7 +258,7 @@ fn read_binary_records(
     }
     let size = spec.kind.bytes();
     let record_bytes = size * spec.fields;
-    let wanted = slots(layout);
+    let wanted = layout.slots();
     let mut buf = vec![0u8; record_bytes];
     let mut records = Vec::new();
     loop {
@@ -345,7 +332,7 @@ fn read_mat_records(
             ))
         }
     };
-    let wanted = slots(layout);
+    let wanted = layout.slots();
     if let Some((_, f)) = wanted.iter().find(|(_, f)| *f >= matrix.cols) {
         return Err(InputError::file(
             source,
@@ -418,23 +405,23 @@ fn check_gravity(rows: &[Row], accel: &Channel, rate_hz: f64, source: &str) -> R
     let norm = |f: [f64; 3]| (f[0] * f[0] + f[1] * f[1] + f[2] * f[2]).sqrt();
     let mut norms: Vec<f64> = rows.iter().step_by(step).map(|r| norm(r.force_b_mps2)).collect();
     let mid = norms.len() / 2;
-    let (_, median, _) = norms.select_nth_unstable_by(mid, f64::total_cmp);
-    let median = *median;
-    let g = STANDARD_GRAVITY_MPS2;
-    if (0.5 * g..=2.0 * g).contains(&median) {
+    let (_, median_mps2, _) = norms.select_nth_unstable_by(mid, f64::total_cmp);
+    let median_mps2 = *median_mps2;
+    let g_mps2 = STANDARD_GRAVITY_MPS2;
+    if (0.5 * g_mps2..=2.0 * g_mps2).contains(&median_mps2) {
         return Ok(());
     }
-    let hint = if !accel.increments && (0.5 * g / rate_hz..=2.0 * g / rate_hz).contains(&median) {
+    let hint = if !accel.increments && (0.5 * g_mps2 / rate_hz..=2.0 * g_mps2 / rate_hz).contains(&median_mps2) {
         "it is g times the sample interval: the values look like velocity increments (set increments = true)"
             .to_string()
-    } else if accel.increments && (0.5 * g * rate_hz..=2.0 * g * rate_hz).contains(&median) {
+    } else if accel.increments && (0.5 * g_mps2 * rate_hz..=2.0 * g_mps2 * rate_hz).contains(&median_mps2) {
         "it is g divided by the sample interval: the values look like rates (set increments = false)".to_string()
     } else {
         "check [accel] unit, scale and offset".to_string()
     };
     Err(InputError::file(
         source,
-        format!("the median |specific force| is {median:.6} m/s^2, not a gravity near {g} m/s^2: {hint}"),
+        format!("the median |specific force| is {median_mps2:.6} m/s^2, not a gravity near {g_mps2} m/s^2: {hint}"),
     ))
 }
 

@@ -261,7 +261,7 @@ impl Layout {
         let axes = axes(file.axes.as_ref()).map_err(bad)?;
         let layout = Layout { storage, time, gyro, accel, axes, latitude_deg, gravity_mps2, height_m };
         if let Storage::Binary { fields, .. } = layout.storage {
-            if let Some(f) = layout.fields_used().into_iter().find(|&f| f >= fields) {
+            if let Some((_, f)) = layout.slots().into_iter().find(|&(_, f)| f >= fields) {
                 return Err(bad(format!(
                     "field {f} is beyond the binary record of {fields} fields (0 to {})",
                     fields - 1
@@ -271,14 +271,17 @@ impl Layout {
         Ok(layout)
     }
 
-    /// Every field the layout reads: time (if a field), gyro x y z, accel x y z.
-    pub fn fields_used(&self) -> Vec<usize> {
+    /// Every field the layout reads, with its slot in a record's seven values (0 time, if a field; 1 to 3 gyro
+    /// x y z; 4 to 6 accel x y z): `(slot, field)`.
+    pub fn slots(&self) -> Vec<(usize, usize)> {
         let mut out = Vec::with_capacity(7);
         if let TimeSource::Field { field, .. } | TimeSource::Samples { field, .. } = self.time {
-            out.push(field);
+            out.push((0, field));
         }
-        out.extend(self.gyro.fields);
-        out.extend(self.accel.fields);
+        for i in 0..3 {
+            out.push((1 + i, self.gyro.fields[i]));
+            out.push((4 + i, self.accel.fields[i]));
+        }
         out
     }
 
