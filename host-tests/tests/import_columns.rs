@@ -335,10 +335,6 @@ fn bad_layouts_are_refused_with_a_reason() {
     assert!(err.contains("gyro2"), "{err}");
 }
 
-fn data_file(dir: &Path, set: &str, name: &str) -> PathBuf {
-    dir.join(set).join(name)
-}
-
 fn layout_file(name: &str) -> String {
     std::fs::read_to_string(Path::new(env!("CARGO_MANIFEST_DIR")).join("layouts").join(name)).unwrap()
 }
@@ -347,7 +343,7 @@ fn layout_file(name: &str) -> String {
 fn real_data_the_three_data_sets_import_through_the_generic_path_as_through_their_own() {
     let Some(data) = common::data_dir() else { return };
     // PSINS: one pose, its attitude from the header (heading = -yaw = 90.6 deg).
-    let imu = data_file(&data, "psins-lasergyro", "lasergyro.imu");
+    let imu = common::data_file(&data, "psins-lasergyro/lasergyro.imu");
     let dedicated = import_psins(&imu, None).unwrap().recording;
     let generic = import(
         &[&imu],
@@ -369,8 +365,8 @@ fn real_data_the_three_data_sets_import_through_the_generic_path_as_through_thei
         )
     );
     // imucal: the six labelled poses of its JSON list as a labels file (sample indices / 102.4 Hz).
-    let csv = data_file(&data, "imucal-ferraris", "example_ferraris_session.csv");
-    let list = data_file(&data, "imucal-ferraris", "example_ferraris_session_list.json");
+    let csv = common::data_file(&data, "imucal-ferraris/example_ferraris_session.csv");
+    let list = common::data_file(&data, "imucal-ferraris/example_ferraris_session_list.json");
     let dedicated = import_imucal(&csv, &list, None).unwrap().recording;
     let mut labels = "pos,start_s,end_s,pitch_deg,roll_deg,heading_deg\n".to_string();
     for r in parse_imucal_labels(&std::fs::read_to_string(&list).unwrap(), "list").unwrap() {
@@ -392,8 +388,10 @@ fn real_data_the_three_data_sets_import_through_the_generic_path_as_through_thei
         (dedicated.header.latitude_deg, dedicated.header.rate_hz)
     );
     // imu_tk: two files side by side, counts, static intervals found with the dedicated importer's defaults.
-    let (acc, gyro) =
-        (data_file(&data, "imu-tk-xsens", "xsens_acc.mat"), data_file(&data, "imu-tk-xsens", "xsens_gyro.mat"));
+    let (acc, gyro) = (
+        common::data_file(&data, "imu-tk-xsens/xsens_acc.mat"),
+        common::data_file(&data, "imu-tk-xsens/xsens_gyro.mat"),
+    );
     let dedicated = import_imutk(&acc, &gyro, None, &StaticDetection::default()).unwrap().recording;
     let layout = Layout::parse(&layout_file("imutk.toml"), "imutk.toml").unwrap();
     let import = ColumnsImport {
