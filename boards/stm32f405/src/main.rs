@@ -166,6 +166,7 @@ mod app {
                 None
             }
         };
+        let (sampler, samples) = sampler.unzip();
         if sampler.is_none() {
             // No IMU, no data ready: SysTick ticks at the sample rate instead, for the watchdog and the main loop
             // (the link still answers; the status shows no samples).
@@ -178,10 +179,6 @@ mod app {
         if !watchdog::start() {
             defmt::warn!("watchdog: the prescaler and reload were not applied within the bound");
         }
-        let (sampler, samples) = match sampler {
-            Some((s, c)) => (Some(s), Some(c)),
-            None => (None, None),
-        };
         let main = MainLoopParts { tx, rx_queue: rx_consumer, samples, flash: dp.FLASH };
         (Shared { stats: SamplingStats::default() }, Local { sampler, rx, rx_queue: rx_producer, main: Some(main) })
     }

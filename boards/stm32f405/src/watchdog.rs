@@ -56,22 +56,20 @@ pub struct Setting {
 /// The finest setting for `period_us` at the nominal LSI: the smallest prescaler whose reload fits 12 bits.
 pub const fn setting_for(period_us: u32) -> Setting {
     let mut code = 0;
-    while code < 6 {
+    loop {
         let counts = (LSI_NOMINAL_HZ as u64 * period_us as u64) / (1_000_000 * (4u64 << code));
-        if counts <= RELOAD_MAX as u64 {
-            break;
+        if counts <= RELOAD_MAX as u64 || code == 6 {
+            let reload = if counts > RELOAD_MAX as u64 {
+                RELOAD_MAX
+            } else if counts == 0 {
+                1
+            } else {
+                counts as u32
+            };
+            return Setting { prescaler_code: code, reload: reload as u16 };
         }
         code += 1;
     }
-    let counts = (LSI_NOMINAL_HZ as u64 * period_us as u64) / (1_000_000 * (4u64 << code));
-    let reload = if counts > RELOAD_MAX as u64 {
-        RELOAD_MAX
-    } else if counts == 0 {
-        1
-    } else {
-        counts as u32
-    };
-    Setting { prescaler_code: code, reload: reload as u16 }
 }
 
 /// The normal setting: 20 ms is /4 and a reload of 160.
@@ -79,6 +77,8 @@ pub const NORMAL: Setting = setting_for(PERIOD_US);
 /// The setting while the flash erases.
 pub const ERASE: Setting = setting_for(ERASE_PERIOD_US);
 const _: () = assert!(NORMAL.prescaler_code == 0 && NORMAL.reload == 160);
+// 4 s is prescaler 32 (code 3) and a reload of 4000.
+const _: () = assert!(ERASE.prescaler_code == 3 && ERASE.reload == 4000);
 
 fn iwdg() -> &'static pac::iwdg::RegisterBlock {
     // SAFETY: the IWDG's registers are only written here; each write is a single store.
