@@ -46,21 +46,8 @@ fn the_stm32f405_firmware_answers_its_link_as_the_same_device() {
     let mut board = boot_stm32f405(&elf).unwrap();
     let c = &mut board.client;
     // A request that arrives before the board has enabled its USART is lost, as on the chip (the USART drops
-    // what it receives while disabled), or only its first bytes are, and the rest is refused as a broken frame:
-    // ask again, a second at a time, for at most 20 s.
-    c.timeout = std::time::Duration::from_secs(1);
-    let mut identity = c.identify();
-    for _ in 0..20 {
-        let booting = matches!(
-            identity,
-            Err(LinkError::Timeout(..) | LinkError::Refused { code: ErrorCode::Frame | ErrorCode::Crc, .. })
-        );
-        if !booting {
-            break;
-        }
-        identity = c.identify();
-    }
-    c.timeout = std::time::Duration::from_secs(20);
+    // what it receives while disabled), or only its first bytes are, and the rest is refused as a broken frame.
+    let identity = c.identify_after_boot(std::time::Duration::from_secs(20));
     let identity = identity.unwrap();
     println!("STM32F405 in QEMU: {identity:?}");
     // The QEMU board's instrument, on the same core: the same identity.

@@ -185,6 +185,27 @@ impl<T: Read + Write> Client<T> {
         parse(&mut r).ok_or(LinkError::Malformed("identify"))
     }
 
+    /// Identify, asked again once a second for at most `total` while the device may still be booting: a request
+    /// that arrives before its serial port is enabled is lost (no reply), and one whose first bytes are lost is
+    /// refused as a broken frame. Any other answer ends the wait. The reply timeout is restored afterwards.
+    pub fn identify_after_boot(&mut self, total: Duration) -> Result<Identity, LinkError> {
+        let timeout = self.timeout;
+        self.timeout = Duration::from_secs(1);
+        let deadline = Instant::now() + total;
+        let identity = loop {
+            let answer = self.identify();
+            let booting = matches!(
+                answer,
+                Err(LinkError::Timeout(..) | LinkError::Refused { code: ErrorCode::Frame | ErrorCode::Crc, .. })
+            );
+            if !booting || Instant::now() >= deadline {
+                break answer;
+            }
+        };
+        self.timeout = timeout;
+        identity
+    }
+
     /// Status.
     pub fn status(&mut self) -> Result<Status, LinkError> {
         let body = self.request("status", kind::STATUS, &[])?;
