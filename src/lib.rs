@@ -21,9 +21,9 @@
 //! | [`sensor`] | [`ImuSample`], the [`ImuSource`] trait, the ADIS driver |
 //! | [`calib`] | prefilter, dwell statistics, alignment, the bias solution, the calibration, the compensation of samples |
 //! | [`run`] | the data-ready handler and its queue, the calibration sequence |
-//! | [`rig`] | replay of a recording through the firmware path, semihosting (emulation and tests) |
-//! | [`instrument`] | the device: the host link (frames, messages), the calibration record in NOR flash, compensation; it sends and stores the replay formats' configuration and outcome |
-//! | `board` | register-level code of the board, the panic handler and exit (target only, feature `mps2-an386`, on by default) |
+//! | [`instrument`] | the device: the host link (frames, messages), the wire formats (configuration, outcome, record: [`instrument::wire`]), the calibration record in NOR flash, compensation |
+//! | `rig` | replay of a recording through the firmware path, exact synthetic data, semihosting (emulation and tests; feature `rig`) |
+//! | `board` | register-level code of QEMU's board, the panic handler and the defmt logger (target only, feature `mps2-an386`, not a default) |
 //!
 //! ## Data flow
 //! On the firmware, at 100 Hz:
@@ -40,7 +40,8 @@
 //!    refining in passes.
 //!
 //! On the workstation, `sinscal calibrate` runs steps 2 and 3 on a recording's rows directly, or the whole
-//! path through [`rig::replay`] (`--on host`), or the firmware itself in QEMU (`--on qemu`).
+//! path through the test rig's replay (`rig::replay`, feature `rig`: `--on host`), or the firmware itself in
+//! QEMU (`--on qemu`).
 #![cfg_attr(not(test), no_std)]
 #![deny(missing_docs)]
 #![deny(unsafe_code)]
@@ -52,6 +53,7 @@ pub mod calib;
 pub mod instrument;
 pub mod math;
 pub mod nav;
+#[cfg(feature = "rig")]
 pub mod rig;
 pub mod run;
 pub mod sensor;

@@ -5,8 +5,9 @@
 use embedded_storage::nor_flash::{ErrorType, NorFlash, NorFlashErrorKind, ReadNorFlash};
 use sinscal::instrument::device::Device;
 use sinscal::instrument::link::{encode_frame, Frame, FrameReceiver, MAX_WIRE_BYTES};
-use sinscal::instrument::message::{kind, BodyReader, DeviceState, ErrorCode};
+use sinscal::instrument::message::{kind, DeviceState, ErrorCode};
 use sinscal::instrument::store::RecordStore;
+use sinscal::instrument::wire::Reader as BodyReader;
 use sinscal::rig::replay::{read_header, ReplayDevice};
 use sinscal::run::sampling::{on_data_ready, process_next, QueueItem, SamplingStats, QUEUE_SLOTS};
 use sinscal::sensor::adis::{Adis, Model, BURST32_LEN};
@@ -97,11 +98,11 @@ impl Bench {
     fn refused(&mut self, k: u8, body: &[u8]) -> ErrorCode {
         let (rk, b) = self.ask(k, body);
         assert_eq!(rk, kind::ERROR, "request {k:#04x} accepted");
-        ErrorCode::from_u8(b[0]).unwrap()
+        ErrorCode::from_code(b[0]).unwrap()
     }
 
     fn state(&mut self) -> DeviceState {
-        DeviceState::from_u8(self.ok(kind::STATUS, &[])[0]).unwrap()
+        DeviceState::from_code(self.ok(kind::STATUS, &[])[0]).unwrap()
     }
 
     fn read_all(&mut self, k: u8) -> Vec<u8> {
@@ -120,7 +121,7 @@ impl Bench {
     /// compensated samples the stream would send.
     fn feed(&mut self, replay: &[u8], frames: usize) -> Vec<[f32; 6]> {
         let header = read_header(&mut &replay[..]).unwrap();
-        let start = sinscal::rig::replay::replay_header_bytes(header.schedule.len());
+        let start = sinscal::rig::replay::replay_header_bytes(header.configuration.schedule.len());
         let mut imu = Adis::new(ReplayDevice::new(Model::Adis16505_2), Model::Adis16505_2);
         imu.init(&mut sinscal::rig::replay::NoDelay).unwrap();
         let mut queue: heapless::spsc::Queue<QueueItem, QUEUE_SLOTS> = heapless::spsc::Queue::new();
@@ -187,8 +188,8 @@ fn every_request_and_refusal_in_order_then_the_record_at_the_next_boot() {
     let result = b.read_all(kind::READ_RESULT);
     // The same bytes as the replay's outcome on the host path (every counter, every dwell, the solution).
     let host = sinscal::rig::replay::run_replay(&replay[..], |_| {}).unwrap();
-    let mut expected = vec![0u8; sinscal::rig::replay::MAX_OUTCOME_BYTES];
-    let n = sinscal::rig::replay::encode_outcome(&host, &mut expected).unwrap();
+    let mut expected = vec![0u8; sinscal::instrument::wire::outcome::MAX_BYTES];
+    let n = host.encode(&mut expected).unwrap();
     assert_eq!(result, &expected[..n], "the device's result is the host replay's outcome, byte for byte");
     let stored = b.ok(kind::STORE, &[]);
     let erases = u32::from_le_bytes(stored[5..9].try_into().unwrap());

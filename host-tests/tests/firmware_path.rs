@@ -17,7 +17,7 @@ fn example(seconds: f64) -> Recording {
 /// Offset of frame k's record in a replay file.
 fn frame_offset(file: &[u8], k: usize) -> usize {
     let header = read_header(&mut &file[..]).unwrap();
-    let header_len = sinscal::rig::replay::replay_header_bytes(header.schedule.len());
+    let header_len = sinscal::rig::replay::replay_header_bytes(header.configuration.schedule.len());
     header_len + k * (1 + BURST32_LEN)
 }
 
@@ -161,9 +161,9 @@ fn corrupted_frames_are_counted_and_the_dwell_survives_a_few() {
     assert_eq!(outcome.positions[0].summary.samples, 2000 - 4);
     assert_eq!(outcome.positions[1].summary.samples, 2000);
     // The outcome file carries every counter, and decodes to the same outcome.
-    let mut bytes = vec![0u8; sinscal::rig::replay::MAX_OUTCOME_BYTES];
-    let n = sinscal::rig::replay::encode_outcome(&outcome, &mut bytes).unwrap();
-    let decoded = sinscal::rig::replay::decode_outcome(&outcome.header, &bytes[..n]).unwrap();
+    let mut bytes = vec![0u8; sinscal::instrument::wire::outcome::MAX_BYTES];
+    let n = outcome.encode(&mut bytes).unwrap();
+    let decoded = sinscal::instrument::wire::outcome::Outcome::decode(&outcome.configuration, &bytes[..n]).unwrap();
     assert_eq!(decoded.sampling, s);
     assert_eq!(decoded, outcome);
 }
@@ -329,17 +329,25 @@ impl sinscal::sensor::source::ImuSource for Level {
 
 /// A one-position sequence as the replay runs it (no settling, dwells as long as the table says).
 fn level_sequence() -> sinscal::run::sequence::CalibrationSequence {
-    use sinscal::rig::replay::{replay_sequence_settings, ReplaySolve};
-    let solve = ReplaySolve {
-        estimator: sinscal::run::sequence::Estimator::Angles,
+    use sinscal::instrument::wire::codes::EstimatorCode;
+    use sinscal::instrument::wire::configuration::{Configuration, RestLimits, Thresholds};
+    let site = sinscal::nav::earth::Site::with_normal_gravity(45.0f32.to_radians(), 0.0);
+    let schedule = [sinscal::nav::frames::Attitude::from_degrees(0.0, 0.0, 0.0)];
+    let configuration = Configuration {
+        imu: sinscal::sensor::adis::Model::Adis16505_2,
+        estimator: EstimatorCode::Angles,
+        terms: sinscal::calib::channels::Model::BIASES,
+        site,
+        schedule: heapless::Vec::from_slice(&schedule).unwrap(),
+        labels: heapless::Vec::from_slice(&[1]).unwrap(),
+        unknown_headings: 0,
+        prefilter: sinscal::calib::dwell::Prefilter::None,
         dwell_value: sinscal::calib::align::DwellValue::Mean,
         max_passes: 1,
         estimate_reference_offset: false,
-        unknown_headings: 0,
+        rest: RestLimits::sequence_default(),
     };
-    let settings = replay_sequence_settings(sinscal::calib::dwell::Prefilter::None, solve);
-    let site = sinscal::nav::earth::Site::with_normal_gravity(45.0f32.to_radians(), 0.0);
-    let schedule = [sinscal::nav::frames::Attitude::from_degrees(0.0, 0.0, 0.0)];
+    let settings = configuration.sequence_settings(Thresholds::REPLAY);
     sinscal::run::sequence::CalibrationSequence::new(&schedule, site, settings).unwrap()
 }
 
@@ -406,7 +414,7 @@ fn unknown_headings_beyond_the_32nd_dwell_reach_the_sequence() {
     let (file, plan) = replay_file(&rec, &Options::default()).unwrap();
     assert_eq!(plan.dwells.len(), 36);
     let header = read_header(&mut &file[..]).unwrap();
-    assert_eq!(header.settings.unknown_headings, (1 << 3) | (1 << 34));
+    assert_eq!(header.configuration.unknown_headings, (1 << 3) | (1 << 34));
     // The firmware path solves the same session as the direct path: every heading estimate agrees.
     let direct = calibrate(&rec, &Options::default()).unwrap();
     let replayed = calibrate_on_host(&rec, &Options::default()).unwrap();

@@ -6,7 +6,8 @@
 mod common;
 
 use sinscal::calib::session::{session_estimator, SessionDwell};
-use sinscal::rig::replay::{decode_outcome, encode_outcome, read_header, run_replay, MAX_OUTCOME_BYTES};
+use sinscal::instrument::wire::outcome::{Outcome, MAX_BYTES as MAX_OUTCOME_BYTES};
+use sinscal::rig::replay::{read_header, run_replay};
 use sinscal::run::sequence::{Estimator, SequenceSolution};
 use sinscal_host::calibration::firmware_path::{calibrate_on_host, replay_file};
 use sinscal_host::calibration::qemu::{
@@ -52,7 +53,7 @@ fn firmware_in_qemu_and_the_host_replay_agree_to_the_bit() {
         file[header_len + 1000 * record + 1 + 4] ^= 0x01;
         let host = run_replay(&file[..], |_| {}).unwrap();
         let mut bytes = vec![0u8; MAX_OUTCOME_BYTES];
-        let n = encode_outcome(&host, &mut bytes).unwrap();
+        let n = host.encode(&mut bytes).unwrap();
         let (target, log) = run_firmware(&elf, &file).expect("firmware runs");
         assert_eq!(target, bytes[..n].to_vec(), "outcome bytes differ; firmware log:\n{log}");
         assert!(host.result.is_some());
@@ -60,17 +61,21 @@ fn firmware_in_qemu_and_the_host_replay_agree_to_the_bit() {
         // The general estimator solved on the Cortex-M4F is the host core's solution of the firmware's own
         // dwell statistics, to the bit.
         let header = read_header(&mut &file[..]).unwrap();
-        let decoded = decode_outcome(&header, &target).unwrap();
+        let decoded = Outcome::decode(&header.configuration, &target).unwrap();
         if let (Some(SequenceSolution::Channels(on_target)), Estimator::Channels(settings)) =
-            (&decoded.result, header.settings.estimator)
+            (&decoded.result, header.configuration.sequence_estimator())
         {
-            let dwells = decoded.positions.iter().enumerate().zip(&header.schedule).map(|((k, p), a)| SessionDwell {
-                attitude: *a,
-                heading_known: header.settings.unknown_headings & (1 << k) == 0,
-                summary: &p.summary,
+            let dwells = decoded.positions.iter().enumerate().zip(&header.configuration.schedule).map(|((k, p), a)| {
+                SessionDwell {
+                    attitude: *a,
+                    heading_known: header.configuration.unknown_headings & (1 << k) == 0,
+                    summary: &p.summary,
+                }
             });
-            let on_x86 =
-                session_estimator(dwells, header.site, settings, options.dwell_value).unwrap().solve().unwrap();
+            let on_x86 = session_estimator(dwells, header.configuration.site, settings, options.dwell_value)
+                .unwrap()
+                .solve()
+                .unwrap();
             let bits = |c: &sinscal::calib::channels::ChannelSolution| {
                 let mut b = c.parameters_si.map(f32::to_bits).to_vec();
                 b.extend(c.covariance_si.iter().flatten().map(|x| x.to_bits()));

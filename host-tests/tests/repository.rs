@@ -29,7 +29,7 @@ fn files(dir: &Path, exts: &[&str], out: &mut Vec<PathBuf>) {
 }
 
 /// The core's layers, lowest first: a module may use only layers listed before it (and itself).
-const LAYERS: [&str; 8] = ["math", "nav", "sensor", "calib", "run", "rig", "instrument", "board"];
+const LAYERS: [&str; 8] = ["math", "nav", "sensor", "calib", "run", "instrument", "rig", "board"];
 
 #[test]
 fn core_layers_use_only_the_layers_below_them() {

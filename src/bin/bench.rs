@@ -27,9 +27,11 @@ mod firmware {
     use sinscal::board::exit;
     use sinscal::calib::compensation::Compensation;
     use sinscal::calib::dwell::Prefilter;
+    use sinscal::instrument::wire::codes::EstimatorCode;
+    use sinscal::instrument::wire::configuration::{Configuration, DeviceConfiguration, RestLimits, Thresholds};
     use sinscal::nav::earth::Site;
     use sinscal::nav::frames::Attitude;
-    use sinscal::rig::replay::{replay_sequence_settings, NoDelay, ReplayDevice, ReplaySolve};
+    use sinscal::rig::replay::{NoDelay, ReplayDevice};
     use sinscal::run::sampling::{
         on_data_ready, process_next, QueueItem, SamplingStats, QUEUE_SLOTS, TABLE_IN_POSITION,
     };
@@ -46,15 +48,33 @@ mod firmware {
         start.wrapping_sub(end) & 0x00FF_FFFF
     }
 
-    /// The solve settings of the measured sequences (the per-sample path does not depend on them).
-    fn single_pass() -> ReplaySolve {
-        ReplaySolve {
-            estimator: Estimator::Angles,
+    /// The six positions of Table 1 at 45.7796 N with the general estimator's default terms, one pass of the
+    /// angle method, and `prefilter`.
+    fn table1_configuration(estimator: EstimatorCode, prefilter: Prefilter) -> Configuration {
+        let mut c = Configuration {
+            imu: Model::Adis16505_2,
+            estimator,
+            terms: sinscal::calib::session::DEFAULT_MODEL,
+            site: Site { latitude_rad: 45.7796f32.to_radians(), gravity_mps2: 9.8063 },
+            schedule: heapless::Vec::new(),
+            labels: heapless::Vec::new(),
+            unknown_headings: 0,
+            prefilter,
             dwell_value: sinscal::calib::align::DwellValue::Mean,
             max_passes: 1,
             estimate_reference_offset: true,
-            unknown_headings: 0,
+            rest: RestLimits::sequence_default(),
+        };
+        for (k, p) in sinscal::calib::solve::TABLE1_POSITIONS_DEG.iter().enumerate() {
+            let _ = c.schedule.push(Attitude::from_degrees(p[0], p[1], p[2]));
+            let _ = c.labels.push(k as u16 + 1);
         }
+        c
+    }
+
+    /// The settings of the measured sequences (the per-sample path does not depend on the solve's).
+    fn single_pass(prefilter: Prefilter) -> sinscal::run::sequence::SequenceSettings {
+        table1_configuration(EstimatorCode::Angles, prefilter).sequence_settings(Thresholds::REPLAY)
     }
 
     fn measure(prefilter: Prefilter) -> (u32, u32, u32) {
@@ -62,7 +82,7 @@ mod firmware {
         let mut imu = Adis::new(ReplayDevice::new(model), model);
         let _ = imu.init(&mut NoDelay);
         let site = Site::with_normal_gravity(45.7796f32.to_radians(), 0.0);
-        let settings = replay_sequence_settings(prefilter, single_pass());
+        let settings = single_pass(prefilter);
         let schedule = [Attitude::from_degrees(0.0, 0.0, 0.0)];
         let Ok(mut sequence) = CalibrationSequence::new(&schedule, site, settings) else { return (0, 0, 0) };
         let mut queue: Queue<QueueItem, QUEUE_SLOTS> = Queue::new();
@@ -146,7 +166,7 @@ mod firmware {
         let mut imu = Adis::new(ReplayDevice::new(model), model);
         let _ = imu.init(&mut NoDelay);
         let site = Site::with_normal_gravity(45.7796f32.to_radians(), 0.0);
-        let settings = replay_sequence_settings(Prefilter::paper(), single_pass());
+        let settings = single_pass(Prefilter::paper());
         let schedule = [Attitude::from_degrees(0.0, 0.0, 0.0)];
         let Ok(mut sequence) = CalibrationSequence::new(&schedule, site, settings) else { return (0, 0) };
         let mut queue: Queue<QueueItem, QUEUE_SLOTS> = Queue::new();
@@ -169,23 +189,18 @@ mod firmware {
         (isr, processing)
     }
 
-    /// A configure body: the general estimator with its default terms, the paper's prefilter, the six positions
-    /// of Table 1 at 45.7796 N, and a replay's thresholds.
+    /// A configure body: the general estimator with its default terms, the paper's prefilter (a = 1), the six
+    /// positions of Table 1 at 45.7796 N, and thresholds of 1,000-sample dwells without settling.
     fn configuration(out: &mut [u8]) -> usize {
-        use sinscal::instrument::message::BodyWriter;
-        let mut w = BodyWriter::new(out);
-        w.u8(1).u8(1).f32(45.7796f32.to_radians()).f32(9.8063).u16(6);
-        w.u16(sinscal::rig::replay::terms_bits(sinscal::calib::session::DEFAULT_MODEL));
-        w.u8(1).u8(0).u8(6).u8(1).f32(1.0).f32(1.0);
-        let rest = sinscal::run::sequence::SequenceSettings::default();
-        w.f32(rest.max_force_error_mps2).f32(rest.max_gravity_angle_rad).f32(rest.max_rate_radps);
-        for (k, p) in sinscal::calib::solve::TABLE1_POSITIONS_DEG.iter().enumerate() {
-            for angle_deg in p {
-                w.f32(angle_deg.to_radians());
-            }
-            w.u16(k as u16 + 1).u16(0);
-        }
-        w.u32(0).u32(u32::MAX).u32(1000);
+        let prefilter = Prefilter::HmmKf {
+            gyro: sinscal::calib::prefilter::PrefilterSettings::paper_gyro().with_a(1.0),
+            accel: sinscal::calib::prefilter::PrefilterSettings::paper_accel().with_a(1.0),
+        };
+        let mut c = table1_configuration(EstimatorCode::General, prefilter);
+        c.max_passes = 6;
+        let thresholds = Thresholds { settle_samples: 0, dwell_samples: u32::MAX, min_dwell_samples: 1000 };
+        let mut w = sinscal::instrument::wire::Writer::new(out);
+        DeviceConfiguration { configuration: c, thresholds }.encode(&mut w);
         w.written().unwrap_or(0)
     }
 

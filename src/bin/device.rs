@@ -70,7 +70,7 @@ mod firmware {
         let path = arg_path(2).filter(|p| p.as_c_str().to_bytes() != b"-")?;
         let mut source = FileSource::open(&path).unwrap_or_else(|| fail("cannot open the replay file"));
         let header = read_header(&mut source).unwrap_or_else(|_| fail("replay file unreadable"));
-        Some(Frames { source, model: header.model, left: header.frames })
+        Some(Frames { source, model: header.configuration.imu, left: header.frames })
     }
 
     /// What the data-ready interrupt would do for one frame: serve it, read it, latch the table signal.

@@ -18,7 +18,8 @@ mod firmware {
     use defmt_full as defmt;
     use sinscal::board::exit;
     use sinscal::instrument::main_loop::log_event;
-    use sinscal::rig::replay::{encode_outcome, run_replay, MAX_OUTCOME_BYTES};
+    use sinscal::instrument::wire::outcome::MAX_BYTES as MAX_OUTCOME_BYTES;
+    use sinscal::rig::replay::run_replay;
     use sinscal::rig::semihost::FileSource;
     use sinscal::run::sequence::SequenceSolution;
 
@@ -80,7 +81,7 @@ mod firmware {
         // Single-threaded firmware: the only reference to OUT.
         #[allow(static_mut_refs)]
         let bytes = unsafe { &mut OUT };
-        let Ok(n) = encode_outcome(&outcome, bytes) else { fail("outcome too large") };
+        let Ok(n) = outcome.encode(bytes) else { fail("outcome too large") };
         if !sinscal::rig::semihost::write_file(&output, &bytes[..n]) {
             fail("cannot write the outcome file");
         }

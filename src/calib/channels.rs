@@ -162,6 +162,20 @@ impl Model {
         Term::ALL.iter().filter(|t| t.is_gyro()).fold(self, |m, t| m.without(*t))
     }
 
+    /// The model as stored in replay files, configurations and records: bit i is `Term::ALL[i]`.
+    pub fn stored_bits(self) -> u16 {
+        Term::ALL.iter().enumerate().fold(0, |bits, (i, t)| if self.contains(*t) { bits | 1 << i } else { bits })
+    }
+
+    /// The model of [`Model::stored_bits`]; `None` when a bit names no term.
+    pub fn from_stored_bits(bits: u16) -> Option<Model> {
+        let model = Term::ALL
+            .iter()
+            .enumerate()
+            .fold(Model::EMPTY, |m, (i, t)| if bits & (1 << i) != 0 { m.with(*t) } else { m });
+        (model.stored_bits() == bits).then_some(model)
+    }
+
     /// Whether parameter `index` belongs to a term of the model.
     pub fn has_parameter(self, index: usize) -> bool {
         Term::ALL.iter().any(|t| {

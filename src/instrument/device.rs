@@ -10,23 +10,20 @@ use embedded_storage::nor_flash::NorFlash;
 use heapless::Vec;
 
 use super::link::{encode_frame, Frame, FrameError, MAX_BODY_BYTES};
-use super::message::{kind, BodyReader, BodyWriter, DeviceState, ErrorCode, MAX_CHUNK_BYTES, MAX_NOTE_BYTES};
-use super::record::{Record, RecordHead, RECORD_HEAD_BYTES, RECORD_VERSION};
+use super::message::{kind, DeviceState, ErrorCode, MAX_CHUNK_BYTES, MAX_NOTE_BYTES};
 use super::store::{RecordInfo, RecordStore};
+use super::wire::codes::{ConfigurationRefusal, ImuCode};
+use super::wire::configuration::{DeviceConfiguration, MAX_DEVICE_BYTES, THRESHOLD_BYTES};
+use super::wire::outcome::{encode_part, OutcomeView};
+use super::wire::record::{Record, RecordHead, RECORD_HEAD_BYTES, RECORD_VERSION};
+use super::wire::{Reader as BodyReader, Writer as BodyWriter};
 use crate::calib::compensation::{self, Compensation};
 use crate::calib::solve::MAX_POSITIONS;
-use crate::rig::replay::{encode_outcome_part, read_configuration, OutcomeView, ReplayHeader};
 use crate::run::sampling::{QueueItem, SamplingStats};
 use crate::run::sequence::{feed_sequence, CalibrationSequence, Event, SequenceFailure, SequenceSolution};
 use crate::sensor::adis::Model;
 use crate::sensor::sample::ImuSample;
 
-/// Longest configuration body, bytes: the fixed fields, a schedule of [`MAX_POSITIONS`] (16 each), and the
-/// thresholds (12).
-pub const MAX_CONFIGURATION_BYTES: usize =
-    crate::rig::replay::CONFIGURATION_FIXED_BYTES + 16 * MAX_POSITIONS + THRESHOLD_BYTES;
-/// Bytes of the thresholds at the end of a configuration body.
-pub const THRESHOLD_BYTES: usize = 12;
 /// The firmware's version, as the identify reply reports it (16 bytes, NUL-padded).
 pub const FIRMWARE_VERSION: &str = concat!("sinscal ", env!("CARGO_PKG_VERSION"));
 
@@ -61,8 +58,8 @@ pub enum Action {
 pub struct Device<F: NorFlash> {
     model: Model,
     state: DeviceState,
-    configuration: Vec<u8, MAX_CONFIGURATION_BYTES>,
-    header: Option<ReplayHeader>,
+    configuration: Vec<u8, MAX_DEVICE_BYTES>,
+    configured: Option<DeviceConfiguration>,
     note: Vec<u8, MAX_NOTE_BYTES>,
     sequence: Option<CalibrationSequence>,
     run: RunCounters,
@@ -112,7 +109,7 @@ impl<F: NorFlash> Device<F> {
             model,
             state: DeviceState::Idle,
             configuration: Vec::new(),
-            header: None,
+            configured: None,
             note: Vec::new(),
             // A sequence built once, here, and started again in place by every start (a second one on the
             // stack would cost tens of kilobytes); until a start it holds no result and is never reported.
@@ -337,7 +334,7 @@ impl<F: NorFlash> Device<F> {
             kind::START => exact(0).and_then(|()| self.start(sampling)),
             kind::ABORT => {
                 exact(0)?;
-                self.state = if self.header.is_some() { DeviceState::Configured } else { DeviceState::Idle };
+                self.state = if self.configured.is_some() { DeviceState::Configured } else { DeviceState::Idle };
                 Ok((0, Action::None))
             }
             kind::STATUS => exact(0).and_then(|()| self.status(sampling, out)),
@@ -362,10 +359,7 @@ impl<F: NorFlash> Device<F> {
         version[..n].copy_from_slice(&v[..n]);
         let mut w = BodyWriter::new(out);
         w.u8(super::link::PROTOCOL_VERSION).bytes(&version);
-        w.u8(match self.model {
-            Model::Adis16470 => 0,
-            Model::Adis16505_2 => 1,
-        });
+        w.u8(ImuCode::of(self.model).code());
         w.u16(RECORD_VERSION).u16(MAX_POSITIONS as u16).u16(MAX_CHUNK_BYTES as u16).u16(MAX_NOTE_BYTES as u16);
         w.u32(self.store.max_payload() as u32);
         body_of(w.written())
@@ -376,31 +370,21 @@ impl<F: NorFlash> Device<F> {
         if self.state == DeviceState::Running {
             return Err((ErrorCode::Busy, 0));
         }
-        let refused = |detail| Err((ErrorCode::Configuration, detail));
-        if body.len() < THRESHOLD_BYTES || body.len() > MAX_CONFIGURATION_BYTES {
-            return refused(1);
+        let refused = |why: ConfigurationRefusal| Err((ErrorCode::Configuration, why.code()));
+        if body.len() < THRESHOLD_BYTES || body.len() > MAX_DEVICE_BYTES {
+            return refused(ConfigurationRefusal::Length);
         }
-        let (settings_bytes, threshold_bytes) = body.split_at(body.len() - THRESHOLD_BYTES);
-        let mut source = settings_bytes;
-        let Ok(mut header) = read_configuration(&mut source) else { return refused(2) };
-        if !source.is_empty() {
-            return refused(2);
+        let Ok(configured) = DeviceConfiguration::decode(body) else { return refused(ConfigurationRefusal::Content) };
+        if configured.configuration.imu != self.model {
+            return refused(ConfigurationRefusal::Imu);
         }
-        if header.model != self.model {
-            return refused(4);
-        }
-        let mut t = BodyReader::new(threshold_bytes);
-        let (Some(settle), Some(dwell), Some(min_dwell)) = (t.u32(), t.u32(), t.u32()) else { return refused(1) };
-        header.settings.settle_samples = settle;
-        header.settings.dwell_samples = dwell;
-        header.settings.min_dwell_samples = min_dwell;
-        if CalibrationSequence::check(&header.schedule, &header.settings).is_err() {
-            return refused(3);
+        if CalibrationSequence::check(&configured.configuration.schedule, &configured.sequence_settings()).is_err() {
+            return refused(ConfigurationRefusal::Sequence);
         }
         self.configuration.clear();
         // The length is checked above against the capacity.
         let _ = self.configuration.extend_from_slice(body);
-        self.header = Some(header);
+        self.configured = Some(configured);
         // The last result, if any, is no longer offered: the state says configured.
         self.state = DeviceState::Configured;
         Ok((0, Action::None))
@@ -428,11 +412,12 @@ impl<F: NorFlash> Device<F> {
         if self.state == DeviceState::Running {
             return Err((ErrorCode::Busy, 0));
         }
-        let Some(header) = &self.header else { return Err((ErrorCode::NotConfigured, 0)) };
-        let refused = (ErrorCode::Configuration, 3);
+        let Some(configured) = &self.configured else { return Err((ErrorCode::NotConfigured, 0)) };
+        let refused = (ErrorCode::Configuration, ConfigurationRefusal::Sequence.code());
         // The sequence built at boot, started again in place (never a second one on the stack).
         let sequence = self.sequence.as_mut().ok_or(refused)?;
-        sequence.restart(&header.schedule, header.site, header.settings).map_err(|_| refused)?;
+        let c = &configured.configuration;
+        sequence.restart(&c.schedule, c.site, configured.sequence_settings()).map_err(|_| refused)?;
         self.run = RunCounters { sampling_at_start: *sampling, ..RunCounters::default() };
         self.state = DeviceState::Running;
         Ok((0, Action::Started))
@@ -442,9 +427,9 @@ impl<F: NorFlash> Device<F> {
     fn status(&self, sampling: &SamplingStats, out: &mut [u8]) -> Reply {
         let mut w = BodyWriter::new(out);
         w.u8(self.state as u8);
-        let (position, positions) = match (&self.sequence, &self.header) {
-            (Some(s), Some(h)) => (s.position() as u16, h.schedule.len() as u16),
-            (None, Some(h)) => (0, h.schedule.len() as u16),
+        let (position, positions) = match (&self.sequence, &self.configured) {
+            (Some(s), Some(c)) => (s.position() as u16, c.configuration.schedule.len() as u16),
+            (None, Some(c)) => (0, c.configuration.schedule.len() as u16),
             _ => (0, 0),
         };
         w.u16(position).u16(positions);
@@ -465,7 +450,7 @@ impl<F: NorFlash> Device<F> {
         let outcome = self.outcome().ok_or((ErrorCode::NoResult, 0))?;
         let (head, part) = out.split_at_mut(8);
         let part = &mut part[..MAX_CHUNK_BYTES];
-        let total = encode_outcome_part(&outcome, offset, part);
+        let total = encode_part(&outcome, offset, part);
         let n = total.saturating_sub(offset).min(MAX_CHUNK_BYTES);
         BodyWriter::new(head).u32(total as u32).u32(offset as u32);
         Ok((8 + n, Action::None))

@@ -4,6 +4,8 @@
 //! A reply carries its request's sequence number and the request's kind with bit 7 set, or the kind
 //! [`kind::ERROR`] with an [`ErrorCode`]. Streamed samples come unasked, with kind [`kind::SAMPLE`].
 
+use super::wire::codes::wire_codes;
+
 /// Kind bytes of the frames.
 pub mod kind {
     /// Identify the device: firmware, IMU, record version, limits.
@@ -36,50 +38,38 @@ pub mod kind {
     pub const ERROR: u8 = 0xFF;
 }
 
-/// Why the device refused a request (the body of an error reply: code u8, detail u32).
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
-#[cfg_attr(feature = "defmt", derive(defmt::Format))]
-#[repr(u8)]
-pub enum ErrorCode {
-    /// The frame's CRC did not match (detail: 0).
-    Crc = 1,
-    /// The frame's stuffing was broken or it was too short or too long (a truncated frame).
-    Frame = 2,
-    /// Another protocol version (detail: the version received).
-    Version = 3,
-    /// An unknown kind (detail: the kind).
-    UnknownKind = 4,
-    /// The body's length or content does not fit the kind (detail: the body's length).
-    Body = 5,
-    /// The configuration is not one the core can run (detail: 1 schedule empty or longer than the core holds,
-    /// 2 an unknown code, 3 the sequence refused it).
-    Configuration = 6,
-    /// Not while a calibration runs (configure, store, erase).
-    Busy = 7,
-    /// Start without a configuration.
-    NotConfigured = 8,
-    /// No result yet (read result, store).
-    NoResult = 9,
-    /// The record would not fit the storage slot (detail: its length in bytes).
-    TooLarge = 10,
-    /// The flash failed (detail: 0).
-    Flash = 11,
-    /// Nothing is stored (read record).
-    NothingStored = 12,
-    /// The note is longer than the device keeps (detail: the largest length accepted).
-    NoteTooLong = 13,
-    /// The solution gives no usable compensation (a term beyond what the compensation accepts); nothing stored.
-    NoCompensation = 14,
-}
-
-impl ErrorCode {
-    /// The code of a byte.
-    pub fn from_u8(code: u8) -> Option<ErrorCode> {
-        use ErrorCode::*;
-        [Crc, Frame, Version, UnknownKind, Body, Configuration, Busy, NotConfigured, NoResult, TooLarge, Flash]
-            .into_iter()
-            .chain([NothingStored, NoteTooLong, NoCompensation])
-            .find(|c| *c as u8 == code)
+wire_codes! {
+    /// Why the device refused a request (the body of an error reply: code u8, detail u32).
+    pub enum ErrorCode: u8 {
+        /// The frame's CRC did not match (detail: 0).
+        Crc = 1,
+        /// The frame's stuffing was broken or it was too short or too long (a truncated frame).
+        Frame = 2,
+        /// Another protocol version (detail: the version received).
+        Version = 3,
+        /// An unknown kind (detail: the kind).
+        UnknownKind = 4,
+        /// The body's length or content does not fit the kind (detail: the body's length).
+        Body = 5,
+        /// The configuration is not one the core can run (detail: a
+        /// [`ConfigurationRefusal`](super::wire::codes::ConfigurationRefusal) code).
+        Configuration = 6,
+        /// Not while a calibration runs (configure, store, erase).
+        Busy = 7,
+        /// Start without a configuration.
+        NotConfigured = 8,
+        /// No result yet (read result, store).
+        NoResult = 9,
+        /// The record would not fit the storage slot (detail: its length in bytes).
+        TooLarge = 10,
+        /// The flash failed (detail: 0).
+        Flash = 11,
+        /// Nothing is stored (read record).
+        NothingStored = 12,
+        /// The note is longer than the device keeps (detail: the largest length accepted).
+        NoteTooLong = 13,
+        /// The solution gives no usable compensation (a term beyond what the compensation accepts); nothing stored.
+        NoCompensation = 14,
     }
 }
 
@@ -104,98 +94,6 @@ impl core::fmt::Display for ErrorCode {
     }
 }
 
-/// Writes little-endian fields into a slice; remembers whether everything fitted.
-pub struct BodyWriter<'a> {
-    out: &'a mut [u8],
-    at: usize,
-    fits: bool,
-}
-
-impl<'a> BodyWriter<'a> {
-    /// A writer at the start of `out`.
-    pub fn new(out: &'a mut [u8]) -> BodyWriter<'a> {
-        BodyWriter { out, at: 0, fits: true }
-    }
-    /// Appends bytes.
-    pub fn bytes(&mut self, b: &[u8]) -> &mut Self {
-        match self.out.get_mut(self.at..self.at + b.len()) {
-            Some(dst) => {
-                dst.copy_from_slice(b);
-                self.at += b.len();
-            }
-            None => self.fits = false,
-        }
-        self
-    }
-    /// Appends a byte.
-    pub fn u8(&mut self, v: u8) -> &mut Self {
-        self.bytes(&[v])
-    }
-    /// Appends a u16.
-    pub fn u16(&mut self, v: u16) -> &mut Self {
-        self.bytes(&v.to_le_bytes())
-    }
-    /// Appends a u32.
-    pub fn u32(&mut self, v: u32) -> &mut Self {
-        self.bytes(&v.to_le_bytes())
-    }
-    /// Appends an f32 (its bits).
-    pub fn f32(&mut self, v: f32) -> &mut Self {
-        self.bytes(&v.to_bits().to_le_bytes())
-    }
-    /// The bytes written, or `None` if something did not fit.
-    pub fn written(&self) -> Option<usize> {
-        self.fits.then_some(self.at)
-    }
-}
-
-/// Reads little-endian fields from a body; `None` past its end.
-pub struct BodyReader<'a> {
-    body: &'a [u8],
-}
-
-impl<'a> BodyReader<'a> {
-    /// A reader at the start of `body`.
-    pub fn new(body: &'a [u8]) -> BodyReader<'a> {
-        BodyReader { body }
-    }
-    /// The next `n` bytes.
-    pub fn bytes(&mut self, n: usize) -> Option<&'a [u8]> {
-        if self.body.len() < n {
-            return None;
-        }
-        let (head, tail) = self.body.split_at(n);
-        self.body = tail;
-        Some(head)
-    }
-    /// The next byte.
-    pub fn u8(&mut self) -> Option<u8> {
-        Some(self.bytes(1)?[0])
-    }
-    /// The next u16.
-    pub fn u16(&mut self) -> Option<u16> {
-        let b = self.bytes(2)?;
-        Some(u16::from_le_bytes([b[0], b[1]]))
-    }
-    /// The next u32.
-    pub fn u32(&mut self) -> Option<u32> {
-        let b = self.bytes(4)?;
-        Some(u32::from_le_bytes([b[0], b[1], b[2], b[3]]))
-    }
-    /// The next f32.
-    pub fn f32(&mut self) -> Option<f32> {
-        Some(f32::from_bits(self.u32()?))
-    }
-    /// The bytes not yet read.
-    pub fn rest(&mut self) -> &'a [u8] {
-        core::mem::take(&mut self.body)
-    }
-    /// Whether every byte was read.
-    pub fn is_empty(&self) -> bool {
-        self.body.is_empty()
-    }
-}
-
 /// Largest part of a result or record in one reply, bytes (with its total and offset, within
 /// [`MAX_BODY_BYTES`](super::link::MAX_BODY_BYTES)).
 pub const MAX_CHUNK_BYTES: usize = 1024;
@@ -203,27 +101,18 @@ pub const MAX_CHUNK_BYTES: usize = 1024;
 /// Longest provenance note the device keeps with a record, bytes.
 pub const MAX_NOTE_BYTES: usize = 2048;
 
-/// The state of the device in a status reply.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
-#[cfg_attr(feature = "defmt", derive(defmt::Format))]
-#[repr(u8)]
-pub enum DeviceState {
-    /// Waiting for a configuration.
-    Idle = 0,
-    /// Configured, not started.
-    Configured = 1,
-    /// The calibration sequence runs.
-    Running = 2,
-    /// The sequence ended with a result.
-    Solved = 3,
-    /// The sequence ended without a result (the result holds the failure).
-    Failed = 4,
-}
-
-impl DeviceState {
-    /// The state of a byte.
-    pub fn from_u8(v: u8) -> Option<DeviceState> {
-        use DeviceState::*;
-        [Idle, Configured, Running, Solved, Failed].into_iter().find(|s| *s as u8 == v)
+wire_codes! {
+    /// The state of the device in a status reply.
+    pub enum DeviceState: u8 {
+        /// Waiting for a configuration.
+        Idle = 0,
+        /// Configured, not started.
+        Configured = 1,
+        /// The calibration sequence runs.
+        Running = 2,
+        /// The sequence ended with a result.
+        Solved = 3,
+        /// The sequence ended without a result (the result holds the failure).
+        Failed = 4,
     }
 }

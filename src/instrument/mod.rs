@@ -5,7 +5,8 @@
 //! - [`link`]: frames on the serial line (COBS, CRC, bounded).
 //! - [`message`]: the messages in those frames (kinds, error codes, body fields).
 //! - [`store`]: the power-safe A/B store of the calibration record in NOR flash (docs/storage.md).
-//! - [`record`]: the calibration record's layout (compensation, configuration, note, outcome).
+//! - [`wire`]: the wire formats, each defined once with its encode and decode: the configuration, the
+//!   outcome, the calibration record (compensation, configuration, note, outcome), and every code as an enum.
 //! - [`device`]: the device behind the link (requests, the calibration, the record, compensation).
 //! - `main_loop` (target only): the instrument's main loop and its link port, the same on every board.
 
@@ -15,5 +16,5 @@ pub mod link;
 #[cfg(target_os = "none")]
 pub mod main_loop;
 pub mod message;
-pub mod record;
 pub mod store;
+pub mod wire;

@@ -91,6 +91,24 @@ impl SamplingStats {
         ]
     }
 
+    /// The counters of [`SamplingStats::counters`]' order.
+    pub fn from_counters(c: [u32; 10]) -> SamplingStats {
+        let [events, readings, queue_full, bus_errors, checksum_errors, stalled_counters, status_flags, dead_bus_frames, missed_samples, queue_high_water] =
+            c;
+        SamplingStats {
+            events,
+            readings,
+            queue_full,
+            bus_errors,
+            checksum_errors,
+            stalled_counters,
+            status_flags,
+            dead_bus_frames,
+            missed_samples,
+            queue_high_water,
+        }
+    }
+
     /// The counts since `start` (an earlier snapshot of the same counters); the high-water mark is this one's.
     pub fn since(&self, start: &SamplingStats) -> SamplingStats {
         SamplingStats {

@@ -2,12 +2,12 @@
 //! ADIS16505-2 burst frames, quantised to the device's 32-bit output LSB, with the turntable's position
 //! signal; and the calibration of such a replay on the host (`--on host`) or in QEMU (`--on qemu`).
 
-use sinscal::calib::align::{position_angles, DwellValue};
-use sinscal::calib::dwell::Prefilter;
-use sinscal::rig::replay::{
-    decode_outcome, encode_outcome, estimator_code, read_header, run_replay, terms_bits, ByteSource, ReplayError,
-    ReplayOutcome, MAGIC, MAX_OUTCOME_BYTES, VERSION,
-};
+use sinscal::calib::align::position_angles;
+use sinscal::instrument::wire::codes::EstimatorCode;
+use sinscal::instrument::wire::configuration::{Configuration, RestLimits};
+use sinscal::instrument::wire::outcome::{Outcome, MAX_BYTES as MAX_OUTCOME_BYTES};
+use sinscal::instrument::wire::Writer;
+use sinscal::rig::replay::{read_header, replay_header_bytes, run_replay, ByteSource, ReplayError, ReplayHeader};
 use sinscal::run::sequence::{SequenceFailure, SequenceSolution};
 use sinscal::sensor::adis::{encode_burst, Burst, Model, BURST32_LEN, I16F16};
 
@@ -19,7 +19,6 @@ use crate::io::dwell_tally::{DwellTallies, DwellTally};
 use crate::io::error::InputError;
 use crate::io::recording::{DwellAttitude, RowSource};
 use crate::io::ScratchFile;
-use sinscal::calib::channels::ChannelSettings;
 use sinscal::calib::session::session_estimator;
 use sinscal::run::sequence::Estimator;
 use std::io::Write as _;
@@ -93,50 +92,34 @@ pub fn replay_parts(
         .map_err(|_| InputError::file(source, format!("{rows} rows: the replay file counts its frames in 32 bits")))?;
     let (site, _) = site_of(rec.header());
     let estimator = match options.method {
-        Method::Angles => Estimator::Angles,
-        Method::Channels => Estimator::Channels(ChannelSettings {
-            model: options.model,
-            use_gyro: rec.has_gyro(),
-            ..ChannelSettings::default()
-        }),
+        Method::Angles => EstimatorCode::Angles,
+        Method::Channels if rec.has_gyro() => EstimatorCode::General,
+        Method::Channels => EstimatorCode::GeneralWithoutGyros,
     };
-    let (prefilter_code, [a_gyro, a_accel]) = match prefilter {
-        Prefilter::None => (0u8, [1.0f32, 1.0]),
-        Prefilter::HmmKf { gyro, accel } => (1, [gyro.a, accel.a]),
+    let mut configuration = Configuration {
+        imu: REPLAY_MODEL,
+        estimator,
+        terms: options.model,
+        site,
+        schedule: Default::default(),
+        labels: Default::default(),
+        unknown_headings: 0,
+        prefilter,
+        dwell_value: options.dwell_value,
+        max_passes: options.max_passes.min(255) as u8,
+        estimate_reference_offset: options.estimate_reference_offset,
+        // The limits of rest: the force tolerance asked for, the sequence's default gravity angle and rate.
+        rest: RestLimits { force_error_max_mps2: options.rest_force_tolerance_mps2, ..RestLimits::sequence_default() },
     };
-    let mut head = Vec::with_capacity(64 + 16 * dwells.len());
-    head.extend_from_slice(&MAGIC);
-    head.extend_from_slice(&VERSION.to_le_bytes());
-    head.push(1); // ADIS16505-2
-    head.push(estimator_code(&estimator));
-    head.extend_from_slice(&site.latitude_rad.to_le_bytes());
-    head.extend_from_slice(&site.gravity_mps2.to_le_bytes());
-    head.extend_from_slice(&(dwells.len() as u16).to_le_bytes());
-    head.extend_from_slice(&terms_bits(options.model).to_le_bytes());
-    head.push(prefilter_code);
-    head.push(match options.dwell_value {
-        DwellValue::Mean => 0,
-        DwellValue::Settled => 1,
-    });
-    head.push(options.max_passes.min(255) as u8);
-    head.push(options.estimate_reference_offset as u8);
-    head.extend_from_slice(&a_gyro.to_le_bytes());
-    head.extend_from_slice(&a_accel.to_le_bytes());
-    // The limits of rest: the force tolerance asked for, the sequence's default gravity angle and rate.
-    let rest = sinscal::run::sequence::SequenceSettings::default();
-    for v in [options.rest_force_tolerance_mps2, rest.max_gravity_angle_rad, rest.max_rate_radps] {
-        head.extend_from_slice(&v.to_le_bytes());
-    }
     let mut attitudes = Vec::new();
-    for d in &dwells {
+    for (k, d) in dwells.iter().enumerate() {
         // The angle method needs every heading; the general estimator estimates an unknown one.
         let att = match options.method {
             Method::Angles => d.attitude_with_heading(source, "the angle method")?.0,
             Method::Channels => d.attitude(source)?,
         };
-        for v in [att.pitch_deg, att.roll_deg, att.heading_deg.unwrap_or(0.0)] {
-            head.extend_from_slice(&(v as f32).to_radians().to_le_bytes());
-        }
+        let [pitch_rad, roll_rad, heading_rad] =
+            [att.pitch_deg, att.roll_deg, att.heading_deg.unwrap_or(0.0)].map(|v| (v as f32).to_radians());
         // The replay file holds a label in 16 bits: a larger one would be clipped and two labels could
         // collide.
         let label = u16::try_from(d.pos).map_err(|_| {
@@ -146,11 +129,17 @@ pub fn replay_parts(
                 format!("position label {} does not fit the firmware path's 16 bits (at most 65535)", d.pos),
             )
         })?;
-        head.extend_from_slice(&label.to_le_bytes());
-        head.extend_from_slice(&u16::from(att.heading_deg.is_none()).to_le_bytes());
+        // At most MAX_POSITIONS dwells (write_frames refuses more): both pushes fit.
+        let _ = configuration.schedule.push(sinscal::nav::frames::Attitude { pitch_rad, roll_rad, heading_rad });
+        let _ = configuration.labels.push(label);
+        if att.heading_deg.is_none() {
+            configuration.unknown_headings |= 1u64 << k;
+        }
         attitudes.push(att);
     }
-    head.extend_from_slice(&frames.to_le_bytes());
+    let header = ReplayHeader { configuration, frames };
+    let mut head = vec![0u8; replay_header_bytes(dwells.len())];
+    header.encode(&mut Writer::new(&mut head));
     let dwells = dwells.iter().map(|d| PlannedDwell { pos: d.pos, first_line: d.first_line }).collect();
     Ok((head, ReplayPlan { dwells, attitudes }))
 }
@@ -207,10 +196,10 @@ pub fn calibration_from_outcome(
     rec: &impl RowSource,
     options: &Options,
     plan: &ReplayPlan,
-    outcome: &ReplayOutcome,
+    outcome: &Outcome,
 ) -> Result<Calibration, InputError> {
     let source = rec.source();
-    let site = outcome.header.site;
+    let site = outcome.configuration.site;
     let ReplayPlan { dwells, attitudes } = plan;
     let mut positions = Vec::new();
     for (k, p) in outcome.positions.iter().enumerate() {
@@ -222,7 +211,7 @@ pub fn calibration_from_outcome(
                 None => None,
             };
         positions.push(PositionResult {
-            pos: outcome.header.labels[k] as u32,
+            pos: outcome.configuration.labels[k] as u32,
             first_line: dwells[k].first_line,
             attitude: attitudes[k],
             summary: p.summary,
@@ -237,7 +226,7 @@ pub fn calibration_from_outcome(
                 format!(
                     "calibration sequence failed: position {} (dwell {}) aborted: {reason:?}",
                     index + 1,
-                    outcome.header.labels.get(index).copied().unwrap_or(0)
+                    outcome.configuration.labels.get(index).copied().unwrap_or(0)
                 ),
             ),
             SequenceFailure::Calibration(e) => angle_error(e, &positions, source),
@@ -251,7 +240,7 @@ pub fn calibration_from_outcome(
             format!(
                 "the calibration sequence ended after {} of {} positions",
                 outcome.positions.len(),
-                outcome.header.schedule.len()
+                outcome.configuration.schedule.len()
             ),
         )
     })?;
@@ -260,7 +249,7 @@ pub fn calibration_from_outcome(
         latitude_deg: rec.header().latitude_deg,
         site,
         gravity_source: site_of(rec.header()).1,
-        prefilter: outcome.header.settings.prefilter,
+        prefilter: outcome.configuration.prefilter,
         options: *options,
         positions: positions.clone(),
         estimates,
@@ -283,7 +272,7 @@ pub fn calibration_from_outcome(
         SequenceSolution::Channels(c) => {
             // The result without suspect dwells, solved on this machine from the firmware's dwell statistics
             // with the same core function.
-            let settings = match outcome.header.settings.estimator {
+            let settings = match outcome.configuration.sequence_estimator() {
                 Estimator::Channels(s) => s,
                 Estimator::Angles => return Err(InputError::file(source, "replay outcome: estimator mismatch")),
             };
@@ -307,9 +296,9 @@ pub fn calibrate_on_host(rec: &impl RowSource, options: &Options) -> Result<Cali
     let open = || std::fs::File::open(replay.path()).map(|f| ReadSource(std::io::BufReader::new(f)));
     let outcome = run_replay(open().map_err(|e| fail(e.to_string()))?, |_| {}).map_err(|e| fail(e.to_string()))?;
     let mut bytes = vec![0u8; MAX_OUTCOME_BYTES];
-    let n = encode_outcome(&outcome, &mut bytes).map_err(|e| fail(e.to_string()))?;
+    let n = outcome.encode(&mut bytes).map_err(|e| fail(e.to_string()))?;
     let header = read_header(&mut open().map_err(|e| fail(e.to_string()))?).map_err(|e| fail(e.to_string()))?;
-    let decoded = decode_outcome(&header, &bytes[..n]).map_err(|e| fail(e.to_string()))?;
+    let decoded = Outcome::decode(&header.configuration, &bytes[..n]).map_err(|e| fail(e.to_string()))?;
     calibration_from_outcome(rec, options, &plan, &decoded)
 }
 

@@ -8,7 +8,8 @@
 use std::path::{Path, PathBuf};
 use std::process::{Command, Stdio};
 
-use sinscal::rig::replay::{decode_outcome, read_header};
+use sinscal::instrument::wire::outcome::Outcome;
+use sinscal::rig::replay::read_header;
 
 use crate::calibration::firmware_path::{calibration_from_outcome, write_replay_file, ReadSource};
 use crate::calibration::{Calibration, Options};
@@ -40,6 +41,7 @@ pub fn firmware_binary(name: &str) -> Result<PathBuf, String> {
     let status = Command::new(std::env::var("CARGO").unwrap_or_else(|_| "cargo".into()))
         .current_dir(&root)
         .args(["build", "-q", "-p", "sinscal", "--profile", "firmware", "--target", "thumbv7em-none-eabihf", "--bins"])
+        .args(["--features", "mps2-an386"])
         .stdout(Stdio::null())
         .status()
         .map_err(|e| format!("cannot run cargo to build the firmware: {e}"))?;
@@ -140,8 +142,8 @@ pub fn calibrate_on_qemu(rec: &impl RowSource, options: &Options) -> Result<Cali
     let fail = |e: String| InputError::file(source, format!("replay: {e}"));
     let file = std::fs::File::open(replay.path()).map_err(|e| fail(e.to_string()))?;
     let header = read_header(&mut ReadSource(std::io::BufReader::new(file))).map_err(|e| fail(e.to_string()))?;
-    let outcome =
-        decode_outcome(&header, &bytes).map_err(|e| InputError::file(source, format!("--on qemu: outcome: {e}")))?;
+    let outcome = Outcome::decode(&header.configuration, &bytes)
+        .map_err(|e| InputError::file(source, format!("--on qemu: outcome: {e}")))?;
     let mut cal = calibration_from_outcome(rec, options, &plan, &outcome)?;
     cal.on = "qemu";
     Ok(cal)

@@ -8,9 +8,7 @@ use std::path::PathBuf;
 use crate::calibration::Calibration;
 use crate::cmd::calibrate::{finish, CalibrationArgs};
 use crate::device::client::{Client, Status};
-use crate::device::{
-    boot_qemu, calibration_of_record, read_record, replay_for, run_calibration, table_thresholds, DeviceRun,
-};
+use crate::device::{boot_qemu, calibration_of_record, read_record, replay_for, run_calibration, DeviceRun};
 use crate::io::recording::RecordingFile;
 
 /// Arguments of `sinscal device`.
@@ -142,7 +140,15 @@ fn device_run(a: RunArgs) -> anyhow::Result<()> {
             let mut client = Client::new(SerialPort::open(port)?);
             client.timeout = std::time::Duration::from_secs(5);
             // A board's own IMU on a real turntable: settle, then dwells of the sequence's length.
-            run_calibration(&mut client, &rec, &options, &replay, &plan, Some(table_thresholds()), progress())?
+            run_calibration(
+                &mut client,
+                &rec,
+                &options,
+                &replay,
+                &plan,
+                Some(sinscal::instrument::wire::configuration::Thresholds::table()),
+                progress(),
+            )?
         }
         (None, Some(flash)) => {
             let mut device = boot_qemu(flash, Some(replay.path())).map_err(anyhow::Error::msg)?;

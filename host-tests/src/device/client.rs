@@ -5,7 +5,8 @@ use std::io::{Read, Write};
 use std::time::{Duration, Instant};
 
 use sinscal::instrument::link::{encode_frame, FrameReceiver, MAX_WIRE_BYTES};
-use sinscal::instrument::message::{kind, BodyReader, DeviceState, ErrorCode, MAX_CHUNK_BYTES, MAX_NOTE_BYTES};
+use sinscal::instrument::message::{kind, DeviceState, ErrorCode, MAX_CHUNK_BYTES, MAX_NOTE_BYTES};
+use sinscal::instrument::wire::Reader as BodyReader;
 
 /// A failure of the link or a refusal of the device.
 #[derive(Debug, thiserror::Error)]
@@ -152,7 +153,7 @@ impl<T: Read + Write> Client<T> {
                 }
                 if frame.kind == kind::ERROR {
                     let mut r = BodyReader::new(frame.body);
-                    let (code, detail) = (r.u8().and_then(ErrorCode::from_u8), r.u32());
+                    let (code, detail) = (r.u8().and_then(ErrorCode::from_code), r.u32());
                     return match (code, detail) {
                         (Some(code), Some(detail)) => Err(LinkError::Refused { what, code, detail }),
                         _ => Err(LinkError::Malformed(what)),
@@ -218,7 +219,7 @@ impl<T: Read + Write> Client<T> {
         let counters = (body.len() - fixed) / 4;
         let mut r = BodyReader::new(&body);
         let parse = |r: &mut BodyReader<'_>| -> Option<Status> {
-            let state = DeviceState::from_u8(r.u8()?)?;
+            let state = DeviceState::from_code(r.u8()?)?;
             let (position, positions) = (r.u16()?, r.u16()?);
             let sampling = (0..counters).map(|_| r.u32()).collect::<Option<Vec<u32>>>()?;
             let mut link = [0u32; 6];

@@ -10,10 +10,11 @@ use std::path::{Path, PathBuf};
 use std::process::{Child, Command, Stdio};
 use std::time::{Duration, Instant};
 
-use sinscal::instrument::device::THRESHOLD_BYTES;
 use sinscal::instrument::message::{kind, DeviceState};
-use sinscal::instrument::record::{RecordHead, RECORD_HEAD_BYTES};
-use sinscal::rig::replay::{decode_outcome, read_configuration, read_header, ReplayHeader};
+use sinscal::instrument::wire::configuration::{DeviceConfiguration, Thresholds};
+use sinscal::instrument::wire::outcome::Outcome;
+use sinscal::instrument::wire::record::{RecordHead, RECORD_HEAD_BYTES};
+use sinscal::rig::replay::{read_header, ReplayHeader};
 
 use crate::calibration::firmware_path::{calibration_from_outcome, write_replay_file, ReplayPlan};
 use crate::calibration::qemu::{firmware_binary, QEMU};
@@ -116,37 +117,24 @@ fn boot_machine(machine_args: &[&str], elf: &Path) -> Result<QemuDevice, String>
     Ok(QemuDevice { child, _socket_dir: dir, client: Client::new(stream) })
 }
 
-/// The configuration body of a replay header: its configuration part (without magic, version and frame count)
-/// and the thresholds of a replayed sequence (no settling, dwells as long as the table says, the core's fewest
-/// samples), which make a device's result equal to the host replay's.
+/// The configure message's body for a replay file's header (its bytes): the header's configuration with the
+/// thresholds of a replayed sequence ([`Thresholds::REPLAY`]: no settling, dwells as long as the table says,
+/// the core's fewest samples), which make a device's result equal to the host replay's.
 pub fn configuration_body(replay_header: &[u8]) -> Result<Vec<u8>, String> {
     let header = read_header(&mut &replay_header[..]).map_err(|e| e.to_string())?;
-    configuration_body_with(replay_header, replay_thresholds(&header))
+    Ok(device_configuration_body(&header, Thresholds::REPLAY))
 }
 
-/// The thresholds `[settle samples, dwell samples, fewest samples]` a replay header's reader sets.
-fn replay_thresholds(header: &ReplayHeader) -> [u32; 3] {
-    let s = &header.settings;
-    [s.settle_samples, s.dwell_samples, s.min_dwell_samples]
-}
-
-/// [`configuration_body`] with the thresholds `[settle samples, dwell samples, fewest samples]` given.
-pub fn configuration_body_with(replay_header: &[u8], thresholds: [u32; 3]) -> Result<Vec<u8>, String> {
-    if replay_header.len() < 6 + 4 {
-        return Err("replay header too short".into());
-    }
-    let mut body = replay_header[6..replay_header.len() - 4].to_vec();
-    for v in thresholds {
-        body.extend_from_slice(&v.to_le_bytes());
-    }
-    Ok(body)
-}
-
-/// The thresholds of a calibration on a real turntable (the sequence's defaults: 2 s of settling, 60 s dwells,
-/// at least 10 s, at 100 Hz).
-pub fn table_thresholds() -> [u32; 3] {
-    let s = sinscal::run::sequence::SequenceSettings::default();
-    [s.settle_samples, s.dwell_samples, s.min_dwell_samples]
+/// The configure message's body: a replay header's configuration with `thresholds`.
+pub fn device_configuration_body(header: &ReplayHeader, thresholds: Thresholds) -> Vec<u8> {
+    let configured = DeviceConfiguration { configuration: header.configuration.clone(), thresholds };
+    let mut body = vec![0u8; sinscal::instrument::wire::configuration::MAX_DEVICE_BYTES];
+    let mut w = sinscal::instrument::wire::Writer::new(&mut body);
+    configured.encode(&mut w);
+    // The buffer holds the longest configuration.
+    let n = w.written().unwrap_or(0);
+    body.truncate(n);
+    body
 }
 
 /// What `device run` did.
@@ -168,14 +156,13 @@ pub fn run_calibration<T: Read + Write>(
     options: &Options,
     replay: &ScratchFile,
     plan: &ReplayPlan,
-    thresholds: Option<[u32; 3]>,
+    thresholds: Option<Thresholds>,
     mut progress: impl FnMut(&client::Status),
 ) -> Result<DeviceRun, anyhow::Error> {
     let source = rec.source();
-    let (head, header) = replay_header(replay.path())?;
+    let header = replay_header(replay.path())?;
     client.identify()?;
-    let thresholds = thresholds.unwrap_or(replay_thresholds(&header));
-    client.configure(&configuration_body_with(&head, thresholds).map_err(anyhow::Error::msg)?)?;
+    client.configure(&device_configuration_body(&header, thresholds.unwrap_or(Thresholds::REPLAY)))?;
     let note = Provenance::of(rec, options, plan).to_bytes();
     client.annotate(&note)?;
     client.request("start", kind::START, &[])?;
@@ -188,7 +175,8 @@ pub fn run_calibration<T: Read + Write>(
         std::thread::sleep(Duration::from_millis(50));
     };
     let result = client.read_all("the result", kind::READ_RESULT)?;
-    let outcome = decode_outcome(&header, &result).map_err(|e| InputError::file(source, format!("result: {e}")))?;
+    let outcome = Outcome::decode(&header.configuration, &result)
+        .map_err(|e| InputError::file(source, format!("result: {e}")))?;
     let mut calibration = calibration_from_outcome(rec, options, plan, &outcome)?;
     calibration.on = "device";
     let stored = client.store()?;
@@ -200,14 +188,12 @@ pub fn run_calibration<T: Read + Write>(
     Ok(DeviceRun { calibration, stored, status })
 }
 
-/// The replay file's header, its bytes (everything before the frames) and as read: one read of the file's start.
-fn replay_header(path: &Path) -> Result<(Vec<u8>, ReplayHeader), anyhow::Error> {
+/// The replay file's header, read from the file's start.
+fn replay_header(path: &Path) -> Result<ReplayHeader, anyhow::Error> {
     let longest = sinscal::rig::replay::replay_header_bytes(sinscal::calib::solve::MAX_POSITIONS);
     let mut bytes = Vec::with_capacity(longest);
     std::fs::File::open(path)?.take(longest as u64).read_to_end(&mut bytes)?;
-    let header = read_header(&mut bytes.as_slice()).map_err(|e| anyhow::anyhow!("replay: {e}"))?;
-    bytes.truncate(sinscal::rig::replay::replay_header_bytes(header.schedule.len()));
-    Ok((bytes, header))
+    read_header(&mut bytes.as_slice()).map_err(|e| anyhow::anyhow!("replay: {e}"))
 }
 
 /// The parts of a stored record.
@@ -235,11 +221,11 @@ pub fn split_record(record: &[u8]) -> Result<RecordParts<'_>, anyhow::Error> {
 /// The calibration of a stored record (the same report as the run that stored it).
 pub fn calibration_of_record(record: &[u8]) -> Result<Calibration, anyhow::Error> {
     let parts = split_record(record)?;
-    let settings = &parts.configuration[..parts.configuration.len().saturating_sub(THRESHOLD_BYTES)];
-    let header: ReplayHeader =
-        read_configuration(&mut &settings[..]).map_err(|e| anyhow::anyhow!("stored configuration: {e}"))?;
+    let configured =
+        DeviceConfiguration::decode(parts.configuration).map_err(|e| anyhow::anyhow!("stored configuration: {e}"))?;
     let note = Provenance::from_bytes(parts.note)?;
-    let outcome = decode_outcome(&header, parts.outcome).map_err(|e| anyhow::anyhow!("stored outcome: {e}"))?;
+    let outcome = Outcome::decode(&configured.configuration, parts.outcome)
+        .map_err(|e| anyhow::anyhow!("stored outcome: {e}"))?;
     let rec = Recording {
         source: note.source.clone(),
         header: Header {

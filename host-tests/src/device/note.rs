@@ -5,7 +5,6 @@
 
 use serde::{Deserialize, Serialize};
 use sinscal::calib::align::DwellValue;
-use sinscal::rig::replay::{terms_bits, terms_of_bits};
 
 use crate::calibration::firmware_path::ReplayPlan;
 use crate::calibration::{Coefficient, Method, Options, PrefilterKind};
@@ -91,7 +90,7 @@ impl Provenance {
                     Method::Angles => "angles",
                 }
                 .into(),
-                terms: terms_bits(options.model),
+                terms: options.model.stored_bits(),
                 estimate_attitudes: options.estimate_attitudes,
                 rest_force_tolerance_mps2: options.rest_force_tolerance_mps2,
             },
@@ -137,7 +136,9 @@ impl Provenance {
                 "angles" => Method::Angles,
                 v => return Err(bad("method", v)),
             },
-            model: terms_of_bits(o.terms),
+            model: sinscal::calib::channels::Model::from_stored_bits(o.terms).ok_or_else(|| {
+                anyhow::anyhow!("provenance note: terms {:#06x} name a term this version does not know", o.terms)
+            })?,
             estimate_attitudes: o.estimate_attitudes,
             rest_force_tolerance_mps2: o.rest_force_tolerance_mps2,
             // The device's sequence does not integrate the moves.

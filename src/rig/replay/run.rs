@@ -5,43 +5,22 @@ use heapless::spsc::Queue;
 use heapless::Vec;
 
 use super::device::{NoDelay, ReplayDevice};
-use super::file::{read_header, ByteSource, ReplayError, ReplayHeader};
-use crate::calib::calibration::PositionInput;
-use crate::calib::solve::MAX_POSITIONS;
+use super::file::{read_header, ByteSource, ReplayError};
+use crate::instrument::wire::outcome::Outcome;
 use crate::run::sampling::{on_data_ready, process_next, QueueItem, SamplingStats, QUEUE_SLOTS};
-use crate::run::sequence::{feed_sequence, CalibrationSequence, Event, SequenceFailure, SequenceSolution};
+use crate::run::sequence::{feed_sequence, CalibrationSequence, Event};
 use crate::sensor::adis::{Adis, AdisError, BURST32_LEN};
-
-/// What a replay produced.
-#[derive(Clone, Debug, PartialEq)]
-pub struct ReplayOutcome {
-    /// The header.
-    pub header: ReplayHeader,
-    /// Completed positions (attitude and dwell statistics).
-    pub positions: Vec<PositionInput, MAX_POSITIONS>,
-    /// The solution, if the sequence got there.
-    pub result: Option<SequenceSolution>,
-    /// The failure, if it failed.
-    pub failure: Option<SequenceFailure>,
-    /// Sampling counters.
-    pub sampling: SamplingStats,
-    /// Dwells aborted (and collected again).
-    pub aborted_dwells: u32,
-}
 
 /// Replays a file: frames through the replay device, the ADIS driver, the sampling queue and the
 /// calibration sequence. `on_event` sees every event of the sequence (the firmware logs them).
-pub fn run_replay<R: ByteSource>(
-    mut source: R,
-    mut on_event: impl FnMut(&Event),
-) -> Result<ReplayOutcome, ReplayError> {
+pub fn run_replay<R: ByteSource>(mut source: R, mut on_event: impl FnMut(&Event)) -> Result<Outcome, ReplayError> {
     let header = read_header(&mut source)?;
-    let settings = header.settings;
-    let model = header.model;
+    let settings = header.settings();
+    let model = header.configuration.imu;
     let mut imu = Adis::new(ReplayDevice::new(model), model);
     imu.init(&mut NoDelay).map_err(|_: AdisError<ReplayError>| ReplayError::Init)?;
-    let mut sequence =
-        CalibrationSequence::new(&header.schedule, header.site, settings).map_err(ReplayError::Sequence)?;
+    let mut sequence = CalibrationSequence::new(&header.configuration.schedule, header.configuration.site, settings)
+        .map_err(ReplayError::Sequence)?;
     let mut queue: Queue<QueueItem, QUEUE_SLOTS> = Queue::new();
     let (mut producer, mut consumer) = queue.split();
     let mut stats = SamplingStats::default();
@@ -78,5 +57,6 @@ pub fn run_replay<R: ByteSource>(
     for p in sequence.completed() {
         let _ = positions.push(*p);
     }
-    Ok(ReplayOutcome { header, positions, result, failure, sampling: stats, aborted_dwells })
+    let configuration = header.configuration;
+    Ok(Outcome { configuration, positions, result, failure, sampling: stats, aborted_dwells })
 }

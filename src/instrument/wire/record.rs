@@ -7,13 +7,13 @@
 //! configuration  the configure message's body: sensor, site, schedule, estimator, prefilter, thresholds
 //! note           the provenance the workstation sent (what it knows of the recording), kept verbatim
 //! outcome        the calibration's outcome: counters, every dwell's statistics, the solution with its
-//!                covariance (the replay outcome encoding of rig::replay)
+//!                covariance ([`super::outcome`])
 //! ```
-//! The store ([`super::store`]) adds its own header (sequence number, length, CRC) around it. The record is
+//! The store ([`crate::instrument::store`]) adds its own header (sequence number, length, CRC) around it. The record is
 //! written in parts as the store asks for them; nothing holds the whole of it.
 
+use super::outcome::{encode_part, OutcomeView};
 use crate::calib::compensation::{self, Compensation};
-use crate::rig::replay::{encode_outcome_part, OutcomeView};
 
 /// Version of the record layout.
 pub const RECORD_VERSION: u16 = 1;
@@ -102,7 +102,7 @@ impl<'a> Record<'a> {
             compensation_bytes: compensation::ENCODED_BYTES as u16,
             configuration_bytes: configuration.len() as u16,
             note_bytes: note.len() as u16,
-            outcome_bytes: encode_outcome_part(&outcome, 0, &mut []) as u32,
+            outcome_bytes: encode_part(&outcome, 0, &mut []) as u32,
         };
         Record { compensation, configuration, note, outcome, head }
     }
@@ -135,7 +135,7 @@ impl<'a> Record<'a> {
         }
         if offset + out.len() > o {
             let (skip, from) = if offset >= o { (0, offset - o) } else { (o - offset, 0) };
-            encode_outcome_part(&self.outcome, from, &mut out[skip..]);
+            encode_part(&self.outcome, from, &mut out[skip..]);
         }
     }
 }

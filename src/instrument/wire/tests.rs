@@ -1,0 +1,236 @@
+//! Round trips of every wire format over pseudo-random values: encode, decode, the same value; every
+//! truncation and every unknown code refused.
+
+use heapless::Vec;
+
+use super::codes::{EstimatorCode, ImuCode};
+use super::configuration::{Configuration, DeviceConfiguration, RestLimits, Thresholds, MAX_DEVICE_BYTES};
+use super::outcome::{Outcome, MAX_BYTES};
+use super::record::{Record, RecordHead};
+use super::{Reader, Writer};
+use crate::calib::align::DwellValue;
+use crate::calib::calibration::{CalibrationResult, PositionInput};
+use crate::calib::channels::{ChannelSolution, Model as Terms, Term, PARAMETERS};
+use crate::calib::compensation::Compensation;
+use crate::calib::dwell::{DwellAllan, DwellSummary, MeanNoise, Prefilter};
+use crate::calib::prefilter::PrefilterSettings;
+use crate::calib::solve::{BiasSolution, Estimate, MAX_PARAMETERS, MAX_POSITIONS};
+use crate::nav::earth::Site;
+use crate::nav::frames::Attitude;
+use crate::run::sampling::SamplingStats;
+use crate::run::sequence::{SequenceFailure, SequenceSolution};
+
+/// A xorshift generator: the same values on every machine.
+struct Rng(u64);
+
+impl Rng {
+    fn next(&mut self) -> u64 {
+        self.0 ^= self.0 << 13;
+        self.0 ^= self.0 >> 7;
+        self.0 ^= self.0 << 17;
+        self.0
+    }
+    fn below(&mut self, n: u64) -> u64 {
+        self.next() % n
+    }
+    fn f32(&mut self) -> f32 {
+        (self.next() % 2_000_001) as f32 * 1e-6 - 1.0
+    }
+    fn positive(&mut self) -> f32 {
+        self.f32().abs() + 1e-3
+    }
+    fn vec3(&mut self) -> [f32; 3] {
+        [self.f32(), self.f32(), self.f32()]
+    }
+}
+
+fn configuration(rng: &mut Rng) -> Configuration {
+    let terms = Term::ALL.iter().fold(Terms::EMPTY, |m, t| if rng.below(2) == 1 { m.with(*t) } else { m });
+    let prefilter = match rng.below(2) {
+        0 => Prefilter::None,
+        _ => Prefilter::HmmKf {
+            gyro: PrefilterSettings::paper_gyro().with_a(rng.positive()),
+            accel: PrefilterSettings::paper_accel().with_a(rng.positive()),
+        },
+    };
+    let positions = 1 + rng.below(MAX_POSITIONS as u64) as usize;
+    let mut c = Configuration {
+        imu: ImuCode::ALL[rng.below(2) as usize].model(),
+        estimator: EstimatorCode::ALL[rng.below(3) as usize],
+        terms,
+        site: Site { latitude_rad: rng.f32(), gravity_mps2: 9.0 + rng.positive() },
+        schedule: Vec::new(),
+        labels: Vec::new(),
+        unknown_headings: 0,
+        prefilter,
+        dwell_value: if rng.below(2) == 0 { DwellValue::Mean } else { DwellValue::Settled },
+        max_passes: rng.below(256) as u8,
+        estimate_reference_offset: rng.below(2) == 1,
+        rest: RestLimits {
+            force_error_max_mps2: rng.positive(),
+            gravity_angle_max_rad: rng.positive(),
+            rate_max_radps: rng.positive(),
+        },
+    };
+    for k in 0..positions {
+        let [pitch_rad, roll_rad, heading_rad] = rng.vec3();
+        c.schedule.push(Attitude { pitch_rad, roll_rad, heading_rad }).unwrap();
+        c.labels.push(rng.below(65_536) as u16).unwrap();
+        if rng.below(3) == 0 {
+            c.unknown_headings |= 1 << k;
+        }
+    }
+    c
+}
+
+fn encoded(encode: impl Fn(&mut Writer<'_>), out: &mut [u8]) -> usize {
+    let mut w = Writer::new(out);
+    encode(&mut w);
+    w.written().expect("the buffer holds the longest encoding")
+}
+
+#[test]
+fn configurations_round_trip_and_every_truncation_or_unknown_code_is_refused() {
+    let mut rng = Rng(0x5eed_c0de);
+    let mut bytes = [0u8; MAX_DEVICE_BYTES];
+    for _ in 0..300 {
+        let configured = DeviceConfiguration {
+            configuration: configuration(&mut rng),
+            thresholds: Thresholds {
+                settle_samples: rng.next() as u32,
+                dwell_samples: rng.next() as u32,
+                min_dwell_samples: rng.next() as u32,
+            },
+        };
+        let n = encoded(|w| configured.encode(w), &mut bytes);
+        assert_eq!(n, configured.configuration.encoded_bytes() + 12);
+        assert_eq!(DeviceConfiguration::decode(&bytes[..n]), Ok(configured.clone()));
+        let cut = rng.below(n as u64) as usize;
+        assert!(DeviceConfiguration::decode(&bytes[..cut]).is_err(), "a configuration cut to {cut} of {n} bytes");
+        assert!(DeviceConfiguration::decode(&bytes[..n + 1]).is_err(), "a byte too many");
+    }
+    // Unknown codes of the IMU, the estimator, the prefilter, the dwell value and a term bit.
+    let configured = DeviceConfiguration { configuration: configuration(&mut rng), thresholds: Thresholds::REPLAY };
+    let n = encoded(|w| configured.encode(w), &mut bytes);
+    for (at, value) in [(0, 2u8), (1, 3), (14, 2), (15, 2), (13, 0x80)] {
+        let mut bad = bytes;
+        bad[at] = value;
+        assert!(DeviceConfiguration::decode(&bad[..n]).is_err(), "byte {at} = {value} accepted");
+    }
+}
+
+fn dwell(rng: &mut Rng) -> DwellSummary {
+    let mut d = DwellSummary {
+        samples: rng.next() as u32,
+        rejected: rng.next() as u32,
+        rate_mean_b_radps: rng.vec3(),
+        force_mean_b_mps2: rng.vec3(),
+        rate_sample_std_b_radps: rng.vec3(),
+        force_sample_std_b_mps2: rng.vec3(),
+        rate_settled_b_radps: rng.vec3(),
+        force_settled_b_mps2: rng.vec3(),
+        settled_noise_gain: [rng.f32(), rng.f32()],
+        mean_noise: [MeanNoise::default(); 6],
+        allan: [DwellAllan::default(); 6],
+    };
+    for m in d.mean_noise.iter_mut() {
+        (m.white_equivalent_var, m.dof, m.cluster_samples) = (rng.positive(), rng.positive(), rng.next() as u32);
+    }
+    for a in d.allan.iter_mut() {
+        a.avar.iter_mut().for_each(|v| *v = rng.positive());
+        a.prefilter_start_var = rng.positive();
+    }
+    d
+}
+
+fn general_solution(rng: &mut Rng, model: Terms, dwells: usize) -> ChannelSolution {
+    let mut c = ChannelSolution::empty(model, dwells);
+    c.parameters_si.iter_mut().for_each(|p| *p = rng.f32());
+    (c.observable, c.unobservable, c.suspect, c.gauge) = (rng.next(), rng.next(), rng.next(), rng.next());
+    c.covariance_si.iter_mut().flatten().for_each(|v| *v = rng.f32());
+    for k in 0..dwells {
+        (c.heading_rad[k], c.heading_std_rad[k], c.dwell_statistic[k]) = (rng.f32(), rng.f32(), rng.f32());
+        (c.residual_rate_b_radps[k], c.residual_force_b_mps2[k], c.up_b[k]) = (rng.vec3(), rng.vec3(), rng.vec3());
+    }
+    (c.chi_square, c.degrees_of_freedom, c.iterations) = (rng.positive(), rng.next() as u32, rng.next() as u32);
+    (c.converged, c.earth_rate_resolved, c.blind_spots) = (rng.below(2) == 1, rng.below(2) == 1, rng.next() as u32);
+    c
+}
+
+fn outcome(rng: &mut Rng) -> Outcome {
+    let configuration = configuration(rng);
+    let mut counters = [0u32; 10];
+    counters.iter_mut().for_each(|c| *c = rng.next() as u32);
+    let done = rng.below(configuration.schedule.len() as u64 + 1) as usize;
+    let mut positions = Vec::new();
+    for a in &configuration.schedule[..done] {
+        positions.push(PositionInput { c_b_n: a.c_b_n(), summary: dwell(rng) }).unwrap();
+    }
+    let (result, failure) = match rng.below(3) {
+        0 => (
+            None,
+            Some(SequenceFailure::Channels(crate::calib::channels::ChannelError::Diverged {
+                parameter: rng.below(PARAMETERS as u64) as usize,
+                value: rng.f32(),
+            })),
+        ),
+        1 => (Some(SequenceSolution::Channels(general_solution(rng, configuration.terms, done))), None),
+        _ => {
+            let mut estimate = || (rng.below(2) == 1).then(|| Estimate { value: rng.f32(), std_error: rng.positive() });
+            let solution = BiasSolution {
+                gyro_bias_b_radps: [estimate(), estimate(), estimate()],
+                accel_bias_b_mps2: [estimate(), estimate(), estimate()],
+                reference_offset_n_rad: [estimate(), estimate(), estimate()],
+                reference_offset_estimated: rng.below(2) == 1,
+                positions: done,
+                residual_n_rad: [[0.0; 3]; MAX_POSITIONS].map(|_| rng.vec3()),
+                chi_square: rng.positive(),
+                degrees_of_freedom: rng.next() as u32,
+                covariance_si: [[0.0; MAX_PARAMETERS]; MAX_PARAMETERS].map(|row| row.map(|_| rng.f32())),
+            };
+            let r = CalibrationResult {
+                solution,
+                passes: rng.next() as u32,
+                converged: true,
+                last_correction_sigma: rng.f32(),
+            };
+            (Some(SequenceSolution::Angles(r)), None)
+        }
+    };
+    let sampling = SamplingStats::from_counters(counters);
+    Outcome { configuration, positions, result, failure, sampling, aborted_dwells: rng.next() as u32 }
+}
+
+#[test]
+fn outcomes_round_trip_whole_and_in_windows_and_truncations_are_refused() {
+    let mut rng = Rng(0x0dd_ba11);
+    let mut bytes = std::vec![0u8; MAX_BYTES];
+    for _ in 0..60 {
+        let o = outcome(&mut rng);
+        let n = o.encode(&mut bytes).unwrap();
+        assert_eq!(Outcome::decode(&o.configuration, &bytes[..n]), Ok(o.clone()));
+        // A window of the encoding is the same bytes (a link reply, a flash page).
+        let (start, len) = (rng.below(n as u64) as usize, 1 + rng.below(1024) as usize);
+        let mut part = std::vec![0u8; len];
+        assert_eq!(super::outcome::encode_part(&o.view(), start, &mut part), n);
+        let end = (start + len).min(n);
+        assert_eq!(&part[..end - start], &bytes[start..end]);
+        let cut = rng.below(n as u64) as usize;
+        assert!(Outcome::decode(&o.configuration, &bytes[..cut]).is_err(), "an outcome cut to {cut} of {n} bytes");
+    }
+}
+
+#[test]
+fn a_record_reads_back_as_its_parts() {
+    let mut rng = Rng(0xfeed);
+    let o = outcome(&mut rng);
+    let (configuration, note) = ([7u8; 40], *b"provenance");
+    let record = Record::new(Compensation::IDENTITY, &configuration, &note, o.view());
+    let mut bytes = std::vec![0u8; record.record_bytes()];
+    record.write_part(0, &mut bytes);
+    let head = RecordHead::decode(&bytes).unwrap();
+    let [_, (k, kl), (n, nl), (oo, ol)] = head.parts();
+    assert_eq!((&bytes[k..k + kl], &bytes[n..n + nl]), (&configuration[..], &note[..]));
+    assert_eq!(Outcome::decode(&o.configuration, &bytes[oo..oo + ol]), Ok(o));
+    let _ = Reader::new(&bytes);
+}
