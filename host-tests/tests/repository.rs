@@ -1,6 +1,7 @@
 //! The repository's own rules, checked on its files: the core's layers use only the layers below them,
-//! nothing cites a file outside the repository, and every citation of `docs/` names a page and a heading
-//! that exist. These read the source tree; they run no code of the project.
+//! nothing cites a file outside the repository, every citation of `docs/` names a page and a heading
+//! that exist, and the command line's figures need no C font library. These read the source tree; they run
+//! no code of the project.
 
 use std::collections::BTreeSet;
 use std::fs;
@@ -207,4 +208,67 @@ fn anchors_follow_the_heading_rule() {
     assert_eq!(anchor(" Step 4: angles and biases"), "step-4-angles-and-biases");
     assert_eq!(anchor(" Replay file (\"SSRP\", version 1)"), "replay-file-ssrp-version-1");
     assert_eq!(anchor(" `psins`"), "psins");
+}
+
+/// The packages of Cargo.lock reached from `from` through their dependencies (every target and kind: what
+/// the lock file can bring into a build), by name.
+fn locked_dependencies(from: &str) -> BTreeSet<String> {
+    let lock = fs::read_to_string(root().join("Cargo.lock")).unwrap();
+    let mut deps: std::collections::BTreeMap<String, BTreeSet<String>> = Default::default();
+    let (mut name, mut in_deps) = (String::new(), false);
+    for line in lock.lines().map(str::trim) {
+        if let Some(n) = line.strip_prefix("name = ") {
+            name = n.trim_matches('"').to_string();
+            deps.entry(name.clone()).or_default();
+        } else if line == "dependencies = [" {
+            in_deps = true;
+        } else if in_deps && line == "]" {
+            in_deps = false;
+        } else if in_deps {
+            // `"name"`, `"name version"` or `"name version (source)"`.
+            let dep = line.trim_end_matches(',').trim_matches('"').split(' ').next().unwrap_or("").to_string();
+            deps.entry(name.clone()).or_default().insert(dep);
+        } else if line.starts_with('[') {
+            in_deps = false;
+        }
+    }
+    let mut reached = BTreeSet::new();
+    let mut todo = vec![from.to_string()];
+    while let Some(p) = todo.pop() {
+        if reached.insert(p.clone()) {
+            todo.extend(deps.get(&p).into_iter().flatten().cloned());
+        }
+    }
+    reached
+}
+
+/// The figures (plotters) draw their text with a font of the program's own through pure-Rust crates: no font
+/// crate that links a C library (font-kit, which reaches fontconfig and FreeType, or their bindings) is in
+/// the command line's dependency tree, as plotters' default features would put them there.
+#[test]
+fn the_figures_link_no_c_font_library() {
+    let reached = locked_dependencies("sinscal-host");
+    println!("font libraries: {} packages reached from sinscal-host", reached.len());
+    assert!(
+        reached.len() > 50 && reached.contains("plotters") && reached.contains("clap"),
+        "plotters and clap are not reached from sinscal-host: the Cargo.lock scan is not reading it"
+    );
+    let c_fonts = [
+        "font-kit",
+        "freetype",
+        "freetype-rs",
+        "freetype-sys",
+        "fontconfig",
+        "fontconfig-sys",
+        "servo-fontconfig",
+        "servo-fontconfig-sys",
+        "yeslogic-fontconfig",
+        "yeslogic-fontconfig-sys",
+        "expat-sys",
+        "servo-freetype-sys",
+        "core-text",
+        "dwrote",
+    ];
+    let found: Vec<&str> = c_fonts.iter().copied().filter(|c| reached.contains(*c)).collect();
+    assert!(found.is_empty(), "sinscal-host depends (Cargo.lock) on font crates that link C libraries: {found:?}");
 }

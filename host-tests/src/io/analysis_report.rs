@@ -11,7 +11,7 @@ use plotters::coord::combinators::{BindKeyPoints, WithKeyPoints};
 
 use crate::analysis::noise_terms::{sig, FitPoint, NoiseModel};
 use crate::analysis::{Analysis, CHANNELS};
-use crate::io::plot::{display_unit, log_ticks, short_name, tick_label};
+use crate::io::plot::{display_unit, figure, log_ticks, short_name, tick_label, Png};
 use crate::stats::noise::{log_spaced_clusters, overlapping_allan_deviation, welch_psd};
 
 fn err(path: &Path, e: &dyn std::fmt::Display) -> anyhow::Error {
@@ -177,7 +177,7 @@ fn figures_md(md: &mut String, a: &Analysis, noise_figures: bool) {
     }
 }
 
-type Area<'a> = DrawingArea<BitMapBackend<'a>, plotters::coord::Shift>;
+type Area<'a> = DrawingArea<Png<'a>, plotters::coord::Shift>;
 
 /// Colours: base model, final / named model, white only, and one per noise term (model order).
 const GREY: RGBColor = RGBColor(150, 150, 150);
@@ -213,8 +213,7 @@ fn position_spans(points: &[(u32, f64, f64)]) -> Vec<(u32, usize, usize)> {
 fn residuals_plot(a: &Analysis, path: &Path) -> anyhow::Result<()> {
     let groups: Vec<usize> = (0..a.figures.residuals.len()).filter(|&g| !a.figures.residuals[g].is_empty()).collect();
     let rows = groups.len().max(1);
-    let root = BitMapBackend::new(path, (1400, 50 + 250 * rows as u32)).into_drawing_area();
-    root.fill(&WHITE).map_err(|e| err(path, &e))?;
+    let root = figure(path, (1400, 50 + 250 * rows as u32))?;
     let root = root
         .titled(
             &format!("Residuals of the observations ({}) by position: base model and final model", residual_kind(a)),
@@ -333,8 +332,7 @@ fn noise_figure_size(a: &Analysis) -> (u32, u32) {
 }
 
 fn allan_plot(a: &Analysis, path: &Path) -> anyhow::Result<()> {
-    let root = BitMapBackend::new(path, noise_figure_size(a)).into_drawing_area();
-    root.fill(&WHITE).map_err(|e| err(path, &e))?;
+    let root = figure(path, noise_figure_size(a))?;
     let n = a.noise_model.first().map_or(0, |m| m.samples);
     let title = format!(
         "Overlapping Allan deviation of the longest dwell ({n} samples at {} Hz, mean and trend removed)",
@@ -419,7 +417,7 @@ fn allan_panel(area: &Area, model: &NoiseModel, samples: &[f64], rate_hz: f64) -
 }
 
 type LogChart<'a, 'b> =
-    ChartContext<'a, BitMapBackend<'b>, Cartesian2d<WithKeyPoints<LogCoord<f64>>, WithKeyPoints<LogCoord<f64>>>>;
+    ChartContext<'a, Png<'b>, Cartesian2d<WithKeyPoints<LogCoord<f64>>, WithKeyPoints<LogCoord<f64>>>>;
 
 /// The ranges and descriptions of a log-log panel.
 struct LogAxes {
@@ -488,8 +486,7 @@ fn panel_caption(model: &NoiseModel) -> String {
 }
 
 fn psd_plot(a: &Analysis, path: &Path) -> anyhow::Result<()> {
-    let root = BitMapBackend::new(path, noise_figure_size(a)).into_drawing_area();
-    root.fill(&WHITE).map_err(|e| err(path, &e))?;
+    let root = figure(path, noise_figure_size(a))?;
     let title = "One-sided power spectral density of the longest dwell (Welch, Hann, 1024-sample segments)";
     let root = root.titled(title, ("sans-serif", 22)).map_err(|e| err(path, &e))?;
     for (area, c) in channel_panels(a, &root) {

@@ -1,11 +1,228 @@
 //! Figures (PNG, plotters).
 
 use std::path::Path;
+use std::sync::OnceLock;
 
+use ab_glyph::{point, Font, FontRef, PxScale, ScaleFont};
+use plotters::coord::Shift;
 use plotters::prelude::*;
+use plotters_backend::text_anchor::{HPos, VPos};
+use plotters_backend::{BackendColor, BackendCoord, BackendTextStyle, DrawingErrorKind};
 
 use crate::io::calibration_result::ARCSEC_PER_RAD;
 use crate::navigation::check::NavReport;
+
+/// The figures' font: DejaVu Sans, bundled by the `dejavu` crate (the font's licence ships there), so that no
+/// font library of the system (fontconfig, FreeType: C libraries) is needed. Its line height (the `hhea`
+/// ascender less the descender) is set to 1.24 em, the ratio of text size to em of plotters' font-kit path:
+/// ab_glyph scales a font by that height, so that plotters' own estimates (a legend's box) and [`Png`]'s text
+/// both set text of size `s` at one em = s / 1.24 pixels, as the figures had it.
+fn font_bytes() -> &'static [u8] {
+    static BYTES: OnceLock<&'static [u8]> = OnceLock::new();
+    BYTES.get_or_init(|| {
+        let mut font = dejavu::sans::regular().to_vec();
+        let be16 = |b: &[u8], at: usize| b.get(at..at + 2).map(|v| u16::from_be_bytes([v[0], v[1]]));
+        let table = |b: &[u8], tag: &[u8; 4]| {
+            (0..usize::from(be16(b, 4)?)).map(|i| 12 + 16 * i).find_map(|r| {
+                let o = b.get(r + 8..r + 12)?;
+                (b.get(r..r + 4)? == tag).then(|| u32::from_be_bytes([o[0], o[1], o[2], o[3]]) as usize)
+            })
+        };
+        let units_per_em = table(&font, b"head").and_then(|head| be16(&font, head + 18));
+        let hhea = table(&font, b"hhea");
+        let descender = hhea.and_then(|h| be16(&font, h + 6)).map(|d| d as i16);
+        if let (Some(upem), Some(hhea), Some(descender)) = (units_per_em, hhea, descender) {
+            let ascender = (1.24 * f64::from(upem)).round() as i16 + descender;
+            font[hhea + 4..hhea + 6].copy_from_slice(&ascender.to_be_bytes());
+        }
+        Box::leak(font.into_boxed_slice())
+    })
+}
+
+/// The figures' font, read.
+fn font() -> &'static FontRef<'static> {
+    static FONT: OnceLock<FontRef<'static>> = OnceLock::new();
+    FONT.get_or_init(|| FontRef::try_from_slice(font_bytes()).expect("DejaVu Sans is a font ab_glyph reads"))
+}
+
+/// Registers the figures' font with plotters (its `ab_glyph` text path) as `sans-serif`, the family every
+/// figure names: plotters sizes a legend's box with it. The text itself is drawn by [`Png`].
+fn register_font() -> anyhow::Result<()> {
+    static REGISTERED: OnceLock<bool> = OnceLock::new();
+    let ok = *REGISTERED
+        .get_or_init(|| plotters::style::register_font("sans-serif", FontStyle::Normal, font_bytes()).is_ok());
+    anyhow::ensure!(ok, "the figures' font (DejaVu Sans) could not be read");
+    Ok(())
+}
+
+/// A PNG figure: plotters' bitmap backend, with text drawn by ab_glyph (pure Rust) from [`font`]. Text of size
+/// `s` pixels is set at one em = s / 1.24 pixels, its box s / 1.24 high with the baseline 0.76 em below the top
+/// (the metrics of plotters' font-kit path, so that the figures keep their layout), each glyph placed at its
+/// own side bearing and sub-pixel position.
+pub(crate) struct Png<'a>(BitMapBackend<'a>);
+
+impl Png<'_> {
+    /// The scale (ab_glyph's pixel height: ascent - descent) that makes one em `size / 1.24` pixels.
+    fn scale(size: f64) -> PxScale {
+        let f = font();
+        let em = (size / 1.24) as f32;
+        PxScale::from(em * f.height_unscaled() / f.units_per_em().unwrap_or(2048.0))
+    }
+
+    /// The advance width of `text` in pixels.
+    fn width(text: &str, scale: PxScale) -> f32 {
+        let f = font().as_scaled(scale);
+        let mut prev = None;
+        let mut x = 0.0;
+        for c in text.chars() {
+            let id = f.glyph_id(c);
+            if let Some(p) = prev {
+                x += f.kern(p, id);
+            }
+            x += f.h_advance(id);
+            prev = Some(id);
+        }
+        x
+    }
+}
+
+impl DrawingBackend for Png<'_> {
+    type ErrorType = <BitMapBackend<'static> as DrawingBackend>::ErrorType;
+
+    fn get_size(&self) -> (u32, u32) {
+        self.0.get_size()
+    }
+    fn ensure_prepared(&mut self) -> Result<(), DrawingErrorKind<Self::ErrorType>> {
+        self.0.ensure_prepared()
+    }
+    fn present(&mut self) -> Result<(), DrawingErrorKind<Self::ErrorType>> {
+        self.0.present()
+    }
+    fn draw_pixel(
+        &mut self,
+        point: BackendCoord,
+        color: BackendColor,
+    ) -> Result<(), DrawingErrorKind<Self::ErrorType>> {
+        self.0.draw_pixel(point, color)
+    }
+    fn draw_line<S: plotters_backend::BackendStyle>(
+        &mut self,
+        from: BackendCoord,
+        to: BackendCoord,
+        style: &S,
+    ) -> Result<(), DrawingErrorKind<Self::ErrorType>> {
+        self.0.draw_line(from, to, style)
+    }
+    fn draw_rect<S: plotters_backend::BackendStyle>(
+        &mut self,
+        upper_left: BackendCoord,
+        bottom_right: BackendCoord,
+        style: &S,
+        fill: bool,
+    ) -> Result<(), DrawingErrorKind<Self::ErrorType>> {
+        self.0.draw_rect(upper_left, bottom_right, style, fill)
+    }
+    fn draw_path<S: plotters_backend::BackendStyle, I: IntoIterator<Item = BackendCoord>>(
+        &mut self,
+        path: I,
+        style: &S,
+    ) -> Result<(), DrawingErrorKind<Self::ErrorType>> {
+        self.0.draw_path(path, style)
+    }
+    fn draw_circle<S: plotters_backend::BackendStyle>(
+        &mut self,
+        center: BackendCoord,
+        radius: u32,
+        style: &S,
+        fill: bool,
+    ) -> Result<(), DrawingErrorKind<Self::ErrorType>> {
+        self.0.draw_circle(center, radius, style, fill)
+    }
+    fn fill_polygon<S: plotters_backend::BackendStyle, I: IntoIterator<Item = BackendCoord>>(
+        &mut self,
+        vert: I,
+        style: &S,
+    ) -> Result<(), DrawingErrorKind<Self::ErrorType>> {
+        self.0.fill_polygon(vert, style)
+    }
+    fn blit_bitmap(
+        &mut self,
+        pos: BackendCoord,
+        size: (u32, u32),
+        src: &[u8],
+    ) -> Result<(), DrawingErrorKind<Self::ErrorType>> {
+        self.0.blit_bitmap(pos, size, src)
+    }
+
+    fn estimate_text_size<S: BackendTextStyle>(
+        &self,
+        text: &str,
+        style: &S,
+    ) -> Result<(u32, u32), DrawingErrorKind<Self::ErrorType>> {
+        let size = style.size();
+        Ok((Self::width(text, Self::scale(size)) as u32, (size / 1.24) as u32))
+    }
+
+    fn draw_text<S: BackendTextStyle>(
+        &mut self,
+        text: &str,
+        style: &S,
+        pos: BackendCoord,
+    ) -> Result<(), DrawingErrorKind<Self::ErrorType>> {
+        let color = style.color();
+        if color.alpha == 0.0 {
+            return Ok(());
+        }
+        let size = style.size();
+        let scale = Self::scale(size);
+        let (width, height) = (Self::width(text, scale) as i32, (size / 1.24) as i32);
+        let anchor = style.anchor();
+        let dx = match anchor.h_pos {
+            HPos::Left => 0,
+            HPos::Right => -width,
+            HPos::Center => -width / 2,
+        };
+        let dy = match anchor.v_pos {
+            VPos::Top => 0,
+            VPos::Center => -height / 2,
+            VPos::Bottom => -height,
+        };
+        let transform = style.transform();
+        let (w, h) = self.get_size();
+        let baseline = (0.76 * size / 1.24) as f32;
+        let f = font().as_scaled(scale);
+        let mut result = Ok(());
+        let mut x = 0.0;
+        let mut prev = None;
+        for c in text.chars() {
+            let id = f.glyph_id(c);
+            if let Some(p) = prev {
+                x += f.kern(p, id);
+            }
+            prev = Some(id);
+            if let Some(outline) = font().outline_glyph(id.with_scale_and_position(scale, point(x, baseline))) {
+                let min = outline.px_bounds().min;
+                outline.draw(|gx, gy, coverage| {
+                    let (tx, ty) = transform.transform(min.x as i32 + gx as i32 + dx, min.y as i32 + gy as i32 + dy);
+                    let (px, py) = (pos.0 + tx, pos.1 + ty);
+                    if coverage > 0.0 && px >= 0 && py >= 0 && px < w as i32 && py < h as i32 && result.is_ok() {
+                        result = self.0.draw_pixel((px, py), color.mix(f64::from(coverage)));
+                    }
+                });
+            }
+            x += f.h_advance(id);
+        }
+        result
+    }
+}
+
+/// A new figure: a white PNG of `size` pixels at `path`. Every figure starts here.
+pub(crate) fn figure(path: &Path, size: (u32, u32)) -> anyhow::Result<DrawingArea<Png<'_>, Shift>> {
+    register_font()?;
+    let root = Png(BitMapBackend::new(path, size)).into_drawing_area();
+    root.fill(&WHITE).map_err(|e| anyhow::anyhow!("plot {}: {e}", path.display()))?;
+    Ok(root)
+}
 
 fn run_color(name: &str, index: usize) -> RGBColor {
     if name == "uncompensated" {
@@ -23,8 +240,7 @@ fn run_color(name: &str, index: usize) -> RGBColor {
 /// one line per run.
 pub fn navigation_plot(report: &NavReport, path: &Path) -> anyhow::Result<()> {
     let err = |e: &dyn std::fmt::Display| anyhow::anyhow!("plot {}: {e}", path.display());
-    let root = BitMapBackend::new(path, (1200, 900)).into_drawing_area();
-    root.fill(&WHITE).map_err(|e| err(&e))?;
+    let root = figure(path, (1200, 900))?;
     let (upper, lower) = root.split_vertically(470);
     let hours = report.hours.max(1e-6);
     let floor = 1e-3;

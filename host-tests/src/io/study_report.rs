@@ -10,6 +10,7 @@ use plotters::prelude::*;
 use serde_json::{json, Map, Value};
 
 use crate::io::calibration_result::ARCSEC_PER_RAD;
+use crate::io::plot::{figure, Png};
 use crate::model::synth::MICRO_G;
 use crate::stats::noise::NoiseTerms;
 use crate::study::noise_extension::ExtraTerm;
@@ -763,8 +764,7 @@ fn gyro_pose_means_figure(dataset: &str, p: &PoseStudy, dir: &Path) -> anyhow::R
 
 /// Log-log panels (2 x 3).
 fn loglog_panels(path: &Path, title: &str, panels: &[Panel]) -> anyhow::Result<()> {
-    let root = BitMapBackend::new(path, (1500, 900)).into_drawing_area();
-    root.fill(&WHITE).map_err(|e| plot_err(path, e))?;
+    let root = figure(path, (1500, 900))?;
     let root = root.titled(title, ("sans-serif", 24)).map_err(|e| plot_err(path, e))?;
     let areas = root.split_evenly((2, 3));
     for (area, panel) in areas.iter().zip(panels) {
@@ -775,7 +775,7 @@ fn loglog_panels(path: &Path, title: &str, panels: &[Panel]) -> anyhow::Result<(
 }
 
 /// One log-log panel into `area` (nothing when its positive points do not span a range).
-fn loglog_panel(path: &Path, area: &DrawingArea<BitMapBackend<'_>, Shift>, panel: &Panel) -> anyhow::Result<()> {
+fn loglog_panel(path: &Path, area: &DrawingArea<Png<'_>, Shift>, panel: &Panel) -> anyhow::Result<()> {
     let (name, ylabel, series) = panel;
     let pts = series.iter().flat_map(|s| s.2.iter()).filter(|p| p.0 > 0.0 && p.1 > 0.0);
     let (mut x0, mut x1, mut y0, mut y1) = (f64::MAX, f64::MIN, f64::MAX, f64::MIN);
@@ -817,8 +817,7 @@ fn loglog_panel(path: &Path, area: &DrawingArea<BitMapBackend<'_>, Shift>, panel
 
 /// Points per pose index (linear axes), one panel.
 fn pose_plot(path: &Path, title: &str, ylabel: &str, series: &[Series]) -> anyhow::Result<()> {
-    let root = BitMapBackend::new(path, (1200, 700)).into_drawing_area();
-    root.fill(&WHITE).map_err(|e| plot_err(path, e))?;
+    let root = figure(path, (1200, 700))?;
     let all: Vec<(f64, f64)> = series.iter().flat_map(|s| s.2.iter().copied()).collect();
     let xmax = all.iter().map(|p| p.0).fold(1.0, f64::max) + 1.0;
     let ymax = all.iter().map(|p| p.1.abs()).fold(1e-9, f64::max) * 1.15;
