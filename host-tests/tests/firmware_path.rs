@@ -330,22 +330,18 @@ impl sinscal::sensor::source::ImuSource for Level {
 /// A one-position sequence as the replay runs it (no settling, dwells as long as the table says).
 fn level_sequence() -> sinscal::run::sequence::CalibrationSequence {
     use sinscal::instrument::wire::codes::EstimatorCode;
-    use sinscal::instrument::wire::configuration::{Configuration, RestLimits, Thresholds};
+    use sinscal::instrument::wire::configuration::{Configuration, Thresholds};
     let site = sinscal::nav::earth::Site::with_normal_gravity(45.0f32.to_radians(), 0.0);
     let schedule = [sinscal::nav::frames::Attitude::from_degrees(0.0, 0.0, 0.0)];
     let configuration = Configuration {
-        imu: sinscal::sensor::adis::Model::Adis16505_2,
         estimator: EstimatorCode::Angles,
-        terms: sinscal::calib::channels::Model::BIASES,
-        site,
         schedule: heapless::Vec::from_slice(&schedule).unwrap(),
         labels: heapless::Vec::from_slice(&[1]).unwrap(),
-        unknown_headings: 0,
         prefilter: sinscal::calib::dwell::Prefilter::None,
         dwell_value: sinscal::calib::align::DwellValue::Mean,
         max_passes: 1,
         estimate_reference_offset: false,
-        rest: RestLimits::sequence_default(),
+        ..Configuration::new(sinscal::sensor::adis::Model::Adis16505_2, site)
     };
     let settings = configuration.sequence_settings(Thresholds::REPLAY);
     sinscal::run::sequence::CalibrationSequence::new(&schedule, site, settings).unwrap()

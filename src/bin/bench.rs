@@ -28,7 +28,7 @@ mod firmware {
     use sinscal::calib::compensation::Compensation;
     use sinscal::calib::dwell::Prefilter;
     use sinscal::instrument::wire::codes::EstimatorCode;
-    use sinscal::instrument::wire::configuration::{Configuration, DeviceConfiguration, RestLimits, Thresholds};
+    use sinscal::instrument::wire::configuration::{Configuration, DeviceConfiguration, Thresholds};
     use sinscal::nav::earth::Site;
     use sinscal::nav::frames::Attitude;
     use sinscal::rig::replay::{NoDelay, ReplayDevice};
@@ -51,19 +51,15 @@ mod firmware {
     /// The six positions of Table 1 at 45.7796 N with the general estimator's default terms, one pass of the
     /// angle method, and `prefilter`.
     fn table1_configuration(estimator: EstimatorCode, prefilter: Prefilter) -> Configuration {
+        let site = Site { latitude_rad: 45.7796f32.to_radians(), gravity_mps2: 9.8063 };
         let mut c = Configuration {
-            imu: Model::Adis16505_2,
             estimator,
             terms: sinscal::calib::session::DEFAULT_MODEL,
-            site: Site { latitude_rad: 45.7796f32.to_radians(), gravity_mps2: 9.8063 },
-            schedule: heapless::Vec::new(),
-            labels: heapless::Vec::new(),
-            unknown_headings: 0,
             prefilter,
             dwell_value: sinscal::calib::align::DwellValue::Mean,
             max_passes: 1,
             estimate_reference_offset: true,
-            rest: RestLimits::sequence_default(),
+            ..Configuration::new(Model::Adis16505_2, site)
         };
         for (k, p) in sinscal::calib::solve::TABLE1_POSITIONS_DEG.iter().enumerate() {
             let _ = c.schedule.push(Attitude::from_degrees(p[0], p[1], p[2]));

@@ -97,19 +97,15 @@ pub fn replay_parts(
         Method::Channels => EstimatorCode::GeneralWithoutGyros,
     };
     let mut configuration = Configuration {
-        imu: REPLAY_MODEL,
         estimator,
         terms: options.model,
-        site,
-        schedule: Default::default(),
-        labels: Default::default(),
-        unknown_headings: 0,
         prefilter,
         dwell_value: options.dwell_value,
         max_passes: options.max_passes.min(255) as u8,
         estimate_reference_offset: options.estimate_reference_offset,
         // The limits of rest: the force tolerance asked for, the sequence's default gravity angle and rate.
         rest: RestLimits { force_error_max_mps2: options.rest_force_tolerance_mps2, ..RestLimits::sequence_default() },
+        ..Configuration::new(REPLAY_MODEL, site)
     };
     let mut attitudes = Vec::new();
     for (k, d) in dwells.iter().enumerate() {

@@ -116,6 +116,33 @@ pub struct Configuration {
 }
 
 impl Configuration {
+    /// The configuration of the sequence's defaults (the general estimator with its default terms, the paper's
+    /// prefilter, the dwell means, the angle method's passes and reference offset, the limits of rest) for an
+    /// IMU at a site, with no position yet: a caller sets what it asks for and takes the rest from here
+    /// (`Configuration { schedule, ..Configuration::new(imu, site) }`).
+    pub fn new(imu: Model, site: Site) -> Configuration {
+        let s = SequenceSettings::default();
+        let (estimator, terms) = match s.estimator {
+            Estimator::Angles => (EstimatorCode::Angles, Terms::BIASES),
+            Estimator::Channels(c) if c.use_gyro => (EstimatorCode::General, c.model),
+            Estimator::Channels(c) => (EstimatorCode::GeneralWithoutGyros, c.model),
+        };
+        Configuration {
+            imu,
+            estimator,
+            terms,
+            site,
+            schedule: Vec::new(),
+            labels: Vec::new(),
+            unknown_headings: 0,
+            prefilter: s.prefilter,
+            dwell_value: s.calibration.dwell_value,
+            max_passes: s.calibration.max_passes.min(255) as u8,
+            estimate_reference_offset: s.calibration.solver.estimate_reference_offset,
+            rest: RestLimits::sequence_default(),
+        }
+    }
+
     /// The sequence's estimator of the configuration.
     pub fn sequence_estimator(&self) -> Estimator {
         let general =
