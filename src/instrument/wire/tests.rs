@@ -92,7 +92,7 @@ fn encoded(encode: impl Fn(&mut Writer<'_>), out: &mut [u8]) -> usize {
 #[test]
 fn configurations_round_trip_and_every_truncation_or_unknown_code_is_refused() {
     let mut rng = Rng(0x5eed_c0de);
-    let mut bytes = [0u8; MAX_DEVICE_BYTES];
+    let mut bytes = [0u8; MAX_DEVICE_BYTES + 1];
     for _ in 0..300 {
         let configured = DeviceConfiguration {
             configuration: configuration(&mut rng),
