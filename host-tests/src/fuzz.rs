@@ -192,7 +192,7 @@ pub fn seeds() -> Vec<(&'static str, Reader, Vec<u8>)> {
     let scenario = Scenario { dwell_s: 1.0, ..Scenario::example() };
     let rec = scenario.recording(1, "seed.csv");
     let cal = crate::calibration::calibrate(&rec, &Options::default()).expect("the seed calibrates");
-    let cal_json = serde_json::to_string_pretty(&crate::io::calibration_result::CalibrationJson::new(&cal))
+    let cal_json = serde_json::to_string_pretty(&crate::calibration::result::CalibrationJson::new(&cal))
         .expect("the calibration serialises");
     let angles = "# sinscal-angles: 1\n# latitude_deg: 45.7796\n\
                   pos,pitch_deg,roll_deg,heading_deg,phi_e_rad,phi_n_rad,phi_u_rad,phi_e_std_rad,phi_n_std_rad,phi_u_std_rad\n\

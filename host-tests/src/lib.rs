@@ -22,5 +22,6 @@ pub mod fuzz;
 pub mod io;
 pub mod model;
 pub mod navigation;
+pub mod plot;
 pub mod stats;
 pub mod study;

@@ -30,7 +30,7 @@
 //!      ([`crate::stats::noise::detect_quantization`]), against the fraction continuous data give, as a
 //!      binomial likelihood ratio.
 //! 5. `result`: the effects found, ranked, the base model, the verdict and the criterion in words
-//!    make the [`Analysis`]; `summary` ([`summary()`]) is its human text, [`crate::io::analysis_report`] its
+//!    make the [`Analysis`]; `summary` ([`summary()`]) is its human text, [`crate::analysis::report`] its
 //!    report directory.
 //!
 //! # Criterion
@@ -63,6 +63,7 @@ mod observations;
 mod parallel;
 pub mod planted;
 mod recording;
+pub mod report;
 mod result;
 mod sample_tests;
 mod selection;

@@ -8,6 +8,7 @@ pub mod firmware_path;
 pub mod montecarlo;
 pub mod moves;
 pub mod qemu;
+pub mod result;
 pub mod rotation_mc;
 
 use sinscal::calib::align::{position_angles, DwellValue, PositionAngles};

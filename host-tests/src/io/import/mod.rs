@@ -21,9 +21,9 @@ use std::fmt::Write as _;
 use std::ops::Range;
 use std::path::{Path, PathBuf};
 
-use crate::io::calibration_result::ARCSEC_PER_RAD;
 use crate::io::error::InputError;
 use crate::io::recording::{Header, Recording, Row};
+use crate::io::ARCSEC_PER_RAD;
 
 mod columns;
 mod imucal;

@@ -4,7 +4,7 @@ use std::path::Path;
 
 use plotters::prelude::*;
 
-use crate::io::calibration_result::ARCSEC_PER_RAD;
+use crate::io::ARCSEC_PER_RAD;
 use crate::navigation::check::NavReport;
 
 fn run_color(name: &str, index: usize) -> RGBColor {
