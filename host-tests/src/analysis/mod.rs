@@ -52,16 +52,15 @@
 //! mapped the same way, the reference offset and position errors enter directly. Time-dependent and noise
 //! effects are unobservable. The same selection and result steps follow.
 //!
-//! [`hidden`] runs the hidden-effect trials: simulated sessions with one effect of the catalogue hidden.
+//! The hidden-effect trials (simulated sessions with one effect of the catalogue hidden) are the laboratory's:
+//! `sinscal_lab::hidden`, `sinscal_lab::planted`.
 
 mod angles;
 mod candidates;
 mod correlated_noise;
-pub mod hidden;
 pub mod noise_terms;
 mod observations;
 mod parallel;
-pub mod planted;
 mod recording;
 pub mod report;
 mod result;

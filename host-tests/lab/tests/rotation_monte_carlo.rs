@@ -16,15 +16,13 @@
 use std::time::Instant;
 
 use sinscal::calib::channels::parameter_name;
-use sinscal_host::calibration::bound::{
-    channel_noises, cramer_rao, design, dwell_mean_covariance, dwell_spans, Session,
-};
-use sinscal_host::calibration::rotation_mc::{
+use sinscal_host::model::simulator::simulate;
+use sinscal_host::model::synth::{mul, rotation_vector, transpose};
+use sinscal_lab::bound::{channel_noises, cramer_rao, design, dwell_mean_covariance, dwell_spans, Session};
+use sinscal_lab::rotation_mc::{
     core_jacobian_agreement, figures, gyro_parameters, integrate, move_covariance_rad2, moves_of, reference_errors,
     run_all, scenario, setup, table, truth_si, without_noise, Setup,
 };
-use sinscal_host::model::simulator::simulate;
-use sinscal_host::model::synth::{mul, rotation_vector, transpose};
 
 /// The gyro scale factors (15-17) and misalignments (18-23): the terms the moves are for.
 fn moved_terms() -> std::ops::Range<usize> {

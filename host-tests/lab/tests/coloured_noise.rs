@@ -14,14 +14,14 @@
 //! `SINSCAL_MC_RUNS=1000 cargo test -p sinscal-host --test coloured_noise -- --nocapture --test-threads 1`.
 
 use sinscal::calib::channels::{parameter_name, PARAMETERS};
-use sinscal_host::calibration::bound::{
-    channel_noises, cramer_rao, design, dwell_mean_covariance, dwell_mean_covariance_of, dwell_spans,
-    independent_weighting_covariance, pooled_variances, predict, Bound, DwellSpan, NoiseKind, Session,
-};
 use sinscal_host::calibration::{calibrate_channels, Calibration, Options, PrefilterKind};
 use sinscal_host::model::simulator::{simulate, GaussMarkovSpec, ScenarioFile, SiteSpec};
 use sinscal_host::model::synth::{DEG_PER_HOUR, MICRO_G};
 use sinscal_host::stats::noise::chi_square_cdf;
+use sinscal_lab::bound::{
+    channel_noises, cramer_rao, design, dwell_mean_covariance, dwell_mean_covariance_of, dwell_spans,
+    independent_weighting_covariance, pooled_variances, predict, Bound, DwellSpan, NoiseKind, Session,
+};
 
 /// One triad's noise in the simulator's terms, SI (rad/s for the gyros, m/s^2 for the accelerometers).
 #[derive(Clone, Copy, Debug, Default)]

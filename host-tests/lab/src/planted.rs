@@ -1,5 +1,5 @@
 //! Hidden effects in MEASURED noise (docs/analysis.md#hidden-effects-in-measured-noise): the trials of
-//! [`crate::analysis::hidden`] with the simulated white noise replaced by the noise of a real recording.
+//! [`crate::hidden`] with the simulated white noise replaced by the noise of a real recording.
 //!
 //! **Construction** ([`Construction`]). One static stretch of a measured record (one real pose: a stretch of
 //! the PSINS record over which its vehicle does not tilt, [`constant_pose_stretches`]; the first static
@@ -26,7 +26,7 @@
 //! linear in their parameter the standard error is the one `sinscal analyze` gives the candidate fitted
 //! with the base model alone on the untouched construction (the measured block noise and the design); a
 //! dimensionless or angle term is planted only where 20 standard errors stay below [`LINEAR_LIMIT`]. The
-//! others follow [`crate::analysis::hidden`] with the measured noise: warm-up from the base model's block
+//! others follow [`crate::hidden`] with the measured noise: warm-up from the base model's block
 //! residual RMS, vibration from the noise density at the line's frequency, correlated noise and
 //! quantisation from the detrended RMS of the samples.
 
@@ -35,16 +35,16 @@ use std::collections::BTreeMap;
 use rand::{Rng, SeedableRng};
 use rand_chacha::ChaCha8Rng;
 
-use crate::analysis::hidden::{catalogue, clean_scenario, Hidden};
-use crate::analysis::{analyze_recording, Analysis, Effect, BLOCK_SAMPLES, CHANNELS, MAX_BLOCKS_PER_DWELL};
-use crate::calibration::site_of;
-use crate::io::error::InputError;
-use crate::io::recording::{Header, Recording, Row};
-use crate::model::catalogue::{EffectKind, Sensor};
-use crate::model::sensor::Term;
-use crate::model::simulator::normal;
-use crate::model::synth::{c_b_n, earth_rate_n_radps, mul, mul_t_vec, rotation, M3, TABLE1_DEG};
-use crate::stats::noise::{detect_quantization, welch_psd};
+use crate::hidden::{catalogue, Hidden};
+use sinscal_host::analysis::{analyze_recording, Analysis, Effect, BLOCK_SAMPLES, CHANNELS, MAX_BLOCKS_PER_DWELL};
+use sinscal_host::calibration::site_of;
+use sinscal_host::io::error::InputError;
+use sinscal_host::io::recording::{Header, Recording, Row};
+use sinscal_host::model::catalogue::{EffectKind, Sensor};
+use sinscal_host::model::sensor::Term;
+use sinscal_host::model::simulator::{clean_scenario, normal};
+use sinscal_host::model::synth::{c_b_n, earth_rate_n_radps, mul, mul_t_vec, rotation, M3, TABLE1_DEG};
+use sinscal_host::stats::noise::{detect_quantization, welch_psd};
 
 /// The measured records the trials take their noise from.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, PartialOrd, Ord, Hash)]
@@ -493,7 +493,7 @@ pub fn carried(p: &Prepared) -> Vec<(EffectKind, Vec<&'static str>)> {
 /// The truth of a planted trial and the random numbers its planting needs.
 #[derive(Clone, Debug)]
 pub struct Planted {
-    /// The truth, as [`crate::analysis::hidden`] states it.
+    /// The truth, as [`crate::hidden`] states it.
     pub hidden: Hidden,
     /// Vibration phase, rad.
     pub phase_rad: f64,

@@ -18,7 +18,7 @@ use std::time::{Duration, Instant};
 
 use rand::{Rng, SeedableRng};
 use rand_chacha::ChaCha8Rng;
-use sinscal_host::fuzz::{seeds, Reader};
+use sinscal_lab::fuzz::{seeds, Reader};
 
 /// Numbers a mutation puts in place of one in the text.
 const EXTREMES: [&str; 14] =
@@ -79,7 +79,7 @@ fn mutate(input: &[u8], rng: &mut ChaCha8Rng) -> Vec<u8> {
 }
 
 fn corpus_dir(target: &str) -> PathBuf {
-    PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("fuzz-corpus").join(target)
+    PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../fuzz-corpus").join(target)
 }
 
 /// Runs `reader` on `input`; `Err` with the reason for a panic or a non-finite value accepted.
