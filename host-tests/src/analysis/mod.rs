@@ -52,8 +52,8 @@
 //! mapped the same way, the reference offset and position errors enter directly. Time-dependent and noise
 //! effects are unobservable. The same selection and result steps follow.
 //!
-//! The hidden-effect trials (simulated sessions with one effect of the catalogue hidden) are the laboratory's:
-//! `sinscal_lab::hidden`, `sinscal_lab::planted`.
+//! The hidden-effect trials (simulated sessions with one effect of the catalogue hidden) are the laboratory's
+//! (the crate sinscal-lab, host-tests/lab/).
 
 mod angles;
 mod candidates;

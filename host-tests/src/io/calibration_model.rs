@@ -370,8 +370,8 @@ pub const MAX_G_SENSITIVITY_RADPS_PER_MPS2: f64 = 1e-3;
 /// Largest level error of a reference attitude, rad (2.9 degrees: a face placed by hand on a cube).
 pub const MAX_LEVEL_ERROR_RAD: f64 = 0.05;
 
-/// The biases and the g-sensitivity within the plausible limits above (also the effect catalogue's,
-/// [`crate::model::catalogue`], the limits `analyze` holds its effects to): a value beyond them is not a
+/// The biases and the g-sensitivity within the plausible limits above (also the effect catalogue's, in
+/// `model::catalogue`: the limits `analyze` holds its effects to): a value beyond them is not a
 /// calibration of any instrument, and compensating with it gives numbers that mean nothing (a bias of 1e308
 /// rad/s navigates to NaN).
 fn check_plausible(model: &CalibrationModel) -> Result<(), String> {
