@@ -1,7 +1,7 @@
 //! Every reader of sinscal as a fuzz target (docs/formats.md#bad-input): bytes in, the input accepted (with
 //! finite values) or refused with a reason; anything else (a panic, a non-finite value accepted, the file
 //! reader disagreeing with the text reader) is a failure. The stable mutation harness
-//! (`host-tests/tests/fuzz_readers.rs`) and the cargo-fuzz targets (`host-tests/fuzz/`) run these same
+//! (`host-tests/lab/tests/fuzz_readers.rs`) and the cargo-fuzz targets (`host-tests/fuzz/`) run these same
 //! functions, from the same seeds.
 
 use sinscal::rig::replay::{run_replay, ReplayError};

@@ -9,7 +9,7 @@
 //! `cargo test` runs a short campaign (`SINSCAL_FUZZ_INPUTS`, default 2000 inputs per target, a tenth of that
 //! for the file reader, which writes a file per input); the opt-in
 //! campaign of the size:
-//!     SINSCAL_FUZZ_INPUTS=1000000 cargo test --release -p sinscal-host --test fuzz_readers -- --nocapture
+//!     SINSCAL_FUZZ_INPUTS=1000000 cargo test --release -p sinscal-lab --test fuzz_readers -- --nocapture
 //! It reports per target the inputs run, the share accepted, the panics and the slowest input (a hang would
 //! show there: every input is bounded, so the slowest is the longest reader run).
 

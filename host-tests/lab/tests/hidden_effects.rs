@@ -4,7 +4,7 @@
 //!
 //! The fast subset (one trial per effect, seed 1, and three clean sessions) runs in `cargo test`. The
 //! campaign over many seeds is opt-in and measures the detection rate per effect and the false-alarm rate:
-//!     SINSCAL_HIDDEN_SEEDS=100 cargo test --release -p sinscal-host --test hidden_effects -- --ignored --nocapture
+//!     SINSCAL_HIDDEN_SEEDS=100 cargo test --release -p sinscal-lab --test hidden_effects -- --ignored --nocapture
 
 use sinscal_lab::hidden::{catalogue, clean_trial, reference_errors, trial, Outcome};
 

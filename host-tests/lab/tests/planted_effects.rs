@@ -6,7 +6,7 @@
 //! The fast test checks the harness on one construction per record: the measured noise is kept sample for
 //! sample, the untouched construction keeps the record's quantisation, and every planted linear effect is
 //! recovered by the analysis's fit of its column alone. It prints what it measured. The campaign is opt-in:
-//!     SINSCAL_DATA=DIR SINSCAL_PLANTED_RUNS=20 cargo test -p sinscal-host --test planted_effects -- --ignored --nocapture
+//!     SINSCAL_DATA=DIR SINSCAL_PLANTED_RUNS=20 cargo test -p sinscal-lab --test planted_effects -- --ignored --nocapture
 //! (20 trials per effect and record by default; the table of docs/analysis.md#hidden-effects-in-measured-noise).
 
 #[path = "../../tests/common/mod.rs"]
