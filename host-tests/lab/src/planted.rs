@@ -5,7 +5,7 @@
 //! the PSINS record over which its vehicle does not tilt, [`constant_pose_stretches`]; the first static
 //! interval of the imu_tk record) is cut into the dwells of a schedule of known poses, the paper's Table 1
 //! ([`Layout`]). Every sample becomes its measured value minus the session's own straight line (the
-//! record's slow drift over the session, removed through its quantiser: [`session_drift`]), plus what its
+//! record's slow drift over the session, removed through its quantiser: `session_drift`), plus what its
 //! pose predicts (the Earth rate and gravity through the pose's `C_b^n`) plus the clean scenario's constant
 //! biases. One line per channel is removed and one constant per dwell added: the sample-to-sample values,
 //! the dwell-to-dwell wander, and with them the Allan curve, the correlation and the quantisation lattice of
@@ -18,8 +18,8 @@
 //! reference offset, position error) are added as that constant; effects that move within a dwell (drift,
 //! warm-up, vibration, correlated noise) are added through a quantiser with the measured record's step, so
 //! that a quantised channel stays on its lattice: for the PSINS increments the remainder is carried from
-//! sample to sample as a pulse-output sensor does ([`carry_quantised`]), for the imu_tk sampled counts the
-//! sum is rounded again with the record's unknown rounding error drawn uniform ([`sample_quantised`]); a
+//! sample to sample as a pulse-output sensor does (`carry_quantised`), for the imu_tk sampled counts the
+//! sum is rounded again with the record's unknown rounding error drawn uniform (`sample_quantised`); a
 //! planted quantisation requantises the channel to a coarser step.
 //!
 //! **Magnitudes** ([`draw`]): 10 to 20 standard errors of the effect in that construction. For the effects
@@ -83,7 +83,7 @@ pub struct Construction {
     /// Per row of `recording`: the row of the measured record it came from.
     pub source_rows: Vec<usize>,
     /// Per row of `recording`, per channel (gx..az): the record's own drift over the session removed from it,
-    /// SI ([`session_drift`]).
+    /// SI (`session_drift`).
     pub drift_removed_si: Vec<[f64; 6]>,
     /// Per channel (gx..az): the measured record's quantisation step, SI, when its samples are quantised.
     pub steps_si: [Option<f64>; 6],

@@ -156,7 +156,7 @@ pub struct ImportArgs {
     /// columns: the layout file (TOML, docs/data.md#described-layouts).
     #[arg(long)]
     pub layout: Option<PathBuf>,
-    /// columns: a position as START_S,END_S,PITCH_DEG,ROLL_DEG[,HEADING_DEG] (heading empty or '?' = unknown),
+    /// columns: a position as `START_S,END_S,PITCH_DEG,ROLL_DEG[,HEADING_DEG]` (heading empty or '?' = unknown),
     /// instead of a labels file; repeat it for each position (numbered 1, 2, ... in order).
     #[arg(long, value_name = "START_S,END_S,PITCH_DEG,ROLL_DEG[,HEADING_DEG]")]
     pub position: Vec<String>,
