@@ -3,8 +3,8 @@
 
 use assert_cmd::Command;
 use serde_json::Value;
-use sinscal_host::analysis::hidden::clean_scenario;
 use sinscal_host::analysis::{analyze_angles, analyze_recording, AnglesFile};
+use sinscal_host::model::simulator::clean_scenario;
 use sinscal_host::model::simulator::{simulate, PositionError, ScenarioFile};
 use sinscal_host::model::synth::{c_b_n, TABLE1_DEG};
 

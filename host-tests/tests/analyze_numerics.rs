@@ -5,9 +5,9 @@
 
 mod common;
 
-use sinscal_host::analysis::hidden::clean_scenario;
 use sinscal_host::analysis::{analyze_recording, Analysis};
 use sinscal_host::model::catalogue::EffectKind;
+use sinscal_host::model::simulator::clean_scenario;
 use sinscal_host::model::simulator::{simulate, PositionError, ScenarioFile};
 
 /// The analysis of the scenario with its positions `positions_deg`.

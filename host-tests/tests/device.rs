@@ -12,10 +12,10 @@ use sinscal::instrument::link::{encode_frame, MAX_WIRE_BYTES, PROTOCOL_VERSION};
 use sinscal::instrument::message::{kind, DeviceState, ErrorCode};
 use sinscal_host::calibration::qemu::firmware_binary;
 use sinscal_host::calibration::qemu::QEMU;
+use sinscal_host::calibration::result::CalibrationJson;
 use sinscal_host::calibration::Options;
 use sinscal_host::device::client::LinkError;
 use sinscal_host::device::{boot_elf, boot_qemu, calibration_of_record, configuration_body, read_record, replay_for};
-use sinscal_host::io::calibration_result::CalibrationJson;
 use sinscal_host::model::synth::Scenario;
 
 fn sinscal() -> Command {

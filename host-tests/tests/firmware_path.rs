@@ -30,7 +30,7 @@ fn replay_matches_the_direct_calibration_to_the_device_quantisation() {
     assert_eq!((s.events as usize, s.readings as usize), (rec.rows.len(), rec.rows.len()));
     assert_eq!(s.faults() + s.queue_full + s.missed_samples, 0);
     // The JSON lists every fault counter: bus, checksum, stalled counter, status flag, dead bus.
-    let json = serde_json::to_value(sinscal_host::io::calibration_result::CalibrationJson::new(&replayed)).unwrap();
+    let json = serde_json::to_value(sinscal_host::calibration::result::CalibrationJson::new(&replayed)).unwrap();
     assert_eq!(json["sampling"]["faults"], serde_json::json!([0, 0, 0, 0, 0]));
     assert_eq!(json["sampling"]["readings"].as_u64(), Some(rec.rows.len() as u64));
     for (a, b) in direct.positions.iter().zip(&replayed.positions) {

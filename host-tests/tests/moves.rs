@@ -174,7 +174,7 @@ fn the_firmware_path_integrates_the_moves_too() {
     if common::qemu_available(" (the moves in QEMU)") {
         let qemu = sinscal_host::calibration::qemu::calibrate_on_qemu(&rec, &options).expect("--on qemu");
         let json = |c: &Calibration| {
-            let mut v = serde_json::to_value(sinscal_host::io::calibration_result::CalibrationJson::new(c)).unwrap();
+            let mut v = serde_json::to_value(sinscal_host::calibration::result::CalibrationJson::new(c)).unwrap();
             v.as_object_mut().unwrap().remove("on");
             v
         };

@@ -151,8 +151,8 @@ fn schuler_period_and_level_error_of_an_accelerometer_bias() {
 
 #[test]
 fn a_six_position_calibration_shows_its_gain_in_a_two_hour_run() {
+    use sinscal_host::calibration::result::CalibrationJson;
     use sinscal_host::calibration::{calibrate, Options};
-    use sinscal_host::io::calibration_result::CalibrationJson;
     use sinscal_host::navigation::check::{navigate, NavCalibration, NavOptions};
 
     // SIMULATION: the built-in example IMU, calibrated on Table 1, then 2 hours at rest at position 1.

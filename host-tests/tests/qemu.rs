@@ -13,8 +13,8 @@ use sinscal_host::calibration::firmware_path::{calibrate_on_host, replay_file};
 use sinscal_host::calibration::qemu::{
     calibrate_on_qemu, firmware_binary, firmware_elf, run_firmware, run_with_output,
 };
+use sinscal_host::calibration::result::CalibrationJson;
 use sinscal_host::calibration::Options;
-use sinscal_host::io::calibration_result::CalibrationJson;
 use sinscal_host::model::synth::Scenario;
 
 fn json_without_on(c: &sinscal_host::calibration::Calibration) -> serde_json::Value {

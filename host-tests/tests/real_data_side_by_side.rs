@@ -13,8 +13,8 @@ use common::held_out::{
 };
 use sinscal::calib::channels::{AttitudeKnowledge, Model, Term, GAUGE_PARAMETERS};
 use sinscal::nav::earth::normal_gravity_mps2;
+use sinscal_host::calibration::result::summary;
 use sinscal_host::calibration::{calibrate, site_of, Calibration, Options, DEFAULT_MODEL};
-use sinscal_host::io::calibration_result::summary;
 use sinscal_host::io::import::{
     import_imutk, import_psins, StaticDetection, FERRARIS_POSES, IMUTK_ACCEL_GAIN_COUNTS_PER_MPS2,
     IMUTK_GYRO_GAIN_COUNTS_PER_RADPS, IMUTK_OFFSET_COUNTS,

@@ -1,7 +1,7 @@
-//! The repository's own rules, checked on its files: the core's layers use only the layers below them,
-//! nothing cites a file outside the repository, every citation of `docs/` names a page and a heading
-//! that exist, and the command line's figures need no C font library. These read the source tree; they run
-//! no code of the project.
+//! The repository's own rules, checked on its files: the core's layers and the host's use only the layers below
+//! them, the host's product library never names the laboratory crate, nothing cites a file outside the
+//! repository, every citation of `docs/` names a page and a heading that exist, and the command line's figures
+//! need no C font library. These read the source tree; they run no code of the project.
 
 use std::collections::BTreeSet;
 use std::fs;
@@ -66,6 +66,104 @@ fn core_layers_use_only_the_layers_below_them() {
         .filter(|n| !LAYERS.contains(&n.as_str()))
         .collect();
     assert_eq!(top, BTreeSet::from(["bin".to_string(), "lib.rs".to_string()]), "files beside the layers in src/");
+}
+
+/// The host's layers (sinscal-host's top-level modules), lowest first, with their rank: a module may use only
+/// modules of a lower rank (and itself); modules of the same rank do not use each other. io/ is the lowest.
+const HOST_LAYERS: [(&str, usize); 10] = [
+    ("io", 0),
+    ("model", 1),
+    ("stats", 1),
+    ("calibration", 2),
+    ("navigation", 3),
+    ("device", 3),
+    ("plot", 4),
+    ("analysis", 5),
+    ("study", 5),
+    ("cmd", 6),
+];
+
+/// The `crate::` paths of the host file `text` that name a host layer: (line, layer, rank).
+fn host_layer_uses(text: &str) -> Vec<(usize, &'static str, usize)> {
+    let mut uses = Vec::new();
+    for (n, line) in text.lines().enumerate() {
+        for (i, _) in line.match_indices("crate::") {
+            let used = line[i + "crate::".len()..].split(|c: char| !c.is_alphanumeric() && c != '_').next();
+            if let Some(&(layer, rank)) = used.and_then(|u| HOST_LAYERS.iter().find(|(l, _)| *l == u)) {
+                uses.push((n + 1, layer, rank));
+            }
+        }
+    }
+    uses
+}
+
+#[test]
+fn host_layers_use_only_the_layers_below_them() {
+    let src = root().join("host-tests").join("src");
+    let mut violations = Vec::new();
+    let mut checked = 0;
+    for (layer, rank) in HOST_LAYERS {
+        let mut rs = Vec::new();
+        let file = src.join(format!("{layer}.rs"));
+        if file.is_file() {
+            rs.push(file);
+        }
+        files(&src.join(layer), &[".rs"], &mut rs);
+        assert!(!rs.is_empty(), "host layer {layer} has no files under host-tests/src");
+        for file in rs {
+            let text = fs::read_to_string(&file).unwrap();
+            for (n, used, used_rank) in host_layer_uses(&text) {
+                if used == layer {
+                    continue;
+                }
+                checked += 1;
+                if used_rank >= rank {
+                    violations.push(format!("{}:{n}: {layer} uses {used}", file.display()));
+                }
+            }
+        }
+    }
+    println!("host layers: {checked} cross-layer paths checked, {} violations", violations.len());
+    assert!(checked > 50, "only {checked} cross-module paths found: the scan is not reading the host's layers");
+    assert!(violations.is_empty(), "a host layer uses a layer above it (or beside it):\n{}", violations.join("\n"));
+    // Nothing of the host's library lives outside the layers but the crate root and the binary's entry point.
+    let top: BTreeSet<String> = fs::read_dir(&src)
+        .unwrap()
+        .flatten()
+        .map(|e| e.file_name().to_string_lossy().into_owned())
+        .filter(|n| !HOST_LAYERS.iter().any(|(l, _)| *l == n.as_str() || format!("{l}.rs") == *n))
+        .collect();
+    assert_eq!(
+        top,
+        BTreeSet::from(["lib.rs".to_string(), "main.rs".to_string()]),
+        "files beside the layers in host-tests/src"
+    );
+}
+
+/// The product (sinscal-host) never uses the laboratory (sinscal-lab, host-tests/lab): the laboratory depends on
+/// the product, not the other way round (only its own tests may name it, and today none does).
+#[test]
+fn the_product_never_names_the_laboratory() {
+    let host = root().join("host-tests");
+    let mut rs = Vec::new();
+    files(&host.join("src"), &[".rs"], &mut rs);
+    assert!(rs.len() > 50, "only {} files of host-tests/src read", rs.len());
+    let mut hits = Vec::new();
+    for file in rs {
+        let text = fs::read_to_string(&file).unwrap();
+        for (n, line) in text.lines().enumerate() {
+            if line.contains(["sinscal", "_lab"].concat().as_str()) {
+                hits.push(format!("{}:{}: {}", file.display(), n + 1, line.trim()));
+            }
+        }
+    }
+    let manifest = fs::read_to_string(host.join("Cargo.toml")).unwrap();
+    for (n, line) in manifest.lines().enumerate() {
+        if line.contains(["sinscal", "-lab"].concat().as_str()) {
+            hits.push(format!("host-tests/Cargo.toml:{}: {}", n + 1, line.trim()));
+        }
+    }
+    assert!(hits.is_empty(), "the product names the laboratory:\n{}", hits.join("\n"));
 }
 
 /// A real board is a package of its own (boards/): no code of the core names a board's crates (its HAL, its

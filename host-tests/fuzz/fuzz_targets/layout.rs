@@ -1,8 +1,8 @@
-//! libFuzzer target: sinscal_host::fuzz::read_layout (the layout file of `sinscal import columns`; a panic, or an Err,
+//! libFuzzer target: sinscal_lab::fuzz::read_layout (the layout file of `sinscal import columns`; a panic, or an Err,
 //! is a finding).
 #![no_main]
 libfuzzer_sys::fuzz_target!(|data: &[u8]| {
-    if let Err(reason) = sinscal_host::fuzz::read_layout(data) {
+    if let Err(reason) = sinscal_lab::fuzz::read_layout(data) {
         panic!("{reason}");
     }
 });

@@ -1,7 +1,7 @@
-//! libFuzzer target: sinscal_host::fuzz::read_scenario (a panic, or an Err, is a finding).
+//! libFuzzer target: sinscal_lab::fuzz::read_scenario (a panic, or an Err, is a finding).
 #![no_main]
 libfuzzer_sys::fuzz_target!(|data: &[u8]| {
-    if let Err(reason) = sinscal_host::fuzz::read_scenario(data) {
+    if let Err(reason) = sinscal_lab::fuzz::read_scenario(data) {
         panic!("{reason}");
     }
 });

@@ -30,7 +30,7 @@
 //!      ([`crate::stats::noise::detect_quantization`]), against the fraction continuous data give, as a
 //!      binomial likelihood ratio.
 //! 5. `result`: the effects found, ranked, the base model, the verdict and the criterion in words
-//!    make the [`Analysis`]; `summary` ([`summary()`]) is its human text, [`crate::io::analysis_report`] its
+//!    make the [`Analysis`]; `summary` ([`summary()`]) is its human text, [`crate::analysis::report`] its
 //!    report directory.
 //!
 //! # Criterion
@@ -52,17 +52,17 @@
 //! mapped the same way, the reference offset and position errors enter directly. Time-dependent and noise
 //! effects are unobservable. The same selection and result steps follow.
 //!
-//! [`hidden`] runs the hidden-effect trials: simulated sessions with one effect of the catalogue hidden.
+//! The hidden-effect trials (simulated sessions with one effect of the catalogue hidden) are the laboratory's
+//! (the crate sinscal-lab, host-tests/lab/).
 
 mod angles;
 mod candidates;
 mod correlated_noise;
-pub mod hidden;
 pub mod noise_terms;
 mod observations;
 mod parallel;
-pub mod planted;
 mod recording;
+pub mod report;
 mod result;
 mod sample_tests;
 mod selection;

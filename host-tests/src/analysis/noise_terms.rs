@@ -24,7 +24,7 @@ use std::f64::consts::{LN_2, PI};
 use serde::Serialize;
 
 use super::{FigureData, CHANNELS};
-use crate::io::calibration_result::ARCSEC_PER_RAD;
+use crate::io::ARCSEC_PER_RAD;
 use crate::model::synth::{DEG_PER_HOUR, MICRO_G};
 use crate::stats::linfit::chi_square_quantile_upper;
 use crate::stats::noise::{

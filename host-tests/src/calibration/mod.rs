@@ -1,14 +1,12 @@
 //! `sinscal calibrate`: a recording through the no_std core (dwell collection, alignment, solution).
 //! Every formula is the core's; this module only reads, converts to f32 at the edge, and checks input.
 
-pub mod bound;
-pub mod compare;
 pub mod estimates;
 pub mod firmware_path;
 pub mod montecarlo;
 pub mod moves;
 pub mod qemu;
-pub mod rotation_mc;
+pub mod result;
 
 use sinscal::calib::align::{position_angles, DwellValue, PositionAngles};
 use sinscal::calib::calibration::{

@@ -28,7 +28,7 @@ pub fn run(args: Args) -> anyhow::Result<()> {
         super::out(&crate::analysis::summary(&analysis))?;
     }
     if let Some(dir) = report {
-        let files = crate::io::analysis_report::write_report(&analysis, &dir)?;
+        let files = crate::analysis::report::write_report(&analysis, &dir)?;
         if !quiet {
             super::out(&format!("report: {} ({})\n", dir.display(), files.join(", ")))?;
         }

@@ -10,11 +10,11 @@ use sinscal::calib::channels::Model;
 use crate::calibration::estimates::parse_model;
 use crate::calibration::firmware_path::calibrate_on_host;
 use crate::calibration::qemu::calibrate_on_qemu;
+use crate::calibration::result::{summary, CalibrationJson};
 use crate::calibration::{
     calibrate, Calibration, Coefficient, Method, Options, PrefilterKind, DEFAULT_METHOD, DEFAULT_MODEL,
 };
 use crate::cmd::write_json;
-use crate::io::calibration_result::{summary, CalibrationJson};
 use crate::io::recording::RecordingFile;
 
 /// The prefilter in front of the dwell statistics.

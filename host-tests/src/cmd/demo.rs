@@ -8,9 +8,9 @@ use anyhow::Context as _;
 
 use crate::calibration::{calibrate, Calibration, Options};
 use crate::cmd::calibrate::finish;
-use crate::io::calibration_result::ARCSEC_PER_RAD;
 use crate::io::error::InputError;
 use crate::io::recording::Recording;
+use crate::io::ARCSEC_PER_RAD;
 use crate::model::synth::{Scenario, DEG_PER_HOUR, MICRO_G};
 
 /// Arguments of `sinscal demo`.

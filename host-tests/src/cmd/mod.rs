@@ -2,7 +2,6 @@
 //! Every subcommand prints a summary to stdout and, with `--json FILE`, writes its machine-readable result
 //! (`-` = stdout). The command line is described in docs/cli.md.
 
-use std::io::Write as _;
 use std::path::Path;
 
 use anyhow::Context as _;
@@ -20,25 +19,7 @@ pub mod navigate;
 pub mod simulate;
 pub mod study;
 
-/// Standard output could not be written: the reader closed it (a broken pipe: `sinscal ... | head`), or
-/// it failed (a full disk, `/dev/full`). `main` ends quietly with status 0 on a broken pipe (the reader
-/// wanted no more) and with the error and status 1 otherwise; nothing panics.
-#[derive(Debug)]
-pub struct StdoutError(pub std::io::Error);
-
-impl std::fmt::Display for StdoutError {
-    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
-        write!(f, "writing to standard output: {}", self.0)
-    }
-}
-
-impl std::error::Error for StdoutError {}
-
-/// Writes `text` to standard output (and flushes it), with a [`StdoutError`] when that fails.
-pub fn out(text: &str) -> anyhow::Result<()> {
-    let mut stdout = std::io::stdout().lock();
-    stdout.write_all(text.as_bytes()).and_then(|()| stdout.flush()).map_err(|e| StdoutError(e).into())
-}
+pub use crate::io::{out, StdoutError};
 
 /// Writes `text` to `path`, or to stdout when `path` is `-`.
 pub fn write_output(path: &Path, text: &str) -> anyhow::Result<()> {

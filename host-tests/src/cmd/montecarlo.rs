@@ -4,7 +4,7 @@ use std::path::PathBuf;
 
 use crate::calibration::montecarlo;
 use crate::cmd::write_json;
-use crate::io::calibration_result::ARCSEC_PER_RAD;
+use crate::io::ARCSEC_PER_RAD;
 use crate::model::synth::{Scenario, DEG_PER_HOUR, MICRO_G};
 
 /// Arguments of `sinscal montecarlo`.

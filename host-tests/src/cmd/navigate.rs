@@ -4,10 +4,10 @@
 use std::path::PathBuf;
 
 use crate::cmd::{json_to_stdout, write_json};
-use crate::io::calibration_result::ARCSEC_PER_RAD;
-use crate::io::plot::navigation_plot;
 use crate::io::recording::RecordingFile;
+use crate::io::ARCSEC_PER_RAD;
 use crate::navigation::check::{navigate, NavCalibration, NavOptions, NavReport};
+use crate::plot::navigation_plot;
 
 /// Arguments of `sinscal navigate`.
 #[derive(clap::Args)]

@@ -358,12 +358,23 @@ impl<'de> serde::de::Visitor<'de> for NoDuplicateKeys {
     }
 }
 
-/// The biases and the g-sensitivity within the plausible limits of the effect catalogue
-/// ([`crate::model::catalogue`], the limits `analyze` holds its effects to): a value beyond them is not a
+/// Largest gyro bias a plausible instrument has, rad/s (5.7 deg/s: consumer MEMS gyros reach 1 to 3 deg/s).
+pub const MAX_GYRO_BIAS_RADPS: f64 = 0.1;
+/// Largest accelerometer bias a plausible instrument has, m/s^2 (0.2 g: the raw counts of a consumer MEMS
+/// read with its nominal offset are 0.1 g off).
+pub const MAX_ACCEL_BIAS_MPS2: f64 = 2.0;
+/// Largest scale factor error and misalignment, 1 (5 %, 2.9 degrees).
+pub const MAX_SCALE_OR_MISALIGNMENT: f64 = 0.05;
+/// Largest gyro g-sensitivity, (rad/s)/(m/s^2) (0.56 (deg/s)/g; MEMS gyros are specified at 0.01 to 0.1).
+pub const MAX_G_SENSITIVITY_RADPS_PER_MPS2: f64 = 1e-3;
+/// Largest level error of a reference attitude, rad (2.9 degrees: a face placed by hand on a cube).
+pub const MAX_LEVEL_ERROR_RAD: f64 = 0.05;
+
+/// The biases and the g-sensitivity within the plausible limits above (also the effect catalogue's, in
+/// `model::catalogue`: the limits `analyze` holds its effects to): a value beyond them is not a
 /// calibration of any instrument, and compensating with it gives numbers that mean nothing (a bias of 1e308
 /// rad/s navigates to NaN).
 fn check_plausible(model: &CalibrationModel) -> Result<(), String> {
-    use crate::model::catalogue::{MAX_ACCEL_BIAS_MPS2, MAX_GYRO_BIAS_RADPS, MAX_G_SENSITIVITY_RADPS_PER_MPS2};
     let limits: [(&str, Vec<f64>, f64, &str); 3] = [
         ("gyro_bias_radps", model.gyro_bias_radps.to_vec(), MAX_GYRO_BIAS_RADPS, "rad/s"),
         ("accel_bias_mps2", model.accel_bias_mps2.to_vec(), MAX_ACCEL_BIAS_MPS2, "m/s^2"),

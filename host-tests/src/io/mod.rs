@@ -1,17 +1,39 @@
 //! Files in and out: the recording reader and writer, the importers of measured data sets, the
-//! calibration result (JSON and summary), the analysis report and the figures. Formats: docs/formats.md.
+//! calibration model to compensate with, standard output. The lowest host layer: it imports nothing else of
+//! the crate (the writers of the calibration result, the analysis and the study reports and the figures live
+//! next to what they write). Formats: docs/formats.md.
 
-pub mod analysis_report;
 pub mod calibration_model;
-pub mod calibration_result;
 pub mod dwell_tally;
 pub mod error;
 pub mod import;
-pub mod plot;
 pub mod recording;
-pub mod study_report;
 
+use std::io::Write as _;
 use std::path::Path;
+
+/// Arcseconds per radian.
+pub const ARCSEC_PER_RAD: f64 = 206_264.806_247_096_36;
+
+/// Standard output could not be written: the reader closed it (a broken pipe: `sinscal ... | head`), or
+/// it failed (a full disk, `/dev/full`). `main` ends quietly with status 0 on a broken pipe (the reader
+/// wanted no more) and with the error and status 1 otherwise; nothing panics.
+#[derive(Debug)]
+pub struct StdoutError(pub std::io::Error);
+
+impl std::fmt::Display for StdoutError {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        write!(f, "writing to standard output: {}", self.0)
+    }
+}
+
+impl std::error::Error for StdoutError {}
+
+/// Writes `text` to standard output (and flushes it), with a [`StdoutError`] when that fails.
+pub fn out(text: &str) -> anyhow::Result<()> {
+    let mut stdout = std::io::stdout().lock();
+    stdout.write_all(text.as_bytes()).and_then(|()| stdout.flush()).map_err(|e| StdoutError(e).into())
+}
 
 /// Whether `a` and `b` are the same existing file (also through links or different spellings of the path).
 pub fn same_file(a: &Path, b: &Path) -> bool {

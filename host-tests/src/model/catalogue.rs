@@ -150,17 +150,12 @@ impl EffectKind {
     }
 }
 
-/// Largest gyro bias a plausible instrument has, rad/s (5.7 deg/s: consumer MEMS gyros reach 1 to 3 deg/s).
-pub const MAX_GYRO_BIAS_RADPS: f64 = 0.1;
-/// Largest accelerometer bias a plausible instrument has, m/s^2 (0.2 g: the raw counts of a consumer MEMS
-/// read with its nominal offset are 0.1 g off).
-pub const MAX_ACCEL_BIAS_MPS2: f64 = 2.0;
-/// Largest scale factor error and misalignment, 1 (5 %, 2.9 degrees).
-pub const MAX_SCALE_OR_MISALIGNMENT: f64 = 0.05;
-/// Largest gyro g-sensitivity, (rad/s)/(m/s^2) (0.56 (deg/s)/g; MEMS gyros are specified at 0.01 to 0.1).
-pub const MAX_G_SENSITIVITY_RADPS_PER_MPS2: f64 = 1e-3;
-/// Largest level error of a reference attitude, rad (2.9 degrees: a face placed by hand on a cube).
-pub const MAX_LEVEL_ERROR_RAD: f64 = 0.05;
+// The plausible limits of any instrument are the calibration model's (io::calibration_model): the reader of a
+// calibration refuses values beyond them, and the catalogue holds its effects to them.
+pub use crate::io::calibration_model::{
+    MAX_ACCEL_BIAS_MPS2, MAX_GYRO_BIAS_RADPS, MAX_G_SENSITIVITY_RADPS_PER_MPS2, MAX_LEVEL_ERROR_RAD,
+    MAX_SCALE_OR_MISALIGNMENT,
+};
 /// Largest heading error of a reference attitude, rad (29 degrees).
 pub const MAX_HEADING_ERROR_RAD: f64 = 0.5;
 

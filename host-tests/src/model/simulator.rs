@@ -291,6 +291,15 @@ fn check_offdiagonal(m: &M3, what: &str) -> Result<(), String> {
     Ok(())
 }
 
+/// The clean scenario (`host-tests/scenarios/table1-clean.toml`: constant biases and white noise only), the one
+/// the hidden-effect trials and the analysis tests start from.
+pub const CLEAN_SCENARIO: &str = include_str!("../../scenarios/table1-clean.toml");
+
+/// The clean scenario, parsed.
+pub fn clean_scenario() -> ScenarioFile {
+    ScenarioFile::parse(CLEAN_SCENARIO, "table1-clean.toml").expect("the built-in clean scenario parses")
+}
+
 impl ScenarioFile {
     /// Reads and checks a scenario file.
     pub fn read(path: &Path) -> Result<ScenarioFile, InputError> {
@@ -452,7 +461,7 @@ pub(crate) fn rng(seed: u64, stream: u64) -> ChaCha8Rng {
 }
 
 /// A standard normal draw.
-pub(crate) fn normal(r: &mut ChaCha8Rng) -> f64 {
+pub fn normal(r: &mut ChaCha8Rng) -> f64 {
     StandardNormal.sample(r)
 }
 

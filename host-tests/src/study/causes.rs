@@ -2,7 +2,7 @@
 //! a [`Cause`] with that number in words; the causes are ranked by how far the number is from the base model.
 
 use super::{unit_of, Cause, ChannelNoise, PoseStudy, Study, Sway, CHANNELS, CORRELATED_RATIO, POSE_SPREAD_RATIO};
-use crate::io::calibration_result::ARCSEC_PER_RAD;
+use crate::io::ARCSEC_PER_RAD;
 use crate::model::synth::MICRO_G;
 
 /// A cause with its strength (how many times what the base model explains; the ranking key).

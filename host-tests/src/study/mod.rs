@@ -32,7 +32,7 @@
 //! | [`factory`] | imu_tk: the fitted accelerometer against the factory calibration |
 //! | [`causes`] | naming the causes from the numbers |
 //!
-//! The summary, the JSON and the figures are written by [`crate::io::study_report`].
+//! The summary, the JSON and the figures are written by [`crate::study::report`].
 
 pub mod accel;
 pub mod causes;
@@ -43,6 +43,7 @@ pub mod multi_pose;
 pub mod noise;
 pub mod noise_extension;
 pub mod psins;
+pub mod report;
 pub mod rotations;
 
 use std::path::{Path, PathBuf};
@@ -512,6 +513,6 @@ pub fn run(
         return Err(InputError::file(&data_dir.display().to_string(), "not a directory (the data directory)").into());
     }
     let study = study_dataset(dataset, &data_dir)?;
-    crate::io::study_report::write_report(&study, report_dir, json_path)?;
+    crate::study::report::write_report(&study, report_dir, json_path)?;
     Ok(study)
 }

@@ -9,11 +9,12 @@ pub mod held_out;
 /// The shared data directory, or `None` (with a message) when `SINSCAL_DATA` is not set.
 pub fn data_dir() -> Option<PathBuf> {
     match std::env::var_os("SINSCAL_DATA") {
-        // A relative path means relative to the repository root (as CI gives it), not to this package's
-        // directory, where cargo runs the tests.
+        // A relative path means relative to the repository root (as CI gives it), not to the package's
+        // directory, where cargo runs the tests (host-tests/, or host-tests/lab/, whose tests share this module).
         Some(dir) => {
             let dir = PathBuf::from(dir);
-            Some(if dir.is_relative() { Path::new(env!("CARGO_MANIFEST_DIR")).join("..").join(dir) } else { dir })
+            let root = Path::new(env!("CARGO_MANIFEST_DIR")).ancestors().find(|d| d.join("memory.x").is_file());
+            Some(if dir.is_relative() { root.expect("the repository root above the package").join(dir) } else { dir })
         }
         None => {
             // Written to the stderr handle, not through eprintln!, so that the test harness's output capture

@@ -21,9 +21,9 @@ use std::fmt::Write as _;
 use std::ops::Range;
 use std::path::{Path, PathBuf};
 
-use crate::io::calibration_result::ARCSEC_PER_RAD;
 use crate::io::error::InputError;
 use crate::io::recording::{Header, Recording, Row};
+use crate::io::ARCSEC_PER_RAD;
 
 mod columns;
 mod imucal;
@@ -156,7 +156,7 @@ pub struct ImportArgs {
     /// columns: the layout file (TOML, docs/data.md#described-layouts).
     #[arg(long)]
     pub layout: Option<PathBuf>,
-    /// columns: a position as START_S,END_S,PITCH_DEG,ROLL_DEG[,HEADING_DEG] (heading empty or '?' = unknown),
+    /// columns: a position as `START_S,END_S,PITCH_DEG,ROLL_DEG[,HEADING_DEG]` (heading empty or '?' = unknown),
     /// instead of a labels file; repeat it for each position (numbered 1, 2, ... in order).
     #[arg(long, value_name = "START_S,END_S,PITCH_DEG,ROLL_DEG[,HEADING_DEG]")]
     pub position: Vec<String>,

@@ -1,12 +1,12 @@
-//! Hidden-effect trials (`sinscal_host::analysis::hidden`): a SIMULATED Table 1 session with one effect of the catalogue
+//! Hidden-effect trials (`sinscal_lab::hidden`): a SIMULATED Table 1 session with one effect of the catalogue
 //! hidden at a seeded random axis, sign and magnitude; the analysis must name it, its axes and sign, and
 //! its magnitude within 30 %. Clean sessions must give "none".
 //!
 //! The fast subset (one trial per effect, seed 1, and three clean sessions) runs in `cargo test`. The
 //! campaign over many seeds is opt-in and measures the detection rate per effect and the false-alarm rate:
-//!     SINSCAL_HIDDEN_SEEDS=100 cargo test --release -p sinscal-host --test hidden_effects -- --ignored --nocapture
+//!     SINSCAL_HIDDEN_SEEDS=100 cargo test --release -p sinscal-lab --test hidden_effects -- --ignored --nocapture
 
-use sinscal_host::analysis::hidden::{catalogue, clean_trial, reference_errors, trial, Outcome};
+use sinscal_lab::hidden::{catalogue, clean_trial, reference_errors, trial, Outcome};
 
 fn describe(o: &Outcome) -> String {
     format!(

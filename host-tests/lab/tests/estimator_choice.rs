@@ -7,9 +7,9 @@
 //!    the check that the default is no worse than the angle method on any bias.
 
 use sinscal::calib::channels::{Model, Term};
-use sinscal_host::calibration::compare::{compare, table, Candidate, Lab};
 use sinscal_host::calibration::Method;
 use sinscal_host::calibration::{DEFAULT_METHOD, DEFAULT_MODEL};
+use sinscal_lab::compare::{compare, table, Candidate, Lab};
 
 const RUNS: usize = 200;
 

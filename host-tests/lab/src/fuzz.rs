@@ -1,20 +1,20 @@
 //! Every reader of sinscal as a fuzz target (docs/formats.md#bad-input): bytes in, the input accepted (with
 //! finite values) or refused with a reason; anything else (a panic, a non-finite value accepted, the file
 //! reader disagreeing with the text reader) is a failure. The stable mutation harness
-//! (`host-tests/tests/fuzz_readers.rs`) and the cargo-fuzz targets (`host-tests/fuzz/`) run these same
+//! (`host-tests/lab/tests/fuzz_readers.rs`) and the cargo-fuzz targets (`host-tests/fuzz/`) run these same
 //! functions, from the same seeds.
 
 use sinscal::rig::replay::{run_replay, ReplayError};
 use sinscal::sensor::adis::{decode_burst, encode_burst, AdisError, Burst, Model, I16F16};
 
-use crate::analysis::AnglesFile;
-use crate::calibration::firmware_path::replay_file;
-use crate::calibration::Options;
-use crate::io::calibration_model::CalibrationModel;
-use crate::io::recording::Recording;
-use crate::io::ScratchFile;
-use crate::model::simulator::ScenarioFile;
-use crate::model::synth::Scenario;
+use sinscal_host::analysis::AnglesFile;
+use sinscal_host::calibration::firmware_path::replay_file;
+use sinscal_host::calibration::Options;
+use sinscal_host::io::calibration_model::CalibrationModel;
+use sinscal_host::io::recording::Recording;
+use sinscal_host::io::ScratchFile;
+use sinscal_host::model::simulator::ScenarioFile;
+use sinscal_host::model::synth::Scenario;
 
 /// A reader under test: bytes in, `Ok(true)` accepted (with finite values), `Ok(false)` refused.
 pub type Reader = fn(&[u8]) -> Result<bool, String>;
@@ -112,7 +112,7 @@ pub fn read_burst(bytes: &[u8]) -> Result<bool, String> {
 /// The MAT-file reader (`io::import::mat::read_mat`): what it accepts is at least one matrix whose value count is
 /// its rows times its columns, every value finite.
 pub fn read_mat(bytes: &[u8]) -> Result<bool, String> {
-    match crate::io::import::mat::read_mat(bytes, "fuzz.mat") {
+    match sinscal_host::io::import::mat::read_mat(bytes, "fuzz.mat") {
         Err(_) => Ok(false),
         Ok(matrices) if matrices.is_empty() => Err("a MAT-file without a matrix was accepted".into()),
         Ok(matrices) => {
@@ -139,7 +139,7 @@ pub fn read_mat(bytes: &[u8]) -> Result<bool, String> {
 /// different fields per sensor, finite non-zero scales and a body-from-sensor matrix that is a rotation.
 pub fn read_layout(bytes: &[u8]) -> Result<bool, String> {
     let Some(t) = text(bytes) else { return Ok(false) };
-    match crate::io::import::Layout::parse(t, "fuzz.toml") {
+    match sinscal_host::io::import::Layout::parse(t, "fuzz.toml") {
         Err(_) => Ok(false),
         Ok(layout) => {
             let m = layout.axes;
@@ -167,7 +167,7 @@ pub fn read_layout(bytes: &[u8]) -> Result<bool, String> {
 /// that do not overlap, with pitch in [-90, 90].
 pub fn read_labels(bytes: &[u8]) -> Result<bool, String> {
     let Some(t) = text(bytes) else { return Ok(false) };
-    match crate::io::import::parse_labels(t, "fuzz.csv") {
+    match sinscal_host::io::import::parse_labels(t, "fuzz.csv") {
         Err(_) => Ok(false),
         Ok(labels) => {
             for (i, a) in labels.iter().enumerate() {
@@ -191,15 +191,15 @@ pub fn read_labels(bytes: &[u8]) -> Result<bool, String> {
 pub fn seeds() -> Vec<(&'static str, Reader, Vec<u8>)> {
     let scenario = Scenario { dwell_s: 1.0, ..Scenario::example() };
     let rec = scenario.recording(1, "seed.csv");
-    let cal = crate::calibration::calibrate(&rec, &Options::default()).expect("the seed calibrates");
-    let cal_json = serde_json::to_string_pretty(&crate::io::calibration_result::CalibrationJson::new(&cal))
+    let cal = sinscal_host::calibration::calibrate(&rec, &Options::default()).expect("the seed calibrates");
+    let cal_json = serde_json::to_string_pretty(&sinscal_host::calibration::result::CalibrationJson::new(&cal))
         .expect("the calibration serialises");
     let angles = "# sinscal-angles: 1\n# latitude_deg: 45.7796\n\
                   pos,pitch_deg,roll_deg,heading_deg,phi_e_rad,phi_n_rad,phi_u_rad,phi_e_std_rad,phi_n_std_rad,phi_u_std_rad\n\
                   1,0,0,0,1e-5,-2e-5,3e-4,1e-6,1e-6,1e-5\n2,0,0,180,2e-5,1e-5,-3e-4,1e-6,1e-6,1e-5\n\
                   3,0,0,90,1e-5,1e-5,2e-4,1e-6,1e-6,1e-5\n4,0,0,270,-1e-5,2e-5,1e-4,1e-6,1e-6,1e-5\n\
                   5,0,90,0,3e-5,-1e-5,3e-4,1e-6,1e-6,1e-5\n6,0,270,0,1e-5,1e-5,-2e-4,1e-6,1e-6,1e-5\n";
-    let scenario_toml = include_str!("../scenarios/all-effects.toml").to_string();
+    let scenario_toml = include_str!("../../scenarios/all-effects.toml").to_string();
     let (replay, _) = replay_file(&rec, &Options::default()).expect("the seed replays");
     let mut burst = vec![0u8; Model::Adis16505_2.burst_len()];
     let lsb = |x: f64| I16F16::from_num(x);
@@ -213,13 +213,14 @@ pub fn seeds() -> Vec<(&'static str, Reader, Vec<u8>)> {
     encode_burst(Model::Adis16505_2, &b, &mut burst);
     // Small MAT-files: little-endian and uncompressed (a 1x1 with a small-element name, a 3x2), and
     // big-endian with compressed elements (MATLAB's default -v7 layout).
-    use crate::io::import::mat::{write_mat, ByteOrder};
+    use sinscal_host::io::import::mat::{write_mat, ByteOrder};
     let values = [0.25, -1.5, 3.0, 1e-3, 9.81, -0.0];
-    let matrices: [crate::io::import::mat::NamedMatrix<'_>; 2] = [("t", 1, 1, &[2.5]), ("acc_counts", 3, 2, &values)];
+    let matrices: [sinscal_host::io::import::mat::NamedMatrix<'_>; 2] =
+        [("t", 1, 1, &[2.5]), ("acc_counts", 3, 2, &values)];
     let mat = write_mat(&matrices, ByteOrder::Little, false).expect("the seed MAT-file is written");
     let mat_compressed = write_mat(&matrices, ByteOrder::Big, true).expect("the seed MAT-file is written");
     // And a version 7.3 file (HDF5 behind MATLAB's user block), its datasets compressed as MATLAB writes them.
-    let mat_v73 = crate::io::import::mat::write_mat_v73(&matrices, true).expect("the seed MAT-file is written");
+    let mat_v73 = sinscal_host::io::import::mat::write_mat_v73(&matrices, true).expect("the seed MAT-file is written");
     vec![
         ("recording", read_recording as Reader, rec.to_csv().into_bytes()),
         ("recording-file", read_recording_file as Reader, rec.to_csv().into_bytes()),
@@ -230,7 +231,7 @@ pub fn seeds() -> Vec<(&'static str, Reader, Vec<u8>)> {
         ("burst", read_burst as Reader, burst),
         ("mat", read_mat as Reader, mat),
         ("mat-compressed", read_mat as Reader, mat_compressed),
-        ("layout", read_layout as Reader, include_str!("../layouts/imutk.toml").as_bytes().to_vec()),
+        ("layout", read_layout as Reader, include_str!("../../layouts/imutk.toml").as_bytes().to_vec()),
         (
             "labels",
             read_labels as Reader,

@@ -11,7 +11,7 @@ use plotters::coord::combinators::{BindKeyPoints, WithKeyPoints};
 
 use crate::analysis::noise_terms::{sig, FitPoint, NoiseModel};
 use crate::analysis::{Analysis, CHANNELS};
-use crate::io::plot::{display_unit, figure, log_ticks, short_name, tick_label, Png};
+use crate::plot::{display_unit, figure, log_ticks, short_name, tick_label, Png};
 use crate::stats::noise::{log_spaced_clusters, overlapping_allan_deviation, welch_psd};
 
 fn err(path: &Path, e: &dyn std::fmt::Display) -> anyhow::Error {

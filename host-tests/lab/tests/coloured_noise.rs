@@ -5,23 +5,23 @@
 //! at 100 Hz, 5-s moves and 1 s of settling, the noise running on through the moves), calibrates it as `sinscal
 //! calibrate` does (the default options, and the same with `--prefilter none`) and compares the determined
 //! parameters with the truth. The bound is that of the raw dwell means under the simulated noise
-//! (`calibration::bound`); the generalised least squares with their exact covariance, on the same runs' raw
+//! (`sinscal_lab::bound`); the generalised least squares with their exact covariance, on the same runs' raw
 //! dwell means, reaches it. The ratio of an estimator's RMS error to that of the generalised least squares on
 //! the same runs is the Monte Carlo's estimate of RMS error / bound with the runs' common scatter removed (an
 //! RMS over 200 runs scatters by 5 % by itself).
 //!
 //! Runs per mix: 200, or `SINSCAL_MC_RUNS`. The table of docs/method.md#coloured-noise-monte-carlo is
-//! `SINSCAL_MC_RUNS=1000 cargo test -p sinscal-host --test coloured_noise -- --nocapture --test-threads 1`.
+//! `SINSCAL_MC_RUNS=1000 cargo test -p sinscal-lab --test coloured_noise -- --nocapture --test-threads 1`.
 
 use sinscal::calib::channels::{parameter_name, PARAMETERS};
-use sinscal_host::calibration::bound::{
-    channel_noises, cramer_rao, design, dwell_mean_covariance, dwell_mean_covariance_of, dwell_spans,
-    independent_weighting_covariance, pooled_variances, predict, Bound, DwellSpan, NoiseKind, Session,
-};
 use sinscal_host::calibration::{calibrate_channels, Calibration, Options, PrefilterKind};
 use sinscal_host::model::simulator::{simulate, GaussMarkovSpec, ScenarioFile, SiteSpec};
 use sinscal_host::model::synth::{DEG_PER_HOUR, MICRO_G};
 use sinscal_host::stats::noise::chi_square_cdf;
+use sinscal_lab::bound::{
+    channel_noises, cramer_rao, design, dwell_mean_covariance, dwell_mean_covariance_of, dwell_spans,
+    independent_weighting_covariance, pooled_variances, predict, Bound, DwellSpan, NoiseKind, Session,
+};
 
 /// One triad's noise in the simulator's terms, SI (rad/s for the gyros, m/s^2 for the accelerometers).
 #[derive(Clone, Copy, Debug, Default)]

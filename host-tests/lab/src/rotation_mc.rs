@@ -14,7 +14,7 @@
 //! rotation the compensated gyros measure. Under white noise these are independent Gaussian observations, so
 //! the Fisher information is the sum of a dwell part and a move part:
 //! - dwell part: `sum_d J_d^T S_d^-1 J_d`, with `J_d` the design of the six dwell means at the truth
-//!   ([`crate::calibration::bound::design`]) and `S_d = diag(sigma_c^2 / N_d)` (white noise of per-sample
+//!   ([`crate::bound::design`]) and `S_d = diag(sigma_c^2 / N_d)` (white noise of per-sample
 //!   standard deviation `sigma_c`, `N_d` samples in the dwell);
 //! - move part: `sum_m J_m^T S_m^-1 J_m`, with `J_m` the derivative of the rotation vector
 //!   `log(R(theta) R(theta_true)^T)` (start frame of the move) by each gyro parameter, where `R(theta)` is the
@@ -37,12 +37,12 @@
 use sinscal::calib::channels::{misalignment_index, parameter_name, Model, PARAMETERS};
 use sinscal::calib::moves::{MoveSums, MOVE_PARAMETERS};
 
-use crate::calibration::bound::{channel_noises, design, dwell_spans, predict, Session};
-use crate::calibration::{calibrate_channels, Options};
-use crate::io::recording::Recording;
-use crate::model::simulator::{simulate, ScenarioFile, ScheduleSpec, SiteSpec};
-use crate::model::synth::{mul, mul_vec, rotation, rotation_vector, transpose, DEG_PER_HOUR, M3, MICRO_G};
-use crate::stats::solve::solve_spd;
+use crate::bound::{channel_noises, design, dwell_spans, predict, Session};
+use sinscal_host::calibration::{calibrate_channels, Options};
+use sinscal_host::io::recording::Recording;
+use sinscal_host::model::simulator::{simulate, ScenarioFile, ScheduleSpec, SiteSpec};
+use sinscal_host::model::synth::{mul, mul_vec, rotation, rotation_vector, transpose, DEG_PER_HOUR, M3, MICRO_G};
+use sinscal_host::stats::solve::solve_spd;
 
 /// The schedule: pitch, roll, heading of each position, degrees (every quarter turn about each table axis).
 pub const POSITIONS_DEG: [[f64; 3]; 14] = [
@@ -382,7 +382,7 @@ fn inverse_spd(a: &[Vec<f64>]) -> Option<Vec<Vec<f64>>> {
 /// One dwell as the bound sees it: its six channel means (gyro x, y, z, accelerometer x, y, z).
 #[derive(Clone, Debug, PartialEq)]
 pub struct DwellBound {
-    /// The derivative of each mean by every parameter at the truth ([`crate::calibration::bound::design`]).
+    /// The derivative of each mean by every parameter at the truth ([`crate::bound::design`]).
     pub design: [[f64; PARAMETERS]; 6],
     /// The means at the truth without noise, SI.
     pub predicted_si: [f64; 6],
@@ -840,12 +840,12 @@ mod tests {
         }
         // Each move integrates, at the truth, to the reference rotation C_from^T E C_to (E: the Earth's turn).
         let theta = truth_si(&s);
-        let w_n = crate::model::synth::earth_rate_n_radps(LATITUDE_DEG.to_radians());
+        let w_n = sinscal_host::model::synth::earth_rate_n_radps(LATITUDE_DEG.to_radians());
         for m in &moves {
             let (a, b) = (POSITIONS_DEG[m.from], POSITIONS_DEG[m.to]);
             let t_s: f64 = m.samples.iter().map(|x| x.dt_s).sum();
-            let c_from = crate::model::synth::c_b_n(a[0], a[1], a[2]);
-            let c_to = crate::model::synth::c_b_n(b[0], b[1], b[2]);
+            let c_from = sinscal_host::model::synth::c_b_n(a[0], a[1], a[2]);
+            let c_to = sinscal_host::model::synth::c_b_n(b[0], b[1], b[2]);
             let reference = mul(&mul(&transpose(&c_from), &rotation(w_n.map(|w| w * t_s))), &c_to);
             let miss = rotation_vector(&mul(&integrate(&m.samples, &theta), &transpose(&reference)));
             assert!(miss.iter().all(|x| x.abs() < 1e-9), "move {} -> {}: {miss:?}", m.from, m.to);

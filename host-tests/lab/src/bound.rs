@@ -29,11 +29,11 @@
 
 use sinscal::calib::channels::PARAMETERS;
 
-use crate::io::recording::Recording;
-use crate::model::sensor::Triad;
-use crate::model::simulator::{ScenarioFile, TriadModel};
-use crate::model::synth::{c_b_n, cross, earth_rate_n_radps, mul, mul_t_vec, mul_vec, rotation};
-use crate::stats::solve::solve_spd;
+use sinscal_host::io::recording::Recording;
+use sinscal_host::model::sensor::Triad;
+use sinscal_host::model::simulator::{ScenarioFile, TriadModel};
+use sinscal_host::model::synth::{c_b_n, cross, earth_rate_n_radps, mul, mul_t_vec, mul_vec, rotation};
+use sinscal_host::stats::solve::solve_spd;
 
 /// The noise of one channel, in the channel's SI unit (rad/s for gyros, m/s^2 for accelerometers).
 #[derive(Clone, Copy, Debug, Default, PartialEq)]
@@ -459,11 +459,11 @@ pub fn independent_weighting_covariance(
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::model::simulator::{simulate, GaussMarkovSpec, ScheduleSpec, SiteSpec};
-    use crate::model::synth::{DEG_PER_HOUR, MICRO_G, TABLE1_DEG};
     use sinscal::calib::channels::{ChannelDwell, ChannelEstimator, ChannelSettings, Model, Term};
     use sinscal::nav::earth::Site;
     use sinscal::nav::frames::Attitude;
+    use sinscal_host::model::simulator::{simulate, GaussMarkovSpec, ScheduleSpec, SiteSpec};
+    use sinscal_host::model::synth::{DEG_PER_HOUR, MICRO_G, TABLE1_DEG};
 
     /// The covariance of two dwell means written as the double sum over their samples of the per-sample
     /// covariance, each kind's from its own definition (not from the closed forms): white `s^2 [i = j]`,

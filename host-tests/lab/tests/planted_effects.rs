@@ -1,4 +1,4 @@
-//! Hidden effects in MEASURED noise (`sinscal_host::analysis::planted`,
+//! Hidden effects in MEASURED noise (`sinscal_lab::planted`,
 //! docs/analysis.md#hidden-effects-in-measured-noise): the measured static records of `SINSCAL_DATA` laid over the
 //! poses of the paper's Table 1, one effect of the catalogue planted at 10 to 20 standard errors, and
 //! `sinscal analyze` judged on what it reports; the untouched constructions give the false alarms.
@@ -6,21 +6,22 @@
 //! The fast test checks the harness on one construction per record: the measured noise is kept sample for
 //! sample, the untouched construction keeps the record's quantisation, and every planted linear effect is
 //! recovered by the analysis's fit of its column alone. It prints what it measured. The campaign is opt-in:
-//!     SINSCAL_DATA=DIR SINSCAL_PLANTED_RUNS=20 cargo test -p sinscal-host --test planted_effects -- --ignored --nocapture
+//!     SINSCAL_DATA=DIR SINSCAL_PLANTED_RUNS=20 cargo test -p sinscal-lab --test planted_effects -- --ignored --nocapture
 //! (20 trials per effect and record by default; the table of docs/analysis.md#hidden-effects-in-measured-noise).
 
+#[path = "../../tests/common/mod.rs"]
 mod common;
 
 use std::path::Path;
 use std::time::Instant;
 
-use sinscal_host::analysis::planted::{
-    carried, constant_pose_stretches, draw, effect_table, false_alarm_table, imutk_constructions, plant, prepare,
-    psins_constructions, trial, Construction, Prepared, Source, Trial, Verdict,
-};
 use sinscal_host::io::import::{import_imutk, import_psins, StaticDetection};
 use sinscal_host::io::recording::{Recording, Row};
 use sinscal_host::model::catalogue::EffectKind;
+use sinscal_lab::planted::{
+    carried, constant_pose_stretches, draw, effect_table, false_alarm_table, imutk_constructions, plant, prepare,
+    psins_constructions, trial, Construction, Prepared, Source, Trial, Verdict,
+};
 
 /// The three measured records, imported as `sinscal import` does.
 fn records(dir: &Path) -> Vec<(Source, Recording)> {

@@ -8,10 +8,8 @@ use sinscal::calib::channels::{misalignment_index, AttitudeKnowledge, ChannelSol
 use sinscal::calib::dwell::Prefilter;
 
 use crate::calibration::{Calibration, Estimates, GravitySource, PositionResult};
+use crate::io::ARCSEC_PER_RAD;
 use crate::model::synth::{DEG_PER_HOUR, MICRO_G};
-
-/// Arcseconds per radian.
-pub const ARCSEC_PER_RAD: f64 = 206_264.806_247_096_36;
 
 /// One position in the JSON.
 #[derive(Debug, Serialize)]

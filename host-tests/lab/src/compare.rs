@@ -17,9 +17,11 @@ use sinscal::calib::dwell::{DwellAllan, DwellSummary, MeanNoise};
 use sinscal::nav::earth::Site;
 use sinscal::nav::frames::Attitude;
 
-use crate::calibration::estimates::Estimates;
-use crate::model::sensor::Triad;
-use crate::model::synth::{c_b_n, earth_rate_n_radps, mul, mul_t_vec, rotation, DEG_PER_HOUR, MICRO_G, TABLE1_DEG};
+use sinscal_host::calibration::estimates::Estimates;
+use sinscal_host::model::sensor::Triad;
+use sinscal_host::model::synth::{
+    c_b_n, earth_rate_n_radps, mul, mul_t_vec, rotation, DEG_PER_HOUR, MICRO_G, TABLE1_DEG,
+};
 
 /// Arcseconds in a radian.
 const ARCSEC_RAD: f64 = 4.848_136_811_095_36e-6;

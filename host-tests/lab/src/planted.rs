@@ -1,11 +1,11 @@
 //! Hidden effects in MEASURED noise (docs/analysis.md#hidden-effects-in-measured-noise): the trials of
-//! [`crate::analysis::hidden`] with the simulated white noise replaced by the noise of a real recording.
+//! [`crate::hidden`] with the simulated white noise replaced by the noise of a real recording.
 //!
 //! **Construction** ([`Construction`]). One static stretch of a measured record (one real pose: a stretch of
 //! the PSINS record over which its vehicle does not tilt, [`constant_pose_stretches`]; the first static
 //! interval of the imu_tk record) is cut into the dwells of a schedule of known poses, the paper's Table 1
 //! ([`Layout`]). Every sample becomes its measured value minus the session's own straight line (the
-//! record's slow drift over the session, removed through its quantiser: [`session_drift`]), plus what its
+//! record's slow drift over the session, removed through its quantiser: `session_drift`), plus what its
 //! pose predicts (the Earth rate and gravity through the pose's `C_b^n`) plus the clean scenario's constant
 //! biases. One line per channel is removed and one constant per dwell added: the sample-to-sample values,
 //! the dwell-to-dwell wander, and with them the Allan curve, the correlation and the quantisation lattice of
@@ -18,15 +18,15 @@
 //! reference offset, position error) are added as that constant; effects that move within a dwell (drift,
 //! warm-up, vibration, correlated noise) are added through a quantiser with the measured record's step, so
 //! that a quantised channel stays on its lattice: for the PSINS increments the remainder is carried from
-//! sample to sample as a pulse-output sensor does ([`carry_quantised`]), for the imu_tk sampled counts the
-//! sum is rounded again with the record's unknown rounding error drawn uniform ([`sample_quantised`]); a
+//! sample to sample as a pulse-output sensor does (`carry_quantised`), for the imu_tk sampled counts the
+//! sum is rounded again with the record's unknown rounding error drawn uniform (`sample_quantised`); a
 //! planted quantisation requantises the channel to a coarser step.
 //!
 //! **Magnitudes** ([`draw`]): 10 to 20 standard errors of the effect in that construction. For the effects
 //! linear in their parameter the standard error is the one `sinscal analyze` gives the candidate fitted
 //! with the base model alone on the untouched construction (the measured block noise and the design); a
 //! dimensionless or angle term is planted only where 20 standard errors stay below [`LINEAR_LIMIT`]. The
-//! others follow [`crate::analysis::hidden`] with the measured noise: warm-up from the base model's block
+//! others follow [`crate::hidden`] with the measured noise: warm-up from the base model's block
 //! residual RMS, vibration from the noise density at the line's frequency, correlated noise and
 //! quantisation from the detrended RMS of the samples.
 
@@ -35,16 +35,16 @@ use std::collections::BTreeMap;
 use rand::{Rng, SeedableRng};
 use rand_chacha::ChaCha8Rng;
 
-use crate::analysis::hidden::{catalogue, clean_scenario, Hidden};
-use crate::analysis::{analyze_recording, Analysis, Effect, BLOCK_SAMPLES, CHANNELS, MAX_BLOCKS_PER_DWELL};
-use crate::calibration::site_of;
-use crate::io::error::InputError;
-use crate::io::recording::{Header, Recording, Row};
-use crate::model::catalogue::{EffectKind, Sensor};
-use crate::model::sensor::Term;
-use crate::model::simulator::normal;
-use crate::model::synth::{c_b_n, earth_rate_n_radps, mul, mul_t_vec, rotation, M3, TABLE1_DEG};
-use crate::stats::noise::{detect_quantization, welch_psd};
+use crate::hidden::{catalogue, Hidden};
+use sinscal_host::analysis::{analyze_recording, Analysis, Effect, BLOCK_SAMPLES, CHANNELS, MAX_BLOCKS_PER_DWELL};
+use sinscal_host::calibration::site_of;
+use sinscal_host::io::error::InputError;
+use sinscal_host::io::recording::{Header, Recording, Row};
+use sinscal_host::model::catalogue::{EffectKind, Sensor};
+use sinscal_host::model::sensor::Term;
+use sinscal_host::model::simulator::{clean_scenario, normal};
+use sinscal_host::model::synth::{c_b_n, earth_rate_n_radps, mul, mul_t_vec, rotation, M3, TABLE1_DEG};
+use sinscal_host::stats::noise::{detect_quantization, welch_psd};
 
 /// The measured records the trials take their noise from.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, PartialOrd, Ord, Hash)]
@@ -83,7 +83,7 @@ pub struct Construction {
     /// Per row of `recording`: the row of the measured record it came from.
     pub source_rows: Vec<usize>,
     /// Per row of `recording`, per channel (gx..az): the record's own drift over the session removed from it,
-    /// SI ([`session_drift`]).
+    /// SI (`session_drift`).
     pub drift_removed_si: Vec<[f64; 6]>,
     /// Per channel (gx..az): the measured record's quantisation step, SI, when its samples are quantised.
     pub steps_si: [Option<f64>; 6],
@@ -493,7 +493,7 @@ pub fn carried(p: &Prepared) -> Vec<(EffectKind, Vec<&'static str>)> {
 /// The truth of a planted trial and the random numbers its planting needs.
 #[derive(Clone, Debug)]
 pub struct Planted {
-    /// The truth, as [`crate::analysis::hidden`] states it.
+    /// The truth, as [`crate::hidden`] states it.
     pub hidden: Hidden,
     /// Vibration phase, rad.
     pub phase_rad: f64,

@@ -12,15 +12,12 @@ use std::collections::BTreeMap;
 use rand::{Rng, SeedableRng};
 use rand_chacha::ChaCha8Rng;
 
-use crate::analysis::{analyze_recording, Analysis};
-use crate::io::recording::Recording;
-use crate::model::catalogue::{EffectKind, Sensor};
-use crate::model::simulator::{
-    simulate, GaussMarkovSpec, PositionError, ScenarioFile, TemperatureSpec, VibrationSpec, WarmupSpec,
+use sinscal_host::analysis::{analyze_recording, Analysis};
+use sinscal_host::io::recording::Recording;
+use sinscal_host::model::catalogue::{EffectKind, Sensor};
+use sinscal_host::model::simulator::{
+    clean_scenario, simulate, GaussMarkovSpec, PositionError, ScenarioFile, TemperatureSpec, VibrationSpec, WarmupSpec,
 };
-
-/// The clean scenario every trial starts from (constant biases and white noise only).
-pub const CLEAN_SCENARIO: &str = include_str!("../../scenarios/table1-clean.toml");
 
 /// Per-channel axes as the trials name them (the sensor, then the axis).
 const CHANNEL_AXES: &[&str] = &["gx", "gy", "gz", "ax", "ay", "az"];
@@ -86,11 +83,6 @@ pub struct ReferenceErrors {
     pub std_error: BTreeMap<String, f64>,
     /// White noise per sample, gyro (rad/s) and accelerometer (m/s^2).
     pub noise: [f64; 2],
-}
-
-/// The clean scenario.
-pub fn clean_scenario() -> ScenarioFile {
-    ScenarioFile::parse(CLEAN_SCENARIO, "table1-clean.toml").expect("the built-in clean scenario parses")
 }
 
 /// Standard errors from the analysis of a clean recording (seed `seed`).
@@ -318,7 +310,7 @@ impl<'a> Draw<'a> {
 /// Mid times of the analysis's blocks (6 s, ten per one-minute dwell) in the scenario's schedule, s.
 fn block_times(s: &ScenarioFile) -> Vec<f64> {
     let sch = &s.schedule;
-    let blocks = ((sch.dwell_s * sch.rate_hz) as usize / crate::analysis::BLOCK_SAMPLES).max(4);
+    let blocks = ((sch.dwell_s * sch.rate_hz) as usize / sinscal_host::analysis::BLOCK_SAMPLES).max(4);
     let mut times = Vec::new();
     for k in 0..sch.positions_deg.len() {
         let start = k as f64 * (sch.dwell_s + sch.settle_s + sch.move_s) + sch.settle_s;
@@ -332,7 +324,7 @@ fn block_times(s: &ScenarioFile) -> Vec<f64> {
 /// White noise of a block mean.
 fn block_noise(s: &ScenarioFile, per_sample: f64) -> f64 {
     let sch = &s.schedule;
-    let blocks = ((sch.dwell_s * sch.rate_hz) as usize / crate::analysis::BLOCK_SAMPLES).max(4) as f64;
+    let blocks = ((sch.dwell_s * sch.rate_hz) as usize / sinscal_host::analysis::BLOCK_SAMPLES).max(4) as f64;
     per_sample / (sch.dwell_s * sch.rate_hz / blocks).sqrt()
 }
 

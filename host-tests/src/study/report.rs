@@ -9,8 +9,8 @@ use plotters::coord::Shift;
 use plotters::prelude::*;
 use serde_json::{json, Map, Value};
 
-use crate::io::calibration_result::ARCSEC_PER_RAD;
-use crate::io::plot::{figure, Png};
+use crate::io::ARCSEC_PER_RAD;
+use crate::plot::{figure, Png};
 use crate::model::synth::MICRO_G;
 use crate::stats::noise::NoiseTerms;
 use crate::study::noise_extension::ExtraTerm;
@@ -30,13 +30,13 @@ pub fn write_report(study: &Study, report_dir: &Path, json_path: Option<&Path>) 
     std::fs::write(&md, &text).map_err(|e| anyhow::anyhow!("cannot write {}: {e}", md.display()))?;
     let to_stdout = json_path == Some(Path::new("-"));
     if !to_stdout {
-        crate::cmd::out(&format!("{text}\nreport: {}\n", md.display()))?;
+        crate::io::out(&format!("{text}\nreport: {}\n", md.display()))?;
     }
     if let Some(path) = json_path {
         let mut out = serde_json::to_string_pretty(&study_json(study, &figures))?;
         out.push('\n');
         if to_stdout {
-            crate::cmd::out(&out)?;
+            crate::io::out(&out)?;
         } else {
             std::fs::write(path, out).map_err(|e| anyhow::anyhow!("cannot write {}: {e}", path.display()))?;
         }

@@ -9,7 +9,7 @@ use plotters::prelude::*;
 use plotters_backend::text_anchor::{HPos, VPos};
 use plotters_backend::{BackendColor, BackendCoord, BackendTextStyle, DrawingErrorKind};
 
-use crate::io::calibration_result::ARCSEC_PER_RAD;
+use crate::io::ARCSEC_PER_RAD;
 use crate::navigation::check::NavReport;
 
 /// The figures' font: DejaVu Sans, bundled by the `dejavu` crate (the font's licence ships there), so that no

@@ -9,7 +9,7 @@
 //! `cargo test` runs a short campaign (`SINSCAL_FUZZ_INPUTS`, default 2000 inputs per target, a tenth of that
 //! for the file reader, which writes a file per input); the opt-in
 //! campaign of the size:
-//!     SINSCAL_FUZZ_INPUTS=1000000 cargo test --release -p sinscal-host --test fuzz_readers -- --nocapture
+//!     SINSCAL_FUZZ_INPUTS=1000000 cargo test --release -p sinscal-lab --test fuzz_readers -- --nocapture
 //! It reports per target the inputs run, the share accepted, the panics and the slowest input (a hang would
 //! show there: every input is bounded, so the slowest is the longest reader run).
 
@@ -18,7 +18,7 @@ use std::time::{Duration, Instant};
 
 use rand::{Rng, SeedableRng};
 use rand_chacha::ChaCha8Rng;
-use sinscal_host::fuzz::{seeds, Reader};
+use sinscal_lab::fuzz::{seeds, Reader};
 
 /// Numbers a mutation puts in place of one in the text.
 const EXTREMES: [&str; 14] =
@@ -79,7 +79,7 @@ fn mutate(input: &[u8], rng: &mut ChaCha8Rng) -> Vec<u8> {
 }
 
 fn corpus_dir(target: &str) -> PathBuf {
-    PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("fuzz-corpus").join(target)
+    PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../fuzz-corpus").join(target)
 }
 
 /// Runs `reader` on `input`; `Err` with the reason for a panic or a non-finite value accepted.
