@@ -13,7 +13,7 @@
 //! Runs per mix: 200, or `SINSCAL_MC_RUNS`. The table of docs/method.md#coloured-noise-monte-carlo is
 //! `SINSCAL_MC_RUNS=1000 cargo test -p sinscal-host --test coloured_noise -- --nocapture --test-threads 1`.
 
-use sinscal::calib::channels::{parameter_name, PARAMETERS};
+use sinscal::calib::general::{parameter_name, PARAMETERS};
 use sinscal_host::calibration::bound::{
     channel_noises, cramer_rao, design, dwell_mean_covariance, dwell_mean_covariance_of, dwell_spans,
     independent_weighting_covariance, pooled_variances, predict, Bound, DwellSpan, NoiseKind, Session,

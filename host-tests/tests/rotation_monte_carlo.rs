@@ -15,7 +15,7 @@
 
 use std::time::Instant;
 
-use sinscal::calib::channels::parameter_name;
+use sinscal::calib::general::parameter_name;
 use sinscal_host::calibration::bound::{
     channel_noises, cramer_rao, design, dwell_mean_covariance, dwell_spans, Session,
 };

@@ -20,15 +20,14 @@
 
 use heapless::Vec;
 
-use crate::calib::calibration::{
-    calibrate_positions, CalibrationError, CalibrationResult, CalibrationSettings, PositionInput,
+use crate::calib::angles::{
+    calibrate_positions, CalibrationError, CalibrationResult, CalibrationSettings, PositionInput, MAX_POSITIONS,
 };
-use crate::calib::channels::{ChannelError, ChannelSettings, ChannelSolution, Term, PARAMETERS};
 use crate::calib::dwell::{DwellCollector, Prefilter, MIN_DWELL_SAMPLES};
+use crate::calib::general::{ChannelError, ChannelSettings, ChannelSolution, Term, PARAMETERS};
 use crate::calib::moves::{pooled_rate_var_radps2, ChannelMove, MoveSums};
 use crate::calib::prefilter::{HmmKf, PrefilterError};
 use crate::calib::session::{default_channel_settings, session_estimator, SessionDwell};
-use crate::calib::solve::MAX_POSITIONS;
 use crate::math::linalg::{dot, Vec3};
 use crate::nav::earth::Site;
 use crate::nav::frames::Attitude;

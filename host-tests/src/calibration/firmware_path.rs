@@ -19,7 +19,7 @@ use crate::io::dwell_tally::{DwellTallies, DwellTally};
 use crate::io::error::InputError;
 use crate::io::recording::{DwellAttitude, RowSource};
 use crate::io::ScratchFile;
-use sinscal::calib::channels::ChannelSettings;
+use sinscal::calib::general::ChannelSettings;
 use sinscal::calib::session::session_estimator;
 use sinscal::run::sequence::Estimator;
 use std::io::Write as _;
@@ -64,7 +64,7 @@ pub fn replay_parts(
     frames: &mut dyn std::io::Write,
 ) -> Result<(Vec<u8>, ReplayPlan), InputError> {
     let source = rec.source();
-    if attitude_knowledge(rec.header()) == sinscal::calib::channels::AttitudeKnowledge::Unknown {
+    if attitude_knowledge(rec.header()) == sinscal::calib::general::AttitudeKnowledge::Unknown {
         return Err(InputError::file(
             source,
             "the firmware path takes the recording's attitudes as its reference, and this recording's were \
@@ -160,7 +160,7 @@ pub fn replay_parts(
 /// firmware path needs). Returns the dwells and the number of rows.
 fn write_frames(rec: &impl RowSource, out: &mut dyn std::io::Write) -> Result<(Vec<DwellTally>, u64), InputError> {
     let source = rec.source();
-    let mut tallies = DwellTallies::new(sinscal::calib::solve::MAX_POSITIONS, "the core's limit");
+    let mut tallies = DwellTallies::new(sinscal::calib::angles::MAX_POSITIONS, "the core's limit");
     let lsb_rate = (REPLAY_MODEL.radps_per_lsb() as f64) / 65536.0;
     let lsb_force = (REPLAY_MODEL.accel_mps2_per_lsb() as f64) / 65536.0;
     let quantise = |value: f64, lsb: f64, line: usize, what: &str| -> Result<I16F16, InputError> {

@@ -11,16 +11,16 @@ pub mod qemu;
 pub mod rotation_mc;
 
 use sinscal::calib::align::{position_angles, DwellValue, PositionAngles};
-use sinscal::calib::calibration::{
-    calibrate_positions, CalibrationError, CalibrationResult, CalibrationSettings, PositionInput,
-};
-use sinscal::calib::channels::{
-    AttitudeKnowledge, ChannelError, ChannelEstimator, ChannelSettings, ChannelSolution, Model, MAX_DWELLS,
+use sinscal::calib::angles::{
+    calibrate_positions, BiasSolution, CalibrationError, CalibrationResult, CalibrationSettings, PositionInput,
+    SolverSettings, MAX_POSITIONS,
 };
 use sinscal::calib::dwell::{pool_mean_noise, DwellCollector, DwellSummary, Prefilter};
+use sinscal::calib::general::{
+    AttitudeKnowledge, ChannelError, ChannelEstimator, ChannelSettings, ChannelSolution, Model, MAX_DWELLS,
+};
 use sinscal::calib::prefilter::{CoefficientIdentifier, PrefilterSettings};
 use sinscal::calib::session::{session_estimator, SessionDwell};
-use sinscal::calib::solve::{BiasSolution, SolverSettings, MAX_POSITIONS};
 use sinscal::nav::earth::{normal_gravity_mps2, Site};
 use sinscal::nav::frames::Attitude;
 use sinscal::sensor::sample::ImuSample;

@@ -5,7 +5,7 @@ use std::path::{Path, PathBuf};
 
 use clap::ValueEnum;
 use sinscal::calib::align::DwellValue;
-use sinscal::calib::channels::Model;
+use sinscal::calib::general::Model;
 
 use crate::calibration::estimates::parse_model;
 use crate::calibration::firmware_path::calibrate_on_host;

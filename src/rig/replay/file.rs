@@ -6,11 +6,12 @@ use heapless::Vec;
 
 use super::run::ReplayOutcome;
 use crate::calib::align::{AlignError, DwellValue};
-use crate::calib::calibration::{CalibrationError, CalibrationResult, CalibrationSettings, PositionInput};
-use crate::calib::channels::{AttitudeKnowledge, ChannelError, ChannelSettings, ChannelSolution, Model as Terms, Term};
+use crate::calib::angles::{
+    CalibrationError, CalibrationResult, CalibrationSettings, PositionInput, SolveError, MAX_POSITIONS,
+};
 use crate::calib::dwell::{Prefilter, MIN_DWELL_SAMPLES};
+use crate::calib::general::{AttitudeKnowledge, ChannelError, ChannelSettings, ChannelSolution, Model as Terms, Term};
 use crate::calib::prefilter::PrefilterSettings;
-use crate::calib::solve::{SolveError, MAX_POSITIONS};
 use crate::nav::earth::Site;
 use crate::nav::frames::Attitude;
 use crate::run::sampling::SamplingStats;
@@ -260,7 +261,7 @@ pub const OUTCOME_MAGIC: [u8; 4] = *b"SSRO";
 /// Largest encoded outcome, bytes: the counters and failure (76), [`MAX_POSITIONS`] positions of 424 bytes,
 /// and the general estimator's solution (5,416 and 48 per dwell; the angle method's, 520 and 12 per position,
 /// is smaller). For 64 positions: 35,696.
-pub const MAX_OUTCOME_BYTES: usize = 76 + MAX_POSITIONS * 424 + 5_416 + crate::calib::channels::MAX_DWELLS * 48;
+pub const MAX_OUTCOME_BYTES: usize = 76 + MAX_POSITIONS * 424 + 5_416 + crate::calib::general::MAX_DWELLS * 48;
 
 /// Writes the encoding into `out`: the whole of it (an error if it does not fit), or only the window of
 /// `out.len()` bytes from `window_start` (the rest is computed and dropped: a part for a link reply or a flash
@@ -295,7 +296,7 @@ impl Writer<'_> {
     fn f32s(&mut self, v: &[f32]) -> Result<(), ReplayError> {
         v.iter().try_for_each(|x| self.f32(*x))
     }
-    fn estimate(&mut self, e: Option<crate::calib::solve::Estimate>) -> Result<(), ReplayError> {
+    fn estimate(&mut self, e: Option<crate::calib::angles::Estimate>) -> Result<(), ReplayError> {
         match e {
             Some(e) => {
                 self.u32(1)?;
@@ -323,10 +324,10 @@ impl Reader<'_> {
     fn vec3(&mut self) -> Result<[f32; 3], ReplayError> {
         Ok([self.f32()?, self.f32()?, self.f32()?])
     }
-    fn estimate(&mut self) -> Result<Option<crate::calib::solve::Estimate>, ReplayError> {
+    fn estimate(&mut self) -> Result<Option<crate::calib::angles::Estimate>, ReplayError> {
         let present = self.u32()? != 0;
         let (value, std_error) = (self.f32()?, self.f32()?);
-        Ok(present.then_some(crate::calib::solve::Estimate { value, std_error }))
+        Ok(present.then_some(crate::calib::angles::Estimate { value, std_error }))
     }
 }
 
@@ -615,7 +616,7 @@ pub fn decode_outcome(header: &ReplayHeader, bytes: &[u8]) -> Result<ReplayOutco
 }
 
 fn decode_angles(r: &mut Reader<'_>) -> Result<CalibrationResult, ReplayError> {
-    use crate::calib::solve::{BiasSolution, MAX_PARAMETERS};
+    use crate::calib::angles::{BiasSolution, MAX_PARAMETERS};
     let passes = r.u32()?;
     let converged = r.u32()? != 0;
     let last_correction_sigma = r.f32()?;
@@ -656,7 +657,7 @@ fn decode_angles(r: &mut Reader<'_>) -> Result<CalibrationResult, ReplayError> {
 }
 
 fn decode_channels(r: &mut Reader<'_>) -> Result<ChannelSolution, ReplayError> {
-    use crate::calib::channels::{MAX_DWELLS, PARAMETERS};
+    use crate::calib::general::{MAX_DWELLS, PARAMETERS};
     let model = terms_of_bits(r.u32()? as u16);
     let mut parameters_si = [0.0f32; PARAMETERS];
     for p in parameters_si.iter_mut() {

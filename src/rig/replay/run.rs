@@ -6,8 +6,7 @@ use heapless::Vec;
 
 use super::device::{NoDelay, ReplayDevice};
 use super::file::{read_header, ByteSource, ReplayError, ReplayHeader};
-use crate::calib::calibration::PositionInput;
-use crate::calib::solve::MAX_POSITIONS;
+use crate::calib::angles::{PositionInput, MAX_POSITIONS};
 use crate::run::sampling::{on_data_ready, process_next, QueueItem, SamplingStats, QUEUE_SLOTS};
 use crate::run::sequence::{feed_sequence, CalibrationSequence, Event, SequenceFailure, SequenceSolution};
 use crate::sensor::adis::{Adis, AdisError, BURST32_LEN};

@@ -11,8 +11,8 @@
 //! compensated data show no bias at all, to f32 precision.
 
 use crate::calib::align::{position_angles, AlignError, DwellValue};
+use crate::calib::angles::solve::{BiasSolution, BiasSolver, Estimate, SolveError, SolverSettings};
 use crate::calib::dwell::DwellSummary;
-use crate::calib::solve::{BiasSolution, BiasSolver, Estimate, SolveError, SolverSettings};
 use crate::math::linalg::{norm, rotation, Mat3};
 use crate::nav::earth::Site;
 
@@ -144,7 +144,7 @@ pub fn attitude_difference_rad(c_hat_b_n: &Mat3, c_b_n: &Mat3) -> (f32, f32) {
     (level_rad, heading_rad)
 }
 
-/// Calibrates from a set of positions (any number up to [`crate::calib::solve::MAX_POSITIONS`]).
+/// Calibrates from a set of positions (any number up to [`MAX_POSITIONS`](crate::calib::angles::MAX_POSITIONS)).
 pub fn calibrate_positions(
     positions: &[PositionInput],
     site: &Site,
