@@ -59,6 +59,6 @@ pub use observability::MIN_EXERCISE;
 pub use settings::{AttitudeKnowledge, ChannelSettings};
 pub use solution::ChannelSolution;
 pub use terms::{
-    implausible_parameter, misalignment_index, parameter_name, Model, Term, GAUGE_PARAMETERS, PARAMETERS,
-    PLAUSIBLE_MAGNITUDE_SI,
+    implausible_parameter, misalignment_index, parameter_name, Axes, Model, Term, TermInfo, GAUGE_PARAMETERS,
+    PARAMETERS, PLAUSIBLE_MAGNITUDE_SI, TERMS,
 };

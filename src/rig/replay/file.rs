@@ -10,7 +10,7 @@ use crate::calib::angles::{
     CalibrationError, CalibrationResult, CalibrationSettings, PositionInput, SolveError, MAX_POSITIONS,
 };
 use crate::calib::dwell::{Prefilter, MIN_DWELL_SAMPLES};
-use crate::calib::general::{AttitudeKnowledge, ChannelError, ChannelSettings, ChannelSolution, Model as Terms, Term};
+use crate::calib::general::{AttitudeKnowledge, ChannelError, ChannelSettings, ChannelSolution, Model as Terms};
 use crate::calib::prefilter::PrefilterSettings;
 use crate::nav::earth::Site;
 use crate::nav::frames::Attitude;
@@ -120,14 +120,14 @@ pub fn replay_sequence_settings(prefilter: Prefilter, solve: ReplaySolve) -> Seq
     }
 }
 
-/// The bits of a set of terms in the replay file: bit i is `Term::ALL[i]`.
+/// The bits of a set of terms in the replay file: [`Terms::stored_bits`], bit `TermInfo::stored_bit` of each term.
 pub fn terms_bits(model: Terms) -> u16 {
-    Term::ALL.iter().enumerate().fold(0, |bits, (i, t)| if model.contains(*t) { bits | 1 << i } else { bits })
+    model.stored_bits()
 }
 
-/// The set of terms of [`terms_bits`].
+/// The set of terms of [`terms_bits`] (bits no term has are ignored).
 pub fn terms_of_bits(bits: u16) -> Terms {
-    Term::ALL.iter().enumerate().fold(Terms::EMPTY, |m, (i, t)| if bits & (1 << i) != 0 { m.with(*t) } else { m })
+    Terms::from_stored_bits_truncate(bits)
 }
 
 /// The estimator code of the replay file.
