@@ -178,7 +178,7 @@ mod firmware {
         w.u16(sinscal::rig::replay::terms_bits(sinscal::calib::session::DEFAULT_MODEL));
         w.u8(1).u8(0).u8(6).u8(1).f32(1.0).f32(1.0);
         let rest = sinscal::run::sequence::SequenceSettings::default();
-        w.f32(rest.max_force_error_mps2).f32(rest.max_gravity_angle_rad).f32(rest.max_rate_radps);
+        w.f32(rest.rest_force_error_max_mps2).f32(rest.rest_gravity_angle_max_rad).f32(rest.rest_rate_max_radps);
         for (k, p) in sinscal::calib::angles::TABLE1_POSITIONS_DEG.iter().enumerate() {
             for angle_deg in p {
                 w.f32(angle_deg.to_radians());

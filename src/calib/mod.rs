@@ -3,7 +3,7 @@
 //! the default) fits every channel of every dwell with the sensor-model terms selectable; [`session`] loads a
 //! session's dwells into it, and [`moves`] turns the moves between dwells into observations of the gyro terms.
 //! The paper's angle method ([`angles`]) solves for the biases from the alignment angles of every position, with
-//! its refinement passes. [`compensation`] inverts the sensor model for every sample on the device
+//! its refinement passes. [`limits`] holds the rest and pose thresholds. [`compensation`] inverts the sensor model for every sample on the device
 //! (docs/compensation.md). The methods are described in docs/method.md.
 
 pub mod align;
@@ -11,6 +11,7 @@ pub mod angles;
 pub mod compensation;
 pub mod dwell;
 pub mod general;
+pub mod limits;
 pub mod moves;
 pub mod prefilter;
 pub mod session;

@@ -124,7 +124,7 @@ pub fn replay_parts(
     head.extend_from_slice(&a_accel.to_le_bytes());
     // The limits of rest: the force tolerance asked for, the sequence's default gravity angle and rate.
     let rest = sinscal::run::sequence::SequenceSettings::default();
-    for v in [options.rest_force_tolerance_mps2, rest.max_gravity_angle_rad, rest.max_rate_radps] {
+    for v in [options.rest_force_tolerance_mps2, rest.rest_gravity_angle_max_rad, rest.rest_rate_max_radps] {
         head.extend_from_slice(&v.to_le_bytes());
     }
     let mut attitudes = Vec::new();

@@ -100,7 +100,7 @@ impl Default for Options {
             method: DEFAULT_METHOD,
             model: DEFAULT_MODEL,
             estimate_attitudes: false,
-            rest_force_tolerance_mps2: sinscal::run::sequence::SequenceSettings::default().max_force_error_mps2,
+            rest_force_tolerance_mps2: sinscal::run::sequence::SequenceSettings::default().rest_force_error_max_mps2,
             use_moves: true,
         }
     }

@@ -10,7 +10,7 @@ mod solve;
 
 pub use calibration::{
     attitude_difference_rad, calibrate_positions, CalibrationError, CalibrationResult, CalibrationSettings,
-    PositionInput, MAX_FORCE_MAGNITUDE_ERROR, MAX_HEADING_MISALIGNMENT_RAD, MAX_LEVEL_MISALIGNMENT_RAD,
+    PositionInput, MAX_HEADING_MISALIGNMENT_RAD, MAX_LEVEL_MISALIGNMENT_RAD,
 };
 pub use solve::{
     design_rows_si, table1_pair_solution, BiasSolution, BiasSolver, Estimate, Parameter, SolveError, SolverSettings,

@@ -100,7 +100,7 @@ impl ChannelEstimator {
             let f = d.force_mean_b_mps2;
             let ratio = norm(f) / g;
             // NaN fails the test too.
-            let within = (ratio - 1.0).abs() <= self.settings.max_force_magnitude_error;
+            let within = (ratio - 1.0).abs() <= self.settings.force_magnitude_error_max_relative;
             if !within {
                 return Err(ChannelError::ForceMagnitude { dwell, ratio });
             }
@@ -110,7 +110,7 @@ impl ChannelEstimator {
             let up_b = d.tilt.transpose().mul_vec([0.0, 0.0, 1.0]);
             let cos = (dot(f, up_b) / norm(f)).clamp(-1.0, 1.0);
             let angle_rad = libm::acosf(cos);
-            let within = angle_rad <= self.settings.max_gravity_angle_rad;
+            let within = angle_rad <= self.settings.pose_gravity_angle_max_rad;
             if !within {
                 return Err(ChannelError::GravityDirection { dwell, angle_rad });
             }

@@ -2,6 +2,7 @@
 //! ([`AttitudeKnowledge`]).
 
 use crate::calib::general::terms::Model;
+use crate::calib::limits::{FORCE_MAGNITUDE_ERROR_MAX_RELATIVE, POSE_GRAVITY_ANGLE_MAX_RAD};
 
 /// Settings of the estimator.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -18,9 +19,11 @@ pub struct ChannelSettings {
     /// A parameter whose squared share in the blind spots exceeds this is unobservable.
     pub share_tolerance: f32,
     /// Largest relative difference between |f| and g accepted before the fit.
-    pub max_force_magnitude_error: f32,
+    /// (Default [`FORCE_MAGNITUDE_ERROR_MAX_RELATIVE`].)
+    pub force_magnitude_error_max_relative: f32,
     /// Largest angle between measured gravity and the reference's accepted before the fit, rad.
-    pub max_gravity_angle_rad: f32,
+    /// (Default [`POSE_GRAVITY_ANGLE_MAX_RAD`].)
+    pub pose_gravity_angle_max_rad: f32,
     /// Whether the dwells' tilts are a reference or unknown (then nuisance parameters).
     pub attitude: AttitudeKnowledge,
     /// Whether the gyros resolve the Earth rate (their dwell means and errors are well below it). Without, the
@@ -50,8 +53,8 @@ impl Default for ChannelSettings {
             max_iterations: 12,
             rank_tolerance: 1e-4,
             share_tolerance: 1e-3,
-            max_force_magnitude_error: crate::calib::angles::MAX_FORCE_MAGNITUDE_ERROR,
-            max_gravity_angle_rad: 0.1745,
+            force_magnitude_error_max_relative: FORCE_MAGNITUDE_ERROR_MAX_RELATIVE,
+            pose_gravity_angle_max_rad: POSE_GRAVITY_ANGLE_MAX_RAD,
             attitude: AttitudeKnowledge::Reference,
             earth_rate_resolved: true,
         }

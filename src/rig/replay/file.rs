@@ -222,10 +222,10 @@ pub fn read_configuration<R: ByteSource>(source: &mut R) -> Result<ReplayHeader,
     // The limits of rest of the sequence's checks.
     let mut rest = [0u8; 12];
     source.read_exact(&mut rest)?;
-    let (max_force_error_mps2, max_gravity_angle_rad, max_rate_radps) =
+    let (rest_force_error_max_mps2, rest_gravity_angle_max_rad, rest_rate_max_radps) =
         (f32_at(&rest, 0), f32_at(&rest, 4), f32_at(&rest, 8));
     let positive = |x: f32| x.is_finite() && x > 0.0;
-    if !(positive(max_force_error_mps2) && positive(max_gravity_angle_rad) && positive(max_rate_radps)) {
+    if !(positive(rest_force_error_max_mps2) && positive(rest_gravity_angle_max_rad) && positive(rest_rate_max_radps)) {
         return Err(ReplayError::Format);
     }
     let mut schedule = Vec::new();
@@ -250,9 +250,9 @@ pub fn read_configuration<R: ByteSource>(source: &mut R) -> Result<ReplayHeader,
         unknown_headings,
     };
     let mut settings = replay_sequence_settings(prefilter, solve);
-    settings.max_force_error_mps2 = max_force_error_mps2;
-    settings.max_gravity_angle_rad = max_gravity_angle_rad;
-    settings.max_rate_radps = max_rate_radps;
+    settings.rest_force_error_max_mps2 = rest_force_error_max_mps2;
+    settings.rest_gravity_angle_max_rad = rest_gravity_angle_max_rad;
+    settings.rest_rate_max_radps = rest_rate_max_radps;
     Ok(ReplayHeader { model, site, schedule, labels, settings, frames: 0 })
 }
 
