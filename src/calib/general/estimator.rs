@@ -6,14 +6,13 @@ use heapless::Vec;
 use crate::calib::general::error::ChannelError;
 use crate::calib::general::move_rows::move_used;
 use crate::calib::general::nuisance::eliminate_nuisances;
-use crate::calib::general::observability::MIN_EXERCISE;
 use crate::calib::general::settings::{AttitudeKnowledge, ChannelSettings};
 use crate::calib::general::solution::ChannelSolution;
 use crate::calib::general::terms::{columns, implausible_parameter, Model, PARAMETERS};
 use crate::calib::moves::{ChannelMove, MAX_MOVES};
 use crate::math::linalg::{dot, norm, Mat3, Vec3};
 use crate::math::lsq::{inverse_gram, solve_upper, SqrtInfo};
-use crate::nav::earth::{Site, EARTH_RATE_RADPS};
+use crate::nav::earth::Site;
 use crate::nav::frames::heading_rotation;
 
 /// Most dwells one solution takes (a bit mask of `u64` marks suspect dwells).
@@ -270,66 +269,9 @@ impl ChannelEstimator {
         used: impl Fn(usize) -> bool,
         moves: UsedMoves<'_>,
     ) -> Pass {
-        let UsedMoves { all: moves, refused } = moves;
-        let model = self.model();
-        let zero = [0.0f32; PARAMETERS];
-        let ones = [1.0f32; PARAMETERS];
-        let none = [false; 3];
-        // Column norms of the weighted and the structural designs, for equilibration.
-        let mut norm_w = [0.0f32; PARAMETERS];
-        let mut norm_s = [0.0f32; PARAMETERS];
-        let mut peak_s = [0.0f32; PARAMETERS];
-        for (k, d) in self.dwells.iter().enumerate().filter(|(k, _)| used(*k)) {
-            let lin = self.linearise(theta, &attitude[k], model);
-            let lin_s = self.linearise(&zero, &attitude[k], model);
-            let w = self.rows(d, &lin, cols, n, &ones, false, none);
-            let s = self.rows(d, &lin_s, cols, n, &ones, true, none);
-            for c in 0..n {
-                for r in 0..w.rows {
-                    norm_w[c] += w.a[r][c] * w.a[r][c];
-                    norm_s[c] += s.a[r][c] * s.a[r][c];
-                    peak_s[c] = peak_s[c].max(s.a[r][c].abs());
-                }
-            }
-        }
-        let use_gyro = self.settings.use_gyro;
-        let used = &used;
-        let moves_used = || {
-            moves
-                .iter()
-                .enumerate()
-                .filter(move |(k, m)| use_gyro && move_used(m, used) && (*k >= 64 || refused & (1 << k) == 0))
-        };
-        for (_, m) in moves_used() {
-            let w = self.move_rows(m, theta, attitude, cols, n, &ones, false);
-            let s = self.move_rows(m, theta, attitude, cols, n, &ones, true);
-            for c in 0..n {
-                for r in 0..w.rows {
-                    norm_w[c] += w.a[r][c] * w.a[r][c];
-                    norm_s[c] += s.a[r][c] * s.a[r][c];
-                    peak_s[c] = peak_s[c].max(s.a[r][c].abs());
-                }
-            }
-        }
-        // A proportional term whose input never reaches 5 % of full scale in any dwell (an axis tilted by less
-        // than 3 deg from horizontal for a scale factor) is not exercised by the schedule: absent, whatever a
-        // fit would make of it (a 0.05 deg tilt would otherwise "determine" a scale factor from 9e-4 g).
-        // A dwell whose heading is neither given nor estimated leaves the reference offset undefined: its axes
-        // are navigation axes, and that dwell's are not known.
-        let offset_undefined =
-            self.dwells.iter().enumerate().any(|(k, d)| used(k) && d.heading_rad.is_none() && !self.nuisances(d)[2]);
-        for c in 0..n {
-            let p = cols[c];
-            let full_scale = match p {
-                33..=35 if offset_undefined => f32::INFINITY,
-                6..=23 | 33..=35 => 1.0,
-                24..=32 => self.site.gravity_mps2 / EARTH_RATE_RADPS,
-                _ => continue,
-            };
-            if peak_s[c] < MIN_EXERCISE * full_scale {
-                norm_s[c] = 0.0;
-            }
-        }
+        let design = Design { theta, attitude, cols, n };
+        let (norm_w, mut norm_s, peak_s) = self.column_norms(&design, &used, moves);
+        self.drop_unexercised(&design, &used, &peak_s, &mut norm_s);
         let mut scale = [1.0f32; PARAMETERS];
         let mut scale_s = [1.0f32; PARAMETERS];
         for c in 0..n {
@@ -342,14 +284,87 @@ impl ChannelEstimator {
                 scale_s[c] = 0.0;
             }
         }
+        let (weighted, structure) = self.factors(&design, &used, moves, &scale, &scale_s);
+        let (determined, blind_spots, gauge) = self.structural_rank(&structure.r, cols, n);
+        let pass = Pass { scale, determined, blind_spots, gauge, ..Pass::default() };
+        restricted_solution(pass, &weighted, n)
+    }
+
+    /// The moves a pass uses: with gyro data, those whose dwells are used and that are not gross misfits.
+    fn moves_used<'m>(
+        &self,
+        used: &'m impl Fn(usize) -> bool,
+        moves: UsedMoves<'m>,
+    ) -> impl Iterator<Item = &'m ChannelMove> + 'm {
+        let UsedMoves { all, refused } = moves;
+        let use_gyro = self.settings.use_gyro;
+        all.iter()
+            .enumerate()
+            .filter(move |(k, m)| use_gyro && move_used(m, used) && (*k >= 64 || refused & (1 << k) == 0))
+            .map(|(_, m)| m)
+    }
+
+    /// Column norms of the weighted and the structural designs (for equilibration), and the largest entry of
+    /// each column of the structural design.
+    fn column_norms(
+        &self,
+        design: &Design<'_>,
+        used: &impl Fn(usize) -> bool,
+        moves: UsedMoves<'_>,
+    ) -> ([f32; PARAMETERS], [f32; PARAMETERS], [f32; PARAMETERS]) {
+        let Design { theta, attitude, cols, n } = *design;
+        let model = self.model();
+        let zero = [0.0f32; PARAMETERS];
+        let ones = [1.0f32; PARAMETERS];
+        let none = [false; 3];
+        let mut norm_w = [0.0f32; PARAMETERS];
+        let mut norm_s = [0.0f32; PARAMETERS];
+        let mut peak_s = [0.0f32; PARAMETERS];
+        let mut add = |w: &[[f32; PARAMETERS]], s: &[[f32; PARAMETERS]], rows: usize| {
+            for c in 0..n {
+                for r in 0..rows {
+                    norm_w[c] += w[r][c] * w[r][c];
+                    norm_s[c] += s[r][c] * s[r][c];
+                    peak_s[c] = peak_s[c].max(s[r][c].abs());
+                }
+            }
+        };
+        for (k, d) in self.dwells.iter().enumerate().filter(|(k, _)| used(*k)) {
+            let lin = self.linearise(theta, &attitude[k], model);
+            let lin_s = self.linearise(&zero, &attitude[k], model);
+            let w = self.rows(d, &lin, cols, n, &ones, false, none);
+            let s = self.rows(d, &lin_s, cols, n, &ones, true, none);
+            add(&w.a, &s.a, w.rows);
+        }
+        for m in self.moves_used(used, moves) {
+            let w = self.move_rows(m, theta, attitude, cols, n, &ones, false);
+            let s = self.move_rows(m, theta, attitude, cols, n, &ones, true);
+            add(&w.a, &s.a, w.rows);
+        }
+        (norm_w, norm_s, peak_s)
+    }
+
+    /// The weighted and the structural square-root information factors of the used dwells (their nuisance
+    /// angles eliminated) and moves, columns scaled by `scale` and `scale_s`.
+    fn factors(
+        &self,
+        design: &Design<'_>,
+        used: &impl Fn(usize) -> bool,
+        moves: UsedMoves<'_>,
+        scale: &[f32; PARAMETERS],
+        scale_s: &[f32; PARAMETERS],
+    ) -> (SqrtInfo<PARAMETERS>, SqrtInfo<PARAMETERS>) {
+        let Design { theta, attitude, cols, n } = *design;
+        let model = self.model();
+        let zero = [0.0f32; PARAMETERS];
         let mut weighted = SqrtInfo::<PARAMETERS>::new(n);
         let mut structure = SqrtInfo::<PARAMETERS>::new(n);
         for (k, d) in self.dwells.iter().enumerate().filter(|(k, _)| used(*k)) {
             let lin = self.linearise(theta, &attitude[k], model);
             let lin_s = self.linearise(&zero, &attitude[k], model);
             let nuisance = self.nuisances(d);
-            let mut w = self.rows(d, &lin, cols, n, &scale, false, nuisance);
-            let mut s = self.rows(d, &lin_s, cols, n, &scale_s, true, nuisance);
+            let mut w = self.rows(d, &lin, cols, n, scale, false, nuisance);
+            let mut s = self.rows(d, &lin_s, cols, n, scale_s, true, nuisance);
             let skip_w = eliminate_nuisances(&mut w, n);
             let skip_s = eliminate_nuisances(&mut s, n);
             for r in skip_w..w.rows {
@@ -359,47 +374,59 @@ impl ChannelEstimator {
                 structure.add_row(&s.a[r], 0.0);
             }
         }
-        for (_, m) in moves_used() {
-            let w = self.move_rows(m, theta, attitude, cols, n, &scale, false);
-            let s = self.move_rows(m, theta, attitude, cols, n, &scale_s, true);
+        for m in self.moves_used(used, moves) {
+            let w = self.move_rows(m, theta, attitude, cols, n, scale, false);
+            let s = self.move_rows(m, theta, attitude, cols, n, scale_s, true);
             for r in 0..w.rows {
                 weighted.add_row(&w.a[r], w.y[r]);
                 structure.add_row(&s.a[r], 0.0);
             }
         }
-        let (determined, blind_spots, gauge) = self.structural_rank(&structure.r, cols, n);
-        // The determined columns of the weighted factor, triangularised again.
-        let mut kept = [0usize; PARAMETERS];
-        let mut m = 0;
-        for (c, &d) in determined.iter().enumerate().take(n) {
-            if d {
-                kept[m] = c;
-                m += 1;
-            }
-        }
-        let mut restricted = SqrtInfo::<PARAMETERS>::new(m);
-        for i in 0..n {
-            let mut row = [0.0f32; PARAMETERS];
-            for (slot, &c) in row.iter_mut().zip(kept.iter()).take(m) {
-                *slot = weighted.r[i][c];
-            }
-            restricted.add_row(&row, weighted.z[i]);
-        }
-        let x = solve_upper(&restricted.r, &restricted.z, m);
-        let mut cov_kept = [[0.0f32; PARAMETERS]; PARAMETERS];
-        inverse_gram(&restricted.r, m, &mut cov_kept);
-        let mut pass = Pass { scale, determined, blind_spots, gauge, ..Pass::default() };
-        for (i, &ci) in kept.iter().enumerate().take(m) {
-            pass.step_si[ci] = x[i] * scale[ci];
-            for (j, &cj) in kept.iter().enumerate().take(m) {
-                pass.cov_scaled[ci][cj] = cov_kept[i][j];
-            }
-        }
-        pass.restricted = restricted.r;
-        pass.kept = kept;
-        pass.kept_count = m;
-        pass
+        (weighted, structure)
     }
+}
+
+/// The point a pass linearises at: the parameters, the dwells' attitudes and the model's columns.
+#[derive(Clone, Copy)]
+pub(super) struct Design<'a> {
+    pub(super) theta: &'a [f32; PARAMETERS],
+    pub(super) attitude: &'a [Mat3; MAX_DWELLS],
+    pub(super) cols: &'a [usize; PARAMETERS],
+    pub(super) n: usize,
+}
+
+/// The pass's step and covariance from the weighted factor restricted to the determined columns of `pass`
+/// (triangularised again).
+fn restricted_solution(mut pass: Pass, weighted: &SqrtInfo<PARAMETERS>, n: usize) -> Pass {
+    let mut kept = [0usize; PARAMETERS];
+    let mut m = 0;
+    for (c, &d) in pass.determined.iter().enumerate().take(n) {
+        if d {
+            kept[m] = c;
+            m += 1;
+        }
+    }
+    let mut restricted = SqrtInfo::<PARAMETERS>::new(m);
+    for i in 0..n {
+        let mut row = [0.0f32; PARAMETERS];
+        for (slot, &c) in row.iter_mut().zip(kept.iter()).take(m) {
+            *slot = weighted.r[i][c];
+        }
+        restricted.add_row(&row, weighted.z[i]);
+    }
+    let x = solve_upper(&restricted.r, &restricted.z, m);
+    let mut cov_kept = [[0.0f32; PARAMETERS]; PARAMETERS];
+    inverse_gram(&restricted.r, m, &mut cov_kept);
+    for (i, &ci) in kept.iter().enumerate().take(m) {
+        pass.step_si[ci] = x[i] * pass.scale[ci];
+        for (j, &cj) in kept.iter().enumerate().take(m) {
+            pass.cov_scaled[ci][cj] = cov_kept[i][j];
+        }
+    }
+    pass.restricted = restricted.r;
+    pass.kept = kept;
+    pass.kept_count = m;
+    pass
 }
 
 /// The moves of a pass: all of them, and those left out as gross misfits (bit k: move k).
