@@ -1,20 +1,20 @@
 //! The thresholds that decide whether a dwell is at rest and whether its pose is plausible: each default defined
 //! once, with its unit (or `relative`) in its name. The calibration sequence checks every sample against the rest
-//! thresholds ([`crate::run::sequence::SequenceSettings`]); the estimators check every dwell's mean against the
+//! thresholds (`run::sequence::SequenceSettings`); the estimators check every dwell's mean against the
 //! pose thresholds before a fit ([`crate::calib::general::ChannelSettings`], [`crate::calib::angles`]).
 
 /// Largest angle between a sample's specific force and the announced up direction, rad, while a dwell is
-/// sampled ([`crate::run::sequence::SequenceSettings::rest_gravity_angle_max_rad`]): 0.1 rad (5.7 deg) lets
+/// sampled (`SequenceSettings::rest_gravity_angle_max_rad`): 0.1 rad (5.7 deg) lets
 /// vibration and a tilted table through, not a wrong face down.
 pub const REST_GRAVITY_ANGLE_MAX_RAD: f32 = 0.1;
 
 /// Largest | |f| - g | of one sample of a body at rest, m/s^2
-/// ([`crate::run::sequence::SequenceSettings::rest_force_error_max_mps2`]): 0.5 m/s^2 (51 mg) passes vibration
+/// (`SequenceSettings::rest_force_error_max_mps2`): 0.5 m/s^2 (51 mg) passes vibration
 /// and scale errors, and aborts a dwell whose body is moved.
 pub const REST_FORCE_ERROR_MAX_MPS2: f32 = 0.5;
 
 /// Largest angular rate magnitude of one sample of a body at rest, rad/s
-/// ([`crate::run::sequence::SequenceSettings::rest_rate_max_radps`]): 2 deg/s, far above any gyro bias and the
+/// (`SequenceSettings::rest_rate_max_radps`): 2 deg/s, far above any gyro bias and the
 /// Earth rate, far below a table that turns.
 pub const REST_RATE_MAX_RADPS: f32 = 2.0f32.to_radians();
 

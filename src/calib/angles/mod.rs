@@ -3,7 +3,7 @@
 //! for the three gyro drifts, the three accelerometer biases and the reference offset ([`BiasSolver`],
 //! file `solve.rs`), and the whole calibration with its refinement passes ([`calibrate_positions`], file
 //! `calibration.rs`). The default estimator is the general one ([`crate::calib::general`]); this one is chosen
-//! with `--method angles` on the host and [`crate::run::sequence::Estimator::Angles`] on the device.
+//! with `--method angles` on the host and `run::sequence::Estimator::Angles` on the device.
 
 mod calibration;
 mod solve;
