@@ -1,8 +1,9 @@
 //! # sinscal core
 //!
 //! Fast calibration of a strapdown IMU on a turntable (docs/method.md): the two-state HMM/KF prefilter,
-//! dwell statistics, analytic coarse alignment, and the weighted least-squares bias solution with
-//! standard errors and observability; the ADIS driver, the sampling queue and the calibration sequence
+//! dwell statistics, and the general estimator (the default: the sensor model's terms fitted to every channel
+//! of every dwell, with standard errors and structural observability) beside the paper's angle method
+//! (analytic coarse alignment and the weighted least-squares bias solution); the ADIS driver, the sampling queue and the calibration sequence
 //! of the firmware. `no_std`, f32, no allocation, no panics on the data path: the same code runs on a
 //! Cortex-M4F and, through the `sinscal` tool, on a workstation.
 //!
@@ -19,7 +20,7 @@
 //! | [`math`] | 3-vectors, 3x3 matrices, dwell accumulators, the online octave Allan variance |
 //! | [`nav`] | frames, attitudes, Earth rate and gravity: every sign convention |
 //! | [`sensor`] | [`ImuSample`], the [`ImuSource`] trait, the ADIS driver |
-//! | [`calib`] | prefilter, dwell statistics, alignment, the bias solution, the calibration, the compensation of samples |
+//! | [`calib`] | prefilter, dwell statistics, alignment, the two estimators (general, angles), the moves, the compensation of samples |
 //! | [`run`] | the data-ready handler and its queue, the calibration sequence |
 //! | [`instrument`] | the device: the host link (frames, messages), the wire formats (configuration, outcome, record: [`instrument::wire`]), the calibration record in NOR flash, compensation |
 //! | `rig` | replay of a recording through the firmware path, exact synthetic data, semihosting (emulation and tests; feature `rig`) |
@@ -34,10 +35,14 @@
 //!    "in position" signal: it waits, lets the table settle, and feeds the dwell's
 //!    [`DwellCollector`] (HMM/KF prefilter and statistics per channel, with the octave Allan variance that
 //!    gives the honest noise of each dwell mean), aborting a dwell that moves;
-//! 3. after the last position, [`calibrate_positions`] aligns every dwell
-//!    ([`calib::align::position_angles`]: `phi` against the turntable attitude), stacks the positions in
-//!    the [`BiasSolver`] and solves for the gyro and accelerometer biases with their standard errors,
-//!    refining in passes.
+//! 3. after the last position, the general estimator (the default, docs/method.md#general-estimator):
+//!    [`calib::session::session_estimator`] loads every dwell's means and their honest variances into a
+//!    [`ChannelEstimator`], which fits the sensor model's terms ([`Model`] of [`Term`]s: biases, scale factors,
+//!    misalignments, g-sensitivity, reference offset) to every channel of every dwell by Gauss-Newton, with the
+//!    moves between dwells ([`calib::moves`]) as observations of the gyro terms, and gives a [`ChannelSolution`]:
+//!    the parameters with their covariance, the structural blind spots, the residuals. The paper's angle method
+//!    ([`calib::angles`]: alignment of every dwell, the angles' bias solution, refinement) is the other
+//!    estimator, chosen in the sequence's settings.
 //!
 //! On the workstation, `sinscal calibrate` runs steps 2 and 3 on a recording's rows directly, or the whole
 //! path through the test rig's replay (`rig::replay`, feature `rig`: `--on host`), or the firmware itself in
@@ -58,9 +63,8 @@ pub mod rig;
 pub mod run;
 pub mod sensor;
 
-pub use calib::calibration::{calibrate_positions, CalibrationResult, CalibrationSettings, PositionInput};
 pub use calib::dwell::{DwellCollector, DwellSummary, Prefilter};
-pub use calib::solve::{BiasSolution, BiasSolver, Estimate};
+pub use calib::general::{ChannelDwell, ChannelError, ChannelEstimator, ChannelSettings, ChannelSolution, Model, Term};
 pub use math::linalg::{Mat3, Vec3};
 pub use nav::earth::Site;
 pub use nav::frames::Attitude;

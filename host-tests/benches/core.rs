@@ -6,8 +6,8 @@ use std::hint::black_box;
 
 use criterion::{criterion_group, criterion_main, Criterion};
 use sinscal::calib::align::{position_angles, DwellValue};
+use sinscal::calib::angles::{BiasSolver, SolverSettings, TABLE1_POSITIONS_DEG};
 use sinscal::calib::dwell::{DwellCollector, Prefilter};
-use sinscal::calib::solve::{BiasSolver, SolverSettings, TABLE1_POSITIONS_DEG};
 use sinscal::nav::earth::Site;
 use sinscal::nav::frames::Attitude;
 use sinscal::sensor::sample::ImuSample;

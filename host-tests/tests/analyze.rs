@@ -127,7 +127,7 @@ fn angles_text(pos_error: Option<(u32, usize, f64)>, with_std: bool) -> String {
     for (p, att) in TABLE1_DEG.iter().enumerate() {
         let c = c_b_n(att[0], att[1], att[2]);
         let c32 = sinscal::math::linalg::Mat3(std::array::from_fn(|i| std::array::from_fn(|j| c[i][j] as f32)));
-        let rows = sinscal::calib::solve::design_rows_si(&c32, &site);
+        let rows = sinscal::calib::angles::design_rows_si(&c32, &site);
         let mut phi = [0.0; 3];
         for k in 0..3 {
             phi[k] = (0..6).map(|j| rows[k][j] as f64 * biases[j]).sum::<f64>();

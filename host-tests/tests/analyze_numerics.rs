@@ -139,7 +139,7 @@ fn published_table(planted: impl Fn(usize, usize, &[f32; 9], [f64; 3]) -> f64) -
     for (p, att) in TABLE1_DEG.iter().enumerate() {
         let c = c_b_n(att[0], att[1], att[2]);
         let c32 = sinscal::math::linalg::Mat3(std::array::from_fn(|i| std::array::from_fn(|j| c[i][j] as f32)));
-        let rows = sinscal::calib::solve::design_rows_si(&c32, &site);
+        let rows = sinscal::calib::angles::design_rows_si(&c32, &site);
         let force_b = [c[2][0] * g, c[2][1] * g, c[2][2] * g];
         let phi: Vec<f64> = (0..3)
             .map(|k| {

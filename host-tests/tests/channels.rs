@@ -4,7 +4,7 @@
 //! generated in f64 by the host's own model (model::sensor::Triad, model::synth::c_b_n), independently of the
 //! core's formulas.
 
-use sinscal::calib::channels::{
+use sinscal::calib::general::{
     misalignment_index, parameter_name, AttitudeKnowledge, ChannelDwell, ChannelError, ChannelEstimator,
     ChannelSettings, ChannelSolution, Model, Term, GAUGE_PARAMETERS, PARAMETERS,
 };

@@ -16,9 +16,9 @@
 
 use rand::{Rng, SeedableRng};
 use rand_chacha::ChaCha8Rng;
-use sinscal::calib::calibration::CalibrationResult;
-use sinscal::calib::channels::{ChannelSolution, Model, PARAMETERS};
+use sinscal::calib::angles::CalibrationResult;
 use sinscal::calib::compensation::{Compensation, ENCODED_BYTES};
+use sinscal::calib::general::{ChannelSolution, Model, PARAMETERS};
 use sinscal::sensor::sample::ImuSample;
 use sinscal_host::calibration::result::CalibrationJson;
 use sinscal_host::calibration::{calibrate, Calibration, Options};
@@ -202,7 +202,7 @@ fn every_term_of_both_signs_gives_the_true_sample_back() {
 fn a_term_left_out_or_undetermined_is_identity_or_zero() {
     let theta = truth(1.0);
     // Biases and accelerometer scale factors only (the default model); accel_bias_y undetermined.
-    let model = Model::BIASES.with(sinscal::calib::channels::Term::AccelScaleFactor);
+    let model = Model::BIASES.with(sinscal::calib::general::Term::AccelScaleFactor);
     let mut s = solution(model, &theta);
     s.observable &= !(1 << 4);
     s.unobservable |= 1 << 4;

@@ -160,8 +160,8 @@ fn every_request_and_refusal_in_order_then_the_record_at_the_next_boot() {
          solution {} bytes (size_of on the host)",
         std::mem::size_of::<Device<RamFlash>>(),
         std::mem::size_of::<Option<sinscal::CalibrationSequence>>(),
-        std::mem::size_of::<sinscal::calib::channels::ChannelEstimator>(),
-        std::mem::size_of::<sinscal::calib::channels::ChannelSolution>()
+        std::mem::size_of::<sinscal::calib::general::ChannelEstimator>(),
+        std::mem::size_of::<sinscal::calib::general::ChannelSolution>()
     );
     assert_eq!(b.state(), DeviceState::Idle);
     assert_eq!(b.refused(kind::START, &[]), ErrorCode::NotConfigured);

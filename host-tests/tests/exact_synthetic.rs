@@ -157,7 +157,7 @@ fn a_flipped_phi_convention_would_be_caught() {
     // The paper's printed step-4 signs (every right-hand side negated) give the negated biases. Here the
     // equivalent: feed the solver angles of the opposite sign and see that the estimates flip, so the
     // sign checks above really do distinguish the two conventions.
-    use sinscal::calib::solve::{BiasSolver, SolverSettings, TABLE1_POSITIONS_DEG};
+    use sinscal::calib::angles::{BiasSolver, SolverSettings, TABLE1_POSITIONS_DEG};
     use sinscal::nav::frames::Attitude;
     let scenario = Scenario {
         gyro_bias_b_radps: [0.05 * DEG_PER_HOUR; 3],

@@ -65,7 +65,7 @@ fn without_headings(mut rec: Recording) -> Recording {
 #[test]
 fn general_estimator_on_the_firmware_path_matches_the_direct_one() {
     let rec = example(60.0);
-    let full = Options { model: sinscal::calib::channels::Model::FULL, ..Options::default() };
+    let full = Options { model: sinscal::calib::general::Model::FULL, ..Options::default() };
     for (rec, options) in
         [(rec.clone(), Options::default()), (without_headings(rec.clone()), Options::default()), (rec, full)]
     {
@@ -76,12 +76,12 @@ fn general_estimator_on_the_firmware_path_matches_the_direct_one() {
         // The device's 32-bit LSB (6.7e-9 rad/s, 3.7e-8 m/s^2) moves every estimate by far less than its
         // standard error.
         let mut compared = 0;
-        for i in 0..sinscal::calib::channels::PARAMETERS {
+        for i in 0..sinscal::calib::general::PARAMETERS {
             if let (Some((dv, ds)), Some((rv, _))) = (d.estimate(i), r.estimate(i)) {
                 assert!(
                     (dv - rv).abs() < 0.02 * ds,
                     "{}: {dv} vs {rv} (std {ds})",
-                    sinscal::calib::channels::parameter_name(i)
+                    sinscal::calib::general::parameter_name(i)
                 );
                 compared += 1;
             }
@@ -102,8 +102,8 @@ fn general_estimator_on_the_firmware_path_matches_the_direct_one() {
 /// holds them.
 #[test]
 fn sixty_four_positions_fit_the_firmware_path() {
-    let capacity = sinscal::calib::solve::MAX_POSITIONS;
-    assert_eq!(capacity, sinscal::calib::channels::MAX_DWELLS);
+    let capacity = sinscal::calib::angles::MAX_POSITIONS;
+    assert_eq!(capacity, sinscal::calib::general::MAX_DWELLS);
     let positions_deg: Vec<[f64; 3]> = (0..capacity)
         .map(|k| {
             let [p, r, h] = sinscal_host::model::synth::TABLE1_DEG[k % 6];
@@ -116,9 +116,9 @@ fn sixty_four_positions_fit_the_firmware_path() {
     let (d, r) = (direct.channels.as_ref().unwrap(), replayed.channels.as_ref().unwrap());
     assert_eq!((d.dwells, r.dwells), (capacity, capacity));
     assert_eq!(replayed.positions.len(), capacity);
-    for i in 0..sinscal::calib::channels::PARAMETERS {
+    for i in 0..sinscal::calib::general::PARAMETERS {
         if let (Some((dv, ds)), Some((rv, _))) = (d.estimate(i), r.estimate(i)) {
-            assert!((dv - rv).abs() < 0.02 * ds, "{}", sinscal::calib::channels::parameter_name(i));
+            assert!((dv - rv).abs() < 0.02 * ds, "{}", sinscal::calib::general::parameter_name(i));
         }
     }
     // One more position is refused with the limit named.

@@ -9,7 +9,7 @@ mod common;
 
 use std::path::Path;
 
-use sinscal::calib::channels::{parameter_name, Model, PARAMETERS};
+use sinscal::calib::general::{parameter_name, Model, PARAMETERS};
 use sinscal_host::calibration::{calibrate, Calibration, Options};
 use sinscal_host::io::recording::Recording;
 use sinscal_host::model::simulator::{simulate, ScenarioFile};
@@ -212,6 +212,6 @@ fn a_move_to_a_dwell_that_was_not_added_is_refused_not_a_panic() {
     m.duration_s = 1.0;
     m.to = 99;
     for result in [session.estimator.solve_with(&[m]), session.estimator.solve_excluding_with(1, &[m])] {
-        assert!(matches!(result, Err(sinscal::calib::channels::ChannelError::BadMove { index: 0 })), "{result:?}");
+        assert!(matches!(result, Err(sinscal::calib::general::ChannelError::BadMove { index: 0 })), "{result:?}");
     }
 }

@@ -5,7 +5,7 @@
 
 use std::path::{Path, PathBuf};
 
-use sinscal::calib::channels::Model;
+use sinscal::calib::general::Model;
 use sinscal_host::analysis::analyze_recording;
 use sinscal_host::calibration::firmware_path::calibrate_on_host;
 use sinscal_host::calibration::result::CalibrationJson;

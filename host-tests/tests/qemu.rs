@@ -34,7 +34,7 @@ fn firmware_in_qemu_and_the_host_replay_agree_to_the_bit() {
     for row in unknown_headings.rows.iter_mut().filter(|r| r.pos == 2 || r.pos == 5) {
         row.heading_deg = None;
     }
-    let full = Options { model: sinscal::calib::channels::Model::FULL, ..Options::default() };
+    let full = Options { model: sinscal::calib::general::Model::FULL, ..Options::default() };
     for (rec, options) in [
         (&rec, Options::angles()),
         (
@@ -76,7 +76,7 @@ fn firmware_in_qemu_and_the_host_replay_agree_to_the_bit() {
                 .unwrap()
                 .solve()
                 .unwrap();
-            let bits = |c: &sinscal::calib::channels::ChannelSolution| {
+            let bits = |c: &sinscal::calib::general::ChannelSolution| {
                 let mut b = c.parameters_si.map(f32::to_bits).to_vec();
                 b.extend(c.covariance_si.iter().flatten().map(|x| x.to_bits()));
                 b.extend(c.heading_rad[..c.dwells].iter().map(|x| x.to_bits()));
@@ -151,7 +151,7 @@ fn on_target_tests_pass_in_qemu() {
         assert!(report.lines().any(|l| l == line), "host: {line}\n{report}");
     }
     // The general estimator on the exact session, solved on x86 by the same core: the same bits as on the target.
-    use sinscal::calib::channels::{ChannelEstimator, ChannelSettings, Model};
+    use sinscal::calib::general::{ChannelEstimator, ChannelSettings, Model};
     let mut est = ChannelEstimator::new(
         sinscal::rig::exact::site(),
         ChannelSettings { model: Model::FULL, ..ChannelSettings::default() },

@@ -9,7 +9,7 @@
 mod common;
 
 use common::held_out::{accelerometer_model, held_out_rms_mps2, unlabelled_static_intervals};
-use sinscal::calib::channels::{Model, Term};
+use sinscal::calib::general::{Model, Term};
 use sinscal_host::calibration::{calibrate, site_of, Options, PrefilterKind};
 
 #[test]
@@ -71,5 +71,5 @@ fn ferraris_full_model_diverges_and_is_refused() {
     // A plausible model on the same data is still reported (its values within every term's bound).
     let cal = calibrate(&rec, &Options::default()).expect("the default model");
     let theta = cal.channels.as_ref().expect("the general estimator").parameters_si;
-    assert_eq!(sinscal::calib::channels::implausible_parameter(&theta), None);
+    assert_eq!(sinscal::calib::general::implausible_parameter(&theta), None);
 }

@@ -9,7 +9,7 @@
 
 mod common;
 
-use sinscal::calib::channels::{parameter_name, Model, Term};
+use sinscal::calib::general::{parameter_name, Model, Term};
 use sinscal_host::calibration::{calibrate, site_of, Options, PrefilterKind};
 use sinscal_host::io::recording::Recording;
 

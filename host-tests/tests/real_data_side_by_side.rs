@@ -11,7 +11,7 @@ mod common;
 use common::held_out::{
     accelerometer_model, calibrated_norm_error_mps2, held_out_rms_mps2, unlabelled_static_intervals, Interval,
 };
-use sinscal::calib::channels::{AttitudeKnowledge, Model, Term, GAUGE_PARAMETERS};
+use sinscal::calib::general::{AttitudeKnowledge, Model, Term, GAUGE_PARAMETERS};
 use sinscal::nav::earth::normal_gravity_mps2;
 use sinscal_host::calibration::result::summary;
 use sinscal_host::calibration::{calibrate, site_of, Calibration, Options, DEFAULT_MODEL};

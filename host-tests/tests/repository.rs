@@ -166,6 +166,24 @@ fn the_product_never_names_the_laboratory() {
     assert!(hits.is_empty(), "the product names the laboratory:\n{}", hits.join("\n"));
 }
 
+/// The general estimator (calib/general, the default) stands alone: it uses nothing of the paper's angle method
+/// (calib/angles), which may use it (its capacity is the general estimator's).
+#[test]
+fn the_general_estimator_does_not_use_the_angle_method() {
+    let mut rs = Vec::new();
+    files(&root().join("src/calib/general"), &[".rs"], &mut rs);
+    assert!(rs.len() > 3, "only {} files under src/calib/general", rs.len());
+    let mut uses = Vec::new();
+    for file in &rs {
+        for (n, line) in fs::read_to_string(file).unwrap().lines().enumerate() {
+            if line.contains("calib::angles") {
+                uses.push(format!("{}:{}: {}", file.display(), n + 1, line.trim()));
+            }
+        }
+    }
+    assert!(uses.is_empty(), "the general estimator uses the angle method:\n{}", uses.join("\n"));
+}
+
 /// A real board is a package of its own (boards/): no code of the core names a board's crates (its HAL, its
 /// framework, its chip), so that every board runs the same core. QEMU's board (src/board, register level, no crate
 /// of its own) is the one board inside the core package.

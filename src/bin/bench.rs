@@ -61,7 +61,7 @@ mod firmware {
             estimate_reference_offset: true,
             ..Configuration::new(Model::Adis16505_2, site)
         };
-        for (k, p) in sinscal::calib::solve::TABLE1_POSITIONS_DEG.iter().enumerate() {
+        for (k, p) in sinscal::calib::angles::TABLE1_POSITIONS_DEG.iter().enumerate() {
             let _ = c.schedule.push(Attitude::from_degrees(p[0], p[1], p[2]));
             let _ = c.labels.push(k as u16 + 1);
         }
@@ -263,7 +263,7 @@ mod firmware {
 
     /// A compensation with every term non-zero (docs/compensation.md); its cost does not depend on the values.
     fn compensation() -> Compensation {
-        let mut theta = [0.0f32; sinscal::calib::channels::PARAMETERS];
+        let mut theta = [0.0f32; sinscal::calib::general::PARAMETERS];
         for (i, x) in theta.iter_mut().enumerate().take(33) {
             // 1e-4 to 8e-4 of both signs: biases, scale factors, misalignments, g-sensitivity.
             *x = if i % 2 == 0 { 1e-4 } else { -2e-4 } * (1 + i % 4) as f32;
@@ -380,14 +380,14 @@ mod firmware {
     /// 45.7796 N, `SOLVE_DWELL_SAMPLES` samples each of the exact specific force and Earth rate with a small
     /// deterministic dither (the solve's cost does not depend on the values), 20 samples of "moving" between
     /// dwells (no rotation: with the full model the moves are measured and left out as gross misfits).
-    fn solve_cost(model: sinscal::calib::channels::Model) -> u32 {
+    fn solve_cost(model: sinscal::calib::general::Model) -> u32 {
         const SOLVE_DWELL_SAMPLES: u32 = 300;
         let site = Site::with_normal_gravity(45.7796f32.to_radians(), 0.0);
         let mut schedule = [Attitude::from_degrees(0.0, 0.0, 0.0); 6];
-        for (a, p) in schedule.iter_mut().zip(sinscal::calib::solve::TABLE1_POSITIONS_DEG.iter()) {
+        for (a, p) in schedule.iter_mut().zip(sinscal::calib::angles::TABLE1_POSITIONS_DEG.iter()) {
             *a = Attitude::from_degrees(p[0], p[1], p[2]);
         }
-        let channels = sinscal::calib::channels::ChannelSettings { model, ..Default::default() };
+        let channels = sinscal::calib::general::ChannelSettings { model, ..Default::default() };
         let settings = sinscal::run::sequence::SequenceSettings {
             settle_samples: 0,
             dwell_samples: SOLVE_DWELL_SAMPLES,
@@ -448,7 +448,7 @@ mod firmware {
         let (stack_isr, stack_processing) = stack_depths();
         let (stack_status, stack_configure, stack_start, status_instructions) = link_costs();
         let solve_default = solve_cost(sinscal::calib::session::DEFAULT_MODEL);
-        let solve_full = solve_cost(sinscal::calib::channels::Model::FULL);
+        let solve_full = solve_cost(sinscal::calib::general::Model::FULL);
         let mut text: heapless::String<1536> = heapless::String::new();
         let _ = write!(
             text,

@@ -32,7 +32,7 @@ mod firmware {
         match result {
             SequenceSolution::Angles(r) => {
                 let s = &r.solution;
-                let v = |e: Option<sinscal::calib::solve::Estimate>| e.map_or(f32::NAN, |e| e.value);
+                let v = |e: Option<sinscal::calib::angles::Estimate>| e.map_or(f32::NAN, |e| e.value);
                 defmt::info!(
                     "angle method, {=u32} passes: gyro bias [{=f32}, {=f32}, {=f32}] rad/s, accel bias [{=f32}, {=f32}, {=f32}] m/s^2",
                     r.passes,

@@ -16,10 +16,9 @@ mod firmware {
     use cortex_m as _;
     use cortex_m_rt::entry;
     use sinscal::board::exit;
-    use sinscal::calib::calibration::{calibrate_positions, CalibrationSettings, PositionInput};
+    use sinscal::calib::angles::{calibrate_positions, CalibrationSettings, PositionInput, TABLE1_POSITIONS_DEG};
     use sinscal::calib::dwell::{DwellCollector, Prefilter};
     use sinscal::calib::prefilter::{HmmKf, PrefilterSettings};
-    use sinscal::calib::solve::TABLE1_POSITIONS_DEG;
     use sinscal::math::accumulate::DwellStats;
     use sinscal::nav::earth::Site;
     use sinscal::nav::frames::Attitude;
@@ -141,7 +140,7 @@ mod firmware {
     fn general_estimator(report: &mut Report) {
         // The exact 24-pose session with every static term, solved on the target: the truth comes back, and the
         // bits of every parameter are printed for the host test to compare with x86.
-        use sinscal::calib::channels::{ChannelEstimator, ChannelSettings, Model};
+        use sinscal::calib::general::{ChannelEstimator, ChannelSettings, Model};
         let mut est = ChannelEstimator::new(
             sinscal::rig::exact::site(),
             ChannelSettings { model: Model::FULL, ..ChannelSettings::default() },

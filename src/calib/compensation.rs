@@ -20,8 +20,8 @@
 //! bytes (the layout version, then `b_g`, `b_a`, `T_a`, `T_g`, `G` as f32); [`Compensation::decode`] runs the
 //! same checks and inverts `T` again, so a round trip is bit-exact (docs/compensation.md#encoding).
 
-use crate::calib::calibration::CalibrationResult;
-use crate::calib::channels::{
+use crate::calib::angles::CalibrationResult;
+use crate::calib::general::{
     g_sensitivity_radps_per_mps2, misalignment_index, parameter_name, sensor_matrix, ChannelSolution, Term, PARAMETERS,
 };
 use crate::math::linalg::{Mat3, Vec3};
@@ -201,7 +201,7 @@ impl Compensation {
     /// `G = 0`.
     pub fn from_angles(result: &CalibrationResult) -> Result<Compensation, CompensationError> {
         let s = &result.solution;
-        let value = |e: Option<crate::calib::solve::Estimate>| e.map_or(0.0, |e| e.value);
+        let value = |e: Option<crate::calib::angles::Estimate>| e.map_or(0.0, |e| e.value);
         Compensation::from_model(
             s.gyro_bias_b_radps.map(value),
             s.accel_bias_b_mps2.map(value),

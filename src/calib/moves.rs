@@ -18,11 +18,11 @@
 //!
 //! Memory: 348 bytes per move being integrated; a finished move ([`ChannelMove`]) is 404 bytes.
 
-use crate::calib::channels::{g_sensitivity_radps_per_mps2, misalignment_index, sensor_matrix, PARAMETERS};
+use crate::calib::general::{g_sensitivity_radps_per_mps2, misalignment_index, sensor_matrix, PARAMETERS};
 use crate::math::linalg::{cross, Mat3, Vec3};
 use crate::nav::strapdown::{MoveIntegrator, Quat};
 
-/// Parameters a move observes, in the estimator's order (see [`crate::calib::channels::parameter_name`]): gyro
+/// Parameters a move observes, in the estimator's order (see [`crate::calib::general::parameter_name`]): gyro
 /// bias x, y, z, then gyro scale factors, misalignments and g-sensitivity (indices 15 to 32).
 pub const MOVE_PARAMETERS: [usize; MOVE_COLUMNS] =
     [0, 1, 2, 15, 16, 17, 18, 19, 20, 21, 22, 23, 24, 25, 26, 27, 28, 29, 30, 31, 32];
@@ -38,7 +38,7 @@ pub const fn move_column(p: usize) -> Option<usize> {
     }
 }
 /// Most moves one solution takes: one between each two dwells.
-pub const MAX_MOVES: usize = crate::calib::channels::MAX_DWELLS;
+pub const MAX_MOVES: usize = crate::calib::general::MAX_DWELLS;
 
 /// Why a move cannot be integrated.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]

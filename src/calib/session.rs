@@ -10,8 +10,8 @@
 //! (2^-23 of the Earth rate, of g), which keeps the weights finite on noise-free data.
 
 use crate::calib::align::DwellValue;
-use crate::calib::channels::{ChannelDwell, ChannelError, ChannelEstimator, ChannelSettings, Model, Term};
 use crate::calib::dwell::{pool_raw_mean_noise, DwellSummary};
+use crate::calib::general::{ChannelDwell, ChannelError, ChannelEstimator, ChannelSettings, Model, Term};
 use crate::nav::earth::{Site, EARTH_RATE_RADPS};
 use crate::nav::frames::Attitude;
 

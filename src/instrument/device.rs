@@ -17,8 +17,8 @@ use super::wire::configuration::{DeviceConfiguration, MAX_DEVICE_BYTES, THRESHOL
 use super::wire::outcome::{encode_part, OutcomeView};
 use super::wire::record::{Record, RecordHead, RECORD_HEAD_BYTES, RECORD_VERSION};
 use super::wire::{Reader as BodyReader, Writer as BodyWriter};
+use crate::calib::angles::MAX_POSITIONS;
 use crate::calib::compensation::{self, Compensation};
-use crate::calib::solve::MAX_POSITIONS;
 use crate::run::sampling::{QueueItem, SamplingStats};
 use crate::run::sequence::{feed_sequence, CalibrationSequence, Event, SequenceFailure, SequenceSolution};
 use crate::sensor::adis::Model;

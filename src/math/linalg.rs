@@ -132,6 +132,30 @@ pub fn rotation(v: Vec3) -> Mat3 {
     Mat3(m)
 }
 
+/// The lower Cholesky factor of the leading `n` x `n` block (`n` at most 3) of a symmetric 3x3 matrix, or `None` when it is not
+/// positive definite.
+pub fn cholesky3(s: &[[f32; 3]; 3], n: usize) -> Option<[[f32; 3]; 3]> {
+    let mut l = [[0.0f32; 3]; 3];
+    for i in 0..n {
+        for j in 0..=i {
+            let mut v = s[i][j];
+            for k in 0..j {
+                v -= l[i][k] * l[j][k];
+            }
+            if i == j {
+                // NaN is refused too.
+                if v.is_nan() || v <= 0.0 {
+                    return None;
+                }
+                l[i][i] = libm::sqrtf(v);
+            } else {
+                l[i][j] = v / l[j][j];
+            }
+        }
+    }
+    Some(l)
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;

@@ -7,7 +7,7 @@
 
 use heapless::Vec;
 
-use crate::calib::channels::{g_sensitivity_radps_per_mps2, sensor_matrix, ChannelDwell, PARAMETERS};
+use crate::calib::general::{g_sensitivity_radps_per_mps2, sensor_matrix, ChannelDwell, PARAMETERS};
 use crate::calib::moves::{ChannelMove, MoveError, MoveSums};
 use crate::math::linalg::{rotation, Vec3};
 use crate::nav::earth::Site;
@@ -22,7 +22,7 @@ pub fn site() -> Site {
     Site::with_normal_gravity(45.7796f32.to_radians(), 0.0)
 }
 
-/// The true parameters, SI units, in the order of [`crate::calib::channels::parameter_name`].
+/// The true parameters, SI units, in the order of [`crate::calib::general::parameter_name`].
 pub fn truth() -> [f32; PARAMETERS] {
     let deg_h = crate::nav::earth::EARTH_RATE_RADPS / 15.041;
     let ug = 9.806_65e-6;

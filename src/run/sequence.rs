@@ -6,7 +6,7 @@
 //! (100 Hz); it decides from the item's latched turntable signal whether the table is in position.
 //!
 //! A dwell is aborted, with its reason, and collected again (after settling) when a sample contradicts
-//! the announced position (specific force more than [`SequenceSettings::max_gravity_angle_rad`] away from
+//! the announced position (specific force more than [`RestLimits::gravity_angle_max_rad`] away from
 //! the direction of up in the body frame), when the body moves (rate or specific force out of bounds),
 //! when too many read faults hit it, or when the table leaves before the dwell is long enough. A position
 //! aborted [`SequenceSettings::max_aborts`] times fails the sequence. The checks compare squared
@@ -20,15 +20,15 @@
 
 use heapless::Vec;
 
-use crate::calib::calibration::{
-    calibrate_positions, CalibrationError, CalibrationResult, CalibrationSettings, PositionInput,
+use crate::calib::angles::{
+    calibrate_positions, CalibrationError, CalibrationResult, CalibrationSettings, PositionInput, MAX_POSITIONS,
 };
-use crate::calib::channels::{ChannelError, ChannelSettings, ChannelSolution, Term, PARAMETERS};
 use crate::calib::dwell::{DwellCollector, Prefilter, MIN_DWELL_SAMPLES};
+use crate::calib::general::{ChannelError, ChannelSettings, ChannelSolution, Term, PARAMETERS};
+use crate::calib::limits::{REST_FORCE_ERROR_MAX_MPS2, REST_GRAVITY_ANGLE_MAX_RAD, REST_RATE_MAX_RADPS};
 use crate::calib::moves::{pooled_rate_var_radps2, ChannelMove, MoveSums};
 use crate::calib::prefilter::{HmmKf, PrefilterError};
 use crate::calib::session::{default_channel_settings, session_estimator, SessionDwell};
-use crate::calib::solve::MAX_POSITIONS;
 use crate::math::linalg::{dot, Vec3};
 use crate::nav::earth::Site;
 use crate::nav::frames::Attitude;
@@ -52,12 +52,8 @@ pub struct SequenceSettings {
     pub dwell_samples: u32,
     /// Fewest samples of a usable dwell.
     pub min_dwell_samples: u32,
-    /// Largest angle between measured specific force and the announced up direction, rad.
-    pub max_gravity_angle_rad: f32,
-    /// Largest angular rate magnitude of a body at rest, rad/s.
-    pub max_rate_radps: f32,
-    /// Largest | |f| - g | of a body at rest, m/s^2.
-    pub max_force_error_mps2: f32,
+    /// The limits of a sample of a body at rest.
+    pub rest: RestLimits,
     /// Most read faults in one dwell.
     pub max_faults_per_dwell: u32,
     /// Aborts of one position before the sequence fails.
@@ -95,15 +91,37 @@ pub enum SequenceSolution {
     Channels(ChannelSolution),
 }
 
+/// The limits of a sample of a body at rest: the sequence's checks while it samples (docs/firmware.md#hardening).
+/// The configuration carries them (`instrument::wire::configuration`).
+#[derive(Clone, Copy, Debug, PartialEq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub struct RestLimits {
+    /// Largest | |f| - g |, m/s^2, absolute (default [`REST_FORCE_ERROR_MAX_MPS2`]).
+    pub force_error_max_mps2: f32,
+    /// Largest angle between the specific force and the announced up direction, rad (default
+    /// [`REST_GRAVITY_ANGLE_MAX_RAD`]).
+    pub gravity_angle_max_rad: f32,
+    /// Largest angular rate magnitude, rad/s (default [`REST_RATE_MAX_RADPS`]).
+    pub rate_max_radps: f32,
+}
+
+impl Default for RestLimits {
+    fn default() -> RestLimits {
+        RestLimits {
+            force_error_max_mps2: REST_FORCE_ERROR_MAX_MPS2,
+            gravity_angle_max_rad: REST_GRAVITY_ANGLE_MAX_RAD,
+            rate_max_radps: REST_RATE_MAX_RADPS,
+        }
+    }
+}
+
 impl Default for SequenceSettings {
     fn default() -> SequenceSettings {
         SequenceSettings {
             settle_samples: 200,
             dwell_samples: 6000,
             min_dwell_samples: 1000,
-            max_gravity_angle_rad: 0.1,
-            max_rate_radps: 2.0f32.to_radians(),
-            max_force_error_mps2: 0.5,
+            rest: RestLimits::default(),
             max_faults_per_dwell: 60,
             max_aborts: 3,
             prefilter: Prefilter::paper(),
@@ -276,10 +294,10 @@ impl CalibrationSequence {
             // Capacity checked above.
             let _ = stored.push(*a);
         }
-        let c = libm::cosf(settings.max_gravity_angle_rad);
+        let c = libm::cosf(settings.rest.gravity_angle_max_rad);
         // The third row of C_b^n: the up direction in the body frame.
         let up_b = schedule[0].c_b_n().row(2);
-        let (g, e) = (site.gravity_mps2, settings.max_force_error_mps2);
+        let (g, e) = (site.gravity_mps2, settings.rest.force_error_max_mps2);
         Ok(CalibrationSequence {
             collector: DwellCollector::new(&settings.prefilter).map_err(SequenceError::Prefilter)?,
             settings,
@@ -293,7 +311,7 @@ impl CalibrationSequence {
             aborts: 0,
             up_b,
             gravity_cos2_max: c * c,
-            rate2_max_radps2: settings.max_rate_radps * settings.max_rate_radps,
+            rate2_max_radps2: settings.rest.rate_max_radps * settings.rest.rate_max_radps,
             force2_bounds_mps2sq: ((g - e) * (g - e), (g + e) * (g + e)),
             result: None,
             moves: Vec::new(),
@@ -318,11 +336,11 @@ impl CalibrationSequence {
             // Capacity checked above.
             let _ = self.schedule.push(*a);
         }
-        let c = libm::cosf(settings.max_gravity_angle_rad);
-        let (g, e) = (site.gravity_mps2, settings.max_force_error_mps2);
+        let c = libm::cosf(settings.rest.gravity_angle_max_rad);
+        let (g, e) = (site.gravity_mps2, settings.rest.force_error_max_mps2);
         self.up_b = schedule[0].c_b_n().row(2);
         self.gravity_cos2_max = c * c;
-        self.rate2_max_radps2 = settings.max_rate_radps * settings.max_rate_radps;
+        self.rate2_max_radps2 = settings.rest.rate_max_radps * settings.rest.rate_max_radps;
         self.force2_bounds_mps2sq = ((g - e) * (g - e), (g + e) * (g + e));
         self.settings = settings;
         self.site = site;

@@ -27,7 +27,7 @@
 //!   between them exceeds the step): `q^2 / (6 N^2)` on the diagonal, and `-q^2 / (12 N_a N_b)` between dwells
 //!   that share a carry (the later one starts right after the earlier one ends), 0 otherwise.
 
-use sinscal::calib::channels::PARAMETERS;
+use sinscal::calib::general::PARAMETERS;
 
 use sinscal_host::io::recording::Recording;
 use sinscal_host::model::sensor::Triad;
@@ -244,7 +244,7 @@ pub fn design(session: &Session, theta_si: &[f64; PARAMETERS]) -> Vec<[[f64; PAR
                 t[i][j] = if i == j {
                     1.0 + theta_si[scale + i]
                 } else {
-                    theta_si[misalignment + sinscal::calib::channels::misalignment_index(i, j)]
+                    theta_si[misalignment + sinscal::calib::general::misalignment_index(i, j)]
                 };
             }
         }
@@ -266,7 +266,7 @@ pub fn design(session: &Session, theta_si: &[f64; PARAMETERS]) -> Vec<[[f64; PAR
                 gy[15 + i] = w_b[i];
                 for j in 0..3 {
                     if i != j {
-                        gy[18 + sinscal::calib::channels::misalignment_index(i, j)] = w_b[j];
+                        gy[18 + sinscal::calib::general::misalignment_index(i, j)] = w_b[j];
                     }
                     gy[24 + 3 * i + j] = f_b[j];
                 }
@@ -275,7 +275,7 @@ pub fn design(session: &Session, theta_si: &[f64; PARAMETERS]) -> Vec<[[f64; PAR
                 a[6 + i] = f_b[i];
                 for j in 0..3 {
                     if i != j {
-                        a[9 + sinscal::calib::channels::misalignment_index(i, j)] = f_b[j];
+                        a[9 + sinscal::calib::general::misalignment_index(i, j)] = f_b[j];
                     }
                 }
             }
@@ -305,7 +305,7 @@ pub fn predict(session: &Session, theta_si: &[f64; PARAMETERS]) -> Vec<[f64; 6]>
     for i in 0..3 {
         for j in 0..3 {
             if i != j {
-                let k = sinscal::calib::channels::misalignment_index(i, j);
+                let k = sinscal::calib::general::misalignment_index(i, j);
                 gyro_misalignment[i][j] = theta_si[18 + k];
                 accel_misalignment[i][j] = theta_si[9 + k];
             }
@@ -459,7 +459,7 @@ pub fn independent_weighting_covariance(
 #[cfg(test)]
 mod tests {
     use super::*;
-    use sinscal::calib::channels::{ChannelDwell, ChannelEstimator, ChannelSettings, Model, Term};
+    use sinscal::calib::general::{ChannelDwell, ChannelEstimator, ChannelSettings, Model, Term};
     use sinscal::nav::earth::Site;
     use sinscal::nav::frames::Attitude;
     use sinscal_host::model::simulator::{simulate, GaussMarkovSpec, ScheduleSpec, SiteSpec};
@@ -581,7 +581,7 @@ mod tests {
                     assert!(
                         (numeric - row[c][p]).abs() < 1e-6 * scale,
                         "{} dwell {k} channel {c}: {numeric} vs {}",
-                        sinscal::calib::channels::parameter_name(p),
+                        sinscal::calib::general::parameter_name(p),
                         row[c][p]
                     );
                 }
@@ -635,8 +635,8 @@ mod tests {
                     assert!(
                         (core - bound.covariance_si[i][j]).abs() < 2e-3 * scale,
                         "{model:?} ({}, {}): core {core:e} bound {:e}",
-                        sinscal::calib::channels::parameter_name(a),
-                        sinscal::calib::channels::parameter_name(b),
+                        sinscal::calib::general::parameter_name(a),
+                        sinscal::calib::general::parameter_name(b),
                         bound.covariance_si[i][j]
                     );
                 }

@@ -11,9 +11,9 @@ use rand::SeedableRng;
 use rand_chacha::ChaCha8Rng;
 use rand_distr::{Distribution, Normal};
 use serde::Serialize;
-use sinscal::calib::calibration::{calibrate_positions, CalibrationSettings, PositionInput};
-use sinscal::calib::channels::{ChannelDwell, ChannelEstimator, ChannelSettings, Model, Term};
+use sinscal::calib::angles::{calibrate_positions, CalibrationSettings, PositionInput};
 use sinscal::calib::dwell::{DwellAllan, DwellSummary, MeanNoise};
+use sinscal::calib::general::{ChannelDwell, ChannelEstimator, ChannelSettings, Model, Term};
 use sinscal::nav::earth::Site;
 use sinscal::nav::frames::Attitude;
 

@@ -34,7 +34,7 @@
 //! Carlo's own scatter, and the estimator's RMS error over the reference's on the same runs is its RMS error /
 //! bound with that scatter divided out.
 
-use sinscal::calib::channels::{misalignment_index, parameter_name, Model, PARAMETERS};
+use sinscal::calib::general::{misalignment_index, parameter_name, Model, PARAMETERS};
 use sinscal::calib::moves::{MoveSums, MOVE_PARAMETERS};
 
 use crate::bound::{channel_noises, design, dwell_spans, predict, Session};

@@ -13,7 +13,7 @@
 //! Runs per mix: 200, or `SINSCAL_MC_RUNS`. The table of docs/method.md#coloured-noise-monte-carlo is
 //! `SINSCAL_MC_RUNS=1000 cargo test -p sinscal-lab --test coloured_noise -- --nocapture --test-threads 1`.
 
-use sinscal::calib::channels::{parameter_name, PARAMETERS};
+use sinscal::calib::general::{parameter_name, PARAMETERS};
 use sinscal_host::calibration::{calibrate_channels, Calibration, Options, PrefilterKind};
 use sinscal_host::model::simulator::{simulate, GaussMarkovSpec, ScenarioFile, SiteSpec};
 use sinscal_host::model::synth::{DEG_PER_HOUR, MICRO_G};

@@ -6,7 +6,7 @@
 //!    100 ppm, misalignments 50 arcsec, turntable 3 arcsec): the table from which the default is chosen, and
 //!    the check that the default is no worse than the angle method on any bias.
 
-use sinscal::calib::channels::{Model, Term};
+use sinscal::calib::general::{Model, Term};
 use sinscal_host::calibration::Method;
 use sinscal_host::calibration::{DEFAULT_METHOD, DEFAULT_MODEL};
 use sinscal_lab::compare::{compare, table, Candidate, Lab};

@@ -15,7 +15,7 @@
 
 use std::time::Instant;
 
-use sinscal::calib::channels::parameter_name;
+use sinscal::calib::general::parameter_name;
 use sinscal_host::model::simulator::simulate;
 use sinscal_host::model::synth::{mul, rotation_vector, transpose};
 use sinscal_lab::bound::{channel_noises, cramer_rao, design, dwell_mean_covariance, dwell_spans, Session};

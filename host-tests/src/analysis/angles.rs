@@ -278,7 +278,7 @@ impl AngleObservations {
         for (pi, r) in file.rows.iter().enumerate() {
             let c = c_b_n(r.attitude_deg[0], r.attitude_deg[1], r.attitude_deg[2]);
             let c32 = sinscal::math::linalg::Mat3(std::array::from_fn(|i| std::array::from_fn(|j| c[i][j] as f32)));
-            let rows = sinscal::calib::solve::design_rows_si(&c32, &site);
+            let rows = sinscal::calib::angles::design_rows_si(&c32, &site);
             for k in 0..3 {
                 o.y.push(r.phi_rad[k]);
                 o.group.push(angle_group(k));

@@ -348,7 +348,7 @@ mod tests {
         for att in crate::model::synth::TABLE1_DEG {
             let c = c_b_n(att[0], att[1], att[2]);
             let c32 = sinscal::math::linalg::Mat3(std::array::from_fn(|i| std::array::from_fn(|j| c[i][j] as f32)));
-            let rows = sinscal::calib::solve::design_rows_si(&c32, &site);
+            let rows = sinscal::calib::angles::design_rows_si(&c32, &site);
             for k in 0..3 {
                 let dw = mul_t_vec(&c, cross(unit(k), w_n));
                 let df = mul_t_vec(&c, cross(unit(k), [0.0, 0.0, g]));

@@ -7,7 +7,7 @@ use crate::calibration::attitude_knowledge;
 use crate::io::error::InputError;
 use crate::io::recording::RowSource;
 use crate::stats::linfit::Observations;
-use sinscal::calib::channels::AttitudeKnowledge;
+use sinscal::calib::general::AttitudeKnowledge;
 
 use super::candidates::RecordingColumns;
 use super::observations::{Blocks, Session};

@@ -2,10 +2,10 @@
 //! (docs/formats.md#calibration-json-version-2), values and standard errors in SI units, the full covariance of
 //! the determined parameters, and which parameters the schedule cannot determine.
 
-use sinscal::calib::channels::{
+use sinscal::calib::angles::{BiasSolution, Parameter};
+use sinscal::calib::general::{
     parameter_name, AttitudeKnowledge, ChannelEstimator, ChannelSolution, Model, Term, PARAMETERS,
 };
-use sinscal::calib::solve::{BiasSolution, Parameter};
 
 /// Which estimator made a calibration.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]

@@ -63,7 +63,7 @@ pub fn replay_parts(
     frames: &mut dyn std::io::Write,
 ) -> Result<(Vec<u8>, ReplayPlan), InputError> {
     let source = rec.source();
-    if attitude_knowledge(rec.header()) == sinscal::calib::channels::AttitudeKnowledge::Unknown {
+    if attitude_knowledge(rec.header()) == sinscal::calib::general::AttitudeKnowledge::Unknown {
         return Err(InputError::file(
             source,
             "the firmware path takes the recording's attitudes as its reference, and this recording's were \
@@ -104,7 +104,7 @@ pub fn replay_parts(
         max_passes: options.max_passes.min(255) as u8,
         estimate_reference_offset: options.estimate_reference_offset,
         // The limits of rest: the force tolerance asked for, the sequence's default gravity angle and rate.
-        rest: RestLimits { force_error_max_mps2: options.rest_force_tolerance_mps2, ..RestLimits::sequence_default() },
+        rest: RestLimits { force_error_max_mps2: options.rest_force_tolerance_mps2, ..RestLimits::default() },
         ..Configuration::new(REPLAY_MODEL, site)
     };
     let mut attitudes = Vec::new();
@@ -145,7 +145,7 @@ pub fn replay_parts(
 /// firmware path needs). Returns the dwells and the number of rows.
 fn write_frames(rec: &impl RowSource, out: &mut dyn std::io::Write) -> Result<(Vec<DwellTally>, u64), InputError> {
     let source = rec.source();
-    let mut tallies = DwellTallies::new(sinscal::calib::solve::MAX_POSITIONS, "the core's limit");
+    let mut tallies = DwellTallies::new(sinscal::calib::angles::MAX_POSITIONS, "the core's limit");
     let lsb_rate = (REPLAY_MODEL.radps_per_lsb() as f64) / 65536.0;
     let lsb_force = (REPLAY_MODEL.accel_mps2_per_lsb() as f64) / 65536.0;
     let quantise = |value: f64, lsb: f64, line: usize, what: &str| -> Result<I16F16, InputError> {

@@ -9,16 +9,16 @@ pub mod qemu;
 pub mod result;
 
 use sinscal::calib::align::{position_angles, DwellValue, PositionAngles};
-use sinscal::calib::calibration::{
-    calibrate_positions, CalibrationError, CalibrationResult, CalibrationSettings, PositionInput,
-};
-use sinscal::calib::channels::{
-    AttitudeKnowledge, ChannelError, ChannelEstimator, ChannelSettings, ChannelSolution, Model, MAX_DWELLS,
+use sinscal::calib::angles::{
+    calibrate_positions, BiasSolution, CalibrationError, CalibrationResult, CalibrationSettings, PositionInput,
+    SolverSettings, MAX_POSITIONS,
 };
 use sinscal::calib::dwell::{pool_mean_noise, DwellCollector, DwellSummary, Prefilter};
+use sinscal::calib::general::{
+    AttitudeKnowledge, ChannelError, ChannelEstimator, ChannelSettings, ChannelSolution, Model, MAX_DWELLS,
+};
 use sinscal::calib::prefilter::{CoefficientIdentifier, PrefilterSettings};
 use sinscal::calib::session::{session_estimator, SessionDwell};
-use sinscal::calib::solve::{BiasSolution, SolverSettings, MAX_POSITIONS};
 use sinscal::nav::earth::{normal_gravity_mps2, Site};
 use sinscal::nav::frames::Attitude;
 use sinscal::sensor::sample::ImuSample;
@@ -98,7 +98,7 @@ impl Default for Options {
             method: DEFAULT_METHOD,
             model: DEFAULT_MODEL,
             estimate_attitudes: false,
-            rest_force_tolerance_mps2: sinscal::run::sequence::SequenceSettings::default().max_force_error_mps2,
+            rest_force_tolerance_mps2: sinscal::run::sequence::SequenceSettings::default().rest.force_error_max_mps2,
             use_moves: true,
         }
     }

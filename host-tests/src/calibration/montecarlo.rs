@@ -12,9 +12,10 @@
 
 use serde::Serialize;
 use sinscal::calib::align::{angle_covariance_rad2, DwellValue};
-use sinscal::calib::calibration::{calibrate_positions, CalibrationSettings, PositionInput};
+use sinscal::calib::angles::{
+    calibrate_positions, design_rows_si, BiasSolution, CalibrationSettings, Parameter, PositionInput, MAX_PARAMETERS,
+};
 use sinscal::calib::dwell::{DwellCollector, DwellSummary, Prefilter};
-use sinscal::calib::solve::{design_rows_si, BiasSolution, Parameter, MAX_PARAMETERS};
 use sinscal::nav::earth::Site;
 use sinscal::nav::frames::Attitude;
 use sinscal::sensor::sample::ImuSample;

@@ -2,7 +2,7 @@
 //! start of the next, kept as f32 samples and integrated by the core's [`MoveSums`] with the current estimate,
 //! again after each solution until the estimate stops changing.
 
-use sinscal::calib::channels::{
+use sinscal::calib::general::{
     implausible_parameter, ChannelError, ChannelEstimator, ChannelSolution, Model, Term, PARAMETERS,
 };
 use sinscal::calib::moves::{ChannelMove, MoveSums, MAX_MOVES, MOVE_PARAMETERS};

@@ -4,8 +4,8 @@ use std::fmt::Write as _;
 
 use serde::Serialize;
 use sinscal::calib::align::DwellValue;
-use sinscal::calib::channels::{misalignment_index, AttitudeKnowledge, ChannelSolution, Term, PARAMETERS};
 use sinscal::calib::dwell::Prefilter;
+use sinscal::calib::general::{misalignment_index, AttitudeKnowledge, ChannelSolution, Term, PARAMETERS};
 
 use crate::calibration::{Calibration, Estimates, GravitySource, PositionResult};
 use crate::io::ARCSEC_PER_RAD;
@@ -344,7 +344,7 @@ fn estimated(s: &ChannelSolution) -> bool {
 
 /// Names of the parameters a solution held at zero to fix the body frame.
 fn gauge_names(s: &ChannelSolution) -> Vec<&'static str> {
-    (0..PARAMETERS).filter(|i| s.gauge & (1 << i) != 0).map(sinscal::calib::channels::parameter_name).collect()
+    (0..PARAMETERS).filter(|i| s.gauge & (1 << i) != 0).map(sinscal::calib::general::parameter_name).collect()
 }
 
 /// The pitch and roll (degrees) that put the body direction `up_b` up (docs/conventions.md#attitude).
@@ -370,7 +370,7 @@ fn show_term(out: &mut String, e: &Estimates, term: Term, title: &str, per_unit:
     let (first, count) = term.parameters();
     let _ = writeln!(out, "{title}:");
     for i in first..first + count {
-        let name = sinscal::calib::channels::parameter_name(i);
+        let name = sinscal::calib::general::parameter_name(i);
         let axes = name.rsplit('_').next().unwrap_or("");
         let _ = writeln!(out, "  {axes:<2} {}", show(e, i, per_unit, decimals));
     }

@@ -4,6 +4,8 @@
 use std::fmt::Write as _;
 use std::path::{Path, PathBuf};
 
+use sinscal::calib::general::Term;
+
 use crate::io::calibration_model::{CalibrationModel, M3};
 use crate::io::error::InputError;
 use crate::io::recording::{write_file, RecordingFile, RowSource, WriteError};
@@ -90,7 +92,7 @@ fn summary(rec: &RecordingFile, rows: usize, model: &CalibrationModel, out: &Pat
         model.version
     );
     let _ = writeln!(s, "  f = T_a^-1 (f_meas - b_a),  w = T_g^-1 (w_meas - b_g - G f),  T = I + S + M");
-    let has = |name: &str| model.terms.contains(&name);
+    let has = |term: Term| model.terms.contains(&term);
     let _ = writeln!(s, "\n  {:<34} {:>14} {:>14} {:>14}", "term", "x", "y", "z");
     let vector = |s: &mut String, label: &str, v: [f64; 3], scale: f64| {
         let _ = writeln!(s, "  {label:<34} {:>+14.4} {:>+14.4} {:>+14.4}", v[0] / scale, v[1] / scale, v[2] / scale);
@@ -105,19 +107,19 @@ fn summary(rec: &RecordingFile, rows: usize, model: &CalibrationModel, out: &Pat
         }
     };
     let gyro_used = rec.has_gyro();
-    if has("gyro_bias") && gyro_used {
+    if has(Term::GyroBias) && gyro_used {
         vector(&mut s, "gyro bias b_g [deg/h]", model.gyro_bias_radps, DEG_PER_HOUR);
     }
-    if has("accel_bias") {
+    if has(Term::AccelBias) {
         vector(&mut s, "accel bias b_a [ug]", model.accel_bias_mps2, MICRO_G);
     }
-    if has("accel_scale_factor") || has("accel_misalignment") {
+    if has(Term::AccelScaleFactor) || has(Term::AccelMisalignment) {
         matrix(&mut s, "accel S_a + M_a [ppm]", &model.accel_t, true, 1e6);
     }
-    if gyro_used && (has("gyro_scale_factor") || has("gyro_misalignment")) {
+    if gyro_used && (has(Term::GyroScaleFactor) || has(Term::GyroMisalignment)) {
         matrix(&mut s, "gyro S_g + M_g [ppm]", &model.gyro_t, true, 1e6);
     }
-    if gyro_used && has("gyro_g_sensitivity") {
+    if gyro_used && has(Term::GyroGSensitivity) {
         // (deg/h)/g with g = 9.80665 m/s^2, the unit of data sheets.
         let scale = MICRO_G * 1e6 / DEG_PER_HOUR;
         matrix(&mut s, "gyro G [(deg/h)/g]", &model.gyro_g_sensitivity_radps_per_mps2, false, scale);

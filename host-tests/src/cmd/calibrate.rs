@@ -5,7 +5,7 @@ use std::path::{Path, PathBuf};
 
 use clap::ValueEnum;
 use sinscal::calib::align::DwellValue;
-use sinscal::calib::channels::Model;
+use sinscal::calib::general::Model;
 
 use crate::calibration::estimates::parse_model;
 use crate::calibration::firmware_path::calibrate_on_host;
@@ -173,7 +173,7 @@ impl CalibrationArgs {
             estimate_attitudes: self.estimate_attitudes,
             rest_force_tolerance_mps2: self
                 .rest_force_tolerance
-                .unwrap_or(sinscal::run::sequence::SequenceSettings::default().max_force_error_mps2),
+                .unwrap_or(sinscal::run::sequence::SequenceSettings::default().rest.force_error_max_mps2),
             use_moves: !self.no_moves,
         })
     }

@@ -92,7 +92,7 @@ fn montecarlo_table(r: &montecarlo::Report) -> String {
         "  {:<20} {:>7} {:>11} {:>14} {:>16} {:>12}",
         "parameter", "unit", "angles", "six channels", "channels, ref. exact", "angles/chan."
     );
-    for (i, p) in sinscal::calib::solve::Parameter::ALL.iter().enumerate() {
+    for (i, p) in sinscal::calib::angles::Parameter::ALL.iter().enumerate() {
         let (u, name) = unit(p.name());
         let known = r.crb_channels_known_reference.get(i).map_or("-".to_string(), |v| format!("{:.5}", v / u));
         let _ = writeln!(

@@ -190,7 +190,7 @@ pub fn run_calibration<T: Read + Write>(
 
 /// The replay file's header, read from the file's start.
 fn replay_header(path: &Path) -> Result<ReplayHeader, anyhow::Error> {
-    let longest = sinscal::rig::replay::replay_header_bytes(sinscal::calib::solve::MAX_POSITIONS);
+    let longest = sinscal::rig::replay::replay_header_bytes(sinscal::calib::angles::MAX_POSITIONS);
     let mut bytes = Vec::with_capacity(longest);
     std::fs::File::open(path)?.take(longest as u64).read_to_end(&mut bytes)?;
     read_header(&mut bytes.as_slice()).map_err(|e| anyhow::anyhow!("replay: {e}"))

@@ -136,7 +136,7 @@ impl Provenance {
                 "angles" => Method::Angles,
                 v => return Err(bad("method", v)),
             },
-            model: sinscal::calib::channels::Model::from_stored_bits(o.terms).ok_or_else(|| {
+            model: sinscal::calib::general::Model::from_stored_bits(o.terms).ok_or_else(|| {
                 anyhow::anyhow!("provenance note: terms {:#06x} name a term this version does not know", o.terms)
             })?,
             estimate_attitudes: o.estimate_attitudes,

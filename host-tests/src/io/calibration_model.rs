@@ -15,6 +15,7 @@
 use std::path::Path;
 
 use serde_json::Value;
+use sinscal::calib::general::{Axes, Term};
 
 use crate::io::error::InputError;
 
@@ -48,38 +49,26 @@ pub struct CalibrationModel {
     pub gyro_t: M3,
     /// `G`, row i, column j: gyro i's rate error per unit specific force along j, (rad/s)/(m/s^2).
     pub gyro_g_sensitivity_radps_per_mps2: M3,
-    /// The terms given with values (catalogue names: `gyro_bias`, `accel_scale_factor`, ...), in file order.
-    pub terms: Vec<&'static str>,
+    /// The terms given with values, in the order of [`Term::ALL`].
+    pub terms: Vec<Term>,
     /// Parameters that are `null` in the file and taken as 0 (`gyro_bias_z`, `accel_misalignment_xy`, ...).
     pub taken_as_zero: Vec<String>,
 }
 
-/// A term of the JSON: its field, its catalogue name, and its shape.
-struct Term {
-    field: &'static str,
-    name: &'static str,
-    shape: Shape,
+/// The JSON field of a term (docs/formats.md#calibration-json-version-2), or `None` for a term that is no part
+/// of the sensor's model to compensate with (the reference offset).
+fn json_field(term: Term) -> Option<&'static str> {
+    match term {
+        Term::GyroBias => Some("gyro_bias_radps"),
+        Term::AccelBias => Some("accel_bias_mps2"),
+        Term::AccelScaleFactor => Some("accel_scale_factor"),
+        Term::AccelMisalignment => Some("accel_misalignment"),
+        Term::GyroScaleFactor => Some("gyro_scale_factor"),
+        Term::GyroMisalignment => Some("gyro_misalignment"),
+        Term::GyroGSensitivity => Some("gyro_g_sensitivity_radps_per_mps2"),
+        Term::ReferenceOffset => None,
+    }
 }
-
-#[derive(Clone, Copy, PartialEq)]
-enum Shape {
-    /// Three values, axes x, y, z.
-    Vector,
-    /// A 3x3 matrix with a zero diagonal (misalignments).
-    OffDiagonal,
-    /// A full 3x3 matrix (g-sensitivity).
-    Full,
-}
-
-const TERMS: [Term; 7] = [
-    Term { field: "gyro_bias_radps", name: "gyro_bias", shape: Shape::Vector },
-    Term { field: "accel_bias_mps2", name: "accel_bias", shape: Shape::Vector },
-    Term { field: "accel_scale_factor", name: "accel_scale_factor", shape: Shape::Vector },
-    Term { field: "accel_misalignment", name: "accel_misalignment", shape: Shape::OffDiagonal },
-    Term { field: "gyro_scale_factor", name: "gyro_scale_factor", shape: Shape::Vector },
-    Term { field: "gyro_misalignment", name: "gyro_misalignment", shape: Shape::OffDiagonal },
-    Term { field: "gyro_g_sensitivity_radps_per_mps2", name: "gyro_g_sensitivity", shape: Shape::Full },
-];
 
 impl CalibrationModel {
     /// Reads a calibration JSON file.
@@ -128,22 +117,23 @@ impl CalibrationModel {
             terms: Vec::new(),
             taken_as_zero: Vec::new(),
         };
-        for term in &TERMS {
+        for term in Term::ALL {
+            let Some(key) = json_field(term) else { continue };
             // Version 1 has only the biases; its other fields, if a tool adds them, are not the model's.
-            let required = term.name.ends_with("_bias");
+            let required = matches!(term, Term::GyroBias | Term::AccelBias);
             if version == 1 && !required {
                 continue;
             }
             // The biases are fields of both versions (a whole term may be null: not estimated).
-            if required && v.get(term.field).is_none() {
-                return Err(bad(format!("'{}' is missing", term.field)));
+            if required && v.get(key).is_none() {
+                return Err(bad(format!("'{key}' is missing")));
             }
-            let field = &v[term.field];
+            let field = &v[key];
             if field.is_null() {
                 continue;
             }
-            let values = read_term(field, term, source)?;
-            model.terms.push(term.name);
+            let values = read_term(field, term, key, source)?;
+            model.terms.push(term);
             for (i, row) in values.iter().enumerate() {
                 for (j, x) in row.iter().enumerate() {
                     if x.is_none() {
@@ -151,16 +141,7 @@ impl CalibrationModel {
                     }
                 }
             }
-            let value = |i: usize, j: usize| values[i][j].unwrap_or(0.0);
-            match term.name {
-                "gyro_bias" => model.gyro_bias_radps = [0, 1, 2].map(|i| value(i, 0)),
-                "accel_bias" => model.accel_bias_mps2 = [0, 1, 2].map(|i| value(i, 0)),
-                "accel_scale_factor" => (0..3).for_each(|i| model.accel_t[i][i] += value(i, 0)),
-                "gyro_scale_factor" => (0..3).for_each(|i| model.gyro_t[i][i] += value(i, 0)),
-                "accel_misalignment" => add_off_diagonal(&mut model.accel_t, value),
-                "gyro_misalignment" => add_off_diagonal(&mut model.gyro_t, value),
-                _ => model.gyro_g_sensitivity_radps_per_mps2 = [0, 1, 2].map(|i| [0, 1, 2].map(|j| value(i, j))),
-            }
+            model.add(term, |i: usize, j: usize| values[i][j].unwrap_or(0.0));
         }
         for (t, sensor) in [(&model.accel_t, "accel"), (&model.gyro_t, "gyro")] {
             check_t(t, sensor).map_err(bad)?;
@@ -182,9 +163,25 @@ impl CalibrationModel {
             terms: if gyro_bias_radps == [0.0; 3] && accel_bias_mps2 == [0.0; 3] {
                 Vec::new()
             } else {
-                vec!["gyro_bias", "accel_bias"]
+                vec![Term::GyroBias, Term::AccelBias]
             },
             taken_as_zero: Vec::new(),
+        }
+    }
+
+    /// Adds the values of `term` (entry (i, j); (i, 0) for a term of one value per axis) to the model.
+    fn add(&mut self, term: Term, value: impl Fn(usize, usize) -> f64) {
+        match term {
+            Term::GyroBias => self.gyro_bias_radps = [0, 1, 2].map(|i| value(i, 0)),
+            Term::AccelBias => self.accel_bias_mps2 = [0, 1, 2].map(|i| value(i, 0)),
+            Term::AccelScaleFactor => (0..3).for_each(|i| self.accel_t[i][i] += value(i, 0)),
+            Term::GyroScaleFactor => (0..3).for_each(|i| self.gyro_t[i][i] += value(i, 0)),
+            Term::AccelMisalignment => add_off_diagonal(&mut self.accel_t, value),
+            Term::GyroMisalignment => add_off_diagonal(&mut self.gyro_t, value),
+            Term::GyroGSensitivity => {
+                self.gyro_g_sensitivity_radps_per_mps2 = [0, 1, 2].map(|i| [0, 1, 2].map(|j| value(i, j)))
+            }
+            Term::ReferenceOffset => {}
         }
     }
 
@@ -214,11 +211,8 @@ impl CalibrationModel {
 }
 
 /// The parameter name of entry (i, j) of a term (docs/formats.md#calibration-json-version-2): `<term>_<axes>`.
-fn parameter_name(term: &Term, i: usize, j: usize) -> String {
-    match term.shape {
-        Shape::Vector => format!("{}_{}", term.name, AXES[i]),
-        _ => format!("{}_{}{}", term.name, AXES[i], AXES[j]),
-    }
+fn parameter_name(term: Term, i: usize, j: usize) -> String {
+    term.parameter_index(i, j).map_or_else(String::new, |p| sinscal::calib::general::parameter_name(p).to_string())
 }
 
 fn add_off_diagonal(t: &mut M3, value: impl Fn(usize, usize) -> f64) {
@@ -232,9 +226,8 @@ fn add_off_diagonal(t: &mut M3, value: impl Fn(usize, usize) -> f64) {
 }
 
 /// The values of a term as rows (a vector: three rows of one value); `None` = `null`.
-fn read_term(field: &Value, term: &Term, source: &str) -> Result<Vec<Vec<Option<f64>>>, InputError> {
+fn read_term(field: &Value, term: Term, key: &str, source: &str) -> Result<Vec<Vec<Option<f64>>>, InputError> {
     let bad = |reason: String| InputError::file(source, reason);
-    let key = term.field;
     let number = |x: &Value, at: String| -> Result<Option<f64>, InputError> {
         match x {
             Value::Null => Ok(None),
@@ -247,7 +240,8 @@ fn read_term(field: &Value, term: &Term, source: &str) -> Result<Vec<Vec<Option<
     let array3 = |x: &Value, what: &str| -> Result<Vec<Value>, InputError> {
         x.as_array().filter(|a| a.len() == 3).cloned().ok_or_else(|| bad(format!("'{key}' is not {what} (or null)")))
     };
-    if term.shape == Shape::Vector {
+    let axes = term.info().axes;
+    if matches!(axes, Axes::Body | Axes::Navigation) {
         let a = array3(field, "an array of 3 numbers or nulls")?;
         return a.iter().enumerate().map(|(i, x)| Ok(vec![number(x, format!("[{i}]"))?])).collect();
     }
@@ -258,7 +252,7 @@ fn read_term(field: &Value, term: &Term, source: &str) -> Result<Vec<Vec<Option<
         let mut values = Vec::new();
         for (j, x) in row.iter().enumerate() {
             let v = number(x, format!("[{i}][{j}]"))?;
-            if term.shape == Shape::OffDiagonal && i == j {
+            if axes == Axes::OffDiagonal && i == j {
                 if v.is_some_and(|v| v != 0.0) {
                     return Err(bad(format!(
                         "'{key}'[{i}][{i}] is {x}: the diagonal of a misalignment is 0 (scale factors are separate)"
@@ -441,7 +435,7 @@ mod tests {
         assert_eq!(m.version, 1);
         assert_eq!(m.gyro_bias_radps, [1e-6, 0.0, -2e-6]);
         assert_eq!(m.taken_as_zero, ["gyro_bias_y"]);
-        assert_eq!(m.terms, ["gyro_bias", "accel_bias"]);
+        assert_eq!(m.terms, [Term::GyroBias, Term::AccelBias]);
         assert_eq!((m.accel_t, m.gyro_t), (IDENTITY, IDENTITY));
         assert_eq!(m.compensate_force([1.0, 2.0, 3.0]), [1.0 - 1e-3, 2.0 + 2e-3, 3.0 - 3e-3]);
     }

@@ -135,7 +135,7 @@ mod tests {
     /// term's column, sign included.
     #[test]
     fn analysis_terms_are_the_calibration_estimators_parameters() {
-        use sinscal::calib::channels::{g_sensitivity_radps_per_mps2, parameter_name, sensor_matrix, PARAMETERS};
+        use sinscal::calib::general::{g_sensitivity_radps_per_mps2, parameter_name, sensor_matrix, PARAMETERS};
         let (rate, force) = ([0.3f32, -1.2, 2.5], [-4.0f32, 1.5, 9.0]);
         let axes = ["x", "y", "z"];
         for term in Term::all(true) {

@@ -209,7 +209,7 @@ impl Run {
             name: self.name.clone(),
             gyro_bias_removed_radps: self.compensation.gyro_bias_radps,
             accel_bias_removed_mps2: self.compensation.accel_bias_mps2,
-            terms_applied: self.compensation.terms.clone(),
+            terms_applied: self.compensation.terms.iter().map(|t| t.name()).collect(),
             max_horizontal_position_error_m: max(&|e| e.horizontal_position_m()),
             final_horizontal_position_error_m: last.horizontal_position_m(),
             max_horizontal_velocity_error_mps: max(&|e| e.horizontal_velocity_mps()),

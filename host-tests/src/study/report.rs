@@ -10,8 +10,8 @@ use plotters::prelude::*;
 use serde_json::{json, Map, Value};
 
 use crate::io::ARCSEC_PER_RAD;
-use crate::plot::{figure, Png};
 use crate::model::synth::MICRO_G;
+use crate::plot::{figure, Png};
 use crate::stats::noise::NoiseTerms;
 use crate::study::noise_extension::ExtraTerm;
 use crate::study::rotations::{HeldOut, RotationStudy};

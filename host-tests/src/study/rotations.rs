@@ -11,7 +11,7 @@
 //!   attitudes, without its part about the vertical (the headings are unknown: two components, the imu_tk
 //!   comparison of gravity directions).
 
-use sinscal::calib::channels::{ChannelSolution, Model, Term, PARAMETERS};
+use sinscal::calib::general::{ChannelSolution, Model, Term, PARAMETERS};
 use sinscal::calib::moves::ChannelMove;
 use sinscal::math::linalg::norm;
 
@@ -117,7 +117,7 @@ fn gyro_matrix(s: &ChannelSolution) -> (M3, M3) {
     let mut std = [[0.0; 3]; 3];
     for i in 0..3 {
         for j in 0..3 {
-            let p = if i == j { 15 + i } else { 18 + sinscal::calib::channels::misalignment_index(i, j) };
+            let p = if i == j { 15 + i } else { 18 + sinscal::calib::general::misalignment_index(i, j) };
             let (v, e) = s.estimate(p).map_or((0.0, 0.0), |(v, e)| (v as f64, e as f64));
             t[i][j] = v + if i == j { 1.0 } else { 0.0 };
             std[i][j] = e;
@@ -134,7 +134,7 @@ fn fit(
     held_out: &[(String, MoveSamples)],
 ) -> Result<RotationFit, (String, String)> {
     let rate_var = s.rate_var_radps2;
-    let bad = |e: sinscal::calib::channels::ChannelError| (name.to_string(), e.to_string());
+    let bad = |e: sinscal::calib::general::ChannelError| (name.to_string(), e.to_string());
     let (solution, _, passes) = solve_with_moves(&s.estimator, fitted, rate_var, 0).map_err(bad)?;
     if !solution.converged {
         return Err((name.to_string(), format!("the fit did not converge in {passes} passes")));

@@ -8,13 +8,14 @@ use heapless::Vec;
 use super::codes::{DwellValueCode, EstimatorCode, ImuCode, PrefilterCode};
 use super::{Reader, WireError, Writer};
 use crate::calib::align::DwellValue;
-use crate::calib::calibration::CalibrationSettings;
-use crate::calib::channels::{ChannelSettings, Model as Terms};
+use crate::calib::angles::CalibrationSettings;
+use crate::calib::angles::MAX_POSITIONS;
 use crate::calib::dwell::{Prefilter, MIN_DWELL_SAMPLES};
+use crate::calib::general::{ChannelSettings, Model as Terms};
 use crate::calib::prefilter::PrefilterSettings;
-use crate::calib::solve::MAX_POSITIONS;
 use crate::nav::earth::Site;
 use crate::nav::frames::Attitude;
+pub use crate::run::sequence::RestLimits;
 use crate::run::sequence::{Estimator, SequenceSettings};
 use crate::sensor::adis::Model;
 
@@ -31,30 +32,6 @@ pub const MAX_BYTES: usize = FIXED_BYTES + POSITION_BYTES * MAX_POSITIONS;
 pub const MAX_DEVICE_BYTES: usize = MAX_BYTES + THRESHOLD_BYTES;
 
 const _: () = assert!(MAX_POSITIONS <= 64, "unknown_headings holds one bit per position");
-
-/// The limits of rest of the sequence's checks while it samples (docs/firmware.md#hardening).
-#[derive(Clone, Copy, Debug, PartialEq)]
-#[cfg_attr(feature = "defmt", derive(defmt::Format))]
-pub struct RestLimits {
-    /// Largest | |f| - g | of a body at rest, m/s^2 (absolute).
-    pub force_error_max_mps2: f32,
-    /// Largest angle between measured specific force and the announced up direction, rad.
-    pub gravity_angle_max_rad: f32,
-    /// Largest angular rate magnitude of a body at rest, rad/s.
-    pub rate_max_radps: f32,
-}
-
-impl RestLimits {
-    /// The calibration sequence's defaults.
-    pub fn sequence_default() -> RestLimits {
-        let s = SequenceSettings::default();
-        RestLimits {
-            force_error_max_mps2: s.max_force_error_mps2,
-            gravity_angle_max_rad: s.max_gravity_angle_rad,
-            rate_max_radps: s.max_rate_radps,
-        }
-    }
-}
 
 /// The thresholds of a device's dwells, in samples.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -139,7 +116,7 @@ impl Configuration {
             dwell_value: s.calibration.dwell_value,
             max_passes: s.calibration.max_passes.min(255) as u8,
             estimate_reference_offset: s.calibration.solver.estimate_reference_offset,
-            rest: RestLimits::sequence_default(),
+            rest: RestLimits::default(),
         }
     }
 
@@ -166,9 +143,7 @@ impl Configuration {
             settle_samples: thresholds.settle_samples,
             dwell_samples: thresholds.dwell_samples,
             min_dwell_samples: thresholds.min_dwell_samples,
-            max_gravity_angle_rad: self.rest.gravity_angle_max_rad,
-            max_rate_radps: self.rest.rate_max_radps,
-            max_force_error_mps2: self.rest.force_error_max_mps2,
+            rest: self.rest,
             prefilter: self.prefilter,
             estimator: self.sequence_estimator(),
             calibration,

@@ -14,12 +14,10 @@ use super::codes::{AttitudeCode, FailureKind, SolutionCode};
 use super::configuration::Configuration;
 use super::{Reader, WireError, Writer};
 use crate::calib::align::AlignError;
-use crate::calib::calibration::{CalibrationError, CalibrationResult, PositionInput};
-use crate::calib::channels::{
-    AttitudeKnowledge, ChannelError, ChannelSolution, Model as Terms, MAX_DWELLS, PARAMETERS,
-};
+use crate::calib::angles::{BiasSolution, Estimate, SolveError, MAX_PARAMETERS, MAX_POSITIONS};
+use crate::calib::angles::{CalibrationError, CalibrationResult, PositionInput};
 use crate::calib::dwell::{DwellAllan, DwellSummary, MeanNoise};
-use crate::calib::solve::{BiasSolution, Estimate, SolveError, MAX_PARAMETERS, MAX_POSITIONS};
+use crate::calib::general::{AttitudeKnowledge, ChannelError, ChannelSolution, Model as Terms, MAX_DWELLS, PARAMETERS};
 use crate::run::sampling::SamplingStats;
 use crate::run::sequence::{AbortReason, SequenceFailure, SequenceSolution};
 

@@ -9,12 +9,12 @@ use super::outcome::{Outcome, MAX_BYTES};
 use super::record::{Record, RecordHead};
 use super::{Reader, Writer};
 use crate::calib::align::DwellValue;
-use crate::calib::calibration::{CalibrationResult, PositionInput};
-use crate::calib::channels::{ChannelSolution, Model as Terms, Term, PARAMETERS};
+use crate::calib::angles::{BiasSolution, Estimate, MAX_PARAMETERS, MAX_POSITIONS};
+use crate::calib::angles::{CalibrationResult, PositionInput};
 use crate::calib::compensation::Compensation;
 use crate::calib::dwell::{DwellAllan, DwellSummary, MeanNoise, Prefilter};
+use crate::calib::general::{ChannelSolution, Model as Terms, Term, PARAMETERS};
 use crate::calib::prefilter::PrefilterSettings;
-use crate::calib::solve::{BiasSolution, Estimate, MAX_PARAMETERS, MAX_POSITIONS};
 use crate::nav::earth::Site;
 use crate::nav::frames::Attitude;
 use crate::run::sampling::SamplingStats;
@@ -169,7 +169,7 @@ fn outcome(rng: &mut Rng) -> Outcome {
     let (result, failure) = match rng.below(3) {
         0 => (
             None,
-            Some(SequenceFailure::Channels(crate::calib::channels::ChannelError::Diverged {
+            Some(SequenceFailure::Channels(crate::calib::general::ChannelError::Diverged {
                 parameter: rng.below(PARAMETERS as u64) as usize,
                 value: rng.f32(),
             })),

@@ -4,7 +4,7 @@
 
 use embedded_hal::spi;
 
-use crate::calib::solve::MAX_POSITIONS;
+use crate::calib::angles::MAX_POSITIONS;
 use crate::instrument::wire::configuration::{Configuration, Thresholds, FIXED_BYTES, MAX_BYTES, POSITION_BYTES};
 use crate::instrument::wire::{Reader, WireError, Writer};
 use crate::run::sequence::{SequenceError, SequenceSettings};

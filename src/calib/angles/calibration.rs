@@ -11,8 +11,9 @@
 //! compensated data show no bias at all, to f32 precision.
 
 use crate::calib::align::{position_angles, AlignError, DwellValue};
+use crate::calib::angles::solve::{BiasSolution, BiasSolver, Estimate, SolveError, SolverSettings};
 use crate::calib::dwell::DwellSummary;
-use crate::calib::solve::{BiasSolution, BiasSolver, Estimate, SolveError, SolverSettings};
+use crate::calib::limits::FORCE_MAGNITUDE_ERROR_MAX_RELATIVE;
 use crate::math::linalg::{norm, rotation, Mat3};
 use crate::nav::earth::Site;
 
@@ -69,7 +70,7 @@ pub enum CalibrationError {
         /// Heading of the computed attitude less the reference's, rad, in (-pi, pi], of the sign of phi_u.
         heading_rad: f32,
     },
-    /// The dwell's |f| differs from g by more than [`MAX_FORCE_MAGNITUDE_ERROR`] (relative): an accelerometer
+    /// The dwell's |f| differs from g by more than [`FORCE_MAGNITUDE_ERROR_MAX_RELATIVE`] (relative): an accelerometer
     /// scale error, or a body not at rest.
     ForceMagnitude {
         /// Which position.
@@ -78,9 +79,6 @@ pub enum CalibrationError {
         ratio: f32,
     },
 }
-
-/// Largest relative difference between a dwell's |f| and g accepted (the general estimator's default too).
-pub const MAX_FORCE_MAGNITUDE_ERROR: f32 = 0.2;
 
 /// Largest level misalignment (phi_e, phi_n) accepted, rad: 0.05 rad (2.9 deg) is an accelerometer bias
 /// of 50 mg. Larger means the reference attitude or the axis convention is wrong.
@@ -144,7 +142,7 @@ pub fn attitude_difference_rad(c_hat_b_n: &Mat3, c_b_n: &Mat3) -> (f32, f32) {
     (level_rad, heading_rad)
 }
 
-/// Calibrates from a set of positions (any number up to [`crate::calib::solve::MAX_POSITIONS`]).
+/// Calibrates from a set of positions (any number up to [`MAX_POSITIONS`](crate::calib::angles::MAX_POSITIONS)).
 pub fn calibrate_positions(
     positions: &[PositionInput],
     site: &Site,
@@ -175,7 +173,7 @@ pub fn calibrate_positions(
             // Plausibility first: checked on the data as measured (the first pass), not after corrections.
             if passes == 1 {
                 let ratio = norm(p.summary.force_mean_b_mps2) / site.gravity_mps2;
-                if (ratio - 1.0).abs() > MAX_FORCE_MAGNITUDE_ERROR || ratio.is_nan() {
+                if (ratio - 1.0).abs() > FORCE_MAGNITUDE_ERROR_MAX_RELATIVE || ratio.is_nan() {
                     return Err(CalibrationError::ForceMagnitude { index, ratio });
                 }
             }

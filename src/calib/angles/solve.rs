@@ -19,7 +19,7 @@ use crate::nav::earth::Site;
 
 /// Most positions one solution takes: the general estimator's capacity, so that a session either estimator
 /// takes fits the calibration sequence (the imu_tk session has 37 poses).
-pub const MAX_POSITIONS: usize = crate::calib::channels::MAX_DWELLS;
+pub const MAX_POSITIONS: usize = crate::calib::general::MAX_DWELLS;
 /// Parameters: gyro bias x, y, z; accelerometer bias x, y, z; reference offset e, n, u.
 pub const MAX_PARAMETERS: usize = 9;
 
