@@ -12,8 +12,8 @@ use sinscal::run::sequence::{SequenceFailure, SequenceSolution};
 use sinscal::sensor::adis::{encode_burst, Burst, Model, BURST32_LEN, I16F16};
 
 use crate::calibration::{
-    angle_error, attitude_knowledge, channel_error, leave_out_suspects, prefilter_of, session_dwells, site_of,
-    Calibration, Estimates, Method, Options, PositionResult,
+    angle_error, attitude_knowledge, channel_error, prefilter_of, session_dwells, site_of, Calibration, Estimates,
+    Method, Options, PositionResult,
 };
 use crate::io::dwell_tally::{DwellTallies, DwellTally};
 use crate::io::error::InputError;
@@ -266,17 +266,17 @@ pub fn calibration_from_outcome(
             on_firmware(Estimates::from_angles(&r.solution), Some(r.solution), None, None, r.passes, r.converged)
         }
         SequenceSolution::Channels(c) => {
-            // The result without suspect dwells, solved on this machine from the firmware's dwell statistics
-            // with the same core function.
+            // The firmware's solution as it is: nothing is solved again here. The dwells' noise, which the
+            // report's fit statistics divide by, comes from the firmware's dwell statistics. The result without
+            // suspect dwells is a second fit that the device does not make: only the direct path reports it.
             let settings = match outcome.configuration.sequence_estimator() {
                 Estimator::Channels(s) => s,
                 Estimator::Angles => return Err(InputError::file(source, "replay outcome: estimator mismatch")),
             };
             let estimator = session_estimator(session_dwells(&positions), site, settings, options.dwell_value)
                 .map_err(|e| channel_error(e, &positions, source))?;
-            let without_suspect = leave_out_suspects(&estimator, c, &positions, &[], [0.0; 3]);
             let estimates = Estimates::from_session(&estimator, c, 0);
-            on_firmware(estimates, None, Some(c.clone()), without_suspect, c.iterations, c.converged)
+            on_firmware(estimates, None, Some(c.clone()), None, c.iterations, c.converged)
         }
     })
 }

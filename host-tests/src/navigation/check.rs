@@ -8,6 +8,8 @@ use rand_chacha::ChaCha8Rng;
 use rand_distr::{Distribution, Normal};
 use serde::Serialize;
 
+use sinscal::calib::general::Term;
+
 use crate::io::calibration_model::CalibrationModel;
 use crate::io::dwell_tally::{DwellTallies, DwellTally};
 use crate::io::error::InputError;
@@ -366,20 +368,36 @@ impl SimulatedRun<'_> {
 /// for a parameter that does not enter the navigation (the turntable's reference offset).
 pub fn output_sensitivity(name: &str, rate_b_radps: [f64; 3], force_b_mps2: [f64; 3]) -> Option<([f64; 3], [f64; 3])> {
     let axis = |c: char| "xyz".find(c);
-    let (term, axes) = name.rsplit_once('_')?;
+    // The JSON's name to the core's term (the name is the JSON edge; the term decides the rest).
+    let (term_name, axes) = name.rsplit_once('_')?;
+    let term = Term::ALL.into_iter().find(|t| t.name() == term_name)?;
     let mut chars = axes.chars();
     let i = axis(chars.next()?)?;
-    let j = chars.next().map(axis);
+    let j = match chars.next() {
+        None => None,
+        Some(c) => Some(axis(c)?),
+    };
     let (mut dw, mut df) = ([0.0; 3], [0.0; 3]);
     match (term, j) {
-        ("gyro_bias", None) => dw[i] = 1.0,
-        ("accel_bias", None) => df[i] = 1.0,
-        ("gyro_scale_factor", None) => dw[i] = rate_b_radps[i],
-        ("accel_scale_factor", None) => df[i] = force_b_mps2[i],
-        ("gyro_misalignment", Some(Some(j))) => dw[i] = rate_b_radps[j],
-        ("accel_misalignment", Some(Some(j))) => df[i] = force_b_mps2[j],
-        ("gyro_g_sensitivity", Some(Some(j))) => dw[i] = force_b_mps2[j],
-        _ => return None,
+        (Term::GyroBias, None) => dw[i] = 1.0,
+        (Term::AccelBias, None) => df[i] = 1.0,
+        (Term::GyroScaleFactor, None) => dw[i] = rate_b_radps[i],
+        (Term::AccelScaleFactor, None) => df[i] = force_b_mps2[i],
+        (Term::GyroMisalignment, Some(j)) => dw[i] = rate_b_radps[j],
+        (Term::AccelMisalignment, Some(j)) => df[i] = force_b_mps2[j],
+        (Term::GyroGSensitivity, Some(j)) => dw[i] = force_b_mps2[j],
+        (Term::ReferenceOffset, _) => return None,
+        // A term's axes other than its own (a scale factor with two axes, a misalignment with one).
+        (
+            Term::GyroBias
+            | Term::AccelBias
+            | Term::GyroScaleFactor
+            | Term::AccelScaleFactor
+            | Term::GyroMisalignment
+            | Term::AccelMisalignment
+            | Term::GyroGSensitivity,
+            _,
+        ) => return None,
     }
     Some((dw, df))
 }
