@@ -1,5 +1,5 @@
 //! Every code of the wire formats as an enum with its byte: the IMU, the estimator, the prefilter, the dwell
-//! value, why a configuration was refused, what an outcome holds. [`wire_codes!`] writes each enum with its
+//! value, why a configuration was refused, what an outcome holds. `wire_codes!` writes each enum with its
 //! `code()` and `from_code()` from one list, so the two directions cannot disagree.
 
 use crate::calib::align::DwellValue;
