@@ -545,34 +545,30 @@ fn interval_truth(c0: &M3, c1: &M3, dt: f64, w_ie_n: [f64; 3], f_n: [f64; 3]) ->
     ([0, 1, 2].map(|i| turn[i] / dt + earth_b[i]), mul_t_vec(&c_mid, f_n))
 }
 
-/// The simulated session as a recording, reproducible from `seed`.
-pub fn simulate(scenario: &ScenarioFile, seed: u64, source: &str) -> Recording {
-    let s = &scenario.schedule;
-    let dt = 1.0 / s.rate_hz;
-    let g = scenario.gravity_mps2();
-    let lat = scenario.site.latitude_deg.to_radians();
-    let w_ie_n = earth_rate_n_radps(lat);
-    let f_n = [0.0, 0.0, g];
-    let mut gyro = TriadState::new(scenario.gyro_model(), seed, 0);
-    let mut accel = TriadState::new(scenario.accel_model(), seed, 16);
-    // The table's attitude error (e, n, u) at each position: the constant offset plus that position's own.
-    let error_at = |k: usize| -> [f64; 3] {
-        let mut err = s.reference_offset_enu_rad;
-        for e in s.position_error.iter().filter(|e| e.pos as usize == k + 1) {
-            for i in 0..3 {
-                err[i] += e.enu_rad[i];
-            }
+/// One sample boundary of a simulated session: reported attitude (deg), pos label of the interval that starts
+/// there, and the table's attitude error (e, n, u; rad) there.
+type Boundary = ([f64; 3], u32, [f64; 3]);
+
+/// The table's attitude error (e, n, u) at position index `k`: the constant offset plus that position's own.
+fn table_error_at(s: &ScheduleSpec, k: usize) -> [f64; 3] {
+    let mut err = s.reference_offset_enu_rad;
+    for e in s.position_error.iter().filter(|e| e.pos as usize == k + 1) {
+        for i in 0..3 {
+            err[i] += e.enu_rad[i];
         }
-        err
-    };
-    // One entry per sample boundary: reported attitude, pos label of the interval that starts there, and
-    // the table's error there (interpolated during moves, so that the error never jumps).
+    }
+    err
+}
+
+/// One entry per sample boundary of the schedule (moves, settles and dwells in turn), the table's error
+/// interpolated during moves so that it never jumps, and a final boundary closing the last interval.
+fn schedule_boundaries(s: &ScheduleSpec) -> Vec<Boundary> {
     let samples = |secs: f64| (secs * s.rate_hz).round() as usize;
-    let mut boundaries: Vec<([f64; 3], u32, [f64; 3])> = Vec::new();
+    let mut boundaries: Vec<Boundary> = Vec::new();
     for (k, &p) in s.positions_deg.iter().enumerate() {
-        let err = error_at(k);
+        let err = table_error_at(s, k);
         if k > 0 {
-            let (from, from_err) = (s.positions_deg[k - 1], error_at(k - 1));
+            let (from, from_err) = (s.positions_deg[k - 1], table_error_at(s, k - 1));
             let n = samples(s.move_s);
             let steps = [0, 1, 2].map(|i| angle_step_deg(from[i], p[i]));
             for j in 0..n {
@@ -591,18 +587,32 @@ pub fn simulate(scenario: &ScenarioFile, seed: u64, source: &str) -> Recording {
     if let Some(&(att, _, err)) = boundaries.last() {
         boundaries.push((att, 0, err));
     }
-    let c_true =
-        |(att, _, err): ([f64; 3], u32, [f64; 3])| mul(&rotation(err.map(|x| -x)), &c_b_n(att[0], att[1], att[2]));
+    boundaries
+}
+
+/// The true attitude `C_b^n` at a boundary: the reported attitude turned by the table's error.
+fn true_attitude((att, _, err): Boundary) -> M3 {
+    mul(&rotation(err.map(|x| -x)), &c_b_n(att[0], att[1], att[2]))
+}
+
+/// The simulated rows, one per interval between boundaries: the true rate and force through the sensor models.
+/// `g` is the site's gravity (m/s^2).
+fn simulated_rows(scenario: &ScenarioFile, seed: u64, boundaries: &[Boundary], dt: f64, g: f64) -> Vec<Row> {
+    let lat = scenario.site.latitude_deg.to_radians();
+    let w_ie_n = earth_rate_n_radps(lat);
+    let f_n = [0.0, 0.0, g];
+    let mut gyro = TriadState::new(scenario.gyro_model(), seed, 0);
+    let mut accel = TriadState::new(scenario.accel_model(), seed, 16);
     let mut rows = Vec::with_capacity(boundaries.len());
     // The attitude at a boundary and an interval's truth are computed where they change (bit-identical).
-    let mut c1 = boundaries.first().map_or([[0.0; 3]; 3], |&b| c_true(b));
+    let mut c1 = boundaries.first().map_or([[0.0; 3]; 3], |&b| true_attitude(b));
     let mut truth = ([0.0; 3], [0.0; 3]);
     for k in 0..boundaries.len().saturating_sub(1) {
         let (att0, pos, _) = boundaries[k];
         let c0 = c1;
         let moved = boundaries[k + 1] != boundaries[k];
         if moved {
-            c1 = c_true(boundaries[k + 1]);
+            c1 = true_attitude(boundaries[k + 1]);
         }
         let t0 = k as f64 * dt;
         if k == 0 || moved || boundaries[k] != boundaries[k - 1] {
@@ -630,6 +640,16 @@ pub fn simulate(scenario: &ScenarioFile, seed: u64, source: &str) -> Recording {
             line: 0,
         });
     }
+    rows
+}
+
+/// The simulated session as a recording, reproducible from `seed`.
+pub fn simulate(scenario: &ScenarioFile, seed: u64, source: &str) -> Recording {
+    let s = &scenario.schedule;
+    let dt = 1.0 / s.rate_hz;
+    let g = scenario.gravity_mps2();
+    let boundaries = schedule_boundaries(s);
+    let rows = simulated_rows(scenario, seed, &boundaries, dt, g);
     let truth = SimulationTruth {
         seed,
         gyro_bias_b_radps: scenario.gyro.bias_radps,

@@ -55,58 +55,15 @@ impl LinearFit {
 pub fn fit(obs: &Observations, columns: &[&[f64]]) -> Option<LinearFit> {
     let n = obs.y.len();
     let k = columns.len();
-    let mut count = vec![0usize; obs.groups];
-    for &g in &obs.group {
-        count[g] += 1;
-    }
-    // Start from the group's mean square (or the known variances).
-    let mut variance: Vec<f64> = (0..obs.groups)
-        .map(|g| {
-            let (s, c) = obs
-                .y
-                .iter()
-                .zip(&obs.group)
-                .filter(|(_, &gi)| gi == g)
-                .fold((0.0, 0usize), |(s, c), (y, _)| (s + y * y, c + 1));
-            if c > 0 {
-                (s / c as f64).max(1e-300)
-            } else {
-                1.0
-            }
-        })
-        .collect();
-    let weight = |i: usize, variance: &[f64]| -> f64 {
-        match &obs.sigma {
-            Some(s) => 1.0 / (s[i] * s[i]),
-            None => 1.0 / variance[obs.group[i]],
-        }
-    };
+    let count = group_counts(obs);
+    let mut variance = initial_variance(obs);
     // A group that the model fits exactly keeps a tiny variance, not zero (finite weights).
     let floor: Vec<f64> = variance.iter().map(|v| (v * 1e-24).max(1e-300)).collect();
     let iterations = if obs.sigma.is_some() { 1 } else { 30 };
     let mut result = None;
     let mut previous_ll = f64::NEG_INFINITY;
     for _ in 0..iterations {
-        let mut a = vec![vec![0.0; k]; k];
-        let mut b = vec![0.0; k];
-        for i in 0..n {
-            let w = weight(i, &variance);
-            for p in 0..k {
-                let xp = columns[p][i];
-                if xp == 0.0 {
-                    continue;
-                }
-                b[p] += w * xp * obs.y[i];
-                for q in 0..=p {
-                    a[p][q] += w * xp * columns[q][i];
-                }
-            }
-        }
-        for p in 0..k {
-            for q in 0..p {
-                a[q][p] = a[p][q];
-            }
-        }
+        let (a, b) = normal_equations(obs, columns, &variance);
         let (beta, inverse) = if k == 0 { (Vec::new(), Vec::new()) } else { solve_spd(&a, &b)? };
         let residual: Vec<f64> =
             (0..n).map(|i| obs.y[i] - (0..k).map(|p| columns[p][i] * beta[p]).sum::<f64>()).collect();
@@ -115,22 +72,8 @@ pub fn fit(obs: &Observations, columns: &[&[f64]]) -> Option<LinearFit> {
             ss[obs.group[i]] += residual[i] * residual[i];
         }
         let ll = match &obs.sigma {
-            Some(s) => (0..n)
-                .map(|i| {
-                    -0.5 * ((2.0 * std::f64::consts::PI * s[i] * s[i]).ln() + residual[i] * residual[i] / (s[i] * s[i]))
-                })
-                .sum(),
-            None => {
-                for g in 0..obs.groups {
-                    if count[g] > 0 {
-                        variance[g] = (ss[g] / count[g] as f64).max(floor[g]);
-                    }
-                }
-                (0..obs.groups)
-                    .filter(|&g| count[g] > 0)
-                    .map(|g| -0.5 * count[g] as f64 * ((2.0 * std::f64::consts::PI * variance[g]).ln() + 1.0))
-                    .sum::<f64>()
-            }
+            Some(s) => known_sigma_log_likelihood(s, &residual),
+            None => update_variance(&mut variance, &ss, &count, &floor),
         };
         let rms: Vec<f64> =
             (0..obs.groups).map(|g| if count[g] > 0 { (ss[g] / count[g] as f64).sqrt() } else { 0.0 }).collect();
@@ -156,6 +99,89 @@ pub fn fit(obs: &Observations, columns: &[&[f64]]) -> Option<LinearFit> {
         }
     }
     Some(fit)
+}
+
+/// Number of observations in each variance group.
+fn group_counts(obs: &Observations) -> Vec<usize> {
+    let mut count = vec![0usize; obs.groups];
+    for &g in &obs.group {
+        count[g] += 1;
+    }
+    count
+}
+
+/// The starting variance of each group: its mean square observation (1 for an empty group).
+fn initial_variance(obs: &Observations) -> Vec<f64> {
+    (0..obs.groups)
+        .map(|g| {
+            let (s, c) = obs
+                .y
+                .iter()
+                .zip(&obs.group)
+                .filter(|(_, &gi)| gi == g)
+                .fold((0.0, 0usize), |(s, c), (y, _)| (s + y * y, c + 1));
+            if c > 0 {
+                (s / c as f64).max(1e-300)
+            } else {
+                1.0
+            }
+        })
+        .collect()
+}
+
+/// Weight of observation `i`: its inverse known variance, or the inverse of its group's current variance.
+fn weight(obs: &Observations, i: usize, variance: &[f64]) -> f64 {
+    match &obs.sigma {
+        Some(s) => 1.0 / (s[i] * s[i]),
+        None => 1.0 / variance[obs.group[i]],
+    }
+}
+
+/// The weighted normal equations `A beta = b` of the columns (A filled in full from its lower triangle).
+fn normal_equations(obs: &Observations, columns: &[&[f64]], variance: &[f64]) -> (Vec<Vec<f64>>, Vec<f64>) {
+    let k = columns.len();
+    let mut a = vec![vec![0.0; k]; k];
+    let mut b = vec![0.0; k];
+    for i in 0..obs.y.len() {
+        let w = weight(obs, i, variance);
+        for p in 0..k {
+            let xp = columns[p][i];
+            if xp == 0.0 {
+                continue;
+            }
+            b[p] += w * xp * obs.y[i];
+            for q in 0..=p {
+                a[p][q] += w * xp * columns[q][i];
+            }
+        }
+    }
+    for p in 0..k {
+        for q in 0..p {
+            a[q][p] = a[p][q];
+        }
+    }
+    (a, b)
+}
+
+/// The Gaussian log-likelihood of the residuals with known standard deviations `s`.
+fn known_sigma_log_likelihood(s: &[f64], residual: &[f64]) -> f64 {
+    (0..residual.len())
+        .map(|i| -0.5 * ((2.0 * std::f64::consts::PI * s[i] * s[i]).ln() + residual[i] * residual[i] / (s[i] * s[i])))
+        .sum()
+}
+
+/// Sets each non-empty group's variance to its mean square residual (at least `floor`) and returns the profile
+/// log-likelihood.
+fn update_variance(variance: &mut [f64], ss: &[f64], count: &[usize], floor: &[f64]) -> f64 {
+    for g in 0..variance.len() {
+        if count[g] > 0 {
+            variance[g] = (ss[g] / count[g] as f64).max(floor[g]);
+        }
+    }
+    (0..variance.len())
+        .filter(|&g| count[g] > 0)
+        .map(|g| -0.5 * count[g] as f64 * ((2.0 * std::f64::consts::PI * variance[g]).ln() + 1.0))
+        .sum::<f64>()
 }
 
 /// Upper tail probability of the chi-square distribution with `dof` degrees of freedom at `x`.

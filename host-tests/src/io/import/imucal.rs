@@ -161,6 +161,45 @@ pub fn parse_imucal(
         csv_source,
         column_line_number,
     )?;
+    let (rows, first_sample, last_sample) = imucal_session_rows(lines, &columns, &index, &labels, csv_source)?;
+    if rows.is_empty() {
+        return Err(InputError::at(csv_source, column_line_number, "no data rows"));
+    }
+    let samples = (first_sample.unwrap_or(0), last_sample.unwrap_or(0));
+    check_every_pose_sampled(&rows, &labels, labels_text, labels_source, csv_source, samples)?;
+    let comments = vec![
+        format!("source: {csv_source} (labels: {labels_source})"),
+        format!(
+            "source_format: imucal Ferraris session (gyr deg/s, acc m/s^2, {IMUCAL_RATE_HZ} Hz, labels [start, end) \
+             sample indices)"
+        ),
+        format!("latitude_source: {latitude_source}"),
+        imucal_attitude_comment(),
+    ];
+    imucal_finish(
+        rows,
+        csv_source,
+        latitude_deg,
+        &latitude_source,
+        comments,
+        IMUCAL_RATE_HZ,
+        "imucal Ferraris session",
+        vec![],
+    )
+}
+
+/// The rows of an imucal session with its first and last sample index (`None` without rows).
+type SessionRows = (Vec<Row>, Option<u64>, Option<u64>);
+
+/// Reads the data rows of an imucal session (`index` = the columns n_samples, gyr_x/y/z, acc_x/y/z) and labels
+/// each by the static pose whose range holds its sample index; also returns the first and last sample index.
+fn imucal_session_rows<'a>(
+    lines: impl Iterator<Item = (usize, &'a str)>,
+    columns: &[String],
+    index: &[usize],
+    labels: &[LabelRange],
+    csv_source: &str,
+) -> Result<SessionRows, InputError> {
     let mut rows: Vec<Row> = Vec::new();
     let mut previous: Option<u64> = None;
     let mut first_sample: Option<u64> = None;
@@ -202,11 +241,18 @@ pub fn parse_imucal(
         let pose = labels.iter().filter(|r| (r.start..r.end).contains(&sample)).find_map(|r| ferraris_pose(&r.label));
         rows.push(labelled_row(sample as f64 / IMUCAL_RATE_HZ, pose, rate_degps.map(f64::to_radians), force_b_mps2, n));
     }
-    if rows.is_empty() {
-        return Err(InputError::at(csv_source, column_line_number, "no data rows"));
-    }
-    let first_sample = first_sample.unwrap_or(0);
-    let last_sample = previous.unwrap_or(0);
+    Ok((rows, first_sample, previous))
+}
+
+/// Refuses a session in which some Ferraris pose has no sample (`samples` = the first and last sample index).
+fn check_every_pose_sampled(
+    rows: &[Row],
+    labels: &[LabelRange],
+    labels_text: &str,
+    labels_source: &str,
+    csv_source: &str,
+    (first_sample, last_sample): (u64, u64),
+) -> Result<(), InputError> {
     for pose in &FERRARIS_POSES {
         if !rows.iter().any(|r| r.pos == pose.pos) {
             let range = labels.iter().find(|r| r.label == pose.label);
@@ -221,25 +267,7 @@ pub fn parse_imucal(
             ));
         }
     }
-    let comments = vec![
-        format!("source: {csv_source} (labels: {labels_source})"),
-        format!(
-            "source_format: imucal Ferraris session (gyr deg/s, acc m/s^2, {IMUCAL_RATE_HZ} Hz, labels [start, end) \
-             sample indices)"
-        ),
-        format!("latitude_source: {latitude_source}"),
-        imucal_attitude_comment(),
-    ];
-    imucal_finish(
-        rows,
-        csv_source,
-        latitude_deg,
-        &latitude_source,
-        comments,
-        IMUCAL_RATE_HZ,
-        "imucal Ferraris session",
-        vec![],
-    )
+    Ok(())
 }
 
 /// A row of an imucal session: the pose's position and attitude, or pos = 0 outside the static poses.

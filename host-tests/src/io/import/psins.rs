@@ -29,10 +29,60 @@ pub fn parse_psins(text: &str, source: &str, latitude_deg: Option<f64>) -> Resul
         let values = whitespace_numbers(line, 6, what).map_err(|r| InputError::at(source, n, r))?;
         Ok((n, values))
     };
-    let (attitude_line, attitude) = header_line("attitude (pitch roll yaw deg, VE VN VU m/s)")?;
-    let (site_line, site) = header_line("site (latitude deg, longitude deg, height m, t0 s, interval ms, g m/s^2)")?;
-    let (scale_line, scale) = header_line("scale (gyro arcsec x y z, accel ug*s x y z)")?;
+    let attitude = header_line("attitude (pitch roll yaw deg, VE VN VU m/s)")?;
+    let site = header_line("site (latitude deg, longitude deg, height m, t0 s, interval ms, g m/s^2)")?;
+    let scale = header_line("scale (gyro arcsec x y z, accel ug*s x y z)")?;
+    let header = psins_header(attitude, site, scale, source)?;
+    let rows = psins_rows(lines, &header, source)?;
+    if rows.is_empty() {
+        return Err(InputError::at(source, last_line, "no data lines after the three header lines"));
+    }
+    Ok(psins_imported(&header, rows, source, latitude_override))
+}
 
+/// The three PSINS header lines, checked, with the count-to-unit factors they imply.
+struct PsinsHeader {
+    /// Line number of the attitude line.
+    attitude_line: usize,
+    /// Pitch, deg.
+    pitch_deg: f64,
+    /// Roll, deg.
+    roll_deg: f64,
+    /// PSINS yaw, deg, positive towards west.
+    yaw_deg: f64,
+    /// Heading = -yaw in [0, 360), deg.
+    heading_deg: f64,
+    /// Line number of the site line.
+    site_line: usize,
+    /// Latitude of the site line, deg.
+    file_latitude_deg: f64,
+    /// Longitude, deg.
+    longitude_deg: f64,
+    /// Height, m.
+    height_m: f64,
+    /// Time of the first sample, s.
+    t0_s: f64,
+    /// Sampling interval, s.
+    dt_s: f64,
+    /// Sampling rate, Hz.
+    rate_hz: f64,
+    /// Gravity of the site line, m/s^2.
+    gravity_mps2: f64,
+    /// The six scale factors of the scale line (gyro arcsec, accel ug*s per count).
+    scale: Vec<f64>,
+    /// Gyro rate per count, rad/s.
+    gyro_radps_per_count: [f64; 3],
+    /// Accelerometer force per count, m/s^2.
+    accel_mps2_per_count: [f64; 3],
+}
+
+/// Checks the attitude, site and scale header lines (each with its line number) and derives the conversion factors.
+fn psins_header(
+    (attitude_line, attitude): (usize, Vec<f64>),
+    (site_line, site): (usize, Vec<f64>),
+    (scale_line, scale): (usize, Vec<f64>),
+    source: &str,
+) -> Result<PsinsHeader, InputError> {
     let (pitch_deg, roll_deg, yaw_deg) = (attitude[0], attitude[1], attitude[2]);
     if !(-90.0..=90.0).contains(&pitch_deg) {
         return Err(InputError::at(source, attitude_line, format!("pitch {pitch_deg} deg is outside [-90, 90]")));
@@ -57,7 +107,32 @@ pub fn parse_psins(text: &str, source: &str, latitude_deg: Option<f64>) -> Resul
     let rate_hz = 1000.0 / interval_ms;
     let gyro_radps_per_count = [0, 1, 2].map(|i| scale[i] / ARCSEC_PER_RAD / dt_s);
     let accel_mps2_per_count = [3, 4, 5].map(|i| scale[i] * 1e-6 * gravity_mps2 / dt_s);
+    Ok(PsinsHeader {
+        attitude_line,
+        pitch_deg,
+        roll_deg,
+        yaw_deg,
+        heading_deg,
+        site_line,
+        file_latitude_deg,
+        longitude_deg,
+        height_m,
+        t0_s,
+        dt_s,
+        rate_hz,
+        gravity_mps2,
+        scale,
+        gyro_radps_per_count,
+        accel_mps2_per_count,
+    })
+}
 
+/// Converts the data lines (six integer counts each) into rows of the one static pose.
+fn psins_rows<'a>(
+    lines: impl Iterator<Item = (usize, &'a str)>,
+    h: &PsinsHeader,
+    source: &str,
+) -> Result<Vec<Row>, InputError> {
     let mut rows = Vec::new();
     for (n, line) in lines {
         let cells: Vec<&str> = line.split_whitespace().collect();
@@ -74,20 +149,38 @@ pub fn parse_psins(text: &str, source: &str, latitude_deg: Option<f64>) -> Resul
         }
         let k = rows.len() as f64;
         rows.push(Row {
-            t_s: t0_s + k * dt_s,
+            t_s: h.t0_s + k * h.dt_s,
             pos: 1,
-            pitch_deg,
-            roll_deg,
-            heading_deg: Some(heading_deg),
-            rate_b_radps: [0, 1, 2].map(|i| counts[i] as f64 * gyro_radps_per_count[i]),
-            force_b_mps2: [0, 1, 2].map(|i| counts[i + 3] as f64 * accel_mps2_per_count[i]),
+            pitch_deg: h.pitch_deg,
+            roll_deg: h.roll_deg,
+            heading_deg: Some(h.heading_deg),
+            rate_b_radps: [0, 1, 2].map(|i| counts[i] as f64 * h.gyro_radps_per_count[i]),
+            force_b_mps2: [0, 1, 2].map(|i| counts[i + 3] as f64 * h.accel_mps2_per_count[i]),
             temp_c: None,
             line: n,
         });
     }
-    if rows.is_empty() {
-        return Err(InputError::at(source, last_line, "no data lines after the three header lines"));
-    }
+    Ok(rows)
+}
+
+/// Assembles the recording (header comments included) and its import summary from the checked header and rows.
+fn psins_imported(h: &PsinsHeader, rows: Vec<Row>, source: &str, latitude_override: Option<f64>) -> Imported {
+    let PsinsHeader {
+        attitude_line,
+        pitch_deg,
+        roll_deg,
+        yaw_deg,
+        heading_deg,
+        site_line,
+        file_latitude_deg,
+        longitude_deg,
+        height_m,
+        dt_s,
+        rate_hz,
+        gravity_mps2,
+        ref scale,
+        ..
+    } = *h;
     let (latitude_deg, latitude_source) = match latitude_override {
         Some(lat) => (lat, format!("command line (--latitude-deg; the file says {file_latitude_deg})")),
         None => (file_latitude_deg, format!("file header (line {site_line})")),
@@ -125,5 +218,5 @@ pub fn parse_psins(text: &str, source: &str, latitude_deg: Option<f64>) -> Resul
         format!("one static pose: pitch {pitch_deg}, roll {roll_deg}, heading {heading_deg} deg (PSINS yaw {yaw_deg})"),
     ];
     let summary = summarise(&recording, "PSINS .imu", &notes, &|_| String::new());
-    Ok(Imported { recording, summary })
+    Imported { recording, summary }
 }
