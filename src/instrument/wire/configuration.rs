@@ -152,9 +152,14 @@ impl Configuration {
         }
     }
 
+    /// The positions encoded: those with both an attitude and a label (the two lists are meant to be as long).
+    pub fn positions(&self) -> usize {
+        self.schedule.len().min(self.labels.len())
+    }
+
     /// The encoding's length, bytes.
     pub fn encoded_bytes(&self) -> usize {
-        FIXED_BYTES + POSITION_BYTES * self.schedule.len()
+        FIXED_BYTES + POSITION_BYTES * self.positions()
     }
 
     /// Writes the encoding.
@@ -165,7 +170,7 @@ impl Configuration {
         };
         w.u8(ImuCode::of(self.imu).code()).u8(self.estimator.code());
         w.f32(self.site.latitude_rad).f32(self.site.gravity_mps2);
-        w.u16(self.schedule.len() as u16).u16(self.terms.stored_bits());
+        w.u16(self.positions() as u16).u16(self.terms.stored_bits());
         w.u8(prefilter.code()).u8(DwellValueCode::of(self.dwell_value).code());
         w.u8(self.max_passes).u8(self.estimate_reference_offset as u8).f32(a_gyro).f32(a_accel);
         w.f32(self.rest.force_error_max_mps2).f32(self.rest.gravity_angle_max_rad).f32(self.rest.rate_max_radps);
