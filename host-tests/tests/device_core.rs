@@ -7,7 +7,7 @@ use sinscal::instrument::device::Device;
 use sinscal::instrument::link::{encode_frame, Frame, FrameReceiver, MAX_WIRE_BYTES};
 use sinscal::instrument::message::{kind, DeviceState, ErrorCode};
 use sinscal::instrument::store::RecordStore;
-use sinscal::instrument::wire::Reader as BodyReader;
+use sinscal::instrument::wire::Reader;
 use sinscal::rig::replay::{read_header, ReplayDevice};
 use sinscal::run::sampling::{on_data_ready, process_next, QueueItem, SamplingStats, QUEUE_SLOTS};
 use sinscal::sensor::adis::{Adis, Model, BURST32_LEN};
@@ -91,7 +91,7 @@ impl Bench {
 
     fn ok(&mut self, k: u8, body: &[u8]) -> Vec<u8> {
         let (rk, b) = self.ask(k, body);
-        assert_eq!(rk, k | kind::REPLY, "request {k:#04x} refused: {:?}", BodyReader::new(&b).u8());
+        assert_eq!(rk, k | kind::REPLY, "request {k:#04x} refused: {:?}", Reader::new(&b).u8());
         b
     }
 

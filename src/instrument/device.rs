@@ -16,7 +16,7 @@ use super::wire::codes::{ConfigurationRefusal, ImuCode};
 use super::wire::configuration::{DeviceConfiguration, MAX_DEVICE_BYTES, THRESHOLD_BYTES};
 use super::wire::outcome::{encode_part, OutcomeView};
 use super::wire::record::{Record, RecordHead, RECORD_HEAD_BYTES, RECORD_VERSION};
-use super::wire::{Reader as BodyReader, Writer as BodyWriter};
+use super::wire::{Reader, Writer};
 use crate::calib::angles::MAX_POSITIONS;
 use crate::calib::compensation::{self, Compensation};
 use crate::run::sampling::{QueueItem, SamplingStats};
@@ -275,7 +275,7 @@ impl<F: NorFlash> Device<F> {
                 if frame.is_ok() {
                     self.link.refused = self.link.refused.saturating_add(1);
                 }
-                let mut w = BodyWriter::new(&mut body);
+                let mut w = Writer::new(&mut body);
                 w.u8(code as u8).u32(detail);
                 (kind::ERROR, 5, Action::None)
             }
@@ -288,7 +288,7 @@ impl<F: NorFlash> Device<F> {
 /// compensated, as f32. Its length in `wire`.
 pub fn sample_frame(sample: &ImuSample, wire: &mut [u8]) -> usize {
     let mut body = [0u8; 24];
-    let mut w = BodyWriter::new(&mut body);
+    let mut w = Writer::new(&mut body);
     for v in sample.rate_b_radps.iter().chain(&sample.force_b_mps2) {
         w.f32(*v);
     }
@@ -330,7 +330,7 @@ impl<F: NorFlash> Device<F> {
         match k {
             kind::IDENTIFY => exact(0).and_then(|()| self.identify(out)),
             kind::CONFIGURE => self.configure(body),
-            kind::ANNOTATE => self.annotate(&mut BodyReader::new(body)),
+            kind::ANNOTATE => self.annotate(&mut Reader::new(body)),
             kind::START => exact(0).and_then(|()| self.start(sampling)),
             kind::ABORT => {
                 exact(0)?;
@@ -357,7 +357,7 @@ impl<F: NorFlash> Device<F> {
         let v = FIRMWARE_VERSION.as_bytes();
         let n = v.len().min(16);
         version[..n].copy_from_slice(&v[..n]);
-        let mut w = BodyWriter::new(out);
+        let mut w = Writer::new(out);
         w.u8(super::link::PROTOCOL_VERSION).bytes(&version);
         w.u8(ImuCode::of(self.model).code());
         w.u16(RECORD_VERSION).u16(MAX_POSITIONS as u16).u16(MAX_CHUNK_BYTES as u16).u16(MAX_NOTE_BYTES as u16);
@@ -391,7 +391,7 @@ impl<F: NorFlash> Device<F> {
     }
 
     #[inline(never)]
-    fn annotate(&mut self, r: &mut BodyReader<'_>) -> Reply {
+    fn annotate(&mut self, r: &mut Reader<'_>) -> Reply {
         let (Some(offset), Some(total)) = (r.u16(), r.u16()) else { return Err((ErrorCode::Body, 0)) };
         let part = r.rest();
         if total as usize > MAX_NOTE_BYTES {
@@ -425,7 +425,7 @@ impl<F: NorFlash> Device<F> {
 
     #[inline(never)]
     fn status(&self, sampling: &SamplingStats, out: &mut [u8]) -> Reply {
-        let mut w = BodyWriter::new(out);
+        let mut w = Writer::new(out);
         w.u8(self.state as u8);
         let (position, positions) = match (&self.sequence, &self.configured) {
             (Some(s), Some(c)) => (s.position() as u16, c.configuration.schedule.len() as u16),
@@ -452,7 +452,7 @@ impl<F: NorFlash> Device<F> {
         let part = &mut part[..MAX_CHUNK_BYTES];
         let total = encode_part(&outcome, offset, part);
         let n = total.saturating_sub(offset).min(MAX_CHUNK_BYTES);
-        BodyWriter::new(head).u32(total as u32).u32(offset as u32);
+        Writer::new(head).u32(total as u32).u32(offset as u32);
         Ok((8 + n, Action::None))
     }
 
@@ -481,7 +481,7 @@ impl<F: NorFlash> Device<F> {
         self.stored = self.store.newest().ok().flatten();
         self.compensation = compensation;
         self.compensation_from_record = true;
-        let mut w = BodyWriter::new(out);
+        let mut w = Writer::new(out);
         w.u32(report.sequence).u8(report.slot).u32(report.erases).u32(len as u32);
         body_of(w.written())
     }
@@ -493,7 +493,7 @@ impl<F: NorFlash> Device<F> {
         let n = total.saturating_sub(offset).min(MAX_CHUNK_BYTES);
         let (head, part) = out.split_at_mut(8);
         self.store.read(&info, offset, &mut part[..n]).map_err(|_| (ErrorCode::Flash, 0))?;
-        BodyWriter::new(head).u32(total as u32).u32(offset as u32);
+        Writer::new(head).u32(total as u32).u32(offset as u32);
         Ok((8 + n, Action::None))
     }
 
@@ -506,7 +506,7 @@ impl<F: NorFlash> Device<F> {
         self.stored = None;
         self.compensation = Compensation::IDENTITY;
         self.compensation_from_record = false;
-        let mut w = BodyWriter::new(out);
+        let mut w = Writer::new(out);
         w.u32(erases);
         body_of(w.written())
     }

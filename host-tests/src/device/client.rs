@@ -6,7 +6,7 @@ use std::time::{Duration, Instant};
 
 use sinscal::instrument::link::{encode_frame, FrameReceiver, MAX_WIRE_BYTES};
 use sinscal::instrument::message::{kind, DeviceState, ErrorCode, MAX_CHUNK_BYTES, MAX_NOTE_BYTES};
-use sinscal::instrument::wire::Reader as BodyReader;
+use sinscal::instrument::wire::Reader;
 
 /// A failure of the link or a refusal of the device.
 #[derive(Debug, thiserror::Error)]
@@ -141,7 +141,7 @@ impl<T: Read + Write> Client<T> {
             for &b in &buf[..n] {
                 let Some(Ok(frame)) = self.receiver.push(b) else { continue };
                 if frame.kind == kind::SAMPLE {
-                    let mut r = BodyReader::new(frame.body);
+                    let mut r = Reader::new(frame.body);
                     let v: Option<Vec<f32>> = (0..6).map(|_| r.f32()).collect();
                     if let Some(v) = v {
                         self.samples.push([v[0], v[1], v[2], v[3], v[4], v[5]]);
@@ -152,7 +152,7 @@ impl<T: Read + Write> Client<T> {
                     continue;
                 }
                 if frame.kind == kind::ERROR {
-                    let mut r = BodyReader::new(frame.body);
+                    let mut r = Reader::new(frame.body);
                     let (code, detail) = (r.u8().and_then(ErrorCode::from_code), r.u32());
                     return match (code, detail) {
                         (Some(code), Some(detail)) => Err(LinkError::Refused { what, code, detail }),
@@ -167,8 +167,8 @@ impl<T: Read + Write> Client<T> {
     /// Identify.
     pub fn identify(&mut self) -> Result<Identity, LinkError> {
         let body = self.request("identify", kind::IDENTIFY, &[])?;
-        let mut r = BodyReader::new(&body);
-        let parse = |r: &mut BodyReader<'_>| -> Option<Identity> {
+        let mut r = Reader::new(&body);
+        let parse = |r: &mut Reader<'_>| -> Option<Identity> {
             let protocol = r.u8()?;
             let text = r.bytes(16)?;
             let firmware = String::from_utf8_lossy(text).trim_end_matches('\0').to_string();
@@ -217,8 +217,8 @@ impl<T: Read + Write> Client<T> {
             return Err(LinkError::Malformed("status"));
         }
         let counters = (body.len() - fixed) / 4;
-        let mut r = BodyReader::new(&body);
-        let parse = |r: &mut BodyReader<'_>| -> Option<Status> {
+        let mut r = Reader::new(&body);
+        let parse = |r: &mut Reader<'_>| -> Option<Status> {
             let state = DeviceState::from_code(r.u8()?)?;
             let (position, positions) = (r.u16()?, r.u16()?);
             let sampling = (0..counters).map(|_| r.u32()).collect::<Option<Vec<u32>>>()?;
@@ -276,7 +276,7 @@ impl<T: Read + Write> Client<T> {
         let mut all = Vec::new();
         loop {
             let body = self.request(what, k, &(all.len() as u32).to_le_bytes())?;
-            let mut r = BodyReader::new(&body);
+            let mut r = Reader::new(&body);
             let (total, offset) = (r.u32(), r.u32());
             let part = r.rest();
             match (total, offset) {
@@ -296,16 +296,15 @@ impl<T: Read + Write> Client<T> {
     /// Store the result as the calibration record.
     pub fn store(&mut self) -> Result<Stored, LinkError> {
         let body = self.request("store", kind::STORE, &[])?;
-        let mut r = BodyReader::new(&body);
-        let parse = |r: &mut BodyReader<'_>| {
-            Some(Stored { sequence: r.u32()?, slot: r.u8()?, erases: r.u32()?, bytes: r.u32()? })
-        };
+        let mut r = Reader::new(&body);
+        let parse =
+            |r: &mut Reader<'_>| Some(Stored { sequence: r.u32()?, slot: r.u8()?, erases: r.u32()?, bytes: r.u32()? });
         parse(&mut r).ok_or(LinkError::Malformed("store"))
     }
 
     /// Erase the stored record; the sector erases.
     pub fn erase(&mut self) -> Result<u32, LinkError> {
         let body = self.request("erase", kind::ERASE, &[])?;
-        BodyReader::new(&body).u32().ok_or(LinkError::Malformed("erase"))
+        Reader::new(&body).u32().ok_or(LinkError::Malformed("erase"))
     }
 }

@@ -7,7 +7,7 @@ use super::codes::{EstimatorCode, ImuCode};
 use super::configuration::{Configuration, DeviceConfiguration, RestLimits, Thresholds, MAX_DEVICE_BYTES};
 use super::outcome::{Outcome, MAX_BYTES};
 use super::record::{Record, RecordHead};
-use super::{Reader, Writer};
+use super::Writer;
 use crate::calib::align::DwellValue;
 use crate::calib::angles::{BiasSolution, Estimate, MAX_PARAMETERS, MAX_POSITIONS};
 use crate::calib::angles::{CalibrationResult, PositionInput};
@@ -232,5 +232,4 @@ fn a_record_reads_back_as_its_parts() {
     let [_, (k, kl), (n, nl), (oo, ol)] = head.parts();
     assert_eq!((&bytes[k..k + kl], &bytes[n..n + nl]), (&configuration[..], &note[..]));
     assert_eq!(Outcome::decode(&o.configuration, &bytes[oo..oo + ol]), Ok(o));
-    let _ = Reader::new(&bytes);
 }
