@@ -1,10 +1,10 @@
 //! Collection of one dwell (one turntable position): the prefilter bank and the per-channel statistics.
 //!
 //! Call rate: [`DwellCollector::update`] once per IMU sample (100 Hz), for the samples that belong to the
-//! dwell; [`DwellCollector::summary`] once at its end. The collector keeps, per channel, the mean and
-//! variance of the raw samples, the mean of the filtered samples (what the alignment consumes), the
-//! filter's last state (the paper's "settled output"), and the octave Allan variance of the raw samples,
-//! from which, with the prefilter's start term, [`MeanNoise`] gives the honest noise of the dwell mean
+//! dwell; [`DwellCollector::summary`] once at its end. The collector gates spikes (docs/method.md#spikes)
+//! and keeps, per channel, the mean and variance of the used raw samples (the dwell value the alignment
+//! consumes), the filter's last state (the paper's "settled output"), and the octave Allan variance of the
+//! raw samples, from which [`MeanNoise`] gives the honest noise of the dwell mean
 //! (docs/method.md#honest-errors); [`pool_mean_noise`] combines the dwells of one session.
 
 use crate::calib::prefilter::{FixedGain, HmmKf, PrefilterError, PrefilterSettings};
@@ -99,7 +99,7 @@ pub struct MeanNoise {
     /// From the Allan variance at the longest cluster size this dwell estimates well, times `1 + 2 / D` for
     /// the estimate's own noise (D differences), extrapolated as white noise beyond it. (Where `m AVAR(m)`
     /// measurably rises towards that cluster size, the rise is first carried on to the dwell length, at most
-    /// 4-fold; the prefilter's start adds its part. docs/method.md#honest-errors.)
+    /// 4-fold. docs/method.md#honest-errors.)
     pub white_equivalent_var: f32,
     /// Degrees of freedom of that estimate (number of cluster differences it rests on).
     pub dof: f32,
@@ -108,16 +108,8 @@ pub struct MeanNoise {
 }
 
 /// One channel's octave Allan variance over one dwell: what [`MeanNoise`] is taken from and what
-/// [`pool_mean_noise`] pools.
-///
-/// It is the Allan variance of the **raw** samples, also when a prefilter runs. The mean of the filtered
-/// dwell is exactly the raw mean plus a term from the filter's start and end
-/// ([`HmmKf::start_transient_weight`]), so its noise is the raw mean's plus that term,
-/// `prefilter_start_var`. The filtered samples themselves would count the start twice: the filter's
-/// transient from the first sample lies in the first cluster of every level (measured on the PSINS
-/// accelerometers, 6-s dwells: errors reported 1.5 to 1.7 times the scatter of the filtered dwell values),
-/// and at the cluster sizes used (64 samples and more) the filter, with its DC gain of 1, leaves the Allan
-/// variance otherwise unchanged.
+/// [`pool_mean_noise`] pools. It is the Allan variance of the used raw samples, also when a prefilter runs
+/// (the dwell value is their mean).
 #[derive(Clone, Copy, Debug, Default, PartialEq)]
 #[cfg_attr(feature = "defmt", derive(defmt::Format))]
 pub struct DwellAllan {
@@ -125,10 +117,6 @@ pub struct DwellAllan {
     /// where the dwell has no pair of clusters. The number of differences behind each entry is
     /// [`allan_differences`]`(samples, j)`.
     pub avar: [f32; ALLAN_LEVELS],
-    /// Variance that the prefilter's start adds to the dwell mean (unit squared): `sigma^2 t / N^2` with
-    /// `sigma` the raw sample standard deviation and `t` the filter's start weight
-    /// ([`HmmKf::start_transient_weight`]); 0 without prefilter.
-    pub prefilter_start_var: f32,
 }
 
 /// What one dwell gives the alignment, per channel (body frame).
@@ -139,9 +127,12 @@ pub struct DwellSummary {
     pub samples: u32,
     /// Samples rejected as not finite.
     pub rejected: u32,
-    /// Mean of the (prefiltered, if a prefilter runs) gyro channels, rad/s.
+    /// Samples not used as spikes: some channel beyond the gate ([`GATE_WIDTH_SIGMA`]).
+    pub spikes: u32,
+    /// Mean of the used raw gyro samples, rad/s (with or without prefilter: the filtered mean without its
+    /// boundary term).
     pub rate_mean_b_radps: Vec3,
-    /// Mean of the (prefiltered) accelerometer channels, m/s^2.
+    /// Mean of the used raw accelerometer samples, m/s^2.
     pub force_mean_b_mps2: Vec3,
     /// Standard deviation of one raw gyro sample, rad/s.
     pub rate_sample_std_b_radps: Vec3,
@@ -166,8 +157,8 @@ pub struct DwellSummary {
 pub const MAX_NOISE_GROWTH: f32 = 4.0;
 
 /// The noise of a mean of `n` samples from octave Allan variances with their numbers of differences
-/// (`levels`: Allan variance and differences per level), the white-noise fallback (per-sample variance
-/// and its degrees of freedom) and the white-equivalent variance that the prefilter's start adds.
+/// (`levels`: Allan variance and differences per level) and the white-noise fallback (per-sample variance
+/// and its degrees of freedom).
 ///
 /// The rule (docs/method.md#honest-errors): take the longest level with at least
 /// [`MIN_ALLAN_DIFFERENCES`] differences (otherwise the longest with any) and its white-equivalent
@@ -176,18 +167,13 @@ pub const MAX_NOISE_GROWTH: f32 = 4.0;
 /// the factor makes up for it to first order). If `ln q` rises with the level over that level and the two
 /// below it (weighted least squares, weights D/2, the rise more than twice its standard error), the rise is
 /// carried on to `n` samples as a power law, by at most [`MAX_NOISE_GROWTH`]; a flat or falling curve is
-/// extrapolated as white noise (conservative when it falls). Then the start term is added. Without any
+/// extrapolated as white noise (conservative when it falls). Without any
 /// difference (a dwell shorter than two blocks) the per-sample variance, as for white noise.
 #[inline(never)]
-fn mean_noise_from_levels(
-    levels: &[(f32, f32); ALLAN_LEVELS],
-    fallback: (f32, f32),
-    start_q: f32,
-    n: f32,
-) -> MeanNoise {
+fn mean_noise_from_levels(levels: &[(f32, f32); ALLAN_LEVELS], fallback: (f32, f32), n: f32) -> MeanNoise {
     let pick = |min: f32| (0..ALLAN_LEVELS).rev().find(|&j| levels[j].1 >= min && levels[j].1 > 0.0);
     let Some(top) = pick(MIN_ALLAN_DIFFERENCES as f32).or_else(|| pick(1.0)) else {
-        return MeanNoise { white_equivalent_var: fallback.0 + start_q, dof: fallback.1, cluster_samples: 1 };
+        return MeanNoise { white_equivalent_var: fallback.0, dof: fallback.1, cluster_samples: 1 };
     };
     let m = allan_cluster_samples(top);
     // Weighted straight line through (j, log2 q_j), q_j = m_j AVAR_j: var(ln q_j) is about 2 / D_j, so
@@ -217,7 +203,7 @@ fn mean_noise_from_levels(
         }
     }
     let (avar, d) = levels[top];
-    MeanNoise { white_equivalent_var: m as f32 * avar * (1.0 + 2.0 / d) * growth + start_q, dof: d, cluster_samples: m }
+    MeanNoise { white_equivalent_var: m as f32 * avar * (1.0 + 2.0 / d) * growth, dof: d, cluster_samples: m }
 }
 
 /// `log2 x` for a positive normal `x`, within 3e-5: the exponent plus `2 / ln 2 (t + t^3/3 + t^5/5 + t^7/7)`,
@@ -249,24 +235,12 @@ fn exp2_capped(y: f32) -> f32 {
 /// noise per channel: the Allan sums of every level are pooled over the dwells (each dwell's variance
 /// weighted by its number of differences), then the rule of [`MeanNoise`] picks the level, so that a
 /// level too thin in one short dwell can rest on all of them, and a rising curve is carried on to the
-/// dwells' mean length. The prefilter's start term is the dwells' average white-equivalent one; the
-/// white fallback pools the per-sample variances. No allocation; an empty session gives zeros.
+/// dwells' mean length. The white fallback pools the per-sample variances. No allocation; an empty session
+/// gives zeros.
 pub fn pool_mean_noise(summaries: impl Iterator<Item = DwellSummary>) -> [MeanNoise; 6] {
-    pool(summaries, true)
-}
-
-/// [`pool_mean_noise`] without the prefilter's start term: the pooled noise of the raw dwell mean, for a caller
-/// that adds each dwell's own start term ([`DwellAllan::prefilter_start_var`]).
-pub fn pool_raw_mean_noise(summaries: impl Iterator<Item = DwellSummary>) -> [MeanNoise; 6] {
-    pool(summaries, false)
-}
-
-/// The pooling of [`pool_mean_noise`], with the dwells' average start term or without it.
-fn pool(summaries: impl Iterator<Item = DwellSummary>, with_start: bool) -> [MeanNoise; 6] {
     let mut avar_sum = [[0.0f32; ALLAN_LEVELS]; 6];
     let mut diffs = [0u32; ALLAN_LEVELS];
     let mut var_sum = [0.0f32; 6];
-    let mut start_q_sum = [0.0f32; 6];
     let (mut dof, mut dwells, mut samples) = (0u32, 0u32, 0.0f32);
     for s in summaries {
         let n = s.samples;
@@ -285,7 +259,6 @@ fn pool(summaries: impl Iterator<Item = DwellSummary>, with_start: bool) -> [Mea
         for i in 0..6 {
             let sigma = std[i / 3][i % 3];
             var_sum[i] += free as f32 * sigma * sigma;
-            start_q_sum[i] += s.allan[i].prefilter_start_var * n as f32;
         }
     }
     core::array::from_fn(|i| {
@@ -297,9 +270,7 @@ fn pool(summaries: impl Iterator<Item = DwellSummary>, with_start: bool) -> [Mea
             (if d > 0.0 { avar_sum[i][j] / d } else { 0.0 }, d)
         });
         let fallback = (if dof > 0 { var_sum[i] / dof as f32 } else { 0.0 }, dof as f32);
-        let dwells = dwells as f32;
-        let start_q = if with_start { start_q_sum[i] / dwells } else { 0.0 };
-        mean_noise_from_levels(&levels, fallback, start_q, samples / dwells)
+        mean_noise_from_levels(&levels, fallback, samples / dwells as f32)
     })
 }
 
@@ -312,29 +283,136 @@ fn all_finite(z: &[f32; 6]) -> bool {
     (z[0] - z[0]) + (z[1] - z[1]) + (z[2] - z[2]) + (z[3] - z[3]) + (z[4] - z[4]) + (z[5] - z[5]) == 0.0
 }
 
+/// Samples a dwell starts with before its spike gate opens (one block): their median per channel is the
+/// dwell's level (and the shift of its sums), their spread the gate's first width (docs/method.md#spikes).
+pub const GATE_START_SAMPLES: usize = BLOCK_SAMPLES as usize;
+
+/// Least width of the spike gate in standard deviations of one sample: a sample of any channel further than
+/// the gate's width from the dwell's level is a spike, not used and counted. Wide enough for the heavy tails
+/// of real sensors (a ring-laser gyro's samples reach 18 standard deviations in 30,000, docs/method.md#spikes;
+/// Gaussian noise never reaches it); a spike just inside moves a dwell mean of `N` white-noise samples by at
+/// most `20 / sqrt(N)` of its standard error (0.8 for a 6-s dwell at 100 Hz, 0.26 for 60 s).
+pub const GATE_WIDTH_SIGMA: f32 = 20.0;
+
+/// The gate widens with the samples used, `n`, to [`GATE_GROWTH`]` sqrt(n)` standard deviations where that is
+/// more than [`GATE_WIDTH_SIGMA`] (beyond 6,400 samples): a sample just inside still moves the mean by at most
+/// a quarter of its standard error, and longer dwells, which reach further into a heavy tail, keep it.
+pub const GATE_GROWTH: f32 = 0.25;
+
+/// Largest deviations left out of the gate's first width: up to this many spikes among the held samples do
+/// not widen it.
+const GATE_START_TRIMMED: usize = 4;
+
+/// Samples beyond the gate, each within [`GATE_RUN_WINDOW`] samples of the last, that are not spikes but a
+/// level that moved (a dwell that is not static, a disturbance): the gate opens for the rest of the dwell,
+/// and they are used and not counted as spikes.
+pub const GATE_RUN_MAX: u32 = 3;
+
+/// Samples inside the gate after which the samples held beyond it were spikes (isolated, not a run).
+pub const GATE_RUN_WINDOW: u32 = 8;
+
+/// Median of the held values and the root mean square of their deviations from it without the
+/// [`GATE_START_TRIMMED`] largest: the dwell's level and a first width of its noise (for Gaussian noise 0.9
+/// of its standard deviation). A width of 0 (a constant or coarsely quantised start) means "not known yet".
+/// A dwell that ends before its gate opened holds fewer values: then one is left out per 16.
+fn robust_level(values: &[f32]) -> (f32, f32) {
+    let n = values.len().min(GATE_START_SAMPLES);
+    let mut v = [0.0f32; GATE_START_SAMPLES];
+    v[..n].copy_from_slice(&values[..n]);
+    let half = n / 2;
+    let upper = select(&mut v[..n], half);
+    // The middle values: `select` left the lower half below `half`; its largest is the lower middle value.
+    let lower = if n % 2 == 0 { v[..half].iter().fold(f32::NEG_INFINITY, |m, &x| m.max(x)) } else { upper };
+    let median = 0.5 * (lower + upper);
+    let mut dev = [0.0f32; GATE_START_SAMPLES];
+    for k in 0..n {
+        dev[k] = (values[k] - median).abs();
+    }
+    let kept = n - n * GATE_START_TRIMMED / GATE_START_SAMPLES;
+    if kept < n {
+        select(&mut dev[..n], kept);
+    }
+    let sum_sq: f32 = dev[..kept].iter().map(|d| d * d).sum();
+    (median, libm::sqrtf(sum_sq / kept.max(1) as f32))
+}
+
+/// Hoare's selection: reorders `v` so that `v[k]` is the value a sort would put there, every value before it
+/// no larger and every value after it no smaller; returns `v[k]`. NaN-free input (the collector refuses
+/// non-finite samples before); expected time linear, no allocation.
+fn select(v: &mut [f32], k: usize) -> f32 {
+    let (mut lo, mut hi) = (0usize, v.len() - 1);
+    while lo < hi {
+        let pivot = v[lo + (hi - lo) / 2];
+        let (mut i, mut j) = (lo, hi);
+        while i <= j {
+            while v[i] < pivot {
+                i += 1;
+            }
+            while v[j] > pivot {
+                j -= 1;
+            }
+            if i <= j {
+                v.swap(i, j);
+                i += 1;
+                if j == 0 {
+                    break;
+                }
+                j -= 1;
+            }
+        }
+        if k <= j {
+            hi = j;
+        } else if k >= i {
+            lo = i;
+        } else {
+            break;
+        }
+    }
+    v[k]
+}
+
 /// The prefilter bank and statistics for the six channels of one dwell (gyro x, y, z, accel x, y, z).
 ///
-/// Per channel: the shift (the dwell's first raw sample, which is also the filter's first output), blocked
-/// sums of raw deviations and their squares, and of filtered deviations; the filter's state. The filter
-/// constants are held once per sensor ([`FixedGain`]), the states channel by channel.
+/// A dwell starts by holding its first [`GATE_START_SAMPLES`] samples; their median per channel is the
+/// shift of the sums (and where the filters start), their spread the first width of the spike gate. From
+/// then on, per sample: a sample any of whose channels lies beyond [`GATE_WIDTH_SIGMA`] standard deviations
+/// of the dwell's running level is a spike (not used, counted); otherwise, per channel, blocked sums of raw
+/// deviations and their squares, and the filter's state. The level and width follow the used samples at
+/// every block end. The dwell value is the mean of the used raw samples: the mean of the filtered samples
+/// is that mean plus a boundary term of the filter's start and end (docs/method.md#step-1-prefilter), which
+/// would make the dwell value depend on where the dwell starts. The filter constants are held once per
+/// sensor ([`FixedGain`]), the states channel by channel.
 #[derive(Clone, Debug)]
 pub struct DwellCollector {
     /// Gyro and accelerometer filter constants; `None` without prefilter.
     gains: Option<[FixedGain; 2]>,
     /// Filter states `[x_k, x_{k-1}]` per channel.
     state: [[f32; 2]; 6],
-    /// The previous raw sample `z_{k-1}` per channel (with or without prefilter).
+    /// The previous used raw sample `z_{k-1}` per channel (with or without prefilter).
     previous_raw: [f32; 6],
+    /// The dwell's first samples, held until the gate opens.
+    start: [[f32; 6]; GATE_START_SAMPLES],
+    /// Samples held in `start`.
+    held: usize,
     count: u32,
     shift: [f32; 6],
     raw_sum: [BlockedSum; 6],
     raw_sum_sq: [BlockedSum; 6],
-    filtered_sum: [BlockedSum; 6],
+    /// The dwell's level per channel relative to `shift` (the gate's centre).
+    level: [f32; 6],
+    /// The gate's half width per channel (infinite while the noise is not known).
+    gate: [f32; 6],
     rejected: u32,
+    spikes: u32,
+    /// Samples beyond the gate with fewer than [`GATE_RUN_WINDOW`] inside it between them.
+    run: u32,
+    /// Samples inside the gate since the last one beyond it (while `run` is not 0).
+    inside: u32,
+    /// Those samples, held until the run ends or reaches [`GATE_RUN_MAX`].
+    pending: [[f32; 6]; GATE_RUN_MAX as usize],
+    /// The gate opened for the rest of the dwell ([`GATE_RUN_MAX`]).
+    open: bool,
     noise_gain: [f32; 2],
-    /// The prefilter's start weight, gyro and accelerometer ([`HmmKf::start_transient_weight`]); 0
-    /// without prefilter.
-    start_weight: [f32; 2],
     /// Octave Allan variance of the dwell-value series per channel, fed one block sum at a time.
     allan: [OctaveAllan<ALLAN_LEVELS>; 6],
 }
@@ -342,28 +420,34 @@ pub struct DwellCollector {
 impl DwellCollector {
     /// A collector with the given prefilter. The Riccati iteration runs here, once.
     pub fn new(prefilter: &Prefilter) -> Result<DwellCollector, PrefilterError> {
-        let (gains, noise_gain, start_weight) = match prefilter {
-            Prefilter::None => (None, [1.0, 1.0], [0.0, 0.0]),
+        let (gains, noise_gain) = match prefilter {
+            Prefilter::None => (None, [1.0, 1.0]),
             Prefilter::HmmKf { gyro, accel } => {
                 let g = HmmKf::new(gyro)?;
                 let a = HmmKf::new(accel)?;
                 let noise = [g.impulse_response_sums().1, a.impulse_response_sums().1];
-                let start = [g.start_transient_weight(), a.start_transient_weight()];
-                (Some([g.fixed_gain(), a.fixed_gain()]), noise, start)
+                (Some([g.fixed_gain(), a.fixed_gain()]), noise)
             }
         };
         Ok(DwellCollector {
             gains,
             state: [[0.0; 2]; 6],
             previous_raw: [0.0; 6],
+            start: [[0.0; 6]; GATE_START_SAMPLES],
+            held: 0,
             count: 0,
             shift: [0.0; 6],
             raw_sum: [BlockedSum::new(); 6],
             raw_sum_sq: [BlockedSum::new(); 6],
-            filtered_sum: [BlockedSum::new(); 6],
+            level: [0.0; 6],
+            gate: [f32::INFINITY; 6],
             rejected: 0,
+            spikes: 0,
+            run: 0,
+            inside: 0,
+            pending: [[0.0; 6]; GATE_RUN_MAX as usize],
+            open: false,
             noise_gain,
-            start_weight,
             allan: [OctaveAllan::new(); 6],
         })
     }
@@ -374,32 +458,38 @@ impl DwellCollector {
         self.noise_gain
     }
 
-    /// Starts a new dwell: statistics cleared; the filters restart at the dwell's first sample.
+    /// Starts a new dwell: statistics cleared; the gate closes until the dwell's first samples are held.
     pub fn reset(&mut self) {
+        self.held = 0;
         self.count = 0;
         self.raw_sum = [BlockedSum::new(); 6];
         self.raw_sum_sq = [BlockedSum::new(); 6];
-        self.filtered_sum = [BlockedSum::new(); 6];
+        self.level = [0.0; 6];
+        self.gate = [f32::INFINITY; 6];
         self.rejected = 0;
+        self.spikes = 0;
+        self.run = 0;
+        self.inside = 0;
+        self.open = false;
         self.allan = [OctaveAllan::new(); 6];
     }
 
-    /// Samples used so far in this dwell.
+    /// Samples used so far in this dwell (held ones included).
     pub fn samples(&self) -> u32 {
-        self.count
+        if self.held < GATE_START_SAMPLES {
+            self.held as u32
+        } else {
+            self.count
+        }
     }
 
-    /// One channel with its filter: raw statistics, one fixed-gain step, filtered sum.
-    #[inline(always)]
-    fn filtered_channel(&mut self, i: usize, x: f32, gain: &FixedGain) {
-        let d = x - self.shift[i];
-        self.raw_sum[i].add(d);
-        self.raw_sum_sq[i].add(d * d);
-        let y = gain.step(&mut self.state[i], &mut self.previous_raw[i], x);
-        self.filtered_sum[i].add(y - self.shift[i]);
+    /// Samples of this dwell not used as spikes so far.
+    pub fn spikes(&self) -> u32 {
+        self.spikes
     }
 
-    /// Feeds one sample. A sample with a non-finite value is counted and not used.
+    /// Feeds one sample. A sample with a non-finite value is counted and not used (an error); a spike is
+    /// counted and not used (not an error: the dwell goes on).
     #[inline]
     pub fn update(&mut self, sample: &ImuSample) -> Result<(), DwellError> {
         let r = sample.rate_b_radps;
@@ -409,56 +499,150 @@ impl DwellCollector {
             self.rejected = self.rejected.saturating_add(1);
             return Err(DwellError::NotFinite);
         }
-        if self.count == 0 {
-            // The first sample: it is the shift, its deviations are zero, and it starts the filters.
-            self.shift = z;
-            self.state = z.map(|x| [x, x]);
-            self.previous_raw = z;
-            self.count = 1;
+        if self.held < GATE_START_SAMPLES {
+            self.start[self.held] = z;
+            self.held += 1;
+            if self.held == GATE_START_SAMPLES {
+                self.open_gate();
+            }
             return Ok(());
+        }
+        self.gated(&z);
+        Ok(())
+    }
+
+    /// The dwell's first samples are all held: level, shift and first width from them; filters started at the
+    /// level; then the held samples go through the gate like any other. Once per dwell, out of line.
+    #[inline(never)]
+    fn open_gate(&mut self) {
+        let held = self.held;
+        for i in 0..6 {
+            let mut column = [0.0f32; GATE_START_SAMPLES];
+            for k in 0..held {
+                column[k] = self.start[k][i];
+            }
+            let (median, width) = robust_level(&column[..held]);
+            self.shift[i] = median;
+            self.state[i] = [median, median];
+            self.previous_raw[i] = median;
+            self.level[i] = 0.0;
+            self.gate[i] = if width > 0.0 { GATE_WIDTH_SIGMA * width } else { f32::INFINITY };
+        }
+        self.held = GATE_START_SAMPLES;
+        for k in 0..held {
+            let z = self.start[k];
+            self.gated(&z);
+        }
+    }
+
+    /// One sample through the gate: counted as a spike, or used.
+    #[inline(always)]
+    fn gated(&mut self, z: &[f32; 6]) {
+        let d: [f32; 6] = core::array::from_fn(|i| z[i] - self.shift[i]);
+        let mut spike = false;
+        for i in 0..6 {
+            spike |= (d[i] - self.level[i]).abs() > self.gate[i];
+        }
+        if spike {
+            self.beyond_gate(z);
+            return;
+        }
+        if self.run != 0 {
+            self.inside_after_beyond();
+        }
+        self.used(z, &d);
+    }
+
+    /// A sample beyond the gate: a spike, held until the run of such samples says otherwise. A run of
+    /// [`GATE_RUN_MAX`] is not spikes but a level that moved: the gate opens for the rest of the dwell and the
+    /// held samples are used after all, so that nothing is lost. Out of line: rare.
+    #[inline(never)]
+    fn beyond_gate(&mut self, z: &[f32; 6]) {
+        self.spikes = self.spikes.saturating_add(1);
+        self.pending[self.run as usize] = *z;
+        self.run += 1;
+        self.inside = 0;
+        if self.run >= GATE_RUN_MAX {
+            self.spikes -= self.run;
+            self.gate = [f32::INFINITY; 6];
+            self.open = true;
+            for k in 0..self.run as usize {
+                let z = self.pending[k];
+                let d: [f32; 6] = core::array::from_fn(|i| z[i] - self.shift[i]);
+                self.used(&z, &d);
+            }
+            self.run = 0;
+        }
+    }
+
+    /// A sample inside the gate while samples beyond it are held: after [`GATE_RUN_WINDOW`] such samples the
+    /// held ones were spikes.
+    #[inline(never)]
+    fn inside_after_beyond(&mut self) {
+        self.inside += 1;
+        if self.inside >= GATE_RUN_WINDOW {
+            self.run = 0;
+            self.inside = 0;
+        }
+    }
+
+    /// A used sample `z` (`d` its deviation from the shift): sums, filter, block.
+    #[inline(always)]
+    fn used(&mut self, z: &[f32; 6], d: &[f32; 6]) {
+        for i in 0..6 {
+            self.raw_sum[i].add(d[i]);
+            self.raw_sum_sq[i].add(d[i] * d[i]);
         }
         match self.gains {
             Some([gyro, accel]) => {
                 // Written out channel by channel: constant indices are constant offsets, and the gains stay
                 // in registers (a loop, which size optimisation keeps rolled, recomputes addresses).
-                self.filtered_channel(0, z[0], &gyro);
-                self.filtered_channel(1, z[1], &gyro);
-                self.filtered_channel(2, z[2], &gyro);
-                self.filtered_channel(3, z[3], &accel);
-                self.filtered_channel(4, z[4], &accel);
-                self.filtered_channel(5, z[5], &accel);
+                gyro.step(&mut self.state[0], &mut self.previous_raw[0], z[0]);
+                gyro.step(&mut self.state[1], &mut self.previous_raw[1], z[1]);
+                gyro.step(&mut self.state[2], &mut self.previous_raw[2], z[2]);
+                accel.step(&mut self.state[3], &mut self.previous_raw[3], z[3]);
+                accel.step(&mut self.state[4], &mut self.previous_raw[4], z[4]);
+                accel.step(&mut self.state[5], &mut self.previous_raw[5], z[5]);
             }
-            None => {
-                for i in 0..6 {
-                    let d = z[i] - self.shift[i];
-                    self.raw_sum[i].add(d);
-                    self.raw_sum_sq[i].add(d * d);
-                }
-                self.previous_raw = z;
-            }
+            None => self.previous_raw = *z,
         }
         self.count += 1;
         if self.count % BLOCK_SAMPLES == 0 {
             self.end_block();
         }
-        Ok(())
     }
 
-    /// The end of a block of [`BLOCK_SAMPLES`]: its sum of raw deviations goes to the Allan variance, and
-    /// the blocked sums flush. Once per block, kept out of line so that the per-sample path stays small.
+    /// The end of a block of [`BLOCK_SAMPLES`]: its sum of raw deviations goes to the Allan variance, the
+    /// blocked sums flush, and the gate follows the used samples (their mean is its centre, their standard
+    /// deviation its width). Once per block, kept out of line so that the per-sample path stays small.
     #[inline(never)]
     fn end_block(&mut self) {
         for i in 0..6 {
             self.allan[i].add(self.raw_sum[i].block());
             self.raw_sum[i].flush();
             self.raw_sum_sq[i].flush();
-            self.filtered_sum[i].flush();
+            let (sum, sum_sq) = (self.raw_sum[i].value(), self.raw_sum_sq[i].value());
+            self.level[i] = sum / self.count as f32;
+            let var = DwellStats::shifted_variance(self.count, sum, sum_sq).unwrap_or(0.0);
+            if var > 0.0 && !self.open {
+                let width = GATE_WIDTH_SIGMA.max(GATE_GROWTH * libm::sqrtf(self.count as f32));
+                self.gate[i] = width * libm::sqrtf(var);
+            }
         }
     }
 
     /// The summary of the dwell so far.
     #[inline(never)]
     pub fn summary(&self) -> Result<DwellSummary, DwellError> {
+        if self.held < GATE_START_SAMPLES {
+            // A dwell shorter than the gate's start: its held samples through the gate, on a copy.
+            if self.held < MIN_DWELL_SAMPLES as usize {
+                return Err(DwellError::TooFewSamples { samples: self.samples() });
+            }
+            let mut opened = self.clone();
+            opened.open_gate();
+            return opened.summary();
+        }
         let samples = self.count;
         if samples < MIN_DWELL_SAMPLES {
             return Err(DwellError::TooFewSamples { samples });
@@ -466,8 +650,7 @@ impl DwellCollector {
         let filtered = self.gains.is_some();
         let last = if filtered { self.state.map(|x| x[0]) } else { self.previous_raw };
         let mean = |i: usize| {
-            let sum = if filtered { self.filtered_sum[i].value() } else { self.raw_sum[i].value() };
-            DwellStats::shifted_mean(samples, self.shift[i], sum).unwrap_or(self.shift[i])
+            DwellStats::shifted_mean(samples, self.shift[i], self.raw_sum[i].value()).unwrap_or(self.shift[i])
         };
         let var = |i: usize| {
             DwellStats::shifted_variance(samples, self.raw_sum[i].value(), self.raw_sum_sq[i].value()).unwrap_or(0.0)
@@ -483,13 +666,12 @@ impl DwellCollector {
                 allan[i].avar[j] = avar;
                 levels[j] = (avar, allan_differences(samples, j) as f32);
             }
-            let v = var(i);
-            allan[i].prefilter_start_var = v * self.start_weight[i / 3] / n / n;
-            mean_noise[i] = mean_noise_from_levels(&levels, (v, n - 1.0), allan[i].prefilter_start_var * n, n);
+            mean_noise[i] = mean_noise_from_levels(&levels, (var(i), n - 1.0), n);
         }
         Ok(DwellSummary {
             samples,
             rejected: self.rejected,
+            spikes: self.spikes,
             rate_mean_b_radps: [mean(0), mean(1), mean(2)],
             force_mean_b_mps2: [mean(3), mean(4), mean(5)],
             rate_sample_std_b_radps: [std(0), std(1), std(2)],
@@ -602,9 +784,7 @@ mod tests {
                 // with the factor 1 + 2 / 24 for its estimate's noise.
                 let noise = d.mean_noise[i];
                 assert_eq!((noise.cluster_samples, noise.dof), (256, 24.0));
-                let start = d.allan[i].prefilter_start_var;
-                assert_eq!(start == 0.0, p == Prefilter::None);
-                let q = 256.0 * d.allan[i].avar[2] * (1.0 + 2.0 / 24.0) + start * n as f32;
+                let q = 256.0 * d.allan[i].avar[2] * (1.0 + 2.0 / 24.0);
                 assert!((noise.white_equivalent_var / q - 1.0).abs() < 1e-6, "{noise:?}");
             }
         }
@@ -624,9 +804,9 @@ mod tests {
             }
         }
         // White noise of variance 1: 30 dwells of 60 s pooled give q = 1 + 2 / 30 within the estimate's
-        // scatter (2048-sample clusters, one difference per dwell: relative standard deviation 0.26), and the
-        // prefilter's start adds its 207 / 6000 on top.
-        for (p, start) in [(Prefilter::None, 0.0), (Prefilter::paper(), 207.1 / 6000.0)] {
+        // scatter (2048-sample clusters, one difference per dwell: relative standard deviation 0.26), with or
+        // without prefilter (the dwell value is the raw mean either way).
+        for p in [Prefilter::None, Prefilter::paper()] {
             let mut rng = 5u32;
             let mut c = DwellCollector::new(&p).unwrap();
             let mut dwells = [None; 30];
@@ -638,7 +818,7 @@ mod tests {
                 *dwell = Some(c.summary().unwrap());
             }
             let pooled = pool_mean_noise(dwells.iter().flatten().copied());
-            let want = 1.0 + 2.0 / 30.0 + start;
+            let want = 1.0 + 2.0 / 30.0;
             for m in pooled {
                 assert_eq!((m.cluster_samples, m.dof), (2048, 30.0));
                 assert!(m.white_equivalent_var > 0.0 && m.white_equivalent_var < 2.1 * want, "{m:?}");
@@ -734,7 +914,8 @@ mod tests {
         }
         let d = c.summary().unwrap();
         let sigma = d.rate_sample_std_b_radps[0];
-        assert_eq!(d.mean_noise[0], MeanNoise { white_equivalent_var: sigma * sigma, dof: 99.0, cluster_samples: 1 });
+        assert_eq!((d.mean_noise[0].dof, d.mean_noise[0].cluster_samples), (99.0, 1));
+        assert!((d.mean_noise[0].white_equivalent_var / (sigma * sigma) - 1.0).abs() < 1e-6);
     }
 
     #[test]
@@ -749,6 +930,93 @@ mod tests {
             assert!((exp2_capped(y) / y.exp2() - 1.0).abs() < 2e-5, "{y}");
         }
         assert_eq!((exp2_capped(2.0), exp2_capped(7.5), exp2_capped(f32::INFINITY)), (4.0, 4.0, 4.0));
+    }
+
+    /// A dwell of white noise (standard deviation 1e-3 on every channel), with `spike` added to channel
+    /// `channel` of sample `at`; its summary.
+    fn dwell_with_spike(p: &Prefilter, n: usize, at: usize, channel: usize, spike: f32) -> DwellSummary {
+        let mut rng = 7u32;
+        let mut c = DwellCollector::new(p).unwrap();
+        for k in 0..n {
+            let mut z: [f32; 6] =
+                core::array::from_fn(|i| [1e-5, 2e-5, 7e-5, 0.1, -0.2, 9.8][i] + 1e-3 * normal(&mut rng));
+            if k == at {
+                z[channel] += spike;
+            }
+            c.update(&sample(z)).unwrap();
+        }
+        c.summary().unwrap()
+    }
+
+    #[test]
+    fn one_spike_anywhere_is_not_used_and_counted() {
+        // 600 samples (6 s at 100 Hz): the standard error of the mean is 1e-3 / sqrt(600) = 4.1e-5. A spike of
+        // 0.03 (30 sigma) or 35 (a gyro's range in rad/s) at the first sample, inside the held block, at its
+        // end and later: one spike, 599 samples, every mean within 0.1 standard error of the clean dwell's.
+        for p in [Prefilter::None, Prefilter::paper()] {
+            let clean = dwell_with_spike(&p, 600, usize::MAX, 0, 0.0);
+            assert_eq!((clean.samples, clean.spikes), (600, 0));
+            for at in [0, 1, 17, 63, 64, 65, 300, 599] {
+                for (channel, spike) in [(0, 0.03), (0, -35.0), (4, 0.03), (5, 150.0)] {
+                    let d = dwell_with_spike(&p, 600, at, channel, spike);
+                    assert_eq!((d.samples, d.spikes), (599, 1), "at {at} channel {channel} {spike}");
+                    for i in 0..3 {
+                        let dr = (d.rate_mean_b_radps[i] - clean.rate_mean_b_radps[i]).abs();
+                        let df = (d.force_mean_b_mps2[i] - clean.force_mean_b_mps2[i]).abs();
+                        assert!(dr < 0.1 * 4.1e-5 && df < 0.1 * 4.1e-5, "at {at}: {dr:e} {df:e}");
+                        let ratio = d.force_sample_std_b_mps2[i] / clean.force_sample_std_b_mps2[i];
+                        assert!((ratio - 1.0).abs() < 0.05, "at {at}: std ratio {ratio}");
+                    }
+                }
+            }
+        }
+    }
+
+    #[test]
+    fn noise_alone_is_never_a_spike_and_a_moved_level_opens_the_gate() {
+        // 200 dwells of 3000 samples of white noise: no spike.
+        let mut rng = 3u32;
+        let mut c = DwellCollector::new(&Prefilter::paper()).unwrap();
+        for _ in 0..200 {
+            c.reset();
+            for _ in 0..3000 {
+                c.update(&sample(core::array::from_fn(|_| normal(&mut rng)))).unwrap();
+            }
+            assert_eq!(c.summary().unwrap().spikes, 0);
+        }
+        // A step of 50 sigma after 1000 samples is not a spike: after GATE_RUN_MAX samples beyond the gate, the
+        // gate opens; those samples are used after all, and not counted.
+        c.reset();
+        for k in 0..3000 {
+            let step = if k >= 1000 { 50.0 } else { 0.0 };
+            c.update(&sample(core::array::from_fn(|_| step + normal(&mut rng)))).unwrap();
+        }
+        let d = c.summary().unwrap();
+        assert_eq!((d.samples, d.spikes), (3000, 0));
+    }
+
+    #[test]
+    fn the_dwell_value_does_not_depend_on_the_prefilter_or_where_the_dwell_starts() {
+        // The same samples with and without prefilter give the same mean (the raw mean of the used samples); a
+        // dwell started k samples later differs by exactly the k samples left out.
+        let mut rng = 11u32;
+        let xs: Vec<[f32; 6]> =
+            (0..3000).map(|_| core::array::from_fn(|i| 9.8 * (i / 5) as f32 + normal(&mut rng))).collect();
+        let mean_of = |p: &Prefilter, from: usize| {
+            let mut c = DwellCollector::new(p).unwrap();
+            for z in &xs[from..] {
+                c.update(&sample(*z)).unwrap();
+            }
+            c.summary().unwrap()
+        };
+        for k in 0..=5 {
+            let (none, kf) = (mean_of(&Prefilter::None, k), mean_of(&Prefilter::paper(), k));
+            for i in 0..3 {
+                let want: f64 = xs[k..].iter().map(|z| z[i] as f64).sum::<f64>() / (3000 - k) as f64;
+                assert!((none.rate_mean_b_radps[i] as f64 - want).abs() < 1e-5, "k {k}");
+                assert!((kf.rate_mean_b_radps[i] - none.rate_mean_b_radps[i]).abs() <= 1e-6, "k {k}");
+            }
+        }
     }
 
     #[test]

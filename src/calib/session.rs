@@ -3,14 +3,14 @@
 //! dwells give the same estimator input, bit for bit, on either machine.
 //!
 //! Each dwell contributes its mean (or the prefilter's settled value) and the variance of that mean: the
-//! session's pooled honest noise of the raw mean ([`pool_raw_mean_noise`], docs/method.md#honest-errors) over the
+//! session's pooled honest noise of the raw mean ([`pool_mean_noise`], docs/method.md#honest-errors) over the
 //! dwell's number of samples, plus the dwell's own prefilter start term (it follows the dwell's own per-sample
 //! scatter and length: a quantised channel whose input sits on a step scatters little, one between two steps by
 //! up to half a step; docs/method.md#coloured-noise-monte-carlo), never below the f32 resolution of a mean
 //! (2^-23 of the Earth rate, of g), which keeps the weights finite on noise-free data.
 
 use crate::calib::align::DwellValue;
-use crate::calib::dwell::{pool_raw_mean_noise, DwellSummary};
+use crate::calib::dwell::{pool_mean_noise, DwellSummary};
 use crate::calib::general::{ChannelDwell, ChannelError, ChannelEstimator, ChannelSettings, Model, Term};
 use crate::nav::earth::{Site, EARTH_RATE_RADPS};
 use crate::nav::frames::Attitude;
@@ -54,9 +54,8 @@ pub fn session_estimator<'a, I>(
 where
     I: Iterator<Item = SessionDwell<'a>> + Clone,
 {
-    // The pooled noise of the raw mean; each dwell adds its own prefilter start term, which follows that dwell's
-    // per-sample scatter and length.
-    let raw_q = pool_raw_mean_noise(dwells.clone().map(|d| *d.summary)).map(|m| m.white_equivalent_var);
+    // The pooled noise of the dwell mean (the raw mean of the used samples, with or without prefilter).
+    let raw_q = pool_mean_noise(dwells.clone().map(|d| *d.summary)).map(|m| m.white_equivalent_var);
     let (rate_floor, force_floor) = (resolution_floor(EARTH_RATE_RADPS), resolution_floor(site.gravity_mps2));
     let mut estimator = ChannelEstimator::new(site, settings);
     for d in dwells {
@@ -66,7 +65,7 @@ where
             DwellValue::Settled => (s.rate_settled_b_radps, s.force_settled_b_mps2),
         };
         let n = s.samples.max(1) as f32;
-        let variance = |i: usize| raw_q[i] / n + s.allan[i].prefilter_start_var;
+        let variance = |i: usize| raw_q[i] / n;
         estimator.add(ChannelDwell {
             tilt: d.attitude.tilt(),
             heading_rad: d.heading_known.then_some(d.attitude.heading_rad),

@@ -155,6 +155,7 @@ fn draw(lab: &Lab, rng: &mut ChaCha8Rng) -> Run {
         let summary = DwellSummary {
             samples,
             rejected: 0,
+            spikes: 0,
             rate_mean_b_radps: w,
             force_mean_b_mps2: f,
             rate_sample_std_b_radps: [rate_sample_std_radps; 3],

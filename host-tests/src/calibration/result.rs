@@ -5,6 +5,7 @@ use std::fmt::Write as _;
 use serde::Serialize;
 use sinscal::calib::align::DwellValue;
 use sinscal::calib::dwell::Prefilter;
+use sinscal::calib::dwell::GATE_WIDTH_SIGMA;
 use sinscal::calib::general::{misalignment_index, AttitudeKnowledge, ChannelSolution, Term, PARAMETERS};
 
 use crate::calibration::{Calibration, Estimates, GravitySource, PositionResult};
@@ -34,6 +35,8 @@ pub struct PositionJson {
     pub heading_std_deg: Option<f64>,
     /// Samples used.
     pub samples: u32,
+    /// Extra: samples not used as spikes (beyond the spike gate, docs/method.md#spikes).
+    pub spikes: u32,
     /// Misalignment (e, n, u) of the dwell's analytic alignment against the reference, rad; null without a
     /// reference heading or gyro data.
     pub phi_rad: Option<[f64; 3]>,
@@ -138,6 +141,8 @@ pub struct CalibrationJson {
     pub prefilter: PrefilterJson,
     /// Extra: "mean" or "settled".
     pub dwell_value: &'static str,
+    /// Samples not used as spikes, per dwell in the order of `positions` (docs/method.md#spikes).
+    pub spikes_rejected: Vec<u32>,
     /// Extra: passes of the solution (1 = the paper's linear solution).
     pub passes: u32,
     /// Extra: whether the refinement converged.
@@ -246,6 +251,7 @@ impl PositionJson {
                 .filter(|_| p.attitude.heading_deg.is_none())
                 .map(|s| (s.heading_std_rad[k] as f64).to_degrees()),
             samples: p.summary.samples,
+            spikes: p.summary.spikes,
             phi_rad: p.angles.map(|a| f64s(a.phi_n_rad)),
             phi_std_rad: p.angles.map(|a| [0, 1, 2].map(|i| (a.covariance_rad2.0[i][i] as f64).sqrt())),
             residual_rad: c.solution.as_ref().map(|s| f64s(s.residual_n_rad[k])),
@@ -315,6 +321,7 @@ impl CalibrationJson {
             attitude: if c.channels.as_ref().is_some_and(estimated) { "estimated" } else { "reference" },
             gauge: c.channels.as_ref().map_or_else(Vec::new, gauge_names),
             prefilter,
+            spikes_rejected: c.positions.iter().map(|p| p.summary.spikes).collect(),
             dwell_value: match c.options.dwell_value {
                 DwellValue::Mean => "mean",
                 DwellValue::Settled => "settled",
@@ -376,6 +383,25 @@ fn show_term(out: &mut String, e: &Estimates, term: Term, title: &str, per_unit:
     }
 }
 
+/// The spike gate's count: which dwells lost samples as spikes, or that none did.
+fn spikes_line(c: &Calibration) -> String {
+    let hit: Vec<String> = c
+        .positions
+        .iter()
+        .filter(|p| p.summary.spikes > 0)
+        .map(|p| format!("{} in position {}", p.summary.spikes, p.pos))
+        .collect();
+    if hit.is_empty() {
+        format!("no sample beyond the gate (at least {} standard deviations of its dwell's level)", GATE_WIDTH_SIGMA)
+    } else {
+        format!(
+            "samples not used as spikes (beyond the gate, at least {} standard deviations of the dwell's level): {}",
+            GATE_WIDTH_SIGMA,
+            hit.join(", ")
+        )
+    }
+}
+
 /// The human summary of a calibration.
 pub fn summary(c: &Calibration) -> String {
     let e = &c.estimates;
@@ -425,7 +451,8 @@ pub fn summary(c: &Calibration) -> String {
             if c.converged { ", converged" } else { ", NOT converged" }
         ),
     };
-    let _ = writeln!(out, "method: {method}\nprefilter: {prefilter}; the {value} of each dwell\n");
+    let _ = writeln!(out, "method: {method}\nprefilter: {prefilter}; the {value} of each dwell");
+    let _ = writeln!(out, "spike gate: {}\n", spikes_line(c));
     positions_table(&mut out, c);
     moves_table(&mut out, c);
     terms(&mut out, e);

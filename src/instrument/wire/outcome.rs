@@ -3,8 +3,8 @@
 //! its configuration. Little-endian, every f32 as its bit pattern:
 //! ```text
 //! magic "SSRO", sampling counters 10 x u32, aborted dwells u32, failure 5 x u32 (kind, index, reason, two
-//! f32 values), positions u32, positions x (samples u32, rejected u32, six vec3 f32, settled gain 2 x f32,
-//! mean noise 6 x (var f32, dof f32, cluster u32), Allan 6 x (avar f32 x n, prefilter start var f32)),
+//! f32 values), positions u32, positions x (samples u32, rejected u32, spikes u32, six vec3 f32, settled gain 2 x
+//! f32, mean noise 6 x (var f32, dof f32, cluster u32), Allan 6 x avar f32 x n),
 //! solution u32 (SolutionCode) and the solution's fields
 //! ```
 
@@ -23,10 +23,10 @@ use crate::run::sequence::{AbortReason, SequenceFailure, SequenceSolution};
 
 /// Magic of an encoded outcome.
 pub const MAGIC: [u8; 4] = *b"SSRO";
-/// Largest encoded outcome, bytes: the counters and failure (76), [`MAX_POSITIONS`] positions of 424 bytes,
+/// Largest encoded outcome, bytes: the counters and failure (76), [`MAX_POSITIONS`] positions of 404 bytes,
 /// and the general estimator's solution (5,416 and 48 per dwell; the angle method's, 520 and 12 per position,
-/// is smaller). For 64 positions: 35,696.
-pub const MAX_BYTES: usize = 76 + MAX_POSITIONS * 424 + 5_416 + MAX_DWELLS * 48;
+/// is smaller). For 64 positions: 34,416.
+pub const MAX_BYTES: usize = 76 + MAX_POSITIONS * 404 + 5_416 + MAX_DWELLS * 48;
 
 /// What a calibration produced, borrowed: from an [`Outcome`], or from a running device's sequence.
 #[derive(Clone, Copy, Debug)]
@@ -123,7 +123,7 @@ fn encode_view(o: &OutcomeView<'_>, w: &mut Writer<'_>) {
 }
 
 fn encode_dwell(w: &mut Writer<'_>, d: &DwellSummary) {
-    w.u32(d.samples).u32(d.rejected);
+    w.u32(d.samples).u32(d.rejected).u32(d.spikes);
     for v in [
         d.rate_mean_b_radps,
         d.force_mean_b_mps2,
@@ -139,7 +139,7 @@ fn encode_dwell(w: &mut Writer<'_>, d: &DwellSummary) {
         w.f32(m.white_equivalent_var).f32(m.dof).u32(m.cluster_samples);
     }
     for a in &d.allan {
-        w.f32s(&a.avar).f32(a.prefilter_start_var);
+        w.f32s(&a.avar);
     }
 }
 
@@ -147,6 +147,7 @@ fn decode_dwell(r: &mut Reader<'_>) -> Option<DwellSummary> {
     let mut d = DwellSummary {
         samples: r.u32()?,
         rejected: r.u32()?,
+        spikes: r.u32()?,
         rate_mean_b_radps: r.vec3()?,
         force_mean_b_mps2: r.vec3()?,
         rate_sample_std_b_radps: r.vec3()?,
@@ -162,7 +163,6 @@ fn decode_dwell(r: &mut Reader<'_>) -> Option<DwellSummary> {
     }
     for a in d.allan.iter_mut() {
         r.f32s(&mut a.avar)?;
-        a.prefilter_start_var = r.f32()?;
     }
     Some(d)
 }

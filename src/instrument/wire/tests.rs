@@ -123,6 +123,7 @@ fn dwell(rng: &mut Rng) -> DwellSummary {
     let mut d = DwellSummary {
         samples: rng.next() as u32,
         rejected: rng.next() as u32,
+        spikes: rng.next() as u32,
         rate_mean_b_radps: rng.vec3(),
         force_mean_b_mps2: rng.vec3(),
         rate_sample_std_b_radps: rng.vec3(),
@@ -138,7 +139,6 @@ fn dwell(rng: &mut Rng) -> DwellSummary {
     }
     for a in d.allan.iter_mut() {
         a.avar.iter_mut().for_each(|v| *v = rng.positive());
-        a.prefilter_start_var = rng.positive();
     }
     d
 }
