@@ -1,7 +1,7 @@
 //! `sinscal`: calibration of a strapdown IMU on a turntable, on the workstation (docs/cli.md).
 //! Exit status: 0 success, 1 bad input (one-line reason on stderr), 2 usage error, 3 a result was written but
 //! fails one of its checks (`calibrate`, and `apply` of such a result: each failed check one line on stderr,
-//! `sinscal: check failed: NAME: DETAIL`, docs/cli.md#exit-status). A pipeline can trust exit 0.
+//! `sinscal: check failed: NAME: DETAIL`, docs/cli.md#checks). A pipeline can trust exit 0.
 
 use std::process::ExitCode;
 

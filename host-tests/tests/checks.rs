@@ -107,7 +107,9 @@ fn headings_half_a_turn_off_fail_the_physics_check() {
 
 #[test]
 fn gyros_in_deg_per_s_fail_the_physics_check() {
-    fails_physics("degs", "gyros in deg/s?", |h, v| (h, std::array::from_fn(|i| if i < 3 { v[i] * 57.29578 } else { v[i] })));
+    fails_physics("degs", "gyros in deg/s?", |h, v| {
+        (h, std::array::from_fn(|i| if i < 3 { v[i] * 57.29578 } else { v[i] }))
+    });
 }
 
 #[test]
@@ -166,7 +168,15 @@ fn apply_edited(edit: impl Fn(&mut Value)) -> (i32, String, bool) {
     let edited = dir.path().join("edited.json");
     std::fs::write(&edited, v.to_string()).unwrap();
     let out_path = dir.path().join("applied.csv");
-    let out = sinscal().arg("apply").arg(&rec).arg("--calibration").arg(&edited).arg("--out").arg(&out_path).output().unwrap();
+    let out = sinscal()
+        .arg("apply")
+        .arg(&rec)
+        .arg("--calibration")
+        .arg(&edited)
+        .arg("--out")
+        .arg(&out_path)
+        .output()
+        .unwrap();
     (out.status.code().unwrap(), String::from_utf8_lossy(&out.stderr).into_owned(), out_path.exists())
 }
 
@@ -189,7 +199,10 @@ fn apply_of_a_calibration_whose_checks_failed_writes_and_exits_3() {
     let stderr = String::from_utf8_lossy(&out.stderr);
     assert_eq!(out.status.code(), Some(3), "{stderr}");
     assert!(out_path.exists(), "the output is still written");
-    assert!(stderr.lines().any(|l| l.starts_with("sinscal: check failed: physics: headings half a turn off?")), "{stderr}");
+    assert!(
+        stderr.lines().any(|l| l.starts_with("sinscal: check failed: physics: headings half a turn off?")),
+        "{stderr}"
+    );
     assert!(stderr.lines().any(|l| l.starts_with("sinscal: check failed: fit: ")), "{stderr}");
     assert!(stderr.lines().all(|l| l.starts_with("sinscal: check failed: ")), "one line per failed check: {stderr}");
 }
@@ -209,7 +222,10 @@ fn apply_of_a_calibration_without_checks_is_accepted_as_before() {
 fn apply_of_an_implausible_scale_factor_fails() {
     let (code, stderr, written) = apply_edited(|v| v["accel_scale_factor"][0] = serde_json::json!(1e13));
     assert_eq!((code, written), (1, false), "{stderr}");
-    assert!(stderr.contains("accel_scale_factor_x = 10000000000000: T_a = I + S + M is far from the identity"), "{stderr}");
+    assert!(
+        stderr.contains("accel_scale_factor_x = 10000000000000: T_a = I + S + M is far from the identity"),
+        "{stderr}"
+    );
     let (code, stderr, written) = apply_edited(|v| v["accel_scale_factor_std"][0] = serde_json::json!(1e13));
     assert_eq!((code, written), (3, true), "{stderr}");
     assert_eq!(

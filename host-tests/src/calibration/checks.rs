@@ -1,4 +1,4 @@
-//! The checks of a calibration that fail loudly (docs/cli.md#exit-status): `physics` (gravity and the Earth
+//! The checks of a calibration that fail loudly (docs/cli.md#checks): `physics` (gravity and the Earth
 //! rate against the recording's labels and units, before the fit), `fit` (the model against the dwell noise),
 //! `convergence` and `plausibility` (every estimate and standard error finite and within its term's plausible
 //! magnitude). Each is run on every calibration and listed, passed or failed, in the JSON's `checks`; a failed
@@ -72,7 +72,8 @@ pub fn fit(e: &Estimates) -> Check {
         return Check::new("fit", true, "no degrees of freedom: nothing checks the fit");
     };
     let ratio = e.chi_square / e.degrees_of_freedom as f64;
-    let what = format!("chi-square {:.2} on {} degrees of freedom, p = {p_value:.3}", e.chi_square, e.degrees_of_freedom);
+    let what =
+        format!("chi-square {:.2} on {} degrees of freedom, p = {p_value:.3}", e.chi_square, e.degrees_of_freedom);
     if p_value < MISFIT_LEVEL {
         let detail = format!(
             "the residuals are {:.1} times what the dwell noise explains ({what}): the model misses something",
@@ -108,7 +109,11 @@ pub fn plausibility(e: &Estimates) -> Check {
             return Check::new("plausibility", false, detail);
         }
     }
-    Check::new("plausibility", true, "every estimate and standard error finite and within its term's plausible magnitude")
+    Check::new(
+        "plausibility",
+        true,
+        "every estimate and standard error finite and within its term's plausible magnitude",
+    )
 }
 
 /// The plausible magnitude of parameter `p`'s term, SI.
@@ -202,7 +207,9 @@ impl Hypothesis {
     /// The alternatives of a sensor.
     fn alternatives(sensor: Sensor) -> Vec<Hypothesis> {
         let mut out = match sensor {
-            Sensor::Gyro => vec![Hypothesis::HeadingsHalfTurn, Hypothesis::LatitudeFlipped, Hypothesis::Unit(DEG_PER_RAD)],
+            Sensor::Gyro => {
+                vec![Hypothesis::HeadingsHalfTurn, Hypothesis::LatitudeFlipped, Hypothesis::Unit(DEG_PER_RAD)]
+            }
             Sensor::Accel => vec![Hypothesis::Unit(1.0 / 9.80665)],
         };
         out.extend([Hypothesis::Swapped(0, 1), Hypothesis::Swapped(1, 2), Hypothesis::Swapped(0, 2)]);
@@ -325,10 +332,12 @@ fn misfit(sensor: Sensor, dwells: &[PhysicsDwell], site: &Site, h: Hypothesis) -
             (Sensor::Gyro, None) => continue,
             (_, heading) => heading.unwrap_or(0.0) + if h == Hypothesis::HeadingsHalfTurn { 180.0 } else { 0.0 },
         };
-        let c_b_n = Attitude::from_degrees(attitude.pitch_deg as f32, attitude.roll_deg as f32, heading_deg as f32).c_b_n();
+        let c_b_n =
+            Attitude::from_degrees(attitude.pitch_deg as f32, attitude.roll_deg as f32, heading_deg as f32).c_b_n();
         let (reference_n, measured, first, floor) = match sensor {
             Sensor::Gyro => {
-                let latitude_rad = if h == Hypothesis::LatitudeFlipped { -site.latitude_rad } else { site.latitude_rad };
+                let latitude_rad =
+                    if h == Hypothesis::LatitudeFlipped { -site.latitude_rad } else { site.latitude_rad };
                 let at = Site { latitude_rad, ..*site };
                 (at.earth_rate_n_radps(), s.rate_mean_b_radps, 0, GYRO_MEAN_STD_FLOOR_RADPS)
             }

@@ -456,7 +456,7 @@ pub fn summary(c: &Calibration) -> String {
     out
 }
 
-/// "checks: all N passed", or the failed ones, one a line (docs/cli.md#exit-status).
+/// "checks: all N passed", or the failed ones, one a line (docs/cli.md#checks).
 fn checks_line(out: &mut String, checks: &[crate::calibration::checks::Check]) {
     let failed = crate::calibration::checks::failed_lines(checks);
     if failed.is_empty() {

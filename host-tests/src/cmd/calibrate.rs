@@ -7,6 +7,7 @@ use clap::ValueEnum;
 use sinscal::calib::align::DwellValue;
 use sinscal::calib::general::Model;
 
+use crate::calibration::checks::{failed_lines, physics_of, PhysicsDwell};
 use crate::calibration::estimates::parse_model;
 use crate::calibration::firmware_path::calibrate_on_host;
 use crate::calibration::qemu::calibrate_on_qemu;
@@ -14,13 +15,12 @@ use crate::calibration::result::{summary, CalibrationJson};
 use crate::calibration::{
     calibrate, Calibration, Coefficient, Method, Options, PrefilterKind, DEFAULT_METHOD, DEFAULT_MODEL,
 };
-use crate::calibration::checks::{failed_lines, physics_of, PhysicsDwell};
 use crate::calibration::{collect_dwells, prefilter_of, site_of};
 use crate::cmd::{write_json, ChecksFailed};
 use crate::io::error::InputError;
+use crate::io::recording::RecordingFile;
 use crate::io::recording::RowSource as _;
 use sinscal::calib::general::MAX_DWELLS;
-use crate::io::recording::RecordingFile;
 
 /// The prefilter in front of the dwell statistics.
 #[derive(Clone, Copy, ValueEnum)]

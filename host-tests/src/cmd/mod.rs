@@ -21,7 +21,7 @@ pub mod study;
 
 pub use crate::io::{out, StdoutError};
 
-/// A result was written but failed some of its checks (docs/cli.md#exit-status): `main` prints each line on
+/// A result was written but failed some of its checks (docs/cli.md#checks): `main` prints each line on
 /// stderr (`sinscal: check failed: fit: ...`) and exits with status 3.
 #[derive(Debug)]
 pub struct ChecksFailed(pub Vec<String>);
