@@ -1,5 +1,7 @@
 //! `sinscal`: calibration of a strapdown IMU on a turntable, on the workstation (docs/cli.md).
-//! Exit status: 0 success, 1 bad input (one-line reason on stderr), 2 usage error.
+//! Exit status: 0 success, 1 bad input (one-line reason on stderr), 2 usage error, 3 a result was written but
+//! fails one of its checks (`calibrate`, and `apply` of such a result: each failed check one line on stderr,
+//! `sinscal: check failed: NAME: DETAIL`, docs/cli.md#checks). A pipeline can trust exit 0.
 
 use std::process::ExitCode;
 
@@ -73,6 +75,13 @@ fn main() -> ExitCode {
             if e.downcast_ref::<cmd::StdoutError>().is_some_and(|o| o.0.kind() == std::io::ErrorKind::BrokenPipe) =>
         {
             ExitCode::SUCCESS
+        }
+        Err(e) if e.downcast_ref::<cmd::ChecksFailed>().is_some() => {
+            // The result was written; each failed check is one line (no generic error line).
+            for line in e.downcast_ref::<cmd::ChecksFailed>().map_or(&[][..], |c| &c.0[..]) {
+                eprintln!("sinscal: {line}");
+            }
+            ExitCode::from(3)
         }
         Err(e) => {
             // Bad input and failures: one line on stderr, exit 1 (usage errors exit 2 through clap).

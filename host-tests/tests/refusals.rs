@@ -77,7 +77,12 @@ fn a_latitude_at_a_pole_is_refused() {
         refused(&[os("calibrate"), path.as_os_str()], 1, &["pole.csv:", "latitude_deg", "outside [-89.9, 89.9]"]);
     }
     let near = file(&dir, "near.csv", text.replace(&line, "# latitude_deg: 89.9"));
-    sinscal().arg("calibrate").arg(&near).assert().success();
+    // Accepted: the result is written. The example was simulated at 45.8 deg, so its Earth rate contradicts
+    // 89.9 deg and the fit honestly misfits (exit 3).
+    let run = sinscal().arg("calibrate").arg(&near).assert().code(3);
+    let stderr = String::from_utf8_lossy(&run.get_output().stderr).into_owned();
+    assert!(stderr.starts_with("sinscal: check failed: fit: the residuals are "), "{stderr}");
+    assert!(String::from_utf8_lossy(&run.get_output().stdout).contains("checks: "));
 }
 
 #[test]

@@ -1,6 +1,7 @@
 //! `sinscal calibrate`: a recording through the no_std core (dwell collection, alignment, solution).
 //! Every formula is the core's; this module only reads, converts to f32 at the edge, and checks input.
 
+pub mod checks;
 pub mod estimates;
 pub mod firmware_path;
 pub mod montecarlo;

@@ -158,6 +158,9 @@ pub struct CalibrationJson {
     /// Extra: sampling counters of the firmware path.
     #[serde(skip_serializing_if = "Option::is_none")]
     pub sampling: Option<SamplingJson>,
+    /// The checks run on the result, passed or failed (docs/formats.md#calibration-json-version-2): a failed one
+    /// makes `calibrate` exit with status 3.
+    pub checks: Vec<crate::calibration::checks::Check>,
     /// Extra: the recording.
     pub source: String,
     /// Extra: the sinscal version that wrote this.
@@ -338,6 +341,7 @@ impl CalibrationJson {
                 faults: [s.bus_errors, s.checksum_errors, s.stalled_counters, s.status_flags, s.dead_bus_frames],
                 missed_samples: s.missed_samples,
             }),
+            checks: crate::calibration::checks::checks(c),
             source: c.source.clone(),
             sinscal_version: env!("CARGO_PKG_VERSION"),
         }
@@ -475,7 +479,21 @@ pub fn summary(c: &Calibration) -> String {
     }
     fit(&mut out, e);
     suspects(&mut out, c);
+    checks_line(&mut out, &crate::calibration::checks::checks(c));
     out
+}
+
+/// "checks: all N passed", or the failed ones, one a line (docs/cli.md#checks).
+fn checks_line(out: &mut String, checks: &[crate::calibration::checks::Check]) {
+    let failed = crate::calibration::checks::failed_lines(checks);
+    if failed.is_empty() {
+        let _ = writeln!(out, "checks: all {} passed", checks.len());
+    } else {
+        let _ = writeln!(out, "checks: {} of {} failed (exit status 3):", failed.len(), checks.len());
+        for line in failed {
+            let _ = writeln!(out, "  {line}");
+        }
+    }
 }
 
 /// The moves used: where, how long, how far they turned, and the rotation error left after the fit.
@@ -646,9 +664,9 @@ fn fit(out: &mut String, e: &Estimates) {
     let _ = write!(out, "Fit: chi-square {:.2} on {dof} degrees of freedom", e.chi_square);
     if dof > 0 {
         let ratio = e.chi_square / dof as f64;
-        let p_value = 1.0 - crate::stats::noise::chi_square_cdf(e.chi_square, dof as f64);
+        let p_value = crate::calibration::checks::fit_p_value(e).unwrap_or(1.0);
         let _ = write!(out, " (ratio {ratio:.2}, p = {p_value:.3})");
-        if p_value < 1e-3 {
+        if p_value < crate::calibration::checks::MISFIT_LEVEL {
             let _ = write!(
                 out,
                 "\n  The model misses something: the residuals are {:.1} times what the dwell noise explains.",

@@ -6,6 +6,8 @@ use std::path::{Path, PathBuf};
 
 use sinscal::calib::general::Term;
 
+use crate::calibration::checks::failed_in_json;
+use crate::cmd::ChecksFailed;
 use crate::io::calibration_model::{CalibrationModel, M3};
 use crate::io::error::InputError;
 use crate::io::recording::{write_file, RecordingFile, RowSource, WriteError};
@@ -41,7 +43,17 @@ pub fn run(args: Args) -> anyhow::Result<()> {
     let model = CalibrationModel::read(&calibration)?;
     let rows = apply(&rec, &model, &out)?;
     super::out(&summary(&rec, rows, &model, &out))?;
-    Ok(())
+    // The output is written; a calibration that failed its checks, or whose estimates are implausible, still
+    // makes the run fail loudly (exit 3, docs/cli.md#checks).
+    let text = std::fs::read_to_string(&calibration).map_err(|e| InputError::io(&calibration, e))?;
+    let document: serde_json::Value = serde_json::from_str(&text)
+        .map_err(|e| InputError::at(&calibration.display().to_string(), e.line().max(1), e.to_string()))?;
+    let failed = failed_in_json(&document);
+    if failed.is_empty() {
+        Ok(())
+    } else {
+        Err(ChecksFailed(failed).into())
+    }
 }
 
 /// Writes the recording compensated with the model to `out`: every row's specific force, and its rate when the

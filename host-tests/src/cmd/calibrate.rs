@@ -7,6 +7,7 @@ use clap::ValueEnum;
 use sinscal::calib::align::DwellValue;
 use sinscal::calib::general::Model;
 
+use crate::calibration::checks::{failed_lines, physics_of, PhysicsDwell};
 use crate::calibration::estimates::parse_model;
 use crate::calibration::firmware_path::calibrate_on_host;
 use crate::calibration::qemu::calibrate_on_qemu;
@@ -14,8 +15,12 @@ use crate::calibration::result::{summary, CalibrationJson};
 use crate::calibration::{
     calibrate, Calibration, Coefficient, Method, Options, PrefilterKind, DEFAULT_METHOD, DEFAULT_MODEL,
 };
-use crate::cmd::write_json;
+use crate::calibration::{collect_dwells, prefilter_of, site_of};
+use crate::cmd::{write_json, ChecksFailed};
+use crate::io::error::InputError;
 use crate::io::recording::RecordingFile;
+use crate::io::recording::RowSource as _;
+use sinscal::calib::general::MAX_DWELLS;
 
 /// The prefilter in front of the dwell statistics.
 #[derive(Clone, Copy, ValueEnum)]
@@ -185,24 +190,48 @@ pub fn run(args: Args) -> anyhow::Result<()> {
     // The rows are read in passes, never held (docs/formats.md#speed-and-memory).
     let rec = RecordingFile::open(&args.recording)?;
     let cal = match args.on {
-        None => calibrate(&rec, &options)?,
-        Some(OnArg::Host) => calibrate_on_host(&rec, &options)?,
-        Some(OnArg::Qemu) => calibrate_on_qemu(&rec, &options)?,
+        None => calibrate(&rec, &options),
+        Some(OnArg::Host) => calibrate_on_host(&rec, &options),
+        Some(OnArg::Qemu) => calibrate_on_qemu(&rec, &options),
     };
+    let cal = cal.map_err(|e| with_physics_hint(e, &rec, &options))?;
     finish(&cal, args.json.as_deref())
 }
 
-/// Prints the summary (unless the JSON goes to stdout) and writes the JSON if asked.
+/// Prints the summary (unless the JSON goes to stdout) and writes the JSON if asked; then fails with
+/// [`ChecksFailed`] (exit status 3) when the result fails one of its checks.
 pub fn finish(cal: &Calibration, json: Option<&Path>) -> anyhow::Result<()> {
+    let document = CalibrationJson::new(cal);
     match json {
-        Some(path) if path == Path::new("-") => write_json(path, &CalibrationJson::new(cal)),
+        Some(path) if path == Path::new("-") => write_json(path, &document)?,
         Some(path) => {
             super::out(&summary(cal))?;
-            write_json(path, &CalibrationJson::new(cal))
+            write_json(path, &document)?;
         }
-        None => {
-            super::out(&summary(cal))?;
-            Ok(())
-        }
+        None => super::out(&summary(cal))?,
+    }
+    let failed = failed_lines(&document.checks);
+    if failed.is_empty() {
+        Ok(())
+    } else {
+        Err(ChecksFailed(failed).into())
+    }
+}
+
+/// A calibration that the input refused, with the physics check's hint when the dwells contradict gravity or
+/// the Earth rate (the reason the input was refused, more often than not).
+fn with_physics_hint(e: InputError, rec: &RecordingFile, options: &Options) -> anyhow::Error {
+    let Ok(prefilter) = prefilter_of(options, rec) else { return e.into() };
+    let Ok(dwells) = collect_dwells(rec, &prefilter, MAX_DWELLS, None) else { return e.into() };
+    let source = rec.source();
+    let dwells: Option<Vec<PhysicsDwell>> =
+        dwells.into_iter().map(|(tally, summary)| tally.attitude(source).ok().map(|a| (a, summary))).collect();
+    let Some(dwells) = dwells else { return e.into() };
+    let (site, _) = site_of(rec.header());
+    let check = physics_of(&dwells, &site, rec.has_gyro());
+    if check.passed {
+        e.into()
+    } else {
+        anyhow::anyhow!("{e} (check failed: physics: {})", check.detail)
     }
 }

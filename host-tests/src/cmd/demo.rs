@@ -39,8 +39,13 @@ pub fn run(args: Args) -> anyhow::Result<()> {
     ))?;
     let rec = Recording::read(out)?;
     let cal = calibrate(&rec, &Options::default()).map_err(|e: InputError| anyhow::anyhow!(e))?;
-    finish(&cal, json)?;
-    super::out(&truth_table(&scenario, &cal))
+    // The truth table is shown also when a check failed (exit 3 after it).
+    let checked = finish(&cal, json);
+    if checked.as_ref().is_err_and(|e| e.downcast_ref::<super::ChecksFailed>().is_none()) {
+        return checked;
+    }
+    super::out(&truth_table(&scenario, &cal))?;
+    checked
 }
 
 /// The truth of the simulation beside each estimate, and the error in standard errors.

@@ -21,6 +21,19 @@ pub mod study;
 
 pub use crate::io::{out, StdoutError};
 
+/// A result was written but failed some of its checks (docs/cli.md#checks): `main` prints each line on
+/// stderr (`sinscal: check failed: fit: ...`) and exits with status 3.
+#[derive(Debug)]
+pub struct ChecksFailed(pub Vec<String>);
+
+impl std::fmt::Display for ChecksFailed {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        write!(f, "{}", self.0.join("; "))
+    }
+}
+
+impl std::error::Error for ChecksFailed {}
+
 /// Writes `text` to `path`, or to stdout when `path` is `-`.
 pub fn write_output(path: &Path, text: &str) -> anyhow::Result<()> {
     if path == Path::new("-") {

@@ -1,0 +1,235 @@
+//! The checks that fail loudly (docs/cli.md#exit-status): the built-in example passes every check (exit 0);
+//! each impossible variant of it (headings half a turn off, gyros in deg/s, accelerometers in g, latitude sign,
+//! gyro axes swapped, a gyro axis negated, accelerometer axes swapped) fails the physics check with its hint on
+//! stderr and in the JSON (exit 3), or is refused as input with the hint (exit 1) where no result can be made;
+//! `apply` of a calibration whose checks failed, or whose estimates are implausible, writes its output and
+//! exits 3.
+
+use std::path::{Path, PathBuf};
+
+use assert_cmd::Command;
+use serde_json::Value;
+
+fn sinscal() -> Command {
+    Command::cargo_bin("sinscal").unwrap()
+}
+
+/// The built-in example (seed 7) in `dir`.
+fn example(dir: &Path) -> PathBuf {
+    let path = dir.join("ex.csv");
+    sinscal().args(["example", "--seed", "7", "--out"]).arg(&path).assert().success();
+    path
+}
+
+/// The example with its values transformed: `row(heading_deg, [gx, gy, gz, ax, ay, az])` and `header(line)`.
+fn variant(
+    dir: &Path,
+    name: &str,
+    row: impl Fn(f64, [f64; 6]) -> (f64, [f64; 6]),
+    header: impl Fn(&str) -> String,
+) -> PathBuf {
+    let text = std::fs::read_to_string(example(dir)).unwrap();
+    let mut out = String::new();
+    for line in text.lines() {
+        if line.starts_with('#') {
+            out.push_str(&header(line));
+        } else if line.starts_with("t_s") {
+            out.push_str(line);
+        } else {
+            let mut cells: Vec<String> = line.split(',').map(str::to_string).collect();
+            let values: [f64; 6] = std::array::from_fn(|i| cells[5 + i].parse().unwrap());
+            let (heading_deg, values) = row(cells[4].parse().unwrap(), values);
+            cells[4] = heading_deg.to_string();
+            for (i, v) in values.iter().enumerate() {
+                cells[5 + i] = v.to_string();
+            }
+            out.push_str(&cells.join(","));
+        }
+        out.push('\n');
+    }
+    let path = dir.join(format!("{name}.csv"));
+    std::fs::write(&path, out).unwrap();
+    path
+}
+
+/// Runs `calibrate` with `--json`: exit status, stderr, the JSON (null when none was written).
+fn calibrate(dir: &Path, recording: &Path) -> (i32, String, Value) {
+    let json = dir.join("cal.json");
+    let _ = std::fs::remove_file(&json);
+    let out = sinscal().arg("calibrate").arg(recording).arg("--json").arg(&json).output().unwrap();
+    let stderr = String::from_utf8_lossy(&out.stderr).into_owned();
+    let value = std::fs::read_to_string(&json).map_or(Value::Null, |t| serde_json::from_str(&t).unwrap());
+    (out.status.code().unwrap(), stderr, value)
+}
+
+/// The JSON's entry of check `name`.
+fn check<'a>(v: &'a Value, name: &str) -> &'a Value {
+    v["checks"].as_array().unwrap().iter().find(|c| c["check"] == name).unwrap_or_else(|| panic!("no {name}: {v}"))
+}
+
+/// A variant fails the physics check with `hint`: exit 3, the hint on stderr and in the JSON.
+fn fails_physics(name: &str, hint: &str, row: impl Fn(f64, [f64; 6]) -> (f64, [f64; 6])) {
+    let dir = tempfile::tempdir().unwrap();
+    let rec = variant(dir.path(), name, row, str::to_string);
+    fails_physics_of(dir.path(), &rec, hint);
+}
+
+fn fails_physics_of(dir: &Path, rec: &Path, hint: &str) {
+    let (code, stderr, v) = calibrate(dir, rec);
+    assert_eq!(code, 3, "{stderr}");
+    let line = format!("sinscal: check failed: physics: {hint}");
+    assert!(stderr.lines().any(|l| l.starts_with(&line)), "{stderr}");
+    let physics = check(&v, "physics");
+    assert_eq!(physics["passed"], false, "{physics}");
+    assert!(physics["detail"].as_str().unwrap().starts_with(hint), "{physics}");
+}
+
+#[test]
+fn the_example_passes_every_check() {
+    let dir = tempfile::tempdir().unwrap();
+    let rec = example(dir.path());
+    let json = dir.path().join("cal.json");
+    let out = sinscal().arg("calibrate").arg(&rec).arg("--json").arg(&json).assert().success();
+    let stdout = String::from_utf8_lossy(&out.get_output().stdout).into_owned();
+    assert!(stdout.contains("checks: all 4 passed"), "{stdout}");
+    let v: Value = serde_json::from_str(&std::fs::read_to_string(&json).unwrap()).unwrap();
+    let names: Vec<&str> = v["checks"].as_array().unwrap().iter().map(|c| c["check"].as_str().unwrap()).collect();
+    assert_eq!(names, ["physics", "fit", "convergence", "plausibility"]);
+    for c in v["checks"].as_array().unwrap() {
+        assert_eq!(c["passed"], true, "{c}");
+    }
+}
+
+#[test]
+fn headings_half_a_turn_off_fail_the_physics_check() {
+    fails_physics("h180", "headings half a turn off?", |h, v| ((h + 180.0) % 360.0, v));
+}
+
+#[test]
+fn gyros_in_deg_per_s_fail_the_physics_check() {
+    fails_physics("degs", "gyros in deg/s?", |h, v| {
+        (h, std::array::from_fn(|i| if i < 3 { v[i] * 57.29578 } else { v[i] }))
+    });
+}
+
+#[test]
+fn gyro_x_and_y_swapped_fail_the_physics_check() {
+    fails_physics("gxy", "gyro axes x and y swapped?", |h, v| (h, [v[1], v[0], v[2], v[3], v[4], v[5]]));
+}
+
+#[test]
+fn a_negated_gyro_axis_fails_the_physics_check() {
+    fails_physics("gzneg", "gyro axis z negated?", |h, v| (h, [v[0], v[1], -v[2], v[3], v[4], v[5]]));
+}
+
+#[test]
+fn the_latitude_sign_flipped_fails_the_physics_check() {
+    let dir = tempfile::tempdir().unwrap();
+    let flip = |line: &str| line.replace("latitude_deg: ", "latitude_deg: -");
+    let rec = variant(dir.path(), "lat", |h, v| (h, v), flip);
+    fails_physics_of(dir.path(), &rec, "latitude sign?");
+}
+
+/// Accelerometers in g and swapped accelerometer axes: the core's input checks refuse the dwells (|f| far
+/// from g, gravity 90 deg from the reference), so no result is written: exit 1 with the physics hint.
+#[test]
+fn accelerometers_in_g_or_swapped_are_refused_with_the_hint() {
+    let cases: [(&str, &str, fn(f64, [f64; 6]) -> (f64, [f64; 6])); 2] = [
+        ("ing", "accelerometers in g, not m/s^2?", |h, v| {
+            (h, std::array::from_fn(|i| if i < 3 { v[i] } else { v[i] / 9.80665 }))
+        }),
+        ("axy", "accelerometer axes x and y swapped?", |h, v| (h, [v[0], v[1], v[2], v[4], v[3], v[5]])),
+    ];
+    for (name, hint, row) in cases {
+        let dir = tempfile::tempdir().unwrap();
+        let rec = variant(dir.path(), name, row, str::to_string);
+        let (code, stderr, v) = calibrate(dir.path(), &rec);
+        assert_eq!(code, 1, "{name}: {stderr}");
+        assert_eq!(stderr.lines().count(), 1, "{stderr}");
+        assert!(stderr.contains(&format!("(check failed: physics: {hint}")), "{name}: {stderr}");
+        assert!(v.is_null(), "{name}: no result is written");
+    }
+}
+
+/// The example's calibration written to `dir/cal.json`, and the example.
+fn calibrated(dir: &Path) -> (PathBuf, PathBuf) {
+    let rec = example(dir);
+    let json = dir.join("cal.json");
+    sinscal().arg("calibrate").arg(&rec).arg("--json").arg(&json).assert().success();
+    (rec, json)
+}
+
+/// Runs `apply` with a calibration JSON edited by `edit`: exit status, stderr, whether the output exists.
+fn apply_edited(edit: impl Fn(&mut Value)) -> (i32, String, bool) {
+    let dir = tempfile::tempdir().unwrap();
+    let (rec, json) = calibrated(dir.path());
+    let mut v: Value = serde_json::from_str(&std::fs::read_to_string(&json).unwrap()).unwrap();
+    edit(&mut v);
+    let edited = dir.path().join("edited.json");
+    std::fs::write(&edited, v.to_string()).unwrap();
+    let out_path = dir.path().join("applied.csv");
+    let out = sinscal()
+        .arg("apply")
+        .arg(&rec)
+        .arg("--calibration")
+        .arg(&edited)
+        .arg("--out")
+        .arg(&out_path)
+        .output()
+        .unwrap();
+    (out.status.code().unwrap(), String::from_utf8_lossy(&out.stderr).into_owned(), out_path.exists())
+}
+
+#[test]
+fn apply_of_a_calibration_whose_checks_failed_writes_and_exits_3() {
+    let dir = tempfile::tempdir().unwrap();
+    let rec = variant(dir.path(), "h180", |h, v| ((h + 180.0) % 360.0, v), str::to_string);
+    let (code, _, _) = calibrate(dir.path(), &rec);
+    assert_eq!(code, 3);
+    let out_path = dir.path().join("applied.csv");
+    let out = sinscal()
+        .arg("apply")
+        .arg(&rec)
+        .arg("--calibration")
+        .arg(dir.path().join("cal.json"))
+        .arg("--out")
+        .arg(&out_path)
+        .output()
+        .unwrap();
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    assert_eq!(out.status.code(), Some(3), "{stderr}");
+    assert!(out_path.exists(), "the output is still written");
+    assert!(
+        stderr.lines().any(|l| l.starts_with("sinscal: check failed: physics: headings half a turn off?")),
+        "{stderr}"
+    );
+    assert!(stderr.lines().any(|l| l.starts_with("sinscal: check failed: fit: ")), "{stderr}");
+    assert!(stderr.lines().all(|l| l.starts_with("sinscal: check failed: ")), "one line per failed check: {stderr}");
+}
+
+#[test]
+fn apply_of_a_calibration_without_checks_is_accepted_as_before() {
+    let (code, stderr, written) = apply_edited(|v| {
+        v.as_object_mut().unwrap().remove("checks");
+    });
+    assert_eq!((code, written), (0, true), "{stderr}");
+}
+
+/// A scale factor of 1e13 is refused by `apply`'s own reading of the file (|S + M| above 0.5: not a calibration
+/// of these axes, exit 1, nothing written, docs/cli.md#apply); its standard error of 1e13 passes that reading
+/// and fails the plausibility check: written, exit 3.
+#[test]
+fn apply_of_an_implausible_scale_factor_fails() {
+    let (code, stderr, written) = apply_edited(|v| v["accel_scale_factor"][0] = serde_json::json!(1e13));
+    assert_eq!((code, written), (1, false), "{stderr}");
+    assert!(
+        stderr.contains("accel_scale_factor_x = 10000000000000: T_a = I + S + M is far from the identity"),
+        "{stderr}"
+    );
+    let (code, stderr, written) = apply_edited(|v| v["accel_scale_factor_std"][0] = serde_json::json!(1e13));
+    assert_eq!((code, written), (3, true), "{stderr}");
+    assert_eq!(
+        stderr.trim(),
+        "sinscal: check failed: plausibility: accel_scale_factor_std has 1e13, beyond the plausible 1e0 of any instrument"
+    );
+}
