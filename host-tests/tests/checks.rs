@@ -91,10 +91,10 @@ fn the_example_passes_every_check() {
     let json = dir.path().join("cal.json");
     let out = sinscal().arg("calibrate").arg(&rec).arg("--json").arg(&json).assert().success();
     let stdout = String::from_utf8_lossy(&out.get_output().stdout).into_owned();
-    assert!(stdout.contains("checks: all 4 passed"), "{stdout}");
+    assert!(stdout.contains("checks: all 5 passed"), "{stdout}");
     let v: Value = serde_json::from_str(&std::fs::read_to_string(&json).unwrap()).unwrap();
     let names: Vec<&str> = v["checks"].as_array().unwrap().iter().map(|c| c["check"].as_str().unwrap()).collect();
-    assert_eq!(names, ["physics", "fit", "convergence", "plausibility"]);
+    assert_eq!(names, ["physics", "fit", "convergence", "plausibility", "spikes"]);
     for c in v["checks"].as_array().unwrap() {
         assert_eq!(c["passed"], true, "{c}");
     }

@@ -1,7 +1,7 @@
 //! The checks of a calibration that fail loudly (docs/cli.md#checks): `physics` (gravity and the Earth
 //! rate against the recording's labels and units, before the fit), `fit` (the model against the dwell noise),
 //! `convergence` and `plausibility` (every estimate and standard error finite and within its term's plausible
-//! magnitude). Each is run on every calibration and listed, passed or failed, in the JSON's `checks`; a failed
+//! magnitude), and `spikes` (the spike gate left out isolated samples only). Each is run on every calibration and listed, passed or failed, in the JSON's `checks`; a failed
 //! one makes `calibrate` (and `apply`, reading such a result) exit with status 3.
 
 use serde::Serialize;
@@ -21,8 +21,9 @@ pub const MISFIT_LEVEL: f64 = 1e-3;
 /// physics check to name it.
 pub const ALTERNATIVE_FACTOR: f64 = 10.0;
 
-/// Largest relative difference of a dwell's |f| from g the physics check accepts (raw accelerometers included).
-pub const GRAVITY_TOLERANCE: f64 = 0.1;
+/// Largest relative difference of a dwell's |f| from g the physics check accepts: the core's limit for any
+/// accelerometer, raw ones included (an uncalibrated MEMS triad with biases of 0.1 g reads |f| 11 % from g).
+pub const GRAVITY_TOLERANCE: f64 = sinscal::calib::limits::FORCE_MAGNITUDE_ERROR_MAX_RELATIVE as f64;
 
 /// Floor of the standard error of a dwell's gyro mean, rad/s (0.001 deg/h): noise-free simulations still weigh.
 const GYRO_MEAN_STD_FLOOR_RADPS: f64 = 4.848e-9;
@@ -36,7 +37,7 @@ const DEG_PER_RAD: f64 = 57.29578;
 /// One check: its name, whether it passed, and a one-line detail.
 #[derive(Clone, Debug, PartialEq, Serialize)]
 pub struct Check {
-    /// `physics`, `fit`, `convergence` or `plausibility`.
+    /// `physics`, `fit`, `convergence`, `plausibility` or `spikes`.
     pub check: &'static str,
     /// Whether the result passed it.
     pub passed: bool,
@@ -52,7 +53,7 @@ impl Check {
 
 /// Every check of a calibration, in the order they are listed (adding a check is one line here).
 pub fn checks(c: &Calibration) -> Vec<Check> {
-    vec![physics(c), fit(&c.estimates), convergence(c), plausibility(&c.estimates)]
+    vec![physics(c), fit(&c.estimates), convergence(c), plausibility(&c.estimates), spikes(c)]
 }
 
 /// The checks that failed, as the lines `calibrate` prints on stderr (`check failed: fit: ...`).
@@ -83,6 +84,37 @@ pub fn fit(e: &Estimates) -> Check {
     } else {
         Check::new("fit", true, what)
     }
+}
+
+/// Largest fraction of a dwell's samples the spike gate may leave out: beyond it they are not isolated
+/// corrupt samples but a gate that does not suit the data (or data that are not at rest).
+pub const SPIKE_FRACTION_MAX: f64 = 0.01;
+
+/// `spikes`: how many samples the spike gate left out (docs/method.md#spikes); failed when a dwell lost more
+/// than [`SPIKE_FRACTION_MAX`] of its samples.
+pub fn spikes(c: &Calibration) -> Check {
+    let total: u64 = c.positions.iter().map(|p| p.summary.spikes as u64).sum();
+    let worst = c.positions.iter().max_by(|a, b| spike_fraction(a).total_cmp(&spike_fraction(b)));
+    match worst {
+        Some(p) if spike_fraction(p) > SPIKE_FRACTION_MAX => Check::new(
+            "spikes",
+            false,
+            format!(
+                "position {} lost {} of {} samples to the spike gate: not isolated spikes",
+                p.pos,
+                p.summary.spikes,
+                p.summary.samples + p.summary.spikes
+            ),
+        ),
+        _ if total == 0 => Check::new("spikes", true, "no sample beyond the spike gate"),
+        _ => Check::new("spikes", true, format!("{total} isolated sample(s) beyond the spike gate, not used")),
+    }
+}
+
+/// The fraction of a dwell's samples that the spike gate left out.
+fn spike_fraction(p: &crate::calibration::PositionResult) -> f64 {
+    let s = &p.summary;
+    s.spikes as f64 / (s.samples as f64 + s.spikes as f64).max(1.0)
 }
 
 /// `convergence`: whether the solution's refinement converged.
