@@ -36,8 +36,9 @@ pub struct ChannelDwell {
     pub force_mean_var_b_mps2sq: Vec3,
 }
 
-/// Chi-square quantiles at 0.999 for 1 to 6 degrees of freedom.
-pub(super) const CHI2_999: [f32; 6] = [10.828, 13.816, 16.266, 18.467, 20.515, 22.458];
+/// Chi-square quantiles at 0.999 for 1 to 9 degrees of freedom (a dwell's six channels and the priors of its
+/// three attitude angles).
+pub(super) const CHI2_999: [f32; 9] = [10.828, 13.816, 16.266, 18.467, 20.515, 22.458, 24.322, 26.124, 27.877];
 
 /// The estimator: dwells collected, solved on demand.
 #[derive(Clone, Debug)]
@@ -220,7 +221,7 @@ impl ChannelEstimator {
             iterations += 1;
             // Every dwell's nuisance angles, the left-out ones too (their residuals are reported).
             for (k, d) in self.dwells.iter().enumerate() {
-                if unknown_tilt {
+                if unknown_tilt || self.priors(d) != [false; 3] {
                     (attitude[k], heading[k]) = self.profile_attitude(d, &theta, model);
                 } else if self.nuisances(d)[2] {
                     heading[k] = self.profile_heading(d, &d.tilt, &theta, model);
@@ -364,7 +365,11 @@ impl ChannelEstimator {
             let lin_s = self.linearise(&zero, &attitude[k], model);
             let nuisance = self.nuisances(d);
             let mut w = self.rows(d, &lin, cols, n, scale, false, nuisance);
-            let mut s = self.rows(d, &lin_s, cols, n, scale_s, true, nuisance);
+            self.add_prior_rows(d, &attitude[k], &mut w);
+            // The schedule's structure: angles known to a tolerance are known (a prior is not the schedule).
+            let prior = self.priors(d);
+            let free = [0, 1, 2].map(|m| nuisance[m] && !prior[m]);
+            let mut s = self.rows(d, &lin_s, cols, n, scale_s, true, free);
             let skip_w = eliminate_nuisances(&mut w, n);
             let skip_s = eliminate_nuisances(&mut s, n);
             for r in skip_w..w.rows {

@@ -108,11 +108,14 @@ pub(super) fn linearise(
 /// Whitened rows of one dwell: channel rows (`rows` of them), their right-hand sides and the columns of its
 /// nuisance attitude angles (e, n, u; zero for the angles that are not nuisances).
 pub(super) struct DwellRows {
-    pub(super) a: [[f32; PARAMETERS]; 6],
-    pub(super) y: [f32; 6],
-    pub(super) h: [[f32; 3]; 6],
+    pub(super) a: [[f32; PARAMETERS]; DWELL_ROWS],
+    pub(super) y: [f32; DWELL_ROWS],
+    pub(super) h: [[f32; 3]; DWELL_ROWS],
     pub(super) rows: usize,
 }
+
+/// Rows of one dwell at most: six channels and the priors of its three attitude angles.
+pub(super) const DWELL_ROWS: usize = 9;
 
 impl ChannelEstimator {
     /// Prediction and Jacobian of one dwell (the Earth rate only when the gyros resolve it).
@@ -133,7 +136,8 @@ impl ChannelEstimator {
         structural: bool,
         nuisance: [bool; 3],
     ) -> DwellRows {
-        let mut out = DwellRows { a: [[0.0; PARAMETERS]; 6], y: [0.0; 6], h: [[0.0; 3]; 6], rows: 0 };
+        let mut out =
+            DwellRows { a: [[0.0; PARAMETERS]; DWELL_ROWS], y: [0.0; DWELL_ROWS], h: [[0.0; 3]; DWELL_ROWS], rows: 0 };
         let first = if self.settings.use_gyro { 0 } else { 3 };
         let g = self.site.gravity_mps2;
         for ch in first..6 {

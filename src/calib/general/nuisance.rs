@@ -2,7 +2,7 @@
 //! profiled before each pass, and eliminated from the dwell's rows.
 
 use crate::calib::general::estimator::{ChannelDwell, ChannelEstimator};
-use crate::calib::general::linearise::{sensor_matrix, DwellRows};
+use crate::calib::general::linearise::{sensor_matrix, DwellRows, DWELL_ROWS};
 use crate::calib::general::settings::AttitudeKnowledge;
 use crate::calib::general::terms::{Model, PARAMETERS};
 use crate::math::linalg::{norm, rotation, Mat3, Vec3};
@@ -23,7 +23,7 @@ pub(super) fn eliminate_nuisances(d: &mut DwellRows, n: usize) -> usize {
             continue;
         }
         let alpha = if d.h[top][col] >= 0.0 { -h_norm } else { h_norm };
-        let mut u = [0.0f32; 6];
+        let mut u = [0.0f32; DWELL_ROWS];
         for r in top..m {
             u[r] = d.h[r][col];
         }
@@ -121,23 +121,87 @@ impl ChannelEstimator {
         heading
     }
 
-    /// Which attitude angles of dwell `d` are nuisance parameters: tilt about e and n (unknown attitudes),
-    /// heading (unknown heading, gyro data used and resolving the Earth rate).
+    /// Which attitude angles of dwell `d` are nuisance parameters: tilt about e and n (unknown attitudes, or
+    /// known to a tolerance), heading (gyro data used and resolving the Earth rate, and the heading unknown or
+    /// known to a tolerance).
     pub(super) fn nuisances(&self, d: &ChannelDwell) -> [bool; 3] {
-        let tilt = self.settings.attitude == AttitudeKnowledge::Unknown;
-        let heading = self.settings.use_gyro && self.settings.earth_rate_resolved && d.heading_rad.is_none();
+        let prior = self.priors(d);
+        let tilt = self.settings.attitude == AttitudeKnowledge::Unknown || prior[0];
+        let heading =
+            self.settings.use_gyro && self.settings.earth_rate_resolved && (d.heading_rad.is_none() || prior[2]);
         [tilt, tilt, heading]
     }
 
+    /// Which of dwell `d`'s attitude angles are nuisances with the prior N(0, tolerance^2) about the reference:
+    /// the tilt when the attitudes are a reference known to a tolerance, the heading when it is given too and
+    /// the gyros see it.
+    pub(super) fn priors(&self, d: &ChannelDwell) -> [bool; 3] {
+        let s = &self.settings;
+        let tolerance = s.attitude == AttitudeKnowledge::Reference && s.pose_tolerance_rad > 0.0;
+        let heading = tolerance && s.use_gyro && s.earth_rate_resolved && d.heading_rad.is_some();
+        [tolerance, tolerance, heading]
+    }
+
+    /// The reference attitude of dwell `d` (its heading 0 when unknown).
+    fn reference_attitude(d: &ChannelDwell) -> Mat3 {
+        heading_rotation(d.heading_rad.unwrap_or(0.0)).mul(&d.tilt)
+    }
+
+    /// The small-angle attitude error (e, n, u), rad, that takes dwell `d`'s reference attitude to `c`:
+    /// `c = (I - [phi x]) C_ref` to first order.
+    pub(super) fn attitude_offset(d: &ChannelDwell, c: &Mat3) -> Vec3 {
+        let r = Self::reference_attitude(d);
+        // M = c C_ref^T = I - [phi x]: phi from its antisymmetric part.
+        let mut m = [[0.0f32; 3]; 3];
+        for i in 0..3 {
+            for j in 0..3 {
+                m[i][j] = (0..3).map(|k| c.0[i][k] * r.0[j][k]).sum();
+            }
+        }
+        [0.5 * (m[1][2] - m[2][1]), 0.5 * (m[2][0] - m[0][2]), 0.5 * (m[0][1] - m[1][0])]
+    }
+
+    /// Appends the prior rows of dwell `d`'s attitude angles known to a tolerance to its whitened `rows`, at
+    /// the attitude `c`: per angle, `0 = phi + noise` with noise N(0, tolerance^2), that is the residual
+    /// `-phi / tolerance` and the nuisance column `1 / tolerance`.
+    pub(super) fn add_prior_rows(&self, d: &ChannelDwell, c: &Mat3, rows: &mut DwellRows) {
+        let prior = self.priors(d);
+        if prior == [false; 3] {
+            return;
+        }
+        let phi = Self::attitude_offset(d, c);
+        let inverse = 1.0 / self.settings.pose_tolerance_rad;
+        for m in 0..3 {
+            if prior[m] && rows.rows < DWELL_ROWS {
+                let r = rows.rows;
+                rows.a[r] = [0.0; PARAMETERS];
+                rows.y[r] = -phi[m] * inverse;
+                rows.h[r] = [0.0; 3];
+                rows.h[r][m] = inverse;
+                rows.rows += 1;
+            }
+        }
+    }
+
     /// The attitude of dwell `d` that fits its means best given `theta`, with its heading: the tilt that puts
-    /// the calibrated measured gravity `T_a^-1 (f - b_a)` up, the heading profiled over it when unknown, then
-    /// Gauss-Newton on every nuisance angle with all of the dwell's rows.
+    /// the calibrated measured gravity `T_a^-1 (f - b_a)` up (unknown attitudes) or the reference's (known to a
+    /// tolerance), the heading profiled over it when unknown, then Gauss-Newton on every nuisance angle with all
+    /// of the dwell's rows and the priors of the angles known to a tolerance.
     pub(super) fn profile_attitude(&self, d: &ChannelDwell, theta: &[f32; PARAMETERS], model: Model) -> (Mat3, f32) {
-        let b_a = [theta[3], theta[4], theta[5]];
-        let f = [0, 1, 2].map(|i| d.force_mean_b_mps2[i] - b_a[i]);
-        let t_a = sensor_matrix(theta, 6, 9);
-        let up_b = t_a.inverse().map_or(f, |t| t.mul_vec(f));
-        let tilt = tilt_of_up(up_b);
+        let prior = self.priors(d);
+        let tilt = if self.settings.attitude == AttitudeKnowledge::Unknown {
+            let b_a = [theta[3], theta[4], theta[5]];
+            let f = [0, 1, 2].map(|i| d.force_mean_b_mps2[i] - b_a[i]);
+            let t_a = sensor_matrix(theta, 6, 9);
+            tilt_of_up(t_a.inverse().map_or(f, |t| t.mul_vec(f)))
+        } else {
+            d.tilt
+        };
+        let prior_weight = if prior == [false; 3] {
+            0.0
+        } else {
+            1.0 / (self.settings.pose_tolerance_rad * self.settings.pose_tolerance_rad)
+        };
         let active = self.nuisances(d);
         let mut heading = match d.heading_rad {
             Some(h) => h,
@@ -148,8 +212,16 @@ impl ChannelEstimator {
         let first = if self.settings.use_gyro { 0 } else { 3 };
         for _ in 0..4 {
             let lin = self.linearise(theta, &c, model);
+            // The priors: N(0, tolerance^2) on each angle's offset from the reference.
+            let offset = Self::attitude_offset(d, &c);
             let mut normal = Mat3::IDENTITY;
             let mut rhs = [0.0f32; 3];
+            for a in 0..3 {
+                if prior[a] {
+                    normal.0[a][a] += prior_weight;
+                    rhs[a] -= offset[a] * prior_weight;
+                }
+            }
             for ch in first..6 {
                 let (measured, var) = if ch < 3 {
                     (d.rate_mean_b_radps[ch], d.rate_mean_var_b_radps2[ch])

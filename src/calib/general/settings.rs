@@ -26,6 +26,11 @@ pub struct ChannelSettings {
     pub pose_gravity_angle_max_rad: f32,
     /// Whether the dwells' tilts are a reference or unknown (then nuisance parameters).
     pub attitude: AttitudeKnowledge,
+    /// How well the reference attitudes are known, rad (one standard deviation, each axis): with
+    /// [`AttitudeKnowledge::Reference`] and a tolerance above 0, each dwell's attitude error (the tilt about
+    /// east and north, and the heading where the gyros resolve the Earth rate) is a nuisance parameter with the
+    /// prior N(0, tolerance^2) (docs/method.md#poses-known-to-a-tolerance). 0: the labels are exact.
+    pub pose_tolerance_rad: f32,
     /// Whether the gyros resolve the Earth rate (their dwell means and errors are well below it). Without, the
     /// gyro model leaves the Earth rate out: no heading is estimated or checked, and the gyro scale factors and
     /// misalignments, which a static pose sees only through the Earth rate, are not exercised.
@@ -56,6 +61,7 @@ impl Default for ChannelSettings {
             force_magnitude_error_max_relative: FORCE_MAGNITUDE_ERROR_MAX_RELATIVE,
             pose_gravity_angle_max_rad: POSE_GRAVITY_ANGLE_MAX_RAD,
             attitude: AttitudeKnowledge::Reference,
+            pose_tolerance_rad: 0.0,
             earth_rate_resolved: true,
         }
     }

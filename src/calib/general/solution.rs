@@ -164,6 +164,7 @@ impl ChannelEstimator {
             let lin = self.linearise(theta, &attitude[k], model);
             let nuisance = self.nuisances(d);
             let mut rows = self.rows(d, &lin, cols, n, &pass.scale, false, nuisance);
+            self.add_prior_rows(d, &attitude[k], &mut rows);
             for i in 0..3 {
                 sol.residual_rate_b_radps[k][i] = if first == 0 { d.rate_mean_b_radps[i] - lin.pred[i] } else { 0.0 };
                 sol.residual_force_b_mps2[k][i] = d.force_mean_b_mps2[i] - lin.pred[3 + i];
