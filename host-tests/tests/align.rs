@@ -68,6 +68,7 @@ fn recording(poses: &[Pose], n: usize, has_gyro: bool, noise: (f64, f64), rng: &
         gravity_mps2: Some(G),
         comments: vec![],
         truth: None,
+        pose_tolerance_deg: None,
     };
     Recording { source: "synthetic.csv".to_string(), header, rows, has_gyro }
 }

@@ -167,6 +167,7 @@ fn recording(model: &Model, has_gyro: bool) -> (Recording, Ideal) {
         gravity_mps2: Some(9.8063),
         comments: vec!["source: synthetic".to_string(), "exact data for apply".to_string()],
         truth: None,
+        pose_tolerance_deg: None,
     };
     (Recording { source: "measured.csv".to_string(), header, rows, has_gyro }, ideal)
 }

@@ -253,6 +253,7 @@ fn exact_recording(theta: &[f32; PARAMETERS]) -> (Recording, Vec<(V3, V3)>) {
         gravity_mps2: Some(G_MPS2),
         comments: vec!["source: exact synthetic data for the compensation".to_string()],
         truth: None,
+        pose_tolerance_deg: None,
     };
     (Recording { source: "exact.csv".to_string(), header, rows, has_gyro: true }, ideal)
 }

@@ -254,6 +254,7 @@ fn recording_of_model(
         gravity_mps2: Some(scenario.gravity_mps2),
         comments: Vec::new(),
         truth: None,
+        pose_tolerance_deg: None,
     };
     Recording { source: "model.csv".into(), header, rows, has_gyro: true }
 }

@@ -29,6 +29,7 @@ fn header(rate_hz: f64, gravity_mps2: f64) -> Header {
         gravity_mps2: Some(gravity_mps2),
         comments: vec!["SIMULATION for tests/study.rs".to_string()],
         truth: None,
+        pose_tolerance_deg: None,
     }
 }
 

@@ -303,6 +303,7 @@ fn construct(record: &Recording, source: Source, segmentation: String, pieces: &
             source.name()
         )],
         truth: None,
+        pose_tolerance_deg: None,
     };
     let source_name = format!("{} ({segmentation})", source.name());
     Construction {
@@ -962,6 +963,7 @@ mod tests {
             gravity_mps2: Some(9.8),
             comments: Vec::new(),
             truth: None,
+            pose_tolerance_deg: None,
         };
         let rows = (0..n)
             .map(|i| Row {

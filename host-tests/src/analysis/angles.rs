@@ -233,6 +233,7 @@ fn site(file: &AnglesFile) -> Site {
         gravity_mps2: file.gravity_mps2,
         comments: Vec::new(),
         truth: None,
+        pose_tolerance_deg: None,
     };
     site_of(&header).0
 }

@@ -235,6 +235,7 @@ pub fn calibration_of_record(record: &[u8]) -> Result<Calibration, anyhow::Error
             gravity_mps2: note.gravity_mps2,
             comments: Vec::new(),
             truth: None,
+            pose_tolerance_deg: None,
         },
         rows: Vec::new(),
         has_gyro: note.has_gyro,

@@ -26,7 +26,14 @@ pub struct Header {
     pub comments: Vec<String>,
     /// The truth of a sinscal simulation (`# truth_*` header keys), absent for measured data.
     pub truth: Option<SimulationTruth>,
+    /// How well the labelled attitudes are known, degrees (one standard deviation, each axis), if the header
+    /// says (`# pose_tolerance_deg`, docs/formats.md#recording).
+    pub pose_tolerance_deg: Option<f64>,
 }
+
+/// Largest pose tolerance a header or `--pose-tolerance` may give, degrees: beyond it the small-angle prior
+/// means nothing (and the estimator's plausibility check on poses refuses anything beyond 10 deg anyway).
+pub const MAX_POSE_TOLERANCE_DEG: f64 = 10.0;
 
 /// The true errors of a simulated IMU, as written by sinscal into the header of a simulated recording
 /// (extra `# truth_*: x,y,z` keys; other tools ignore them, as docs/formats.md#recording allows for unknown keys).
@@ -248,6 +255,9 @@ impl<W: std::io::Write> RecordingWriter<W> {
         }
         if let Some(g) = h.gravity_mps2 {
             let _ = writeln!(text, "# gravity_mps2: {g}");
+        }
+        if let Some(t) = h.pose_tolerance_deg {
+            let _ = writeln!(text, "# pose_tolerance_deg: {t}");
         }
         if let Some(t) = &h.truth {
             let v3 = |v: [f64; 3]| format!("{:e},{:e},{:e}", v[0], v[1], v[2]);
@@ -667,6 +677,7 @@ fn parse_header<'t>(
     let mut rate_hz = None;
     let mut rate_line = None;
     let mut gravity = None;
+    let mut pose_tolerance_deg = None;
     let mut comments = Vec::new();
     let mut truth_keys: Vec<(usize, String, String)> = Vec::new();
     let mut seen: Vec<(String, usize)> = Vec::new();
@@ -711,6 +722,16 @@ fn parse_header<'t>(
                 rate_line = Some(n);
             }
             "gravity_mps2" => gravity = Some(number("gravity_mps2")?),
+            "pose_tolerance_deg" => {
+                let t = number("pose_tolerance_deg")?;
+                if !(0.0..=MAX_POSE_TOLERANCE_DEG).contains(&t) {
+                    return Err(bad(
+                        n,
+                        format!("header pose_tolerance_deg: {} is not in [0, {MAX_POSE_TOLERANCE_DEG}] deg", shown(t)),
+                    ));
+                }
+                pose_tolerance_deg = Some(t);
+            }
             k if k.starts_with("truth_") => truth_keys.push((n, k.to_string(), value.to_string())),
             _ => comments.push(rest.trim().to_string()),
         }
@@ -737,7 +758,7 @@ fn parse_header<'t>(
         }
     }
     let truth = parse_truth(&truth_keys, source)?;
-    let header = Header { latitude_deg, height_m, rate_hz, gravity_mps2: gravity, comments, truth };
+    let header = Header { latitude_deg, height_m, rate_hz, gravity_mps2: gravity, comments, truth, pose_tolerance_deg };
     Ok((header, header_line, column_line, rate_line))
 }
 

@@ -667,6 +667,7 @@ pub fn simulate(scenario: &ScenarioFile, seed: u64, source: &str) -> Recording {
             gravity_mps2: Some(g),
             comments: vec![format!("SIMULATION by sinscal simulate (seed {seed}) of {source}, not measured data")],
             truth: Some(truth),
+            pose_tolerance_deg: None,
         },
         rows,
         has_gyro: true,

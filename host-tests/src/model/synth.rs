@@ -289,6 +289,7 @@ impl Scenario {
                     "SIMULATION by sinscal (seed {seed}), not measured data; truth_* keys give its errors"
                 )],
                 truth: Some(self.truth(seed)),
+                pose_tolerance_deg: None,
             },
             rows,
             has_gyro: true,

@@ -578,6 +578,7 @@ fn records_to_recording(
             gravity_mps2: layout.gravity_mps2,
             comments,
             truth: None,
+            pose_tolerance_deg: None,
         },
         rows,
         has_gyro: true,

@@ -311,6 +311,7 @@ fn imucal_finish(
             gravity_mps2: None,
             comments,
             truth: None,
+            pose_tolerance_deg: None,
         },
         rows,
         has_gyro: true,

@@ -326,6 +326,7 @@ fn imutk_recording(
             gravity_mps2: Some(IMUTK_GRAVITY_MPS2),
             comments,
             truth: None,
+            pose_tolerance_deg: None,
         },
         rows,
         has_gyro: true,

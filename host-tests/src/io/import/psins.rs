@@ -209,6 +209,7 @@ fn psins_imported(h: &PsinsHeader, rows: Vec<Row>, source: &str, latitude_overri
             gravity_mps2: Some(gravity_mps2),
             comments,
             truth: None,
+            pose_tolerance_deg: None,
         },
         rows,
         has_gyro: true,
