@@ -21,8 +21,9 @@ pub const MISFIT_LEVEL: f64 = 1e-3;
 /// physics check to name it.
 pub const ALTERNATIVE_FACTOR: f64 = 10.0;
 
-/// Largest relative difference of a dwell's |f| from g the physics check accepts (raw accelerometers included).
-pub const GRAVITY_TOLERANCE: f64 = 0.1;
+/// Largest relative difference of a dwell's |f| from g the physics check accepts: the core's, beyond any
+/// accelerometer scale error (a raw accelerometer with its nominal scale is often 10 % off).
+pub const GRAVITY_TOLERANCE: f64 = sinscal::calib::limits::FORCE_MAGNITUDE_ERROR_MAX_RELATIVE as f64;
 
 /// Floor of the standard error of a dwell's gyro mean, rad/s (0.001 deg/h): noise-free simulations still weigh.
 const GYRO_MEAN_STD_FLOOR_RADPS: f64 = 4.848e-9;
@@ -371,4 +372,49 @@ fn misfit(sensor: Sensor, dwells: &[PhysicsDwell], site: &Site, h: Hypothesis) -
         used += 1;
     }
     (used >= 2).then(|| (sums.iter().map(|s| (s[2] - s[1] * s[1] / s[0]).max(0.0)).sum(), 3 * (used - 1)))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::calibration::{Method, DEFAULT_MODEL};
+
+    fn estimates(chi_square: f64, degrees_of_freedom: u32) -> Estimates {
+        Estimates {
+            method: Method::Channels,
+            model: DEFAULT_MODEL,
+            value_si: [Some(0.0); PARAMETERS],
+            std_si: [Some(1e-6); PARAMETERS],
+            unobservable: Vec::new(),
+            determined: Vec::new(),
+            covariance_si: Vec::new(),
+            chi_square,
+            degrees_of_freedom,
+            std_scale: [1.0; 2],
+        }
+    }
+
+    #[test]
+    fn the_fit_check_passes_fails_and_says_when_nothing_checks_it() {
+        assert!(fit(&estimates(30.0, 28)).passed);
+        let misfit = fit(&estimates(400.0, 4));
+        assert!(!misfit.passed);
+        assert!(misfit.detail.starts_with("the residuals are 10.0 times what the dwell noise explains"), "{misfit:?}");
+        let none = fit(&estimates(0.0, 0));
+        assert_eq!((none.passed, none.detail.as_str()), (true, "no degrees of freedom: nothing checks the fit"));
+    }
+
+    #[test]
+    fn the_plausibility_check_fails_beyond_a_terms_magnitude_or_not_finite() {
+        assert!(plausibility(&estimates(0.0, 0)).passed);
+        let (first, _) = Term::AccelScaleFactor.parameters();
+        let mut e = estimates(0.0, 0);
+        e.value_si[first] = Some(1e13);
+        let check = plausibility(&e);
+        assert!(!check.passed && check.detail.starts_with("accel_scale_factor_x = 1e13"), "{check:?}");
+        let mut e = estimates(0.0, 0);
+        e.std_si[0] = Some(f64::NAN);
+        let check = plausibility(&e);
+        assert!(!check.passed && check.detail.starts_with("the standard error of gyro_bias_x = NaN"), "{check:?}");
+    }
 }
