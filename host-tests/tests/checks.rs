@@ -130,11 +130,14 @@ fn the_latitude_sign_flipped_fails_the_physics_check() {
     fails_physics_of(dir.path(), &rec, "latitude sign?");
 }
 
+/// A transformation of a row: heading and the six values.
+type RowFn = fn(f64, [f64; 6]) -> (f64, [f64; 6]);
+
 /// Accelerometers in g and swapped accelerometer axes: the core's input checks refuse the dwells (|f| far
 /// from g, gravity 90 deg from the reference), so no result is written: exit 1 with the physics hint.
 #[test]
 fn accelerometers_in_g_or_swapped_are_refused_with_the_hint() {
-    let cases: [(&str, &str, fn(f64, [f64; 6]) -> (f64, [f64; 6])); 2] = [
+    let cases: [(&str, &str, RowFn); 2] = [
         ("ing", "accelerometers in g, not m/s^2?", |h, v| {
             (h, std::array::from_fn(|i| if i < 3 { v[i] } else { v[i] / 9.80665 }))
         }),
