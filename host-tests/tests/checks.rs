@@ -1,4 +1,4 @@
-//! The checks that fail loudly (docs/cli.md#exit-status): the built-in example passes every check (exit 0);
+//! The checks that fail loudly (docs/cli.md#checks): the built-in example passes every check (exit 0);
 //! each impossible variant of it (headings half a turn off, gyros in deg/s, accelerometers in g, latitude sign,
 //! gyro axes swapped, a gyro axis negated, accelerometer axes swapped) fails the physics check with its hint on
 //! stderr and in the JSON (exit 3), or is refused as input with the hint (exit 1) where no result can be made;
