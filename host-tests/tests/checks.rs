@@ -1,4 +1,4 @@
-//! The checks that fail loudly (docs/cli.md#exit-status): the built-in example passes every check (exit 0);
+//! The checks that fail loudly (docs/cli.md#checks): the built-in example passes every check (exit 0);
 //! each impossible variant of it (headings half a turn off, gyros in deg/s, accelerometers in g, latitude sign,
 //! gyro axes swapped, a gyro axis negated, accelerometer axes swapped) fails the physics check with its hint on
 //! stderr and in the JSON (exit 3), or is refused as input with the hint (exit 1) where no result can be made;
@@ -130,11 +130,14 @@ fn the_latitude_sign_flipped_fails_the_physics_check() {
     fails_physics_of(dir.path(), &rec, "latitude sign?");
 }
 
+/// A transformation of a row: heading and the six values.
+type RowFn = fn(f64, [f64; 6]) -> (f64, [f64; 6]);
+
 /// Accelerometers in g and swapped accelerometer axes: the core's input checks refuse the dwells (|f| far
 /// from g, gravity 90 deg from the reference), so no result is written: exit 1 with the physics hint.
 #[test]
 fn accelerometers_in_g_or_swapped_are_refused_with_the_hint() {
-    let cases: [(&str, &str, fn(f64, [f64; 6]) -> (f64, [f64; 6])); 2] = [
+    let cases: [(&str, &str, RowFn); 2] = [
         ("ing", "accelerometers in g, not m/s^2?", |h, v| {
             (h, std::array::from_fn(|i| if i < 3 { v[i] } else { v[i] / 9.80665 }))
         }),
@@ -232,4 +235,59 @@ fn apply_of_an_implausible_scale_factor_fails() {
         stderr.trim(),
         "sinscal: check failed: plausibility: accel_scale_factor_std has 1e13, beyond the plausible 1e0 of any instrument"
     );
+}
+
+/// Gyros that cannot resolve the Earth rate (MEMS: noise 0.01 rad/s a sample, bias 0.005 rad/s, far above
+/// 15 deg/h) are not checked against it: the physics check passes and says so.
+#[test]
+fn mems_gyros_are_not_checked_against_the_earth_rate() {
+    let dir = tempfile::tempdir().unwrap();
+    let mut state = 7u64;
+    let mut gauss = move || {
+        // Sum of 12 uniform numbers: close enough to Gaussian for a noise floor.
+        (0..12)
+            .map(|_| {
+                state = state.wrapping_mul(6364136223846793005).wrapping_add(1442695040888963407);
+                (state >> 11) as f64 / (1u64 << 53) as f64
+            })
+            .sum::<f64>()
+            - 6.0
+    };
+    let noisy = std::cell::RefCell::new(move |v: [f64; 6]| -> [f64; 6] {
+        std::array::from_fn(|i| if i < 3 { v[i] + 0.005 + 0.01 * gauss() } else { v[i] })
+    });
+    let rec = variant(dir.path(), "mems", |h, v| (h, (noisy.borrow_mut())(v)), str::to_string);
+    let (code, stderr, v) = calibrate(dir.path(), &rec);
+    assert!(code == 0 || code == 3, "{stderr}");
+    let physics = check(&v, "physics");
+    assert_eq!(physics["passed"], true, "{physics}");
+    assert!(
+        physics["detail"].as_str().unwrap().contains("the gyros were not checked against the Earth rate"),
+        "{physics}"
+    );
+    assert!(!stderr.contains("physics"), "{stderr}");
+}
+
+/// Dwells without a heading are not used for the gyros' check; the example without its headings passes.
+#[test]
+fn dwells_without_a_heading_pass_the_physics_check() {
+    let dir = tempfile::tempdir().unwrap();
+    let text = std::fs::read_to_string(example(dir.path())).unwrap();
+    let rows: Vec<String> = text
+        .lines()
+        .map(|l| {
+            if l.starts_with('#') || l.starts_with("t_s") {
+                return l.to_string();
+            }
+            let mut cells: Vec<&str> = l.split(',').collect();
+            cells[4] = "";
+            cells.join(",")
+        })
+        .collect();
+    let rec = dir.path().join("nohead.csv");
+    std::fs::write(&rec, rows.join("\n") + "\n").unwrap();
+    let (code, stderr, v) = calibrate(dir.path(), &rec);
+    assert_eq!(code, 0, "{stderr}");
+    assert_eq!(check(&v, "physics")["passed"], true);
+    assert_eq!(check(&v, "fit")["passed"], true);
 }
