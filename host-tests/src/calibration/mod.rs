@@ -75,6 +75,19 @@ pub struct Options {
     /// General estimator: use the moves between dwells when the model has gyro scale factors or misalignments
     /// (docs/method.md#moves).
     pub use_moves: bool,
+    /// General estimator: how well the recording's attitudes are known, degrees (`--pose-tolerance`); `None`:
+    /// the header's `pose_tolerance_deg`, else [`DEFAULT_POSE_TOLERANCE_DEG`].
+    pub pose_tolerance_deg: Option<f64>,
+}
+
+/// The pose tolerance of a recording without `pose_tolerance_deg` in its header and without
+/// `--pose-tolerance`, degrees: its labels are exact (a turntable's). Chosen by measurement
+/// (docs/method.md#poses-known-to-a-tolerance); the importers of hand-placed sessions write their own.
+pub const DEFAULT_POSE_TOLERANCE_DEG: f64 = 0.0;
+
+/// The pose tolerance a calibration of a recording with this header uses, degrees.
+pub fn pose_tolerance_deg(options: &Options, header: &Header) -> f64 {
+    options.pose_tolerance_deg.or(header.pose_tolerance_deg).unwrap_or(DEFAULT_POSE_TOLERANCE_DEG)
 }
 
 impl Options {
@@ -101,6 +114,7 @@ impl Default for Options {
             estimate_attitudes: false,
             rest_force_tolerance_mps2: sinscal::run::sequence::SequenceSettings::default().rest.force_error_max_mps2,
             use_moves: true,
+            pose_tolerance_deg: None,
         }
     }
 }
@@ -171,6 +185,8 @@ pub struct Calibration {
     pub moves: Vec<UsedMove>,
     /// Passes of move integration and solution (0 without moves).
     pub move_passes: u32,
+    /// The pose tolerance the general estimator used, degrees (0: exact labels; the angle method's is 0).
+    pub pose_tolerance_deg: f64,
 }
 
 /// A move the general estimator used: between which dwells, where, how long, how far it turned, and how far the
@@ -326,6 +342,7 @@ pub fn calibrate_channels(recording: &impl RowSource, options: &Options) -> Resu
     let used_moves = used_moves(&move_samples, &integrated, &solution, &positions);
     let without_suspect = leave_out_suspects(&estimator, &solution, &positions, &move_samples, rate_var_radps2);
     Ok(Calibration {
+        pose_tolerance_deg: pose_tolerance_deg(options, header),
         without_suspect,
         source: source.to_string(),
         latitude_deg: header.latitude_deg,
@@ -400,6 +417,7 @@ pub fn channel_session(
         use_gyro: has_gyro,
         attitude,
         earth_rate_resolved,
+        pose_tolerance_rad: (pose_tolerance_deg(options, header) as f32).to_radians(),
         ..ChannelSettings::default()
     };
     let estimator = session_estimator(session_dwells(&positions), site, settings, options.dwell_value)
@@ -525,6 +543,7 @@ pub fn calibrate_angles(recording: &impl RowSource, options: &Options) -> Result
     let CalibrationResult { solution, passes, converged, .. } =
         calibrate_positions(&inputs, &site, &settings).map_err(|e| angle_error(e, &positions, source))?;
     Ok(Calibration {
+        pose_tolerance_deg: 0.0,
         source: source.to_string(),
         latitude_deg: header.latitude_deg,
         site,

@@ -143,6 +143,9 @@ pub struct CalibrationJson {
     pub dwell_value: &'static str,
     /// Samples not used as spikes, per dwell in the order of `positions` (docs/method.md#spikes).
     pub spikes_rejected: Vec<u32>,
+    /// How well the labelled attitudes were taken to be known, degrees (one standard deviation, each axis; 0:
+    /// exact), docs/method.md#poses-known-to-a-tolerance.
+    pub pose_tolerance_deg: f64,
     /// Extra: passes of the solution (1 = the paper's linear solution).
     pub passes: u32,
     /// Extra: whether the refinement converged.
@@ -325,6 +328,7 @@ impl CalibrationJson {
             gauge: c.channels.as_ref().map_or_else(Vec::new, gauge_names),
             prefilter,
             spikes_rejected: c.positions.iter().map(|p| p.summary.spikes).collect(),
+            pose_tolerance_deg: c.pose_tolerance_deg,
             dwell_value: match c.options.dwell_value {
                 DwellValue::Mean => "mean",
                 DwellValue::Settled => "settled",
@@ -384,6 +388,21 @@ fn show_term(out: &mut String, e: &Estimates, term: Term, title: &str, per_unit:
         let name = sinscal::calib::general::parameter_name(i);
         let axes = name.rsplit('_').next().unwrap_or("");
         let _ = writeln!(out, "  {axes:<2} {}", show(e, i, per_unit, decimals));
+    }
+}
+
+/// How the poses were taken: exact labels, known to a tolerance, or estimated.
+fn poses_line(c: &Calibration) -> String {
+    if c.channels.as_ref().is_some_and(estimated) {
+        "estimated from the data (|f| = g)".to_string()
+    } else if c.pose_tolerance_deg > 0.0 {
+        format!(
+            "the labels known to {} deg (one standard deviation, each axis): each dwell's attitude error is a \
+             nuisance with that prior",
+            c.pose_tolerance_deg
+        )
+    } else {
+        "the labels taken as exact".to_string()
     }
 }
 
@@ -456,7 +475,11 @@ pub fn summary(c: &Calibration) -> String {
         ),
     };
     let _ = writeln!(out, "method: {method}\nprefilter: {prefilter}; the {value} of each dwell");
-    let _ = writeln!(out, "spike gate: {}\n", spikes_line(c));
+    let _ = writeln!(out, "spike gate: {}", spikes_line(c));
+    if c.channels.is_some() {
+        let _ = writeln!(out, "poses: {}", poses_line(c));
+    }
+    let _ = writeln!(out);
     positions_table(&mut out, c);
     moves_table(&mut out, c);
     terms(&mut out, e);

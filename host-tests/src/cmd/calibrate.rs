@@ -114,6 +114,20 @@ pub struct CalibrationArgs {
     /// or misalignments: docs/method.md#moves).
     #[arg(long)]
     no_moves: bool,
+    /// Channel method: how well the recording's attitudes are known, degrees (one standard deviation, each axis;
+    /// 0 = exact labels): each dwell's attitude error is a nuisance with that prior. Default: the header's
+    /// pose_tolerance_deg, else 0 (docs/method.md#poses-known-to-a-tolerance).
+    #[arg(long, value_parser = parse_pose_tolerance)]
+    pose_tolerance: Option<f64>,
+}
+
+/// `--pose-tolerance`: degrees in [0, 10] (a bad value is a usage error, exit 2).
+fn parse_pose_tolerance(text: &str) -> Result<f64, String> {
+    let most = crate::io::recording::MAX_POSE_TOLERANCE_DEG;
+    match text.parse::<f64>() {
+        Ok(x) if (0.0..=most).contains(&x) => Ok(x),
+        _ => Err(format!("'{text}' is not a tolerance in degrees between 0 and {most}")),
+    }
 }
 
 /// `--rest-force-tolerance`: a positive number of m/s^2 (a bad value is a usage error, exit 2).
@@ -180,6 +194,7 @@ impl CalibrationArgs {
                 .rest_force_tolerance
                 .unwrap_or(sinscal::run::sequence::SequenceSettings::default().rest.force_error_max_mps2),
             use_moves: !self.no_moves,
+            pose_tolerance_deg: self.pose_tolerance,
         })
     }
 }

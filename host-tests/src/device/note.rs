@@ -52,6 +52,9 @@ pub struct OptionsNote {
     pub estimate_attitudes: bool,
     /// The firmware path's tolerance of rest, m/s^2.
     pub rest_force_tolerance_mps2: f32,
+    /// The pose tolerance asked for, degrees (`None`: the recording's header or the default).
+    #[serde(default)]
+    pub pose_tolerance_deg: Option<f64>,
 }
 
 /// Note format written.
@@ -93,6 +96,7 @@ impl Provenance {
                 terms: options.model.stored_bits(),
                 estimate_attitudes: options.estimate_attitudes,
                 rest_force_tolerance_mps2: options.rest_force_tolerance_mps2,
+                pose_tolerance_deg: options.pose_tolerance_deg,
             },
             plan: plan.clone(),
         }
@@ -143,6 +147,7 @@ impl Provenance {
             rest_force_tolerance_mps2: o.rest_force_tolerance_mps2,
             // The device's sequence does not integrate the moves.
             use_moves: false,
+            pose_tolerance_deg: o.pose_tolerance_deg,
         })
     }
 }

@@ -20,8 +20,8 @@ use crate::run::sequence::{Estimator, SequenceSettings};
 use crate::sensor::adis::Model;
 
 /// Bytes of a configuration's fixed part (IMU, estimator, site, positions, terms: 14; run settings: 12; rest
-/// limits: 12).
-pub const FIXED_BYTES: usize = 14 + 12 + 12;
+/// limits: 12; pose tolerance: 4).
+pub const FIXED_BYTES: usize = 14 + 12 + 12 + 4;
 /// Bytes of each position of the schedule.
 pub const POSITION_BYTES: usize = 16;
 /// Bytes of the thresholds at the end of a device configuration.
@@ -90,7 +90,13 @@ pub struct Configuration {
     pub estimate_reference_offset: bool,
     /// The limits of rest of the sequence's checks.
     pub rest: RestLimits,
+    /// How well the schedule's attitudes are known, rad (one standard deviation, each axis; 0: exact): the
+    /// general estimator's [`ChannelSettings::pose_tolerance_rad`].
+    pub pose_tolerance_rad: f32,
 }
+
+/// Largest pose tolerance a configuration carries, rad (10 deg).
+pub const MAX_POSE_TOLERANCE_RAD: f32 = 0.174_532_93;
 
 impl Configuration {
     /// The configuration of the sequence's defaults (the general estimator with its default terms, the paper's
@@ -117,13 +123,20 @@ impl Configuration {
             max_passes: s.calibration.max_passes.min(255) as u8,
             estimate_reference_offset: s.calibration.solver.estimate_reference_offset,
             rest: RestLimits::default(),
+            pose_tolerance_rad: 0.0,
         }
     }
 
     /// The sequence's estimator of the configuration.
     pub fn sequence_estimator(&self) -> Estimator {
-        let general =
-            |use_gyro| Estimator::Channels(ChannelSettings { model: self.terms, use_gyro, ..Default::default() });
+        let general = |use_gyro| {
+            Estimator::Channels(ChannelSettings {
+                model: self.terms,
+                use_gyro,
+                pose_tolerance_rad: self.pose_tolerance_rad,
+                ..Default::default()
+            })
+        };
         match self.estimator {
             EstimatorCode::Angles => Estimator::Angles,
             EstimatorCode::General => general(true),
@@ -174,6 +187,7 @@ impl Configuration {
         w.u8(prefilter.code()).u8(DwellValueCode::of(self.dwell_value).code());
         w.u8(self.max_passes).u8(self.estimate_reference_offset as u8).f32(a_gyro).f32(a_accel);
         w.f32(self.rest.force_error_max_mps2).f32(self.rest.gravity_angle_max_rad).f32(self.rest.rate_max_radps);
+        w.f32(self.pose_tolerance_rad);
         for (k, (a, label)) in self.schedule.iter().zip(&self.labels).enumerate() {
             let heading_unknown = self.unknown_headings >> k & 1 != 0;
             w.f32(a.pitch_rad).f32(a.roll_rad).f32(a.heading_rad).u16(*label).u16(heading_unknown as u16);
@@ -204,6 +218,7 @@ impl Configuration {
         let (a_gyro, a_accel) = (r.f32()?, r.f32()?);
         let rest =
             RestLimits { force_error_max_mps2: r.f32()?, gravity_angle_max_rad: r.f32()?, rate_max_radps: r.f32()? };
+        let pose_tolerance_rad = r.f32()?;
         let (Some(imu), Some(estimator), Some(terms), Some(prefilter), Some(dwell_value)) =
             (imu, estimator, terms, prefilter, dwell_value)
         else {
@@ -211,7 +226,8 @@ impl Configuration {
         };
         let positive = |x: f32| x.is_finite() && x > 0.0;
         let limits_ok = positive(rest.force_error_max_mps2) && positive(rest.gravity_angle_max_rad);
-        if count == 0 || count > MAX_POSITIONS || !(limits_ok && positive(rest.rate_max_radps)) {
+        let tolerance_ok = (0.0..=MAX_POSE_TOLERANCE_RAD).contains(&pose_tolerance_rad);
+        if count == 0 || count > MAX_POSITIONS || !(limits_ok && positive(rest.rate_max_radps) && tolerance_ok) {
             return Some(Err(WireError));
         }
         let (mut schedule, mut labels, mut unknown_headings) = (Vec::new(), Vec::new(), 0u64);
@@ -244,6 +260,7 @@ impl Configuration {
             max_passes,
             estimate_reference_offset,
             rest,
+            pose_tolerance_rad,
         }))
     }
 }

@@ -71,6 +71,7 @@ fn configuration(rng: &mut Rng) -> Configuration {
             gravity_angle_max_rad: rng.positive(),
             rate_max_radps: rng.positive(),
         },
+        pose_tolerance_rad: if rng.below(2) == 0 { 0.0 } else { 0.1 * rng.positive().min(1.0) },
     };
     for k in 0..positions {
         let [pitch_rad, roll_rad, heading_rad] = rng.vec3();
