@@ -53,7 +53,7 @@ impl Check {
 
 /// Every check of a calibration, in the order they are listed (adding a check is one line here).
 pub fn checks(c: &Calibration) -> Vec<Check> {
-    vec![physics(c), fit(&c.estimates), convergence(c), plausibility(&c.estimates), spikes(c)]
+    vec![physics(c), fit(&c.estimates, noise_dof(c)), convergence(c), plausibility(&c.estimates), spikes(c)]
 }
 
 /// The checks that failed, as the lines `calibrate` prints on stderr (`check failed: fit: ...`).
@@ -61,20 +61,37 @@ pub fn failed_lines<'a>(checks: impl IntoIterator<Item = &'a Check>) -> Vec<Stri
     checks.into_iter().filter(|c| !c.passed).map(|c| format!("check failed: {}: {}", c.check, c.detail)).collect()
 }
 
-/// The p-value of the fit's chi-square on its degrees of freedom; `None` without degrees of freedom.
-pub fn fit_p_value(e: &Estimates) -> Option<f64> {
-    let dof = e.degrees_of_freedom;
-    (dof > 0).then(|| 1.0 - crate::stats::noise::chi_square_cdf(e.chi_square, dof as f64))
+/// The p-value of the fit's chi-square on its degrees of freedom, when the dwell noise it is weighted by is
+/// itself estimated with `noise_dof` degrees of freedom: `chi-square / dof` is then F-distributed with (dof,
+/// noise_dof) degrees of freedom, not chi-square / dof (with 12 noise degrees of freedom its 0.1 % point for 6
+/// fit degrees of freedom is 8.4, not 3.7); infinite `noise_dof` is the chi-square test. `None` without
+/// degrees of freedom.
+pub fn fit_p_value(e: &Estimates, noise_dof: f64) -> Option<f64> {
+    let dof = e.degrees_of_freedom as f64;
+    (dof > 0.0).then(|| 1.0 - crate::stats::noise::f_cdf(e.chi_square / dof, dof, noise_dof))
+}
+
+/// The degrees of freedom of the dwell noise a calibration's fit is weighted by: the fewest of its channels'
+/// pooled noise estimates (the accelerometers', and the gyros' where used; docs/method.md#honest-errors).
+/// Taking the fewest makes the fit check lenient where one channel's noise is poorly known.
+pub fn noise_dof(c: &Calibration) -> f64 {
+    let noise = pool_mean_noise(c.positions.iter().map(|p| p.summary));
+    let first = if c.has_gyro { 0 } else { 3 };
+    noise[first..].iter().map(|m| m.dof as f64).filter(|d| *d > 0.0).fold(f64::INFINITY, f64::min)
 }
 
 /// `fit`: the estimator's chi-square against its degrees of freedom at the 0.1 % level.
-pub fn fit(e: &Estimates) -> Check {
-    let Some(p_value) = fit_p_value(e) else {
+pub fn fit(e: &Estimates, noise_dof: f64) -> Check {
+    let Some(p_value) = fit_p_value(e, noise_dof) else {
         return Check::new("fit", true, "no degrees of freedom: nothing checks the fit");
     };
     let ratio = e.chi_square / e.degrees_of_freedom as f64;
-    let what =
-        format!("chi-square {:.2} on {} degrees of freedom, p = {p_value:.3}", e.chi_square, e.degrees_of_freedom);
+    let noise =
+        if noise_dof.is_finite() { format!(", the dwell noise estimated with {noise_dof:.0}") } else { String::new() };
+    let what = format!(
+        "chi-square {:.2} on {} degrees of freedom{noise}, p = {p_value:.3}",
+        e.chi_square, e.degrees_of_freedom
+    );
     if p_value < MISFIT_LEVEL {
         let detail = format!(
             "the residuals are {:.1} times what the dwell noise explains ({what}): the model misses something",

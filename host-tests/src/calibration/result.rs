@@ -500,7 +500,7 @@ pub fn summary(c: &Calibration) -> String {
             gauge_names(s).join(", ")
         );
     }
-    fit(&mut out, e);
+    fit(&mut out, e, crate::calibration::checks::noise_dof(c));
     suspects(&mut out, c);
     checks_line(&mut out, &crate::calibration::checks::checks(c));
     out
@@ -682,12 +682,12 @@ fn terms(out: &mut String, e: &Estimates) {
 }
 
 /// The chi-square of the fit and, when it is significant, what the model misses.
-fn fit(out: &mut String, e: &Estimates) {
+fn fit(out: &mut String, e: &Estimates, noise_dof: f64) {
     let dof = e.degrees_of_freedom;
     let _ = write!(out, "Fit: chi-square {:.2} on {dof} degrees of freedom", e.chi_square);
     if dof > 0 {
         let ratio = e.chi_square / dof as f64;
-        let p_value = crate::calibration::checks::fit_p_value(e).unwrap_or(1.0);
+        let p_value = crate::calibration::checks::fit_p_value(e, noise_dof).unwrap_or(1.0);
         let _ = write!(out, " (ratio {ratio:.2}, p = {p_value:.3})");
         if p_value < crate::calibration::checks::MISFIT_LEVEL {
             let _ = write!(

@@ -260,7 +260,7 @@ impl ChannelEstimator {
     }
 
     /// One Gauss-Newton pass at `theta` and the dwells' `attitude`: structural rank, weighted solution of the
-    /// determined parameters.
+    /// determined parameters and of a completion of the undetermined ones (see [`Pass::solved`]).
     pub(super) fn pass(
         &self,
         theta: &[f32; PARAMETERS],
@@ -287,7 +287,8 @@ impl ChannelEstimator {
         }
         let (weighted, structure) = self.factors(&design, &used, moves, &scale, &scale_s);
         let (determined, blind_spots, gauge) = self.structural_rank(&structure.r, cols, n);
-        let pass = Pass { scale, determined, blind_spots, gauge, ..Pass::default() };
+        let solved = self.completion(&structure.r, &determined, &scale_s, gauge, cols, n);
+        let pass = Pass { scale, determined, solved, blind_spots, gauge, ..Pass::default() };
         restricted_solution(pass, &weighted, n)
     }
 
@@ -405,7 +406,7 @@ pub(super) struct Design<'a> {
 fn restricted_solution(mut pass: Pass, weighted: &SqrtInfo<PARAMETERS>, n: usize) -> Pass {
     let mut kept = [0usize; PARAMETERS];
     let mut m = 0;
-    for (c, &d) in pass.determined.iter().enumerate().take(n) {
+    for (c, &d) in pass.solved.iter().enumerate().take(n) {
         if d {
             kept[m] = c;
             m += 1;
@@ -465,9 +466,14 @@ pub(super) struct Pass {
     pub(super) scale: [f32; PARAMETERS],
     /// Whether each model column is determined by the schedule.
     pub(super) determined: [bool; PARAMETERS],
-    /// The weighted factor of the determined columns.
+    /// Whether each model column is solved for: the determined ones, and a completion of the undetermined ones
+    /// that the schedule sees in combination (a vertical accelerometer's bias and scale factor from one pose:
+    /// their sum is seen, neither alone). The completion carries that combination, so that it is fitted and not
+    /// left in the residuals as a misfit; its parameters stay unobservable (never reported, never compensated).
+    pub(super) solved: [bool; PARAMETERS],
+    /// The weighted factor of the solved columns.
     pub(super) restricted: [[f32; PARAMETERS]; PARAMETERS],
-    /// Model columns of the determined parameters, and their number.
+    /// Model columns of the solved parameters, and their number.
     pub(super) kept: [usize; PARAMETERS],
     pub(super) kept_count: usize,
     /// Blind spots of the structural design before the gauge, and the gauge's parameter bits.
@@ -482,6 +488,7 @@ impl Default for Pass {
             cov_scaled: [[0.0; PARAMETERS]; PARAMETERS],
             scale: [0.0; PARAMETERS],
             determined: [false; PARAMETERS],
+            solved: [false; PARAMETERS],
             restricted: [[0.0; PARAMETERS]; PARAMETERS],
             kept: [0; PARAMETERS],
             kept_count: 0,

@@ -4,7 +4,7 @@
 use crate::calib::general::estimator::{ChannelEstimator, Design};
 use crate::calib::general::settings::AttitudeKnowledge;
 use crate::calib::general::terms::{Term, GAUGE_PARAMETERS, PARAMETERS};
-use crate::math::lsq::jacobi_svd;
+use crate::math::lsq::{jacobi_svd, SqrtInfo};
 use crate::nav::earth::EARTH_RATE_RADPS;
 
 /// Smallest largest input of a proportional term, as a fraction of its full scale (g for the accelerometer
@@ -39,6 +39,49 @@ impl ChannelEstimator {
             determined = self.determined_columns(&fixed, n).0;
         }
         (determined, blind_spots, gauge)
+    }
+
+    /// The columns solved for: the determined ones, then, in model order, each undetermined column that the
+    /// schedule exercises (a structural norm above zero), that is not held by the gauge, and that is independent
+    /// of the columns taken before it: its distance from their span, in the unit-column structural factor,
+    /// above ten times the rank tolerance. The factor is triangularised again with the determined columns first;
+    /// a column's distance from the span of those before it is then its diagonal entry.
+    pub(super) fn completion(
+        &self,
+        r: &[[f32; PARAMETERS]; PARAMETERS],
+        determined: &[bool; PARAMETERS],
+        scale_s: &[f32; PARAMETERS],
+        gauge: u64,
+        cols: &[usize; PARAMETERS],
+        n: usize,
+    ) -> [bool; PARAMETERS] {
+        let mut solved = *determined;
+        let mut order = [0usize; PARAMETERS];
+        let mut m = 0;
+        for first in [true, false] {
+            for c in 0..n {
+                let candidate = !determined[c] && scale_s[c] > 0.0 && gauge & (1 << cols[c]) == 0;
+                if (first && determined[c]) || (!first && candidate) {
+                    order[m] = c;
+                    m += 1;
+                }
+            }
+        }
+        let mut permuted = SqrtInfo::<PARAMETERS>::new(m);
+        for row in r.iter().take(n) {
+            let mut p = [0.0f32; PARAMETERS];
+            for (slot, &c) in p.iter_mut().zip(order.iter()).take(m) {
+                *slot = row[c];
+            }
+            permuted.add_row(&p, 0.0);
+        }
+        let tolerance = 10.0 * self.settings.rank_tolerance;
+        for (k, &c) in order.iter().enumerate().take(m) {
+            if !determined[c] && permuted.r[k][k].abs() > tolerance {
+                solved[c] = true;
+            }
+        }
+        solved
     }
 
     /// SVD of a structural factor of `n` columns: whether each column is determined (its squared share in the
