@@ -605,7 +605,7 @@ pub struct RunOutcome {
     /// Passes of move integration and solution.
     pub move_passes: u32,
     /// The fit scale of the gyro terms and of the others (docs/method.md#fit-scale).
-    pub std_scale: [f64; 2],
+    pub std_scale: [f64; 6],
     /// Per parameter: the error of the reference estimator on the same run ([`reference_errors`]), SI.
     pub reference_errors_si: Vec<f64>,
 }

@@ -47,10 +47,12 @@ pub struct Estimates {
     pub chi_square: f64,
     /// Degrees of freedom.
     pub degrees_of_freedom: u32,
-    /// The factors the standard errors (and the covariance's square root) carry beyond the dwell noise, for the
-    /// gyro terms and for the others: `S = sqrt(chi_square / degrees_of_freedom)` of that sensor's channels when
-    /// their chi-square is beyond its 95 % point, else 1 (docs/method.md#fit-scale). The angle method's are 1.
-    pub std_scale: [f64; 2],
+    /// The factors the standard errors (and the covariance's square root) carry beyond the dwell noise, one per
+    /// channel (gyro x, y, z, accelerometer x, y, z): `S = sqrt(chi_square / degrees_of_freedom)` of that
+    /// channel's residuals when their chi-square is beyond its 95 % point, else 1 (docs/method.md#fit-scale). A
+    /// parameter carries its channel's (a term's row axis: axis i's bias, scale factor, misalignments and
+    /// g-sensitivities), the reference offset the largest. The angle method's are 1.
+    pub std_scale: [f64; 6],
 }
 
 impl Estimates {
@@ -79,45 +81,62 @@ impl Estimates {
     pub fn from_session(estimator: &ChannelEstimator, s: &ChannelSolution, excluded: u64) -> Estimates {
         let mut e = Estimates::from_channels(s);
         let use_gyro = estimator.settings().use_gyro;
-        let (mut chi, mut rows) = ([0.0f64; 2], [0i64; 2]);
-        let mut nuisance = [0i64; 2];
+        // Per channel: chi-square, rows, and what the parameters and nuisances take of them (fractions where a
+        // parameter or a nuisance angle is shared: an estimated heading by the three gyros, a tilt by the three
+        // accelerometers, the reference offset by every channel).
+        let (mut chi, mut rows, mut taken) = ([0.0f64; 6], [0.0f64; 6], [0.0f64; 6]);
+        let prior_tilt = estimator.settings().pose_tolerance_rad > 0.0 && s.attitude == AttitudeKnowledge::Reference;
         for (k, d) in estimator.dwells().iter().enumerate().take(s.dwells) {
             if k < 64 && excluded & (1 << k) != 0 {
                 continue;
             }
             for i in 0..3 {
                 if use_gyro {
-                    chi[0] += (s.residual_rate_b_radps[k][i] as f64).powi(2) / d.rate_mean_var_b_radps2[i] as f64;
-                    rows[0] += 1;
+                    chi[i] += (s.residual_rate_b_radps[k][i] as f64).powi(2) / d.rate_mean_var_b_radps2[i] as f64;
+                    rows[i] += 1.0;
+                    // An estimated heading (a free one: a prior row pays for its own) is the gyros' to determine.
+                    if s.heading_std_rad[k] > 0.0 && d.heading_rad.is_none() {
+                        taken[i] += 1.0 / 3.0;
+                    }
                 }
-                chi[1] += (s.residual_force_b_mps2[k][i] as f64).powi(2) / d.force_mean_var_b_mps2sq[i] as f64;
-                rows[1] += 1;
+                chi[3 + i] += (s.residual_force_b_mps2[k][i] as f64).powi(2) / d.force_mean_var_b_mps2sq[i] as f64;
+                rows[3 + i] += 1.0;
+                // An estimated tilt is the accelerometers' (a tilt known to a tolerance pays with its prior row).
+                if s.attitude == AttitudeKnowledge::Unknown && !prior_tilt {
+                    taken[3 + i] += 2.0 / 3.0;
+                }
             }
-            // An estimated heading is the gyros' to determine; an estimated tilt the accelerometers'.
-            nuisance[0] += i64::from(s.heading_std_rad[k] > 0.0);
-            nuisance[1] += if s.attitude == AttitudeKnowledge::Unknown { 2 } else { 0 };
         }
         // The moves are gyro rows too.
         for k in 0..s.moves.min(s.move_rows.len()) {
             if s.move_rows[k] > 0 && s.move_statistic[k] >= 0.0 {
-                chi[0] += s.move_statistic[k] as f64;
-                rows[0] += i64::from(s.move_rows[k]);
+                for i in 0..3 {
+                    chi[i] += s.move_statistic[k] as f64 / 3.0;
+                    rows[i] += f64::from(s.move_rows[k]) / 3.0;
+                }
             }
         }
-        let mut params = [0i64; 2];
         for &i in &e.determined {
-            params[sensor_of(i)] += 1;
+            match channel_of(i) {
+                Some(ch) => taken[ch] += 1.0,
+                None => {
+                    let first = if use_gyro { 0 } else { 3 };
+                    for t in taken.iter_mut().skip(first) {
+                        *t += 1.0 / (6 - first) as f64;
+                    }
+                }
+            }
         }
         e.std_scale = core::array::from_fn(|g| {
-            let dof = rows[g] - params[g] - nuisance[g];
-            if dof <= 0 || !chi[g].is_finite() {
+            let dof = rows[g] - taken[g];
+            if dof < 0.5 || !chi[g].is_finite() {
                 return 1.0;
             }
             // Only a chi-square beyond its 95 % point says the sensor's dwell means scatter more than their noise:
             // below it, a ratio above 1 is the noise's own fluctuation and scaling by it would overstate errors.
-            let p_value = 1.0 - crate::stats::noise::chi_square_cdf(chi[g], dof as f64);
+            let p_value = 1.0 - crate::stats::noise::chi_square_cdf(chi[g], dof);
             if p_value < FIT_SCALE_LEVEL {
-                (chi[g] / dof as f64).sqrt()
+                (chi[g] / dof).sqrt()
             } else {
                 1.0
             }
@@ -129,10 +148,12 @@ impl Estimates {
     /// Multiplies the covariance by the scales (entry `(i, j)` by `S(i) S(j)`) and takes each standard error as
     /// the square root of its entry, in f32 as the core's values are: every number written stays an f32.
     fn apply_scale(&mut self) {
-        if self.std_scale == [1.0; 2] {
+        if self.std_scale == [1.0; 6] {
             return;
         }
-        let scale: Vec<f64> = self.determined.iter().map(|&i| self.std_scale[sensor_of(i)]).collect();
+        let largest = self.std_scale.iter().fold(1.0f64, |m, s| m.max(*s));
+        let scale: Vec<f64> =
+            self.determined.iter().map(|&i| channel_of(i).map_or(largest, |ch| self.std_scale[ch])).collect();
         for (a, row) in self.covariance_si.iter_mut().enumerate() {
             for (b, c) in row.iter_mut().enumerate() {
                 *c = (*c as f32 * (scale[a] * scale[b]) as f32) as f64;
@@ -186,7 +207,7 @@ impl Estimates {
             covariance_si: Vec::new(),
             chi_square,
             degrees_of_freedom,
-            std_scale: [1.0; 2],
+            std_scale: [1.0; 6],
         }
     }
 
@@ -210,12 +231,24 @@ impl Estimates {
 pub const FIT_SCALE_LEVEL: f64 = 0.05;
 
 /// 0 for a gyro term's parameter, 1 for the accelerometers' and the reference offset's (seen through the tilt).
-fn sensor_of(index: usize) -> usize {
-    let gyro = Term::ALL.iter().any(|t| {
+/// The channel (gyro x, y, z, accelerometer x, y, z) whose residuals a parameter answers to: the row axis of its
+/// term (axis i's bias, scale factor, misalignments, g-sensitivities); `None` for the reference offset, which
+/// every channel sees.
+fn channel_of(index: usize) -> Option<usize> {
+    Term::ALL.iter().find_map(|t| {
         let (first, count) = t.parameters();
-        t.is_gyro() && (first..first + count).contains(&index)
-    });
-    usize::from(!gyro)
+        if !(first..first + count).contains(&index) {
+            return None;
+        }
+        let k = index - first;
+        let axis = match t.info().axes {
+            sinscal::calib::general::Axes::Body => k,
+            sinscal::calib::general::Axes::OffDiagonal => k / 2,
+            sinscal::calib::general::Axes::Matrix => k / 3,
+            sinscal::calib::general::Axes::Navigation => return None,
+        };
+        Some(if t.is_gyro() { axis } else { 3 + axis })
+    })
 }
 
 /// Parses `--model`: `biases`, `full`, or a comma list of term names. `position_error` is analyze's.

@@ -121,10 +121,10 @@ pub struct CalibrationJson {
     pub chi_square: f64,
     /// Its degrees of freedom.
     pub degrees_of_freedom: u32,
-    /// Extra: the factors the standard errors and the covariance's square root carry beyond the dwell noise,
-    /// gyro terms and the others: `sqrt(chi_square / degrees_of_freedom)` of that sensor's channels when that
-    /// chi-square is beyond its 95 % point, else 1.
-    pub std_scale: [f64; 2],
+    /// The factors the standard errors and the covariance's square root carry beyond the dwell noise, one per
+    /// channel (gyro x, y, z, accelerometer x, y, z): `sqrt(chi_square / degrees_of_freedom)` of that channel's
+    /// residuals when that chi-square is beyond its 95 % point, else 1 (docs/method.md#fit-scale).
+    pub fit_scale: [f64; 6],
     /// Extra: the determined parameters again without the suspect positions (channel method, when some are).
     #[serde(skip_serializing_if = "Option::is_none")]
     pub without_suspect: Option<WithoutSuspectJson>,
@@ -313,7 +313,7 @@ impl CalibrationJson {
             unobservable: e.unobservable_names(),
             chi_square: e.chi_square,
             degrees_of_freedom: e.degrees_of_freedom,
-            std_scale: e.std_scale,
+            fit_scale: e.std_scale,
             without_suspect: c.without_suspect.as_ref().map(|(positions, w)| WithoutSuspectJson {
                 positions: positions.clone(),
                 parameters: w.determined_names(),
@@ -696,12 +696,13 @@ fn fit(out: &mut String, e: &Estimates, noise_dof: f64) {
                 ratio.sqrt()
             );
         }
-        if e.std_scale != [1.0; 2] {
+        if e.std_scale != [1.0; 6] {
+            let s = e.std_scale;
             let _ = write!(
                 out,
-                "\n  Standard errors above are {:.2} (gyro terms) and {:.2} (accelerometer terms) times those of the \
-                 dwell noise alone: the fit scale of each sensor's channels.",
-                e.std_scale[0], e.std_scale[1]
+                "\n  Fit scale per channel (the factor a channel's terms' standard errors above carry beyond the dwell \
+                 noise alone): gyro x {:.2}, y {:.2}, z {:.2}; accelerometer x {:.2}, y {:.2}, z {:.2}.",
+                s[0], s[1], s[2], s[3], s[4], s[5]
             );
         }
     }
