@@ -42,17 +42,10 @@ fn device_run_then_show_gives_the_host_replay_json() {
     let empty = sinscal().args(["device", "show", "--qemu", "--flash"]).arg(&flash).output().unwrap();
     assert_eq!(empty.status.code(), Some(1), "{}", String::from_utf8_lossy(&empty.stderr));
     assert!(String::from_utf8_lossy(&empty.stderr).contains("no calibration record is stored"));
-    // The full model through the firmware path misfits this 30-s example (chi-square 6243 on 18 degrees of
-    // freedom): the fit check fails, exit 3, the result still written and stored; the biases fit.
-    let checked = |code: Option<i32>, stderr: &str, model: &str, what: &str| match model {
-        "full" => {
-            assert_eq!(code, Some(3), "{what}: {stderr}");
-            assert!(
-                stderr.lines().any(|l| l.starts_with("sinscal: check failed: fit: the residuals are ")),
-                "{stderr}"
-            );
-        }
-        _ => assert_eq!(code, Some(0), "{what}: {stderr}"),
+    // Every check passes, with either model (the full model's unobservable terms are fitted together as the
+    // completion, docs/method.md#observability, not left in the residuals).
+    let checked = |code: Option<i32>, stderr: &str, _model: &str, what: &str| {
+        assert_eq!(code, Some(0), "{what}: {stderr}");
     };
     for (model, store) in [("biases", 1), ("full", 2)] {
         let run = sinscal()

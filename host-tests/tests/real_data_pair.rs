@@ -28,7 +28,9 @@ fn ferraris_x_up_x_down_pair_with_unknown_headings() {
     pair.rows.retain(|r| r.pos == 1 || r.pos == 2);
     pair.rows.iter_mut().for_each(|r| r.heading_deg = None);
     let model = Model::BIASES.with(Term::AccelScaleFactor).with(Term::GyroScaleFactor);
-    let options = Options { model, prefilter: PrefilterKind::None, ..Options::default() };
+    // The closed form takes the labels as exact attitudes (tolerance 0, not the importer's 1 deg).
+    let options =
+        Options { model, prefilter: PrefilterKind::None, pose_tolerance_deg: Some(0.0), ..Options::default() };
     let cal = calibrate(&pair, &options).expect("the pair calibrates");
     let e = &cal.estimates;
     let g = site_of(&pair.header).0.gravity_mps2 as f64;

@@ -621,15 +621,18 @@ mod tests {
             }
             let solution = estimator.solve().unwrap();
             let determined: Vec<usize> = (0..PARAMETERS).filter(|&i| solution.estimate(i).is_some()).collect();
+            // The completion (docs/method.md#observability) is free in the solution: free in the bound too.
+            let solved: Vec<usize> =
+                (0..PARAMETERS).filter(|&i| determined.contains(&i) || solution.completion & (1 << i) != 0).collect();
             let spans: Vec<DwellSpan> =
                 (0..6).map(|k| DwellSpan { first_sample: 1000 * k as u64, samples: 1 }).collect();
             let covariance = var.map(|v| {
                 let n = ChannelNoise { white_sample_std_si: v.sqrt(), ..ChannelNoise::default() };
                 dwell_mean_covariance(&n, &spans, 0.01)
             });
-            let bound = cramer_rao(&design(&session, &theta), &covariance, &determined).unwrap();
-            for (i, &a) in determined.iter().enumerate() {
-                for (j, &b) in determined.iter().enumerate() {
+            let bound = cramer_rao(&design(&session, &theta), &covariance, &solved).unwrap();
+            for (i, &a) in solved.iter().enumerate().filter(|(_, a)| determined.contains(a)) {
+                for (j, &b) in solved.iter().enumerate().filter(|(_, b)| determined.contains(b)) {
                     let core = solution.covariance_si[a][b] as f64;
                     let scale = (bound.covariance_si[i][i] * bound.covariance_si[j][j]).sqrt();
                     assert!(

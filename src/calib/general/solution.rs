@@ -22,6 +22,9 @@ pub struct ChannelSolution {
     pub observable: u64,
     /// Bit i: parameter i is in the model and the schedule cannot determine it.
     pub unobservable: u64,
+    /// Bit i: parameter i is unobservable but was solved for as part of the completion that carries what the
+    /// schedule sees of the undetermined parameters together (never reported, never compensated).
+    pub completion: u64,
     /// Covariance of the determined parameters, SI units; rows and columns of the others are zero.
     pub covariance_si: [[f32; PARAMETERS]; PARAMETERS],
     /// Number of dwells.
@@ -87,6 +90,7 @@ impl ChannelSolution {
             parameters_si: [0.0; PARAMETERS],
             observable: 0,
             unobservable: 0,
+            completion: 0,
             covariance_si: [[0.0; PARAMETERS]; PARAMETERS],
             dwells,
             heading_rad: [0.0; MAX_DWELLS],
@@ -154,6 +158,9 @@ impl ChannelEstimator {
                 }
             } else {
                 sol.unobservable |= 1 << p;
+                if pass.solved[c] {
+                    sol.completion |= 1 << p;
+                }
             }
         }
         let first = if self.settings.use_gyro { 0 } else { 3 };

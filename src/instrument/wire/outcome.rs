@@ -24,9 +24,9 @@ use crate::run::sequence::{AbortReason, SequenceFailure, SequenceSolution};
 /// Magic of an encoded outcome.
 pub const MAGIC: [u8; 4] = *b"SSRO";
 /// Largest encoded outcome, bytes: the counters and failure (76), [`MAX_POSITIONS`] positions of 404 bytes,
-/// and the general estimator's solution (5,416 and 48 per dwell; the angle method's, 520 and 12 per position,
-/// is smaller). For 64 positions: 34,416.
-pub const MAX_BYTES: usize = 76 + MAX_POSITIONS * 404 + 5_416 + MAX_DWELLS * 48;
+/// and the general estimator's solution (5,424 and 48 per dwell; the angle method's, 520 and 12 per position,
+/// is smaller). For 64 positions: 34,424.
+pub const MAX_BYTES: usize = 76 + MAX_POSITIONS * 404 + 5_424 + MAX_DWELLS * 48;
 
 /// What a calibration produced, borrowed: from an [`Outcome`], or from a running device's sequence.
 #[derive(Clone, Copy, Debug)]
@@ -345,7 +345,7 @@ fn decode_angles(r: &mut Reader<'_>) -> Option<CalibrationResult> {
 
 /// The general estimator's solution; the per-dwell arrays for its dwells only.
 fn encode_general(w: &mut Writer<'_>, c: &ChannelSolution) {
-    w.u32(c.model.stored_bits() as u32).f32s(&c.parameters_si).u64(c.observable).u64(c.unobservable);
+    w.u32(c.model.stored_bits() as u32).f32s(&c.parameters_si).u64(c.observable).u64(c.unobservable).u64(c.completion);
     for row in &c.covariance_si {
         w.f32s(row);
     }
@@ -373,7 +373,7 @@ fn decode_general(r: &mut Reader<'_>) -> Option<Result<ChannelSolution, WireErro
     };
     let mut parameters_si = [0.0f32; PARAMETERS];
     r.f32s(&mut parameters_si)?;
-    let (observable, unobservable) = (r.u64()?, r.u64()?);
+    let (observable, unobservable, completion) = (r.u64()?, r.u64()?, r.u64()?);
     let mut covariance_si = [[0.0f32; PARAMETERS]; PARAMETERS];
     for row in covariance_si.iter_mut() {
         r.f32s(row)?;
@@ -383,8 +383,8 @@ fn decode_general(r: &mut Reader<'_>) -> Option<Result<ChannelSolution, WireErro
         return Some(Err(WireError));
     }
     let mut c = ChannelSolution::empty(model, dwells);
-    (c.parameters_si, c.observable, c.unobservable, c.covariance_si) =
-        (parameters_si, observable, unobservable, covariance_si);
+    (c.parameters_si, c.observable, c.unobservable, c.completion, c.covariance_si) =
+        (parameters_si, observable, unobservable, completion, covariance_si);
     r.f32s(&mut c.heading_rad[..dwells])?;
     r.f32s(&mut c.heading_std_rad[..dwells])?;
     for k in 0..dwells {

@@ -148,6 +148,7 @@ fn general_solution(rng: &mut Rng, model: Terms, dwells: usize) -> ChannelSoluti
     let mut c = ChannelSolution::empty(model, dwells);
     c.parameters_si.iter_mut().for_each(|p| *p = rng.f32());
     (c.observable, c.unobservable, c.suspect, c.gauge) = (rng.next(), rng.next(), rng.next(), rng.next());
+    c.completion = rng.next();
     c.covariance_si.iter_mut().flatten().for_each(|v| *v = rng.f32());
     for k in 0..dwells {
         (c.heading_rad[k], c.heading_std_rad[k], c.dwell_statistic[k]) = (rng.f32(), rng.f32(), rng.f32());
