@@ -190,6 +190,8 @@ fn bad_input_exits_1_with_file_line_and_reason() {
     let out = sinscal().arg("calibrate").arg(&tilted).args(["--json", "-"]).assert().code(3);
     let stderr = String::from_utf8(out.get_output().stderr.clone()).unwrap();
     assert!(stderr.contains("check failed: fit"), "{stderr}");
+    // The fit check tries the labels known to a degree, which fit: it names the cause.
+    assert!(stderr.contains("poses off their labels? with --pose-tolerance 1 the fit passes"), "{stderr}");
     let v: Value = serde_json::from_slice(&out.get_output().stdout).unwrap();
     let suspect: Vec<bool> =
         v["positions"].as_array().unwrap().iter().map(|p| p["suspect"].as_bool().unwrap()).collect();

@@ -53,7 +53,11 @@ impl Check {
 
 /// Every check of a calibration, in the order they are listed (adding a check is one line here).
 pub fn checks(c: &Calibration) -> Vec<Check> {
-    vec![physics(c), fit(&c.estimates, noise_dof(c)), convergence(c), plausibility(&c.estimates), spikes(c)]
+    let mut fit = fit(&c.estimates, noise_dof(c));
+    if let Some(hint) = c.fit_hint.as_ref().filter(|_| !fit.passed) {
+        fit.detail = format!("{hint}; {}", fit.detail);
+    }
+    vec![physics(c), fit, convergence(c), plausibility(&c.estimates), spikes(c)]
 }
 
 /// The checks that failed, as the lines `calibrate` prints on stderr (`check failed: fit: ...`).

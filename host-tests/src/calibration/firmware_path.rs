@@ -243,6 +243,7 @@ pub fn calibration_from_outcome(
     })?;
     let on_firmware = |estimates, solution, channels, without_suspect, passes, converged| Calibration {
         pose_tolerance_deg: (outcome.configuration.pose_tolerance_rad as f64).to_degrees(),
+        fit_hint: None,
         source: source.to_string(),
         latitude_deg: rec.header().latitude_deg,
         site,

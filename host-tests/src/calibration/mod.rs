@@ -187,6 +187,8 @@ pub struct Calibration {
     pub move_passes: u32,
     /// The pose tolerance the general estimator used, degrees (0: exact labels; the angle method's is 0).
     pub pose_tolerance_deg: f64,
+    /// What the fit check adds when it fails: the alternative that fits (`sinscal calibrate` sets it).
+    pub fit_hint: Option<String>,
 }
 
 /// A move the general estimator used: between which dwells, where, how long, how far it turned, and how far the
@@ -343,6 +345,7 @@ pub fn calibrate_channels(recording: &impl RowSource, options: &Options) -> Resu
     let without_suspect = leave_out_suspects(&estimator, &solution, &positions, &move_samples, rate_var_radps2);
     Ok(Calibration {
         pose_tolerance_deg: pose_tolerance_deg(options, header),
+        fit_hint: None,
         without_suspect,
         source: source.to_string(),
         latitude_deg: header.latitude_deg,
@@ -544,6 +547,7 @@ pub fn calibrate_angles(recording: &impl RowSource, options: &Options) -> Result
         calibrate_positions(&inputs, &site, &settings).map_err(|e| angle_error(e, &positions, source))?;
     Ok(Calibration {
         pose_tolerance_deg: 0.0,
+        fit_hint: None,
         source: source.to_string(),
         latitude_deg: header.latitude_deg,
         site,

@@ -5,7 +5,7 @@ use std::path::{Path, PathBuf};
 
 use clap::ValueEnum;
 use sinscal::calib::align::DwellValue;
-use sinscal::calib::general::Model;
+use sinscal::calib::general::{AttitudeKnowledge, Model};
 
 use crate::calibration::checks::{failed_lines, physics_of, PhysicsDwell};
 use crate::calibration::estimates::parse_model;
@@ -209,8 +209,34 @@ pub fn run(args: Args) -> anyhow::Result<()> {
         Some(OnArg::Host) => calibrate_on_host(&rec, &options),
         Some(OnArg::Qemu) => calibrate_on_qemu(&rec, &options),
     };
-    let cal = cal.map_err(|e| with_physics_hint(e, &rec, &options))?;
+    let mut cal = cal.map_err(|e| with_physics_hint(e, &rec, &options))?;
+    cal.fit_hint = pose_tilt_hint(&cal, &rec, &options);
     finish(&cal, args.json.as_deref())
+}
+
+/// The pose tolerance the fit check tries when exact labels misfit, degrees (a hand-placed pose).
+const HINT_POSE_TOLERANCE_DEG: f64 = 1.0;
+
+/// When the general estimator's fit fails its check with the labels taken as exact, whether the labels known to
+/// a degree fit: then the misfit is the poses', not the sensor's, and the fit check says so (the same
+/// calibration again, on the workstation, with `--pose-tolerance 1`).
+fn pose_tilt_hint(cal: &Calibration, rec: &RecordingFile, options: &Options) -> Option<String> {
+    let exact = cal.pose_tolerance_deg == 0.0
+        && cal.channels.as_ref().is_some_and(|s| s.attitude == AttitudeKnowledge::Reference);
+    let noise_dof = crate::calibration::checks::noise_dof(cal);
+    if !exact || crate::calibration::checks::fit(&cal.estimates, noise_dof).passed {
+        return None;
+    }
+    let trial = Options { pose_tolerance_deg: Some(HINT_POSE_TOLERANCE_DEG), ..*options };
+    let tolerant = calibrate(rec, &trial).ok()?;
+    let e = &tolerant.estimates;
+    crate::calibration::checks::fit(e, crate::calibration::checks::noise_dof(&tolerant)).passed.then(|| {
+        format!(
+            "poses off their labels? with --pose-tolerance {HINT_POSE_TOLERANCE_DEG} the fit passes (chi-square {:.2} \
+             on {} degrees of freedom)",
+            e.chi_square, e.degrees_of_freedom
+        )
+    })
 }
 
 /// Prints the summary (unless the JSON goes to stdout) and writes the JSON if asked; then fails with
