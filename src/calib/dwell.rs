@@ -308,8 +308,12 @@ const GATE_START_TRIMMED: usize = 4;
 /// and they are used and not counted as spikes.
 pub const GATE_RUN_MAX: u32 = 3;
 
-/// Samples inside the gate after which the samples held beyond it were spikes (isolated, not a run).
+/// Used samples after which the samples held beyond the gate were spikes (isolated, not a run).
 pub const GATE_RUN_WINDOW: u32 = 8;
+
+/// The gate's width while the dwell's first samples are held: negative, so that every sample takes the
+/// out-of-line path that holds it (the per-sample path tests nothing else).
+const GATE_CLOSED: f32 = -1.0;
 
 /// Median of the held values and the root mean square of their deviations from it without the
 /// [`GATE_START_TRIMMED`] largest: the dwell's level and a first width of its noise (for Gaussian noise 0.9
@@ -375,10 +379,10 @@ fn select(v: &mut [f32], k: usize) -> f32 {
 ///
 /// A dwell starts by holding its first [`GATE_START_SAMPLES`] samples; their median per channel is the
 /// shift of the sums (and where the filters start), their spread the first width of the spike gate. From
-/// then on, per sample: a sample any of whose channels lies beyond [`GATE_WIDTH_SIGMA`] standard deviations
-/// of the dwell's running level is a spike (not used, counted); otherwise, per channel, blocked sums of raw
-/// deviations and their squares, and the filter's state. The level and width follow the used samples at
-/// every block end. The dwell value is the mean of the used raw samples: the mean of the filtered samples
+/// then on, per sample: a sample any of whose channels lies further than the gate's width (at least
+/// [`GATE_WIDTH_SIGMA`] standard deviations) from that median is a spike (not used, counted); otherwise, per
+/// channel, blocked sums of raw deviations and their squares, and the filter's state. The width follows the
+/// used samples at every block end; a level that moves further than the gate is a run, which opens it. The dwell value is the mean of the used raw samples: the mean of the filtered samples
 /// is that mean plus a boundary term of the filter's start and end (docs/method.md#step-1-prefilter), which
 /// would make the dwell value depend on where the dwell starts. The filter constants are held once per
 /// sensor ([`FixedGain`]), the states channel by channel.
@@ -398,16 +402,15 @@ pub struct DwellCollector {
     shift: [f32; 6],
     raw_sum: [BlockedSum; 6],
     raw_sum_sq: [BlockedSum; 6],
-    /// The dwell's level per channel relative to `shift` (the gate's centre).
-    level: [f32; 6],
-    /// The gate's half width per channel (infinite while the noise is not known).
+    /// The gate's half width per channel (infinite while the noise is not known, [`GATE_CLOSED`] while the
+    /// dwell's first samples are held).
     gate: [f32; 6],
     rejected: u32,
     spikes: u32,
-    /// Samples beyond the gate with fewer than [`GATE_RUN_WINDOW`] inside it between them.
+    /// Samples beyond the gate with fewer than [`GATE_RUN_WINDOW`] used ones between them.
     run: u32,
-    /// Samples inside the gate since the last one beyond it (while `run` is not 0).
-    inside: u32,
+    /// Samples used when the last one beyond the gate came.
+    last_beyond: u32,
     /// Those samples, held until the run ends or reaches [`GATE_RUN_MAX`].
     pending: [[f32; 6]; GATE_RUN_MAX as usize],
     /// The gate opened for the rest of the dwell ([`GATE_RUN_MAX`]).
@@ -439,12 +442,11 @@ impl DwellCollector {
             shift: [0.0; 6],
             raw_sum: [BlockedSum::new(); 6],
             raw_sum_sq: [BlockedSum::new(); 6],
-            level: [0.0; 6],
-            gate: [f32::INFINITY; 6],
+            gate: [GATE_CLOSED; 6],
             rejected: 0,
             spikes: 0,
             run: 0,
-            inside: 0,
+            last_beyond: 0,
             pending: [[0.0; 6]; GATE_RUN_MAX as usize],
             open: false,
             noise_gain,
@@ -464,12 +466,11 @@ impl DwellCollector {
         self.count = 0;
         self.raw_sum = [BlockedSum::new(); 6];
         self.raw_sum_sq = [BlockedSum::new(); 6];
-        self.level = [0.0; 6];
-        self.gate = [f32::INFINITY; 6];
+        self.gate = [GATE_CLOSED; 6];
         self.rejected = 0;
         self.spikes = 0;
         self.run = 0;
-        self.inside = 0;
+        self.last_beyond = 0;
         self.open = false;
         self.allan = [OctaveAllan::new(); 6];
     }
@@ -499,14 +500,8 @@ impl DwellCollector {
             self.rejected = self.rejected.saturating_add(1);
             return Err(DwellError::NotFinite);
         }
-        if self.held < GATE_START_SAMPLES {
-            self.start[self.held] = z;
-            self.held += 1;
-            if self.held == GATE_START_SAMPLES {
-                self.open_gate();
-            }
-            return Ok(());
-        }
+        // While the dwell's first samples are held the gate is closed (a negative width): every sample goes to
+        // the out-of-line path, which holds it.
         self.gated(&z);
         Ok(())
     }
@@ -525,7 +520,6 @@ impl DwellCollector {
             self.shift[i] = median;
             self.state[i] = [median, median];
             self.previous_raw[i] = median;
-            self.level[i] = 0.0;
             self.gate[i] = if width > 0.0 { GATE_WIDTH_SIGMA * width } else { f32::INFINITY };
         }
         self.held = GATE_START_SAMPLES;
@@ -535,33 +529,49 @@ impl DwellCollector {
         }
     }
 
-    /// One sample through the gate: counted as a spike, or used.
+    /// One sample through the gate: counted as a spike, or used. Written out channel by channel, with `|` (no
+    /// short circuit) over the six tests: size optimisation keeps loops rolled and recomputes their addresses
+    /// (docs/firmware.md: the per-sample budget).
     #[inline(always)]
     fn gated(&mut self, z: &[f32; 6]) {
-        let d: [f32; 6] = core::array::from_fn(|i| z[i] - self.shift[i]);
-        let mut spike = false;
-        for i in 0..6 {
-            spike |= (d[i] - self.level[i]).abs() > self.gate[i];
-        }
-        if spike {
+        let (s, g) = (&self.shift, &self.gate);
+        let d = [z[0] - s[0], z[1] - s[1], z[2] - s[2], z[3] - s[3], z[4] - s[4], z[5] - s[5]];
+        let beyond = (d[0].abs() > g[0])
+            | (d[1].abs() > g[1])
+            | (d[2].abs() > g[2])
+            | (d[3].abs() > g[3])
+            | (d[4].abs() > g[4])
+            | (d[5].abs() > g[5]);
+        if beyond {
             self.beyond_gate(z);
             return;
-        }
-        if self.run != 0 {
-            self.inside_after_beyond();
         }
         self.used(z, &d);
     }
 
-    /// A sample beyond the gate: a spike, held until the run of such samples says otherwise. A run of
-    /// [`GATE_RUN_MAX`] is not spikes but a level that moved: the gate opens for the rest of the dwell and the
-    /// held samples are used after all, so that nothing is lost. Out of line: rare.
+    /// A sample beyond the gate, or any while the gate is closed (held for its start). Beyond the open gate: a
+    /// spike, held until the run of such samples says otherwise. Samples beyond the gate each within
+    /// [`GATE_RUN_WINDOW`] used samples of the last are a run; a run of [`GATE_RUN_MAX`] is not spikes but a
+    /// level that moved: the gate opens for the rest of the dwell and the held samples are used after all, so that
+    /// nothing is lost. Out of line: rare.
     #[inline(never)]
     fn beyond_gate(&mut self, z: &[f32; 6]) {
+        if self.held < GATE_START_SAMPLES {
+            self.start[self.held] = *z;
+            self.held += 1;
+            if self.held == GATE_START_SAMPLES {
+                self.open_gate();
+            }
+            return;
+        }
+        if self.run != 0 && self.count.wrapping_sub(self.last_beyond) >= GATE_RUN_WINDOW {
+            // The samples held before were isolated: spikes.
+            self.run = 0;
+        }
         self.spikes = self.spikes.saturating_add(1);
         self.pending[self.run as usize] = *z;
         self.run += 1;
-        self.inside = 0;
+        self.last_beyond = self.count;
         if self.run >= GATE_RUN_MAX {
             self.spikes -= self.run;
             self.gate = [f32::INFINITY; 6];
@@ -575,24 +585,22 @@ impl DwellCollector {
         }
     }
 
-    /// A sample inside the gate while samples beyond it are held: after [`GATE_RUN_WINDOW`] such samples the
-    /// held ones were spikes.
-    #[inline(never)]
-    fn inside_after_beyond(&mut self) {
-        self.inside += 1;
-        if self.inside >= GATE_RUN_WINDOW {
-            self.run = 0;
-            self.inside = 0;
-        }
-    }
-
     /// A used sample `z` (`d` its deviation from the shift): sums, filter, block.
     #[inline(always)]
     fn used(&mut self, z: &[f32; 6], d: &[f32; 6]) {
-        for i in 0..6 {
-            self.raw_sum[i].add(d[i]);
-            self.raw_sum_sq[i].add(d[i] * d[i]);
-        }
+        let (sum, sq) = (&mut self.raw_sum, &mut self.raw_sum_sq);
+        sum[0].add(d[0]);
+        sq[0].add(d[0] * d[0]);
+        sum[1].add(d[1]);
+        sq[1].add(d[1] * d[1]);
+        sum[2].add(d[2]);
+        sq[2].add(d[2] * d[2]);
+        sum[3].add(d[3]);
+        sq[3].add(d[3] * d[3]);
+        sum[4].add(d[4]);
+        sq[4].add(d[4] * d[4]);
+        sum[5].add(d[5]);
+        sq[5].add(d[5] * d[5]);
         match self.gains {
             Some([gyro, accel]) => {
                 // Written out channel by channel: constant indices are constant offsets, and the gains stay
@@ -613,8 +621,7 @@ impl DwellCollector {
     }
 
     /// The end of a block of [`BLOCK_SAMPLES`]: its sum of raw deviations goes to the Allan variance, the
-    /// blocked sums flush, and the gate follows the used samples (their mean is its centre, their standard
-    /// deviation its width). Once per block, kept out of line so that the per-sample path stays small.
+    /// blocked sums flush, and the gate's width follows the used samples' standard deviation. Once per block, kept out of line so that the per-sample path stays small.
     #[inline(never)]
     fn end_block(&mut self) {
         for i in 0..6 {
@@ -622,7 +629,6 @@ impl DwellCollector {
             self.raw_sum[i].flush();
             self.raw_sum_sq[i].flush();
             let (sum, sum_sq) = (self.raw_sum[i].value(), self.raw_sum_sq[i].value());
-            self.level[i] = sum / self.count as f32;
             let var = DwellStats::shifted_variance(self.count, sum, sum_sq).unwrap_or(0.0);
             if var > 0.0 && !self.open {
                 let width = GATE_WIDTH_SIGMA.max(GATE_GROWTH * libm::sqrtf(self.count as f32));
