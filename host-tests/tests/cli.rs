@@ -51,6 +51,16 @@ fn calibrate_writes_the_spec_json_and_numbers_read_back_bit_exact() {
     assert!(v["positions"][0]["residual_accel_mps2"].as_array().is_some());
     assert_eq!(v["latitude_deg"], 45.7796);
     assert_eq!(v["positions"].as_array().unwrap().len(), 6);
+    // What the errors rest on, and what was checked (docs/formats.md#calibration-json-version-2).
+    assert_eq!(v["noise"]["source"], "recording");
+    let noise = v["noise"]["channels"].as_array().unwrap();
+    assert_eq!(noise.len(), 6);
+    assert!(noise.iter().all(|c| c["white_equivalent_var_si"].as_f64().unwrap() > 0.0 && c["model"] == "allan"));
+    assert_eq!(v["fit_scale"].as_array().unwrap().len(), 6);
+    assert_eq!(v["spikes_rejected"], serde_json::json!([0, 0, 0, 0, 0, 0]));
+    assert_eq!(v["pose_tolerance_deg"], 0.0);
+    let checks = v["checks"].as_array().unwrap();
+    assert!(checks.len() == 5 && checks.iter().all(|c| c["passed"] == true), "{checks:?}");
     let p = &v["positions"][4];
     assert_eq!((p["pos"].as_u64(), p["roll_deg"].as_f64(), p["samples"].as_u64()), (Some(5), Some(90.0), Some(2000)));
     for key in ["gyro_bias_radps", "gyro_bias_std_radps", "accel_bias_mps2", "accel_bias_std_mps2"] {

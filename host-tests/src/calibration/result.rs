@@ -139,6 +139,8 @@ pub struct CalibrationJson {
     pub gauge: Vec<&'static str>,
     /// Extra: the prefilter that ran.
     pub prefilter: PrefilterJson,
+    /// The noise each channel's errors rest on (docs/formats.md#calibration-json-version-2).
+    pub noise: NoiseJson,
     /// Extra: "mean" or "settled".
     pub dwell_value: &'static str,
     /// Samples not used as spikes, per dwell in the order of `positions` (docs/method.md#spikes).
@@ -196,6 +198,51 @@ pub struct SamplingJson {
     pub faults: [u32; 5],
     /// Samples missed by the data counter.
     pub missed_samples: u32,
+}
+
+/// The noise model each channel's errors rest on: where it came from, and per channel what it is.
+#[derive(Debug, Serialize)]
+pub struct NoiseJson {
+    /// "recording": the dwells' own Allan variances, pooled over the session (docs/method.md#honest-errors).
+    pub source: &'static str,
+    /// Gyro x, y, z, accelerometer x, y, z (the gyros absent without gyro data).
+    pub channels: Vec<ChannelNoiseJson>,
+}
+
+/// One channel's dwell noise in the JSON.
+#[derive(Debug, Serialize)]
+pub struct ChannelNoiseJson {
+    /// `gyro_x` .. `accel_z`.
+    pub channel: &'static str,
+    /// "allan": from the Allan variance at `cluster_samples`; "white": the per-sample variance (dwells too short
+    /// for two clusters), as for white noise.
+    pub model: &'static str,
+    /// White-equivalent variance per sample, SI squared ((rad/s)^2 or (m/s^2)^2): a dwell mean of N samples has
+    /// the variance `white_equivalent_var_si / N`.
+    pub white_equivalent_var_si: f64,
+    /// The cluster size it was taken at, samples.
+    pub cluster_samples: u32,
+    /// Its degrees of freedom (the Allan differences it rests on).
+    pub degrees_of_freedom: f64,
+}
+
+impl NoiseJson {
+    /// The session's pooled dwell noise.
+    fn new(c: &Calibration) -> NoiseJson {
+        const NAMES: [&str; 6] = ["gyro_x", "gyro_y", "gyro_z", "accel_x", "accel_y", "accel_z"];
+        let pooled = sinscal::calib::dwell::pool_mean_noise(c.positions.iter().map(|p| p.summary));
+        let first = if c.has_gyro { 0 } else { 3 };
+        let channels = (first..6)
+            .map(|i| ChannelNoiseJson {
+                channel: NAMES[i],
+                model: if pooled[i].cluster_samples > 1 { "allan" } else { "white" },
+                white_equivalent_var_si: pooled[i].white_equivalent_var as f64,
+                cluster_samples: pooled[i].cluster_samples,
+                degrees_of_freedom: pooled[i].dof as f64,
+            })
+            .collect();
+        NoiseJson { source: "recording", channels }
+    }
 }
 
 /// The prefilter in the JSON.
@@ -328,6 +375,7 @@ impl CalibrationJson {
             gauge: c.channels.as_ref().map_or_else(Vec::new, gauge_names),
             prefilter,
             spikes_rejected: c.positions.iter().map(|p| p.summary.spikes).collect(),
+            noise: NoiseJson::new(c),
             pose_tolerance_deg: c.pose_tolerance_deg,
             dwell_value: match c.options.dwell_value {
                 DwellValue::Mean => "mean",
