@@ -35,6 +35,12 @@ fn firmware_in_qemu_and_the_host_replay_agree_to_the_bit() {
         row.heading_deg = None;
     }
     let full = Options { model: sinscal::calib::general::Model::FULL, ..Options::default() };
+    // A spike of 1.7 deg/s (inside the sequence's rest limit) in dwell 1, and the labels known to half a degree:
+    // the gate and the pose priors run on the target as on x86.
+    let mut spiked = rec.clone();
+    assert_eq!(spiked.rows[1500].pos, 1);
+    spiked.rows[1500].rate_b_radps[0] += 0.029_67;
+    let tolerant = Options { pose_tolerance_deg: Some(0.5), ..Options::default() };
     for (rec, options) in [
         (&rec, Options::angles()),
         (
@@ -44,6 +50,7 @@ fn firmware_in_qemu_and_the_host_replay_agree_to_the_bit() {
         (&rec, Options::default()),
         (&rec, full),
         (&unknown_headings, Options::default()),
+        (&spiked, tolerant),
     ] {
         let (mut file, _) = replay_file(rec, &options).unwrap();
         // Also a corrupted frame (a gyro byte of row 1000, inside dwell 1), so the fault path runs on both.
@@ -58,6 +65,8 @@ fn firmware_in_qemu_and_the_host_replay_agree_to_the_bit() {
         assert_eq!(target, bytes[..n].to_vec(), "outcome bytes differ; firmware log:\n{log}");
         assert!(host.result.is_some());
         assert_eq!(host.sampling.faults(), 1);
+        let spikes: u32 = host.positions.iter().map(|p| p.summary.spikes).sum();
+        assert_eq!(spikes, u32::from(std::ptr::eq(rec, &spiked)), "spikes counted");
         // The general estimator solved on the Cortex-M4F is the host core's solution of the firmware's own
         // dwell statistics, to the bit.
         let header = read_header(&mut &file[..]).unwrap();
@@ -87,9 +96,9 @@ fn firmware_in_qemu_and_the_host_replay_agree_to_the_bit() {
             assert_eq!((on_target.observable, on_target.suspect), (on_x86.observable, on_x86.suspect));
         }
     }
-    for options in [Options::angles(), Options::default()] {
-        let on_host = calibrate_on_host(&rec, &options).unwrap();
-        let on_qemu = calibrate_on_qemu(&rec, &options).unwrap();
+    for (rec, options) in [(&rec, Options::angles()), (&rec, Options::default()), (&spiked, tolerant)] {
+        let on_host = calibrate_on_host(rec, &options).unwrap();
+        let on_qemu = calibrate_on_qemu(rec, &options).unwrap();
         assert_eq!(on_qemu.on, "qemu");
         assert_eq!(json_without_on(&on_host), json_without_on(&on_qemu));
     }

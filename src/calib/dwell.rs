@@ -382,9 +382,10 @@ fn select(v: &mut [f32], k: usize) -> f32 {
 /// then on, per sample: a sample any of whose channels lies further than the gate's width (at least
 /// [`GATE_WIDTH_SIGMA`] standard deviations) from that median is a spike (not used, counted); otherwise, per
 /// channel, blocked sums of raw deviations and their squares, and the filter's state. The width follows the
-/// used samples at every block end; a level that moves further than the gate is a run, which opens it. The dwell value is the mean of the used raw samples: the mean of the filtered samples
-/// is that mean plus a boundary term of the filter's start and end (docs/method.md#step-1-prefilter), which
-/// would make the dwell value depend on where the dwell starts. The filter constants are held once per
+/// used samples at every block end; a level that moves further than the gate is a run, which opens it. The
+/// dwell value is the mean of the used raw samples: the mean of the filtered samples is that mean plus a
+/// boundary term of the filter's start and end (docs/method.md#step-1-prefilter), which would make the dwell
+/// value depend on where the dwell starts. The filter constants are held once per
 /// sensor ([`FixedGain`]), the states channel by channel.
 #[derive(Clone, Debug)]
 pub struct DwellCollector {
@@ -621,7 +622,8 @@ impl DwellCollector {
     }
 
     /// The end of a block of [`BLOCK_SAMPLES`]: its sum of raw deviations goes to the Allan variance, the
-    /// blocked sums flush, and the gate's width follows the used samples' standard deviation. Once per block, kept out of line so that the per-sample path stays small.
+    /// blocked sums flush, and the gate's width follows the used samples' standard deviation. Once per block,
+    /// kept out of line so that the per-sample path stays small.
     #[inline(never)]
     fn end_block(&mut self) {
         for i in 0..6 {

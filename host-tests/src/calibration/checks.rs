@@ -1,8 +1,9 @@
 //! The checks of a calibration that fail loudly (docs/cli.md#checks): `physics` (gravity and the Earth
 //! rate against the recording's labels and units, before the fit), `fit` (the model against the dwell noise),
 //! `convergence` and `plausibility` (every estimate and standard error finite and within its term's plausible
-//! magnitude), and `spikes` (the spike gate left out isolated samples only). Each is run on every calibration and listed, passed or failed, in the JSON's `checks`; a failed
-//! one makes `calibrate` (and `apply`, reading such a result) exit with status 3.
+//! magnitude), and `spikes` (the spike gate left out isolated samples only). Each is run on every calibration
+//! and listed, passed or failed, in the JSON's `checks`; a failed one makes `calibrate` (and `apply`, reading
+//! such a result) exit with status 3.
 
 use serde::Serialize;
 use serde_json::Value;
