@@ -7,6 +7,8 @@
 
 use std::path::{Path, PathBuf};
 
+mod common;
+
 use assert_cmd::Command;
 use serde_json::Value;
 
@@ -290,4 +292,29 @@ fn dwells_without_a_heading_pass_the_physics_check() {
     assert_eq!(code, 0, "{stderr}");
     assert_eq!(check(&v, "physics")["passed"], true);
     assert_eq!(check(&v, "fit")["passed"], true);
+}
+
+/// REAL DATA (`SINSCAL_DATA`; skipped, and says so, without it): when the fit fails, the check names the
+/// alternative that fits. The imucal Ferraris session with its labels taken as exact (its importer's 1 deg
+/// overridden): poses off their labels. The imu_tk Xsens session with the default model: sensor terms missing
+/// (the full model fits).
+#[test]
+fn real_data_misfits_name_the_alternative_that_fits() {
+    let Some(dir) = common::data_dir() else { return };
+    let tmp = tempfile::tempdir().unwrap();
+    let ferraris = tmp.path().join("ferraris.csv");
+    common::ferraris_session(&dir).write(&ferraris).unwrap();
+    let xsens = tmp.path().join("xsens.csv");
+    common::imutk_session(&dir).write(&xsens).unwrap();
+    for (path, extra, hint) in [
+        (&ferraris, &["--pose-tolerance", "0"][..], "poses off their labels? with --pose-tolerance 1 the fit passes"),
+        (&xsens, &[][..], "sensor terms missing from the model? with --model full the fit passes"),
+    ] {
+        let out = sinscal().arg("calibrate").arg(path).args(extra).assert().code(3);
+        let stderr = String::from_utf8_lossy(&out.get_output().stderr).into_owned();
+        assert!(stderr.starts_with(&format!("sinscal: check failed: fit: {hint}")), "{stderr}");
+    }
+    // With the alternative the check names, the same data pass every check.
+    sinscal().arg("calibrate").arg(&ferraris).assert().success();
+    sinscal().arg("calibrate").arg(&xsens).args(["--model", "full"]).assert().success();
 }

@@ -210,32 +210,39 @@ pub fn run(args: Args) -> anyhow::Result<()> {
         Some(OnArg::Qemu) => calibrate_on_qemu(&rec, &options),
     };
     let mut cal = cal.map_err(|e| with_physics_hint(e, &rec, &options))?;
-    cal.fit_hint = pose_tilt_hint(&cal, &rec, &options);
+    cal.fit_hint = fit_hint(&cal, &rec, &options);
     finish(&cal, args.json.as_deref())
 }
 
 /// The pose tolerance the fit check tries when exact labels misfit, degrees (a hand-placed pose).
 const HINT_POSE_TOLERANCE_DEG: f64 = 1.0;
 
-/// When the general estimator's fit fails its check with the labels taken as exact, whether the labels known to
-/// a degree fit: then the misfit is the poses', not the sensor's, and the fit check says so (the same
-/// calibration again, on the workstation, with `--pose-tolerance 1`).
-fn pose_tilt_hint(cal: &Calibration, rec: &RecordingFile, options: &Options) -> Option<String> {
-    let exact = cal.pose_tolerance_deg == 0.0
-        && cal.channels.as_ref().is_some_and(|s| s.attitude == AttitudeKnowledge::Reference);
-    let noise_dof = crate::calibration::checks::noise_dof(cal);
-    if !exact || crate::calibration::checks::fit(&cal.estimates, noise_dof).passed {
+/// When the general estimator's fit fails its check, the alternative that fits, as the check's hint: the labels
+/// known to a degree (the misfit is the poses', not the sensor's), else every static term (`--model full`: the
+/// model misses sensor terms). The same calibration again on the workstation, once per alternative, only when
+/// the fit failed.
+fn fit_hint(cal: &Calibration, rec: &RecordingFile, options: &Options) -> Option<String> {
+    let channels = cal.channels.as_ref()?;
+    if crate::calibration::checks::fit(&cal.estimates, crate::calibration::checks::noise_dof(cal)).passed {
         return None;
     }
-    let trial = Options { pose_tolerance_deg: Some(HINT_POSE_TOLERANCE_DEG), ..*options };
-    let tolerant = calibrate(rec, &trial).ok()?;
-    let e = &tolerant.estimates;
-    crate::calibration::checks::fit(e, crate::calibration::checks::noise_dof(&tolerant)).passed.then(|| {
-        format!(
-            "poses off their labels? with --pose-tolerance {HINT_POSE_TOLERANCE_DEG} the fit passes (chi-square {:.2} \
-             on {} degrees of freedom)",
-            e.chi_square, e.degrees_of_freedom
-        )
+    let exact = cal.pose_tolerance_deg == 0.0 && channels.attitude == AttitudeKnowledge::Reference;
+    let tolerant = Options { pose_tolerance_deg: Some(HINT_POSE_TOLERANCE_DEG), ..*options };
+    let full = Options { model: Model::FULL, ..*options };
+    let trials = [
+        (exact, tolerant, format!("poses off their labels? with --pose-tolerance {HINT_POSE_TOLERANCE_DEG}")),
+        (options.model != Model::FULL, full, "sensor terms missing from the model? with --model full".to_string()),
+    ];
+    trials.into_iter().filter(|(tried, _, _)| *tried).find_map(|(_, trial, what)| {
+        let alternative = calibrate(rec, &trial).ok()?;
+        let e = &alternative.estimates;
+        let fits = crate::calibration::checks::fit(e, crate::calibration::checks::noise_dof(&alternative)).passed;
+        fits.then(|| {
+            format!(
+                "{what} the fit passes (chi-square {:.2} on {} degrees of freedom)",
+                e.chi_square, e.degrees_of_freedom
+            )
+        })
     })
 }
 
