@@ -116,7 +116,9 @@ impl Estimates {
                 }
             }
         }
-        for &i in &e.determined {
+        // The completion's parameters (docs/method.md#observability) take their freedom too.
+        let completion = (0..PARAMETERS).filter(|&i| s.completion & (1 << i) != 0);
+        for i in e.determined.iter().copied().chain(completion) {
             match channel_of(i) {
                 Some(ch) => taken[ch] += 1.0,
                 None => {
