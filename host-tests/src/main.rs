@@ -38,6 +38,9 @@ enum Command {
     Apply(cmd::apply::Args),
     /// Per dwell, the attitude of the analytic coarse alignment with standard errors, against the reference.
     Align(cmd::align::Args),
+    /// Each channel's noise terms (quantisation, white noise, bias instability, Gauss-Markov, rate random walk),
+    /// with standard errors, from a static recording's longest dwell (a noise file, JSON).
+    Noise(cmd::noise::Args),
     /// Static pure-inertial navigation with and without the calibration's biases removed.
     Navigate(cmd::navigate::Args),
     /// Convert a measured data set (PSINS .imu, imucal Ferraris session, imu_tk counts) into a recording.
@@ -63,6 +66,7 @@ fn main() -> ExitCode {
         Command::Apply(args) => cmd::apply::run(args),
         Command::Align(args) => cmd::align::run(args),
         Command::Navigate(args) => cmd::navigate::run(args),
+        Command::Noise(args) => cmd::noise::run(args),
         Command::Import(args) => cmd::import::run(args),
         Command::Study(args) => cmd::study::run(args),
         Command::Montecarlo(args) => cmd::montecarlo::run(args),

@@ -16,6 +16,7 @@ pub mod example;
 pub mod import;
 pub mod montecarlo;
 pub mod navigate;
+pub mod noise;
 pub mod simulate;
 pub mod study;
 

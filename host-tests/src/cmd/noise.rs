@@ -1,0 +1,118 @@
+//! `sinscal noise STATIC_RECORDING --out NOISE_FILE`: each channel's noise terms (quantisation, white noise,
+//! bias instability, Gauss-Markov, rate random walk, rate ramp), named from its Allan variance, with standard
+//! errors (docs/cli.md#noise). The noise file is JSON, schema `sinscal-noise/1`.
+
+use std::path::PathBuf;
+
+use serde::Serialize;
+
+use crate::analysis::noise_terms::{noise_model, NoiseModel};
+use crate::cmd::{json_to_stdout, write_json};
+use crate::io::error::InputError;
+use crate::io::recording::{Recording, Row};
+
+/// Arguments of `sinscal noise`.
+#[derive(clap::Args)]
+pub struct Args {
+    /// A static recording (docs/formats.md#recording): its longest dwell is characterised.
+    recording: PathBuf,
+    /// Write the noise file (JSON, schema sinscal-noise/1) to this file ('-' = stdout).
+    #[arg(long)]
+    out: PathBuf,
+}
+
+/// The noise file.
+#[derive(Serialize)]
+pub struct NoiseFile {
+    /// "sinscal-noise/1".
+    pub schema: &'static str,
+    /// The recording characterised.
+    pub source: String,
+    /// The dwell characterised (the longest), its label.
+    pub pos: u32,
+    /// Its samples.
+    pub samples: usize,
+    /// Sample rate, Hz.
+    pub rate_hz: f64,
+    /// Per channel (gyro x, y, z, accelerometer x, y, z; no gyros without gyro data): the named terms with their
+    /// standard errors, the fit's statistics, and how far the white-noise error of the dwell's mean is off.
+    pub channels: Vec<NoiseModel>,
+}
+
+const CHANNELS: [&str; 6] = ["gx_radps", "gy_radps", "gz_radps", "ax_mps2", "ay_mps2", "az_mps2"];
+
+/// Runs `sinscal noise`.
+pub fn run(args: Args) -> anyhow::Result<()> {
+    let rec = Recording::read(&args.recording)?;
+    let file = characterise(&rec)?;
+    if !json_to_stdout(Some(&args.out)) {
+        super::out(&summary(&file))?;
+    }
+    write_json(&args.out, &file)
+}
+
+/// The noise file of a recording's longest dwell.
+pub fn characterise(rec: &Recording) -> Result<NoiseFile, InputError> {
+    let (pos, rows) = longest_dwell(rec)
+        .ok_or_else(|| InputError::at(&rec.source, 1, "no dwell (no row with pos > 0) to characterise"))?;
+    let rate_hz = rec.header.rate_hz.unwrap_or_else(|| median_rate_hz(&rows));
+    let first = if rec.has_gyro { 0 } else { 3 };
+    let mut channels = Vec::new();
+    for i in first..6 {
+        let samples: Vec<f64> =
+            rows.iter().map(|r| if i < 3 { r.rate_b_radps[i] } else { r.force_b_mps2[i - 3] }).collect();
+        let model = noise_model(CHANNELS[i], i < 3, &samples, rate_hz).ok_or_else(|| {
+            InputError::at(
+                &rec.source,
+                rows[0].line,
+                format!(
+                    "dwell {pos}: {} samples are too few to name {}'s noise (the Allan variance needs {} octaves)",
+                    rows.len(),
+                    CHANNELS[i],
+                    crate::analysis::noise_terms::MIN_POINTS
+                ),
+            )
+        })?;
+        channels.push(model);
+    }
+    Ok(NoiseFile { schema: "sinscal-noise/1", source: rec.source.clone(), pos, samples: rows.len(), rate_hz, channels })
+}
+
+/// The longest dwell: its label and rows.
+fn longest_dwell(rec: &Recording) -> Option<(u32, Vec<&Row>)> {
+    let mut labels: Vec<u32> = rec.rows.iter().map(|r| r.pos).filter(|p| *p > 0).collect();
+    labels.sort_unstable();
+    labels.dedup();
+    labels
+        .into_iter()
+        .map(|p| (p, rec.rows.iter().filter(|r| r.pos == p).collect::<Vec<_>>()))
+        .max_by_key(|(_, rows)| rows.len())
+}
+
+/// The sample rate from the median time step, Hz.
+fn median_rate_hz(rows: &[&Row]) -> f64 {
+    let mut steps: Vec<f64> = rows.windows(2).map(|w| w[1].t_s - w[0].t_s).filter(|d| *d > 0.0).collect();
+    steps.sort_by(f64::total_cmp);
+    steps.get(steps.len() / 2).map_or(1.0, |d| 1.0 / d)
+}
+
+/// The human summary: one line per channel.
+pub fn summary(file: &NoiseFile) -> String {
+    let mut out = format!(
+        "sinscal noise: {} (dwell {}: {} samples at {} Hz, {:.0} s); each channel's noise terms from its Allan \
+         variance (docs/analysis.md#noise-model)\n",
+        file.source,
+        file.pos,
+        file.samples,
+        file.rate_hz,
+        file.samples as f64 / file.rate_hz
+    );
+    for m in &file.channels {
+        out.push_str(&format!("  {}\n", m.text()));
+        out.push_str(&format!(
+            "  {:<9} white-noise error of this dwell's mean / the model's: {:.2}\n",
+            "", m.white_error_factor
+        ));
+    }
+    out
+}
