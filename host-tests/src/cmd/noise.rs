@@ -7,9 +7,10 @@ use std::path::PathBuf;
 use serde::Serialize;
 
 use crate::analysis::noise_terms::{noise_model, NoiseModel};
+use crate::analysis::CHANNELS;
 use crate::cmd::{json_to_stdout, write_json};
 use crate::io::error::InputError;
-use crate::io::recording::{Recording, Row};
+use crate::io::recording::{Recording, Row, TimeSteps};
 
 /// Arguments of `sinscal noise`.
 #[derive(clap::Args)]
@@ -39,8 +40,6 @@ pub struct NoiseFile {
     pub channels: Vec<NoiseModel>,
 }
 
-const CHANNELS: [&str; 6] = ["gx_radps", "gy_radps", "gz_radps", "ax_mps2", "ay_mps2", "az_mps2"];
-
 /// Runs `sinscal noise`.
 pub fn run(args: Args) -> anyhow::Result<()> {
     let rec = Recording::read(&args.recording)?;
@@ -55,7 +54,8 @@ pub fn run(args: Args) -> anyhow::Result<()> {
 pub fn characterise(rec: &Recording) -> Result<NoiseFile, InputError> {
     let (pos, rows) = longest_dwell(rec)
         .ok_or_else(|| InputError::at(&rec.source, 1, "no dwell (no row with pos > 0) to characterise"))?;
-    let rate_hz = rec.header.rate_hz.unwrap_or_else(|| median_rate_hz(&rows));
+    let median_step_s = || TimeSteps::of(rows.iter().map(|r| r.t_s)).median_s().unwrap_or(1.0);
+    let rate_hz = rec.header.rate_hz.unwrap_or_else(|| 1.0 / median_step_s());
     let first = if rec.has_gyro { 0 } else { 3 };
     let mut channels = Vec::new();
     for i in first..6 {
@@ -87,13 +87,6 @@ fn longest_dwell(rec: &Recording) -> Option<(u32, Vec<&Row>)> {
         .into_iter()
         .map(|p| (p, rec.rows.iter().filter(|r| r.pos == p).collect::<Vec<_>>()))
         .max_by_key(|(_, rows)| rows.len())
-}
-
-/// The sample rate from the median time step, Hz.
-fn median_rate_hz(rows: &[&Row]) -> f64 {
-    let mut steps: Vec<f64> = rows.windows(2).map(|w| w[1].t_s - w[0].t_s).filter(|d| *d > 0.0).collect();
-    steps.sort_by(f64::total_cmp);
-    steps.get(steps.len() / 2).map_or(1.0, |d| 1.0 / d)
 }
 
 /// The human summary: one line per channel.

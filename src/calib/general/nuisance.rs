@@ -150,14 +150,8 @@ impl ChannelEstimator {
     /// The small-angle attitude error (e, n, u), rad, that takes dwell `d`'s reference attitude to `c`:
     /// `c = (I - [phi x]) C_ref` to first order.
     pub(super) fn attitude_offset(d: &ChannelDwell, c: &Mat3) -> Vec3 {
-        let r = Self::reference_attitude(d);
         // M = c C_ref^T = I - [phi x]: phi from its antisymmetric part.
-        let mut m = [[0.0f32; 3]; 3];
-        for i in 0..3 {
-            for j in 0..3 {
-                m[i][j] = (0..3).map(|k| c.0[i][k] * r.0[j][k]).sum();
-            }
-        }
+        let m = c.mul(&Self::reference_attitude(d).transpose()).0;
         [0.5 * (m[1][2] - m[2][1]), 0.5 * (m[2][0] - m[0][2]), 0.5 * (m[0][1] - m[1][0])]
     }
 
