@@ -55,3 +55,98 @@ fn the_psins_record_names_more_than_white_noise() {
         assert!(c["terms"].as_array().unwrap().iter().all(|t| t["std_error_si"].as_f64().unwrap() > 0.0));
     }
 }
+
+fn calibrate_json(args: &[&std::ffi::OsStr], json: &std::path::Path) -> Value {
+    Command::cargo_bin("sinscal").unwrap().arg("calibrate").args(args).arg("--json").arg(json).assert().success();
+    serde_json::from_str(&std::fs::read_to_string(json).unwrap()).unwrap()
+}
+
+/// `calibrate --noise`: SIMULATION. The built-in example (white noise: 0.1 deg/h and 1000 ug per sample at
+/// 100 Hz) weighted by the noise file of a simulated 600-s static pose of the same white noise: its standard
+/// errors are those of the true noise (a hand-written noise file of the true N) within 10 % (the file's N is
+/// an estimate), the JSON names the file as the noise source, and the firmware path (`--on host`, the noise
+/// model in the device's configuration) gives the same values and errors.
+#[test]
+fn calibrate_with_a_noise_file_weights_by_it_on_either_path() {
+    let dir = tempfile::tempdir().unwrap();
+    let path = dir.path().join("static.csv");
+    let scenario = Scenario { dwell_s: 600.0, positions_deg: vec![[0.0, 0.0, 0.0]], ..Scenario::example() };
+    scenario.recording(7, "static.csv").write(&path).unwrap();
+    noise_file(&path);
+    let noise = path.with_extension("noise.json");
+    let truth = dir.path().join("truth.json");
+    let channels: Vec<String> = ["gx_radps", "gy_radps", "gz_radps", "ax_mps2", "ay_mps2", "az_mps2"]
+        .iter()
+        .enumerate()
+        .map(|(i, c)| {
+            let n = [4.848_137e-7, 9.806_65e-3][i / 3] * 0.1;
+            format!(r#"{{"channel": "{c}", "terms": [{{"term": "white", "value_si": {n:e}}}]}}"#)
+        })
+        .collect();
+    std::fs::write(&truth, format!(r#"{{"schema": "sinscal-noise/1", "channels": [{}]}}"#, channels.join(",")))
+        .unwrap();
+    let example = dir.path().join("example.csv");
+    Command::cargo_bin("sinscal").unwrap().arg("example").arg("--out").arg(&example).assert().success();
+    let own = calibrate_json(&[example.as_os_str()], &dir.path().join("own.json"));
+    let known =
+        calibrate_json(&[example.as_os_str(), "--noise".as_ref(), truth.as_os_str()], &dir.path().join("t.json"));
+    let args = [example.as_os_str(), "--noise".as_ref(), noise.as_os_str()];
+    let filed = calibrate_json(&args, &dir.path().join("file.json"));
+    let on_host =
+        calibrate_json(&[&args[..], &["--on".as_ref(), "host".as_ref()]].concat(), &dir.path().join("h.json"));
+    assert_eq!((own["noise"]["source"].as_str(), filed["noise"]["source"].as_str()), (Some("recording"), Some("file")));
+    assert_eq!(on_host["noise"]["source"], "file");
+    assert!(filed["noise"]["channels"][0]["terms"]["white_u_sqrt_s"].as_f64().unwrap() > 0.0);
+    println!("fit scale: own noise {}, noise file {}", own["fit_scale"], filed["fit_scale"]);
+    for key in ["gyro_bias_std_radps", "accel_bias_std_mps2"] {
+        for i in 0..3 {
+            let at = |v: &Value| v[key][i].as_f64().unwrap();
+            let (a, t, b, h) = (at(&own), at(&known), at(&filed), at(&on_host));
+            println!("{key}[{i}]: own noise {a:e}, true noise {t:e}, noise file {b:e}, --on host {h:e}");
+            assert!((b / t - 1.0).abs() < 0.1, "{key}[{i}]: {b:e} against the truth's {t:e}");
+            assert!((h / b - 1.0).abs() < 1e-3, "{key}[{i}]: --on host {h:e} against {b:e}");
+        }
+    }
+    // The values: the firmware path reads the samples as the ADIS's fixed-point words, within a small part of
+    // their standard errors of the direct path's.
+    for (key, std) in [("gyro_bias_radps", "gyro_bias_std_radps"), ("accel_bias_mps2", "accel_bias_std_mps2")] {
+        for i in 0..3 {
+            let z =
+                (filed[key][i].as_f64().unwrap() - on_host[key][i].as_f64().unwrap()) / filed[std][i].as_f64().unwrap();
+            println!("{key}[{i}]: --on host - direct = {z:.4} standard errors");
+            assert!(z.abs() < 0.05, "{key}[{i}]: {z}");
+        }
+    }
+}
+
+/// `--noise` refusals: a file that is not a noise file (exit 1, named), and the angle method (exit 2).
+#[test]
+fn calibrate_refuses_a_file_that_is_not_a_noise_file() {
+    let dir = tempfile::tempdir().unwrap();
+    let example = dir.path().join("example.csv");
+    Command::cargo_bin("sinscal").unwrap().arg("example").arg("--out").arg(&example).assert().success();
+    let not_noise = dir.path().join("x.json");
+    std::fs::write(&not_noise, r#"{"schema": "sinscal/2"}"#).unwrap();
+    let out = Command::cargo_bin("sinscal")
+        .unwrap()
+        .arg("calibrate")
+        .arg(&example)
+        .arg("--noise")
+        .arg(&not_noise)
+        .assert()
+        .code(1)
+        .get_output()
+        .stderr
+        .clone();
+    let text = String::from_utf8_lossy(&out);
+    assert!(text.contains("not a noise file"), "{text}");
+    let angles = Command::cargo_bin("sinscal")
+        .unwrap()
+        .args(["calibrate", "--method", "angles", "--noise"])
+        .arg(&not_noise)
+        .arg(&example)
+        .assert()
+        .code(2);
+    let text = String::from_utf8_lossy(&angles.get_output().stderr).to_string();
+    assert!(text.contains("--noise"), "{text}");
+}

@@ -5,6 +5,8 @@
 
 mod common;
 
+use sinscal_host::io::noise_file::NoiseTerms;
+
 use sinscal::calib::session::{session_estimator, SessionDwell};
 use sinscal::instrument::wire::outcome::{Outcome, MAX_BYTES as MAX_OUTCOME_BYTES};
 use sinscal::rig::replay::{read_header, run_replay};
@@ -41,6 +43,19 @@ fn firmware_in_qemu_and_the_host_replay_agree_to_the_bit() {
     assert_eq!(spiked.rows[1500].pos, 1);
     spiked.rows[1500].rate_b_radps[0] += 0.029_67;
     let tolerant = Options { pose_tolerance_deg: Some(0.5), ..Options::default() };
+    // A noise model with every term (the Gauss-Markov's exponentials on either side of its series), so that
+    // the dwell variances computed on the target are those of x86.
+    let terms = |scale: f32| sinscal::calib::noise_model::ChannelNoiseTerms {
+        quantisation_u_s: 1e-3 * scale,
+        white_u_sqrt_s: 1e-2 * scale,
+        instability_u: 1e-3 * scale,
+        gauss_markov_u: 3e-3 * scale,
+        gauss_markov_time_s: if scale < 1e-3 { 10.0 } else { 100.0 },
+        random_walk_u_per_sqrt_s: 1e-5 * scale,
+        ramp_u_per_s: 1e-7 * scale,
+    };
+    let channels = [1e-5f32, 1e-5, 1e-5, 0.1, 0.1, 0.1].map(|s| Some(terms(s)));
+    let noisy = Options { noise: Some(NoiseTerms { channels }), ..Options::default() };
     for (rec, options) in [
         (&rec, Options::angles()),
         (
@@ -51,6 +66,7 @@ fn firmware_in_qemu_and_the_host_replay_agree_to_the_bit() {
         (&rec, full),
         (&unknown_headings, Options::default()),
         (&spiked, tolerant),
+        (&rec, noisy),
     ] {
         let (mut file, _) = replay_file(rec, &options).unwrap();
         // Also a corrupted frame (a gyro byte of row 1000, inside dwell 1), so the fault path runs on both.
@@ -96,7 +112,7 @@ fn firmware_in_qemu_and_the_host_replay_agree_to_the_bit() {
             assert_eq!((on_target.observable, on_target.suspect), (on_x86.observable, on_x86.suspect));
         }
     }
-    for (rec, options) in [(&rec, Options::angles()), (&rec, Options::default()), (&spiked, tolerant)] {
+    for (rec, options) in [(&rec, Options::angles()), (&rec, Options::default()), (&spiked, tolerant), (&rec, noisy)] {
         let on_host = calibrate_on_host(rec, &options).unwrap();
         let on_qemu = calibrate_on_qemu(rec, &options).unwrap();
         assert_eq!(on_qemu.on, "qemu");

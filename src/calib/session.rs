@@ -2,12 +2,11 @@
 //! that the workstation's `calibrate` and the firmware's calibration sequence both call, so that the same
 //! dwells give the same estimator input, bit for bit, on either machine.
 //!
-//! Each dwell contributes its mean (or the prefilter's settled value) and the variance of that mean: the
-//! session's pooled honest noise of the raw mean ([`pool_mean_noise`], docs/method.md#honest-errors) over the
-//! dwell's number of samples, plus the dwell's own prefilter start term (it follows the dwell's own per-sample
-//! scatter and length: a quantised channel whose input sits on a step scatters little, one between two steps by
-//! up to half a step; docs/method.md#coloured-noise-monte-carlo), never below the f32 resolution of a mean
-//! (2^-23 of the Earth rate, of g), which keeps the weights finite on noise-free data.
+//! Each dwell contributes its mean (or the prefilter's settled value) and the variance of that mean: with a
+//! noise model ([`ChannelSettings::noise`], docs/method.md#noise-model) the model's at the dwell's length;
+//! without, the session's pooled honest noise of the raw mean ([`pool_mean_noise`],
+//! docs/method.md#honest-errors) over the dwell's number of samples. Either is never below the f32 resolution
+//! of a mean (2^-23 of the Earth rate, of g), which keeps the weights finite on noise-free data.
 
 use crate::calib::align::DwellValue;
 use crate::calib::dwell::{pool_mean_noise, DwellSummary};
@@ -65,7 +64,10 @@ where
             DwellValue::Settled => (s.rate_settled_b_radps, s.force_settled_b_mps2),
         };
         let n = s.samples.max(1) as f32;
-        let variance = |i: usize| raw_q[i] / n;
+        let variance = |i: usize| match &settings.noise {
+            Some(model) => model.mean_variance(i, s.samples),
+            None => raw_q[i] / n,
+        };
         estimator.add(ChannelDwell {
             tilt: d.attitude.tilt(),
             heading_rad: d.heading_known.then_some(d.attitude.heading_rad),

@@ -458,9 +458,23 @@ fn choose(fits: &[SubsetFit], points: usize) -> Option<(f64, SubsetFit)> {
 /// The noise model of one channel's `samples` (SI: rad/s for a gyro, m/s^2 for an accelerometer) at
 /// `rate_hz`. `None` when the record gives fewer than [`MIN_POINTS`] Allan points or no term fits.
 pub fn noise_model(channel: &str, gyro: bool, samples: &[f64], rate_hz: f64) -> Option<NoiseModel> {
+    noise_model_above(channel, gyro, samples, rate_hz, 0.0)
+}
+
+/// [`noise_model`] fitted to the Allan points at `tau >= min_tau_s` only: the model of the noise at the
+/// averaging times that matter (a dwell mean of seconds does not see a ring-laser gyro's dither at tens of
+/// milliseconds, whose shape no term of the model has and which would otherwise decide the fit).
+pub fn noise_model_above(
+    channel: &str,
+    gyro: bool,
+    samples: &[f64],
+    rate_hz: f64,
+    min_tau_s: f64,
+) -> Option<NoiseModel> {
     let n = samples.len();
     let points = overlapping_allan_deviation(samples, rate_hz, &octaves(n));
-    let points: Vec<_> = points.into_iter().filter(|p| p.adev.is_finite() && p.adev > 0.0).collect();
+    let points: Vec<_> =
+        points.into_iter().filter(|p| p.adev.is_finite() && p.adev > 0.0 && p.tau_s >= min_tau_s).collect();
     if points.len() < MIN_POINTS {
         return None;
     }

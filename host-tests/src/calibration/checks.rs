@@ -78,8 +78,12 @@ pub fn fit_p_value(e: &Estimates, noise_dof: f64) -> Option<f64> {
 
 /// The degrees of freedom of the dwell noise a calibration's fit is weighted by: the fewest of its channels'
 /// pooled noise estimates (the accelerometers', and the gyros' where used; docs/method.md#honest-errors).
-/// Taking the fewest makes the fit check lenient where one channel's noise is poorly known.
+/// Taking the fewest makes the fit check lenient where one channel's noise is poorly known. With a noise file
+/// (`--noise`) the noise is the file's model, taken as known: infinite (the chi-square test).
 pub fn noise_dof(c: &Calibration) -> f64 {
+    if c.noise.is_some() {
+        return f64::INFINITY;
+    }
     let noise = pool_mean_noise(c.positions.iter().map(|p| p.summary));
     let first = if c.has_gyro { 0 } else { 3 };
     noise[first..].iter().map(|m| m.dof as f64).filter(|d| *d > 0.0).fold(f64::INFINITY, f64::min)

@@ -106,6 +106,7 @@ pub fn replay_parts(
         // The limits of rest: the force tolerance asked for, the sequence's default gravity angle and rate.
         rest: RestLimits { force_error_max_mps2: options.rest_force_tolerance_mps2, ..RestLimits::default() },
         pose_tolerance_rad: (crate::calibration::pose_tolerance_deg(options, rec.header()) as f32).to_radians(),
+        noise: crate::calibration::noise_model_of(rec, options)?,
         ..Configuration::new(REPLAY_MODEL, site)
     };
     let mut attitudes = Vec::new();
@@ -243,6 +244,7 @@ pub fn calibration_from_outcome(
     })?;
     let on_firmware = |estimates, solution, channels, without_suspect, passes, converged| Calibration {
         pose_tolerance_deg: (outcome.configuration.pose_tolerance_rad as f64).to_degrees(),
+        noise: outcome.configuration.noise,
         fit_hint: None,
         source: source.to_string(),
         latitude_deg: rec.header().latitude_deg,

@@ -27,7 +27,9 @@ use sinscal::sensor::sample::ImuSample;
 pub use crate::calibration::estimates::{Estimates, Method};
 use crate::io::dwell_tally::{DwellTallies, DwellTally, NO_DWELL};
 use crate::io::error::InputError;
+use crate::io::noise_file::NoiseTerms;
 use crate::io::recording::{DwellAttitude, Header, RowSource};
+use sinscal::calib::noise_model::NoiseModel;
 
 /// Which prefilter runs in front of the dwell statistics.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -78,6 +80,28 @@ pub struct Options {
     /// General estimator: how well the recording's attitudes are known, degrees (`--pose-tolerance`); `None`:
     /// the header's `pose_tolerance_deg`, else [`DEFAULT_POSE_TOLERANCE_DEG`].
     pub pose_tolerance_deg: Option<f64>,
+    /// General estimator: the channels' noise terms from a noise file (`--noise`, docs/method.md#noise-model);
+    /// `None`: the session's own dwell noise.
+    pub noise: Option<NoiseTerms>,
+}
+
+/// The core's noise model of `options.noise` for `recording`: its sample interval is the recording's (the
+/// header's `rate_hz`, else the median step of its times, one more pass over the rows).
+pub fn noise_model_of(recording: &impl RowSource, options: &Options) -> Result<Option<NoiseModel>, InputError> {
+    let Some(terms) = options.noise else { return Ok(None) };
+    let interval_s = match recording.header().rate_hz {
+        Some(rate_hz) => 1.0 / rate_hz,
+        None => {
+            let mut steps = crate::io::recording::TimeSteps::default();
+            recording.for_each_row(&mut |row| {
+                steps.push(row.t_s);
+                Ok(())
+            })?;
+            steps.median_s().ok_or_else(|| InputError::file(recording.source(), "too few rows for a sample rate"))?
+        }
+    };
+    let model = terms.model(interval_s, recording.has_gyro()).map_err(|e| InputError::file(recording.source(), e))?;
+    Ok(Some(model))
 }
 
 /// The pose tolerance of a recording without `pose_tolerance_deg` in its header and without
@@ -115,6 +139,7 @@ impl Default for Options {
             rest_force_tolerance_mps2: sinscal::run::sequence::SequenceSettings::default().rest.force_error_max_mps2,
             use_moves: true,
             pose_tolerance_deg: None,
+            noise: None,
         }
     }
 }
@@ -189,6 +214,9 @@ pub struct Calibration {
     pub pose_tolerance_deg: f64,
     /// What the fit check adds when it fails: the alternative that fits (`sinscal calibrate` sets it).
     pub fit_hint: Option<String>,
+    /// The noise model the general estimator weighted the dwells by (`--noise`); `None`: the session's own
+    /// dwell noise.
+    pub noise: Option<NoiseModel>,
 }
 
 /// A move the general estimator used: between which dwells, where, how long, how far it turned, and how far the
@@ -345,6 +373,7 @@ pub fn calibrate_channels(recording: &impl RowSource, options: &Options) -> Resu
     let without_suspect = leave_out_suspects(&estimator, &solution, &positions, &move_samples, rate_var_radps2);
     Ok(Calibration {
         pose_tolerance_deg: pose_tolerance_deg(options, header),
+        noise: estimator.settings().noise,
         fit_hint: None,
         without_suspect,
         source: source.to_string(),
@@ -421,6 +450,7 @@ pub fn channel_session(
         attitude,
         earth_rate_resolved,
         pose_tolerance_rad: (pose_tolerance_deg(options, header) as f32).to_radians(),
+        noise: noise_model_of(recording, options)?,
         ..ChannelSettings::default()
     };
     let estimator = session_estimator(session_dwells(&positions), site, settings, options.dwell_value)
@@ -547,6 +577,7 @@ pub fn calibrate_angles(recording: &impl RowSource, options: &Options) -> Result
         calibrate_positions(&inputs, &site, &settings).map_err(|e| angle_error(e, &positions, source))?;
     Ok(Calibration {
         pose_tolerance_deg: 0.0,
+        noise: None,
         fit_hint: None,
         source: source.to_string(),
         latitude_deg: header.latitude_deg,

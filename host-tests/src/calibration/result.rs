@@ -203,7 +203,8 @@ pub struct SamplingJson {
 /// The noise model each channel's errors rest on: where it came from, and per channel what it is.
 #[derive(Debug, Serialize)]
 pub struct NoiseJson {
-    /// "recording": the dwells' own Allan variances, pooled over the session (docs/method.md#honest-errors).
+    /// "recording": the dwells' own Allan variances, pooled over the session (docs/method.md#honest-errors);
+    /// "file": the noise model of a noise file (`--noise`, docs/method.md#noise-model).
     pub source: &'static str,
     /// Gyro x, y, z, accelerometer x, y, z (the gyros absent without gyro data).
     pub channels: Vec<ChannelNoiseJson>,
@@ -215,30 +216,80 @@ pub struct ChannelNoiseJson {
     /// `gyro_x` .. `accel_z`.
     pub channel: &'static str,
     /// "allan": from the Allan variance at `cluster_samples`; "white": the per-sample variance (dwells too short
-    /// for two clusters), as for white noise.
+    /// for two clusters), as for white noise; "terms": the noise file's terms.
     pub model: &'static str,
     /// White-equivalent variance per sample, SI squared ((rad/s)^2 or (m/s^2)^2): a dwell mean of N samples has
-    /// the variance `white_equivalent_var_si / N`.
+    /// the variance `white_equivalent_var_si / N` (with a noise file: at the session's longest dwell).
     pub white_equivalent_var_si: f64,
-    /// The cluster size it was taken at, samples.
+    /// The cluster size it was taken at, samples (0 with a noise file).
     pub cluster_samples: u32,
-    /// Its degrees of freedom (the Allan differences it rests on).
-    pub degrees_of_freedom: f64,
+    /// Its degrees of freedom (the Allan differences it rests on; absent with a noise file, whose model is
+    /// taken as known).
+    pub degrees_of_freedom: Option<f64>,
+    /// The noise file's terms, SI (`quantisation_u_s`, `white_u_sqrt_s`, `instability_u`, `gauss_markov_u`,
+    /// `gauss_markov_time_s`, `random_walk_u_per_sqrt_s`, `ramp_u_per_s`; U = rad/s or m/s^2).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub terms: Option<NoiseTermsJson>,
+}
+
+/// A channel's noise terms in the JSON, SI.
+#[derive(Debug, Serialize)]
+pub struct NoiseTermsJson {
+    /// Quantisation Q, U s.
+    pub quantisation_u_s: f64,
+    /// White noise N, U sqrt(s).
+    pub white_u_sqrt_s: f64,
+    /// Bias instability B, U.
+    pub instability_u: f64,
+    /// Gauss-Markov sigma, U.
+    pub gauss_markov_u: f64,
+    /// Gauss-Markov correlation time, s.
+    pub gauss_markov_time_s: f64,
+    /// Rate random walk K, U / sqrt(s).
+    pub random_walk_u_per_sqrt_s: f64,
+    /// Rate ramp R, U / s.
+    pub ramp_u_per_s: f64,
 }
 
 impl NoiseJson {
-    /// The session's pooled dwell noise.
+    /// The noise the session's dwells were weighted by.
     fn new(c: &Calibration) -> NoiseJson {
         const NAMES: [&str; 6] = ["gyro_x", "gyro_y", "gyro_z", "accel_x", "accel_y", "accel_z"];
-        let pooled = sinscal::calib::dwell::pool_mean_noise(c.positions.iter().map(|p| p.summary));
         let first = if c.has_gyro { 0 } else { 3 };
+        if let Some(model) = &c.noise {
+            let longest = c.positions.iter().map(|p| p.summary.samples).max().unwrap_or(1).max(1);
+            let channels = (first..6)
+                .map(|i| {
+                    let t = model.channels[i];
+                    ChannelNoiseJson {
+                        channel: NAMES[i],
+                        model: "terms",
+                        white_equivalent_var_si: model.mean_variance(i, longest) as f64 * longest as f64,
+                        cluster_samples: 0,
+                        degrees_of_freedom: None,
+                        terms: Some(NoiseTermsJson {
+                            quantisation_u_s: t.quantisation_u_s as f64,
+                            white_u_sqrt_s: t.white_u_sqrt_s as f64,
+                            instability_u: t.instability_u as f64,
+                            gauss_markov_u: t.gauss_markov_u as f64,
+                            gauss_markov_time_s: t.gauss_markov_time_s as f64,
+                            random_walk_u_per_sqrt_s: t.random_walk_u_per_sqrt_s as f64,
+                            ramp_u_per_s: t.ramp_u_per_s as f64,
+                        }),
+                    }
+                })
+                .collect();
+            return NoiseJson { source: "file", channels };
+        }
+        let pooled = sinscal::calib::dwell::pool_mean_noise(c.positions.iter().map(|p| p.summary));
         let channels = (first..6)
             .map(|i| ChannelNoiseJson {
                 channel: NAMES[i],
                 model: if pooled[i].cluster_samples > 1 { "allan" } else { "white" },
                 white_equivalent_var_si: pooled[i].white_equivalent_var as f64,
                 cluster_samples: pooled[i].cluster_samples,
-                degrees_of_freedom: pooled[i].dof as f64,
+                degrees_of_freedom: Some(pooled[i].dof as f64),
+                terms: None,
             })
             .collect();
         NoiseJson { source: "recording", channels }

@@ -119,6 +119,11 @@ pub struct CalibrationArgs {
     /// pose_tolerance_deg, else 0 (docs/method.md#poses-known-to-a-tolerance).
     #[arg(long, value_parser = parse_pose_tolerance)]
     pose_tolerance: Option<f64>,
+    /// Channel method: weight each dwell by the noise model of this noise file (made once from a static run
+    /// of the IMU by `sinscal noise`): the variance of a dwell mean is the model's at the dwell's length
+    /// (docs/method.md#noise-model). Default: the session's own dwell noise.
+    #[arg(long, value_name = "NOISE_FILE")]
+    noise: Option<std::path::PathBuf>,
 }
 
 /// `--pose-tolerance`: degrees in [0, 10] (a bad value is a usage error, exit 2).
@@ -168,6 +173,13 @@ impl CalibrationArgs {
         if self.estimate_attitudes && firmware_path {
             usage("--estimate-attitudes: the firmware path takes the recording's attitudes as its reference")
         }
+        if self.noise.is_some() && method == Method::Angles {
+            usage("--noise: the angle method weights by its own dwell noise (--method channels)")
+        }
+        let noise = match &self.noise {
+            Some(path) => Some(crate::io::noise_file::NoiseFile::read(path)?.terms),
+            None => None,
+        };
         let model = match self.model {
             Some(_) if method == Method::Angles => {
                 usage("--model: the angle method estimates the biases (and the reference offset) only")
@@ -195,6 +207,7 @@ impl CalibrationArgs {
                 .unwrap_or(sinscal::run::sequence::SequenceSettings::default().rest.force_error_max_mps2),
             use_moves: !self.no_moves,
             pose_tolerance_deg: self.pose_tolerance,
+            noise,
         })
     }
 }

@@ -6,7 +6,7 @@ use std::path::PathBuf;
 
 use serde::Serialize;
 
-use crate::analysis::noise_terms::{noise_model, NoiseModel};
+use crate::analysis::noise_terms::{noise_model_above, NoiseModel};
 use crate::analysis::CHANNELS;
 use crate::cmd::{json_to_stdout, write_json};
 use crate::io::error::InputError;
@@ -20,6 +20,23 @@ pub struct Args {
     /// Write the noise file (JSON, schema sinscal-noise/1) to this file ('-' = stdout).
     #[arg(long)]
     out: PathBuf,
+    /// Fit each channel's Allan variance at averaging times of at least this many seconds (default 1: a
+    /// calibration's dwell means are seconds to minutes long; 0 fits every point, as `analyze` does).
+    #[arg(long, default_value_t = DEFAULT_MIN_TAU_S, value_parser = parse_min_tau)]
+    min_tau: f64,
+}
+
+/// The shortest averaging time a noise file is fitted at unless told otherwise, s: below it lie a ring-laser
+/// gyro's dither and the filters of MEMS parts, which no term of the model describes and which a dwell mean of
+/// seconds does not see (docs/method.md#noise-model, measured on the PSINS record).
+pub const DEFAULT_MIN_TAU_S: f64 = 1.0;
+
+/// `--min-tau`: a number of seconds >= 0 (a bad value is a usage error, exit 2).
+fn parse_min_tau(text: &str) -> Result<f64, String> {
+    match text.parse::<f64>() {
+        Ok(x) if x.is_finite() && x >= 0.0 => Ok(x),
+        _ => Err(format!("'{text}' is not a number of seconds >= 0")),
+    }
 }
 
 /// The noise file.
@@ -35,6 +52,8 @@ pub struct NoiseFile {
     pub samples: usize,
     /// Sample rate, Hz.
     pub rate_hz: f64,
+    /// The shortest averaging time fitted, s.
+    pub min_tau_s: f64,
     /// Per channel (gyro x, y, z, accelerometer x, y, z; no gyros without gyro data): the named terms with their
     /// standard errors, the fit's statistics, and how far the white-noise error of the dwell's mean is off.
     pub channels: Vec<NoiseModel>,
@@ -43,15 +62,15 @@ pub struct NoiseFile {
 /// Runs `sinscal noise`.
 pub fn run(args: Args) -> anyhow::Result<()> {
     let rec = Recording::read(&args.recording)?;
-    let file = characterise(&rec)?;
+    let file = characterise(&rec, args.min_tau)?;
     if !json_to_stdout(Some(&args.out)) {
         super::out(&summary(&file))?;
     }
     write_json(&args.out, &file)
 }
 
-/// The noise file of a recording's longest dwell.
-pub fn characterise(rec: &Recording) -> Result<NoiseFile, InputError> {
+/// The noise file of a recording's longest dwell, fitted at averaging times of at least `min_tau_s`.
+pub fn characterise(rec: &Recording, min_tau_s: f64) -> Result<NoiseFile, InputError> {
     let (pos, rows) = longest_dwell(rec)
         .ok_or_else(|| InputError::at(&rec.source, 1, "no dwell (no row with pos > 0) to characterise"))?;
     let median_step_s = || TimeSteps::of(rows.iter().map(|r| r.t_s)).median_s().unwrap_or(1.0);
@@ -61,7 +80,7 @@ pub fn characterise(rec: &Recording) -> Result<NoiseFile, InputError> {
     for i in first..6 {
         let samples: Vec<f64> =
             rows.iter().map(|r| if i < 3 { r.rate_b_radps[i] } else { r.force_b_mps2[i - 3] }).collect();
-        let model = noise_model(CHANNELS[i], i < 3, &samples, rate_hz).ok_or_else(|| {
+        let model = noise_model_above(CHANNELS[i], i < 3, &samples, rate_hz, min_tau_s).ok_or_else(|| {
             InputError::at(
                 &rec.source,
                 rows[0].line,
@@ -75,7 +94,15 @@ pub fn characterise(rec: &Recording) -> Result<NoiseFile, InputError> {
         })?;
         channels.push(model);
     }
-    Ok(NoiseFile { schema: "sinscal-noise/1", source: rec.source.clone(), pos, samples: rows.len(), rate_hz, channels })
+    Ok(NoiseFile {
+        schema: "sinscal-noise/1",
+        source: rec.source.clone(),
+        pos,
+        samples: rows.len(),
+        rate_hz,
+        min_tau_s,
+        channels,
+    })
 }
 
 /// The longest dwell: its label and rows.

@@ -122,6 +122,8 @@ impl Provenance {
         let o = &self.options;
         let bad = |what: &str, v: &str| anyhow::anyhow!("the record's provenance note: {what} '{v}'");
         Ok(Options {
+            // The noise model travels in the device's configuration, not in the note.
+            noise: None,
             prefilter: match o.prefilter.as_str() {
                 "hmmkf" => PrefilterKind::HmmKf,
                 "none" => PrefilterKind::None,

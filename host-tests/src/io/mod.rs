@@ -7,6 +7,7 @@ pub mod calibration_model;
 pub mod dwell_tally;
 pub mod error;
 pub mod import;
+pub mod noise_file;
 pub mod recording;
 
 use std::io::Write as _;

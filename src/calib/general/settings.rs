@@ -3,6 +3,7 @@
 
 use crate::calib::general::terms::Model;
 use crate::calib::limits::{FORCE_MAGNITUDE_ERROR_MAX_RELATIVE, POSE_GRAVITY_ANGLE_MAX_RAD};
+use crate::calib::noise_model::NoiseModel;
 
 /// Settings of the estimator.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -35,6 +36,11 @@ pub struct ChannelSettings {
     /// gyro model leaves the Earth rate out: no heading is estimated or checked, and the gyro scale factors and
     /// misalignments, which a static pose sees only through the Earth rate, are not exercised.
     pub earth_rate_resolved: bool,
+    /// The channels' noise model, named once from a static run (docs/method.md#noise-model): with it, the
+    /// variance of each dwell mean is the model's at the dwell's length; without, the session's own pooled
+    /// dwell noise (docs/method.md#honest-errors). The estimator itself reads the dwells' variances only;
+    /// [`session_estimator`](crate::calib::session::session_estimator) sets them from this.
+    pub noise: Option<NoiseModel>,
 }
 
 /// What the session knows of the dwells' attitudes.
@@ -63,6 +69,7 @@ impl Default for ChannelSettings {
             attitude: AttitudeKnowledge::Reference,
             pose_tolerance_rad: 0.0,
             earth_rate_resolved: true,
+            noise: None,
         }
     }
 }

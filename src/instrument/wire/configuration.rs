@@ -12,6 +12,7 @@ use crate::calib::angles::CalibrationSettings;
 use crate::calib::angles::MAX_POSITIONS;
 use crate::calib::dwell::{Prefilter, MIN_DWELL_SAMPLES};
 use crate::calib::general::{ChannelSettings, Model as Terms};
+use crate::calib::noise_model::{ChannelNoiseTerms, NoiseModel, TERM_VALUES};
 use crate::calib::prefilter::PrefilterSettings;
 use crate::nav::earth::Site;
 use crate::nav::frames::Attitude;
@@ -20,8 +21,10 @@ use crate::run::sequence::{Estimator, SequenceSettings};
 use crate::sensor::adis::Model;
 
 /// Bytes of a configuration's fixed part (IMU, estimator, site, positions, terms: 14; run settings: 12; rest
-/// limits: 12; pose tolerance: 4).
-pub const FIXED_BYTES: usize = 14 + 12 + 12 + 4;
+/// limits: 12; pose tolerance: 4; noise model: 4 + 6 x 7 x 4).
+pub const FIXED_BYTES: usize = 14 + 12 + 12 + 4 + NOISE_BYTES;
+/// Bytes of the noise model: the sample interval (0: no model) and each channel's terms.
+pub const NOISE_BYTES: usize = 4 + 6 * TERM_VALUES * 4;
 /// Bytes of each position of the schedule.
 pub const POSITION_BYTES: usize = 16;
 /// Bytes of the thresholds at the end of a device configuration.
@@ -32,6 +35,10 @@ pub const MAX_BYTES: usize = FIXED_BYTES + POSITION_BYTES * MAX_POSITIONS;
 pub const MAX_DEVICE_BYTES: usize = MAX_BYTES + THRESHOLD_BYTES;
 
 const _: () = assert!(MAX_POSITIONS <= 64, "unknown_headings holds one bit per position");
+const _: () = assert!(
+    MAX_DEVICE_BYTES <= crate::instrument::link::MAX_BODY_BYTES,
+    "the configure message carries the longest device configuration"
+);
 
 /// The thresholds of a device's dwells, in samples.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -93,6 +100,8 @@ pub struct Configuration {
     /// How well the schedule's attitudes are known, rad (one standard deviation, each axis; 0: exact): the
     /// general estimator's [`ChannelSettings::pose_tolerance_rad`].
     pub pose_tolerance_rad: f32,
+    /// The channels' noise model (docs/method.md#noise-model); `None`: the session's own dwell noise.
+    pub noise: Option<NoiseModel>,
 }
 
 /// Largest pose tolerance a configuration carries, rad (10 deg).
@@ -124,6 +133,7 @@ impl Configuration {
             estimate_reference_offset: s.calibration.solver.estimate_reference_offset,
             rest: RestLimits::default(),
             pose_tolerance_rad: 0.0,
+            noise: None,
         }
     }
 
@@ -134,6 +144,7 @@ impl Configuration {
                 model: self.terms,
                 use_gyro,
                 pose_tolerance_rad: self.pose_tolerance_rad,
+                noise: self.noise,
                 ..Default::default()
             })
         };
@@ -188,6 +199,13 @@ impl Configuration {
         w.u8(self.max_passes).u8(self.estimate_reference_offset as u8).f32(a_gyro).f32(a_accel);
         w.f32(self.rest.force_error_max_mps2).f32(self.rest.gravity_angle_max_rad).f32(self.rest.rate_max_radps);
         w.f32(self.pose_tolerance_rad);
+        let noise = self.noise.unwrap_or_default();
+        w.f32(noise.sample_interval_s);
+        for c in &noise.channels {
+            for v in c.to_array() {
+                w.f32(v);
+            }
+        }
         for (k, (a, label)) in self.schedule.iter().zip(&self.labels).enumerate() {
             let heading_unknown = self.unknown_headings >> k & 1 != 0;
             w.f32(a.pitch_rad).f32(a.roll_rad).f32(a.heading_rad).u16(*label).u16(heading_unknown as u16);
@@ -219,6 +237,7 @@ impl Configuration {
         let rest =
             RestLimits { force_error_max_mps2: r.f32()?, gravity_angle_max_rad: r.f32()?, rate_max_radps: r.f32()? };
         let pose_tolerance_rad = r.f32()?;
+        let noise = Self::decode_noise(r)?;
         let (Some(imu), Some(estimator), Some(terms), Some(prefilter), Some(dwell_value)) =
             (imu, estimator, terms, prefilter, dwell_value)
         else {
@@ -227,7 +246,10 @@ impl Configuration {
         let positive = |x: f32| x.is_finite() && x > 0.0;
         let limits_ok = positive(rest.force_error_max_mps2) && positive(rest.gravity_angle_max_rad);
         let tolerance_ok = (0.0..=MAX_POSE_TOLERANCE_RAD).contains(&pose_tolerance_rad);
-        if count == 0 || count > MAX_POSITIONS || !(limits_ok && positive(rest.rate_max_radps) && tolerance_ok) {
+        let gyros = estimator != EstimatorCode::GeneralWithoutGyros;
+        let noise_ok = noise.is_none_or(|m| m.is_valid(gyros));
+        let settings_ok = limits_ok && positive(rest.rate_max_radps) && tolerance_ok && noise_ok;
+        if count == 0 || count > MAX_POSITIONS || !settings_ok {
             return Some(Err(WireError));
         }
         let (mut schedule, mut labels, mut unknown_headings) = (Vec::new(), Vec::new(), 0u64);
@@ -261,7 +283,22 @@ impl Configuration {
             estimate_reference_offset,
             rest,
             pose_tolerance_rad,
+            noise,
         }))
+    }
+
+    /// The noise model's bytes: `None` inside when the sample interval is 0 (no model).
+    fn decode_noise(r: &mut Reader<'_>) -> Option<Option<NoiseModel>> {
+        let sample_interval_s = r.f32()?;
+        let mut channels = [ChannelNoiseTerms::default(); 6];
+        for c in &mut channels {
+            let mut v = [0.0f32; TERM_VALUES];
+            for x in &mut v {
+                *x = r.f32()?;
+            }
+            *c = ChannelNoiseTerms::from_array(v);
+        }
+        Some((sample_interval_s != 0.0).then_some(NoiseModel { sample_interval_s, channels }))
     }
 }
 

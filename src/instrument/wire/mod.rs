@@ -16,6 +16,9 @@
 //!                prefilter u8 (PrefilterCode), dwell value u8 (DwellValueCode), passes u8,
 //!                estimate reference offset u8, a_gyro f32, a_accel f32,
 //!                rest limits: max | |f| - g | (m/s^2) f32, max gravity angle (rad) f32, max |rate| (rad/s) f32,
+//!                pose tolerance (rad) f32,
+//!                noise model: sample interval (s, 0 = none) f32, 6 channels x 7 terms f32 (Q, N, B,
+//!                             Gauss-Markov sigma and time, K, R; calib::noise_model),
 //!                positions x (pitch_rad f32, roll_rad f32, heading_rad f32, label u16,
 //!                             flags u16: bit 0 = heading unknown)
 //! thresholds     settle samples u32, dwell samples u32, fewest samples u32 (the configure message only)

@@ -14,6 +14,7 @@ use crate::calib::angles::{CalibrationResult, PositionInput};
 use crate::calib::compensation::Compensation;
 use crate::calib::dwell::{DwellAllan, DwellSummary, MeanNoise, Prefilter};
 use crate::calib::general::{ChannelSolution, Model as Terms, Term, PARAMETERS};
+use crate::calib::noise_model::{ChannelNoiseTerms, NoiseModel, TERM_VALUES};
 use crate::calib::prefilter::PrefilterSettings;
 use crate::nav::earth::Site;
 use crate::nav::frames::Attitude;
@@ -72,6 +73,7 @@ fn configuration(rng: &mut Rng) -> Configuration {
             rate_max_radps: rng.positive(),
         },
         pose_tolerance_rad: if rng.below(2) == 0 { 0.0 } else { 0.1 * rng.positive().min(1.0) },
+        noise: (rng.below(2) == 1).then(|| noise_model(rng)),
     };
     for k in 0..positions {
         let [pitch_rad, roll_rad, heading_rad] = rng.vec3();
@@ -82,6 +84,21 @@ fn configuration(rng: &mut Rng) -> Configuration {
         }
     }
     c
+}
+
+/// A valid noise model with every term drawn (some left out).
+fn noise_model(rng: &mut Rng) -> NoiseModel {
+    let channels = core::array::from_fn(|_| {
+        let mut v = [0.0f32; TERM_VALUES];
+        for x in &mut v {
+            *x = if rng.below(3) == 0 { 0.0 } else { rng.positive() };
+        }
+        // Some term beyond the correlation time, and that time wherever the Gauss-Markov sigma is.
+        v[1] = rng.positive();
+        v[4] = rng.positive();
+        ChannelNoiseTerms::from_array(v)
+    });
+    NoiseModel { sample_interval_s: rng.positive(), channels }
 }
 
 fn encoded(encode: impl Fn(&mut Writer<'_>), out: &mut [u8]) -> usize {
@@ -117,6 +134,19 @@ fn configurations_round_trip_and_every_truncation_or_unknown_code_is_refused() {
         let mut bad = bytes;
         bad[at] = value;
         assert!(DeviceConfiguration::decode(&bad[..n]).is_err(), "byte {at} = {value} accepted");
+    }
+    // A noise model with a negative or non-finite term, or a negative sample interval (bytes 42..46, then the
+    // terms of gyro x from byte 46): refused.
+    let mut c = configuration(&mut rng);
+    c.estimator = EstimatorCode::General;
+    c.noise = Some(noise_model(&mut rng));
+    let configured = DeviceConfiguration { configuration: c, thresholds: Thresholds::REPLAY };
+    let n = encoded(|w| configured.encode(w), &mut bytes);
+    assert_eq!(DeviceConfiguration::decode(&bytes[..n]), Ok(configured.clone()));
+    for (at, value) in [(42, -1.0f32), (46, -1.0), (50, f32::NAN), (54, f32::INFINITY)] {
+        let mut bad = bytes;
+        bad[at..at + 4].copy_from_slice(&value.to_le_bytes());
+        assert!(DeviceConfiguration::decode(&bad[..n]).is_err(), "bytes {at}.. = {value} accepted");
     }
 }
 

@@ -12,7 +12,7 @@ use crate::run::sequence::{SequenceError, SequenceSettings};
 /// File magic.
 pub const MAGIC: [u8; 4] = *b"SSRP";
 /// File version.
-pub const VERSION: u16 = 4;
+pub const VERSION: u16 = 5;
 
 /// Bytes of a replay file's header with `positions` positions: magic and version, the configuration, the frame
 /// count.
@@ -45,7 +45,7 @@ impl core::fmt::Display for ReplayError {
     fn fmt(&self, f: &mut core::fmt::Formatter<'_>) -> core::fmt::Result {
         match self {
             ReplayError::Read => f.write_str("replay file ended early or could not be read"),
-            ReplayError::Format => f.write_str("not a sinscal replay file (version 3)"),
+            ReplayError::Format => write!(f, "not a sinscal replay file (version {VERSION})"),
             ReplayError::Sequence(e) => write!(f, "calibration sequence: {e:?}"),
             ReplayError::Init => f.write_str("IMU initialisation failed"),
         }
