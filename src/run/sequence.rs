@@ -71,6 +71,9 @@ pub struct SequenceSettings {
 }
 
 /// The estimator of a sequence.
+// The general estimator's settings carry the noise model (208 bytes): boxing is not possible without an
+// allocator, and the enum exists once, in the sequence's settings.
+#[allow(clippy::large_enum_variant)]
 #[derive(Clone, Copy, Debug, PartialEq)]
 #[cfg_attr(feature = "defmt", derive(defmt::Format))]
 pub enum Estimator {
