@@ -318,3 +318,37 @@ fn real_data_misfits_name_the_alternative_that_fits() {
     sinscal().arg("calibrate").arg(&ferraris).assert().success();
     sinscal().arg("calibrate").arg(&xsens).args(["--model", "full"]).assert().success();
 }
+
+/// One pose: a constant bias absorbs any constant rate, so the hypotheses cannot be compared across dwells;
+/// gyros in deg/s still show as a mean rate 57.3 times the Earth rate along it. SIMULATION (one 60-s level
+/// pose of the example's sensor) and REAL DATA (the PSINS one-pose record): as recorded, exit 0; with the gyros
+/// in deg/s, exit 3 with the hint.
+#[test]
+fn one_pose_gyros_in_deg_per_s_fail_the_physics_check() {
+    let dir = tempfile::tempdir().unwrap();
+    let scenario = sinscal_host::model::synth::Scenario {
+        dwell_s: 60.0,
+        positions_deg: vec![[0.0, 0.0, 30.0]],
+        ..sinscal_host::model::synth::Scenario::example()
+    };
+    let mut recordings = vec![("one-pose", scenario.recording(3, "one-pose.csv"))];
+    if let Some(data) = common::data_dir() {
+        let psins = common::data_file(&data, "psins-lasergyro/lasergyro.imu");
+        recordings.push(("psins", sinscal_host::io::import::import_psins(&psins, None).unwrap().recording));
+    }
+    for (name, rec) in recordings {
+        let path = dir.path().join(format!("{name}.csv"));
+        rec.write(&path).unwrap();
+        let (code, stderr, v) = calibrate(dir.path(), &path);
+        assert_eq!(code, 0, "{name}: {stderr}");
+        assert_eq!(check(&v, "physics")["passed"], true, "{name}");
+        let mut degrees = rec.clone();
+        for row in &mut degrees.rows {
+            row.rate_b_radps = row.rate_b_radps.map(|w| w * 57.29578);
+        }
+        let path = dir.path().join(format!("{name}-degs.csv"));
+        degrees.write(&path).unwrap();
+        println!("{name}: gyros in deg/s");
+        fails_physics_of(dir.path(), &path, "gyros in deg/s?");
+    }
+}

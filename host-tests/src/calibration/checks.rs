@@ -316,6 +316,11 @@ pub fn physics_of(dwells: &[PhysicsDwell], site: &Site, has_gyro: bool) -> Check
     let mut passed = Vec::new();
     let noise = pool_mean_noise(dwells.iter().map(|d| d.1)).map(|m| m.white_equivalent_var);
     let gyros_checked = has_gyro && gyros_resolve_earth_rate(&noise, dwells.iter().map(|d| d.1.samples));
+    // Gyros in deg/s make them look noisy 57.3-fold too: checked whether or not they resolve the Earth rate.
+    let one_pose = has_gyro && misfit(Sensor::Gyro, dwells, site, Hypothesis::Stated).is_none();
+    if let Some(detail) = one_pose.then(|| gyros_in_degrees(dwells, site)).flatten() {
+        failed.push(detail);
+    }
     for sensor in [Sensor::Gyro, Sensor::Accel] {
         if sensor == Sensor::Gyro && !gyros_checked {
             if has_gyro {
@@ -378,6 +383,45 @@ fn compare(sensor: Sensor, dwells: &[PhysicsDwell], site: &Site) -> Verdict {
         )),
         _ => Verdict::Passed(format!("{name} chi-square {stated:.1} on {dof} degrees of freedom")),
     }
+}
+
+/// Largest relative difference of a dwell's `|w|` from 57.3 times the Earth rate, and largest difference of its
+/// angle from the vertical from the Earth rate's (90 deg - latitude), deg, that [`gyros_in_degrees`] takes for
+/// gyros in deg/s.
+const DEGREES_MAGNITUDE_TOLERANCE: f64 = 0.02;
+const DEGREES_ANGLE_TOLERANCE_DEG: f64 = 5.0;
+
+/// Gyros in deg/s written as rad/s, from dwells too few to compare hypotheses (one pose, where a constant bias
+/// absorbs any constant rate): every dwell's mean rate is 57.3 times the Earth rate (within
+/// [`DEGREES_MAGNITUDE_TOLERANCE`]) and at the Earth rate's angle from the vertical (within
+/// [`DEGREES_ANGLE_TOLERANCE_DEG`]). A true rate does so only with a bias of 57 times the Earth rate (0.24 deg/s)
+/// on the Earth rate's cone about the vertical, within 2 % and 5 deg.
+fn gyros_in_degrees(dwells: &[PhysicsDwell], site: &Site) -> Option<String> {
+    let earth_radps = sinscal::nav::earth::EARTH_RATE_RADPS as f64;
+    let expected_deg = 90.0 - (site.latitude_rad as f64).to_degrees();
+    let mut ratio_sum = 0.0;
+    for (attitude, s) in dwells {
+        let c_b_n = Attitude::from_degrees(attitude.pitch_deg as f32, attitude.roll_deg as f32, 0.0).c_b_n();
+        let up_b = c_b_n.transpose().mul_vec([0.0, 0.0, 1.0]).map(f64::from);
+        let w = s.rate_mean_b_radps.map(f64::from);
+        let size = w.iter().map(|x| x * x).sum::<f64>().sqrt();
+        let ratio = size / earth_radps / DEG_PER_RAD;
+        let cos = (w[0] * up_b[0] + w[1] * up_b[1] + w[2] * up_b[2]) / size.max(f64::MIN_POSITIVE);
+        let angle_deg = cos.clamp(-1.0, 1.0).acos().to_degrees();
+        let degrees = (ratio - 1.0).abs() < DEGREES_MAGNITUDE_TOLERANCE
+            && (angle_deg - expected_deg).abs() < DEGREES_ANGLE_TOLERANCE_DEG;
+        if !degrees {
+            return None;
+        }
+        ratio_sum += ratio;
+    }
+    (!dwells.is_empty()).then(|| {
+        format!(
+            "gyros in deg/s? the mean rate of every dwell is {:.3} x 57.3 times the Earth rate, at its angle from \
+             the vertical",
+            ratio_sum / dwells.len() as f64
+        )
+    })
 }
 
 /// Chi-square and degrees of freedom of a constant bias per channel fitted to the dwell means minus what the

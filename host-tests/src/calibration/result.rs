@@ -505,6 +505,15 @@ fn poses_line(c: &Calibration) -> String {
     }
 }
 
+/// What the dwells were weighted by: the noise file's model or the session's own dwell noise.
+fn noise_line(c: &Calibration) -> String {
+    if c.noise.is_some() {
+        "each dwell weighted by the noise file's model at its length (docs/method.md#noise-model)".to_string()
+    } else {
+        "each dwell weighted by the session's own dwell noise (its Allan variances, pooled)".to_string()
+    }
+}
+
 /// The spike gate's count: which dwells lost samples as spikes, or that none did.
 fn spikes_line(c: &Calibration) -> String {
     let hit: Vec<String> = c
@@ -577,6 +586,7 @@ pub fn summary(c: &Calibration) -> String {
     let _ = writeln!(out, "spike gate: {}", spikes_line(c));
     if c.channels.is_some() {
         let _ = writeln!(out, "poses: {}", poses_line(c));
+        let _ = writeln!(out, "noise: {}", noise_line(c));
     }
     let _ = writeln!(out);
     positions_table(&mut out, c);
