@@ -95,6 +95,7 @@ fn dwell_with(t: &[f64; PARAMETERS], model: Model, pose: [f64; 3], heading_known
         // Navigation-grade noise of a 1 min mean: 0.005 deg/h and 1 ug.
         rate_mean_var_b_radps2: [(0.005 * W_RADPS / 15.041) as f32; 3].map(|s| s * s),
         force_mean_var_b_mps2sq: [1e-6 * 9.80665_f32; 3].map(|s| s * s),
+        window: None,
     }
 }
 

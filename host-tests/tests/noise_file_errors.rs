@@ -182,3 +182,87 @@ fn imutk_noise_file_from_the_first_interval_gives_honest_errors_on_the_hand_plac
         assert!(expected.contains(&ratio), "{}: ratio {ratio:.2} outside {expected:?}", CHANNELS[i]);
     }
 }
+
+/// Sessions of two dwells (REAL DATA, PSINS): each session two 30-s dwells 5 s apart at the record's one
+/// attitude, calibrated by the core (`session_estimator`, biases) with the noise file of the other half, with
+/// and without the dwells' windows (the correlation between them, docs/method.md#noise-model); the reported
+/// standard error of each bias against the spread of the biases of consecutive sessions.
+#[test]
+fn psins_two_dwell_sessions_need_the_correlation_between_dwells() {
+    use sinscal::calib::general::{ChannelSettings, Model};
+    use sinscal::calib::session::{session_estimator, SessionDwell};
+    use sinscal::nav::frames::Attitude;
+    let Some(dir) = data_dir() else { return };
+    let rec = import_psins(&data_file(&dir, "psins-lasergyro/lasergyro.imu"), None).unwrap().recording;
+    let rate_hz = rec.header.rate_hz.unwrap();
+    let rows = &rec.rows[16..];
+    let (a, b) = rows.split_at(rows.len() / 2);
+    let (site, _) = sinscal_host::calibration::site_of(&rec.header);
+    let r0 = &rows[0];
+    let attitude =
+        Attitude::from_degrees(r0.pitch_deg as f32, r0.roll_deg as f32, r0.heading_deg.unwrap_or(0.0) as f32);
+    let (dwell, gap) = ((30.0 * rate_hz) as usize, (5.0 * rate_hz) as usize);
+    let session = 2 * dwell + gap;
+    let mut rows_of = Vec::new();
+    // [with windows, without] x channel.
+    let mut pooled = [[Pooled::default(); 6]; 2];
+    println!("REAL DATA psins-lasergyro: sessions of two 30-s dwells 5 s apart, noise file of the other half");
+    for (fit, eval) in [(a, b), (b, a)] {
+        let model = noise_model_of(&rec, fit, rate_hz);
+        for with_windows in [true, false] {
+            let settings = ChannelSettings { model: Model::BIASES, noise: Some(model), ..ChannelSettings::default() };
+            let mut estimates: Vec<[(f64, f64); 6]> = Vec::new();
+            for s in eval.chunks_exact(session) {
+                let summaries = [&s[..dwell], &s[dwell + gap..]].map(|d| {
+                    let mut c = DwellCollector::new(&Prefilter::None).unwrap();
+                    for r in d {
+                        let sample = ImuSample {
+                            rate_b_radps: r.rate_b_radps.map(|v| v as f32),
+                            force_b_mps2: r.force_b_mps2.map(|v| v as f32),
+                        };
+                        c.update(&sample).unwrap();
+                    }
+                    c.summary().unwrap()
+                });
+                let starts = [0u32, (dwell + gap) as u32];
+                let dwells = (0..2).map(|k| SessionDwell {
+                    attitude,
+                    heading_known: true,
+                    summary: &summaries[k],
+                    first_sample: with_windows.then_some(starts[k]),
+                });
+                let solution = session_estimator(dwells, site, settings, sinscal::calib::align::DwellValue::Mean)
+                    .unwrap()
+                    .solve()
+                    .unwrap();
+                // gyro_bias x, y, z then accel_bias x, y, z: parameters 0..6.
+                estimates.push(core::array::from_fn(|i| {
+                    let (v, se) = solution.estimate(i).unwrap();
+                    (v as f64, (se as f64).powi(2))
+                }));
+            }
+            rows_of.push(estimates.len());
+            for w in estimates.windows(2) {
+                for (i, p) in pooled[usize::from(!with_windows)].iter_mut().enumerate() {
+                    p.add(w[0][i], w[1][i]);
+                }
+            }
+        }
+    }
+    let mut failures = Vec::new();
+    println!(" with the correlation between the two dwells:");
+    let with = check(&pooled[0], "with", &mut failures);
+    println!(" without (each dwell independent):");
+    let mut ignored = Vec::new();
+    let without = check(&pooled[1], "without", &mut ignored);
+    println!("in [0.7, 1.4]: {with} of 6 with the correlation, {without} of 6 without ({:?} sessions)", rows_of);
+    for (i, (x, y)) in pooled[0].iter().zip(&pooled[1]).enumerate() {
+        println!("  {:8} ratio with {:.2}, without {:.2}", CHANNELS[i], x.ratio().0, y.ratio().0);
+    }
+    // The accelerometers, whose noise is slower than a dwell, are honest only with the correlation.
+    for i in 3..6 {
+        let (with, without) = (pooled[0][i].ratio().0, pooled[1][i].ratio().0);
+        assert!((0.7..=1.4).contains(&with), "{}: with the correlation {with:.2}", CHANNELS[i]);
+        assert!(without < with, "{}: without {without:.2}, with {with:.2}", CHANNELS[i]);
+    }
+}

@@ -57,6 +57,7 @@ fn run(rng: &mut ChaCha8Rng, tolerance_deg: f32) -> Run {
             force_mean_b_mps2: f,
             rate_mean_var_b_radps2: [1.0; 3],
             force_mean_var_b_mps2sq: [MEAN_STD_MPS2 * MEAN_STD_MPS2; 3],
+            window: None,
         })
         .unwrap();
     }

@@ -90,11 +90,15 @@ fn firmware_in_qemu_and_the_host_replay_agree_to_the_bit() {
         if let (Some(SequenceSolution::Channels(on_target)), Estimator::Channels(settings)) =
             (&decoded.result, header.configuration.sequence_estimator())
         {
+            // Each dwell's first sample: the device counts every frame, so the row of the dwell's first row.
+            let labels = &header.configuration.labels;
+            let first = |k: usize| rec.rows.iter().position(|r| r.pos == u32::from(labels[k])).map(|i| i as u32);
             let dwells = decoded.positions.iter().enumerate().zip(&header.configuration.schedule).map(|((k, p), a)| {
                 SessionDwell {
                     attitude: *a,
                     heading_known: header.configuration.unknown_headings & (1 << k) == 0,
                     summary: &p.summary,
+                    first_sample: first(k),
                 }
             });
             let on_x86 = session_estimator(dwells, header.configuration.site, settings, options.dwell_value)

@@ -380,14 +380,17 @@ mod firmware {
     /// 45.7796 N, `SOLVE_DWELL_SAMPLES` samples each of the exact specific force and Earth rate with a small
     /// deterministic dither (the solve's cost does not depend on the values), 20 samples of "moving" between
     /// dwells (no rotation: with the full model the moves are measured and left out as gross misfits).
-    fn solve_cost(model: sinscal::calib::general::Model) -> u32 {
+    fn solve_cost(
+        model: sinscal::calib::general::Model,
+        noise: Option<sinscal::calib::noise_model::NoiseModel>,
+    ) -> u32 {
         const SOLVE_DWELL_SAMPLES: u32 = 300;
         let site = Site::with_normal_gravity(45.7796f32.to_radians(), 0.0);
         let mut schedule = [Attitude::from_degrees(0.0, 0.0, 0.0); 6];
         for (a, p) in schedule.iter_mut().zip(sinscal::calib::angles::TABLE1_POSITIONS_DEG.iter()) {
             *a = Attitude::from_degrees(p[0], p[1], p[2]);
         }
-        let channels = sinscal::calib::general::ChannelSettings { model, ..Default::default() };
+        let channels = sinscal::calib::general::ChannelSettings { model, noise, ..Default::default() };
         let settings = sinscal::run::sequence::SequenceSettings {
             settle_samples: 0,
             dwell_samples: SOLVE_DWELL_SAMPLES,
@@ -447,8 +450,23 @@ mod firmware {
         let move_sums = move_sums_loop();
         let (stack_isr, stack_processing) = stack_depths();
         let (stack_status, stack_configure, stack_start, status_instructions) = link_costs();
-        let solve_default = solve_cost(sinscal::calib::session::DEFAULT_MODEL);
-        let solve_full = solve_cost(sinscal::calib::general::Model::FULL);
+        let solve_default = solve_cost(sinscal::calib::session::DEFAULT_MODEL, None);
+        let solve_full = solve_cost(sinscal::calib::general::Model::FULL, None);
+        // A noise model with every term: the dwells' correlation adds its sandwich to the solving step.
+        let terms = |s: f32| sinscal::calib::noise_model::ChannelNoiseTerms {
+            quantisation_u_s: 1e-3 * s,
+            white_u_sqrt_s: 1e-2 * s,
+            instability_u: 1e-3 * s,
+            gauss_markov_u: 3e-3 * s,
+            gauss_markov_time_s: 30.0,
+            random_walk_u_per_sqrt_s: 1e-5 * s,
+            ramp_u_per_s: 0.0,
+        };
+        let noise = sinscal::calib::noise_model::NoiseModel {
+            sample_interval_s: 0.01,
+            channels: [1e-5f32, 1e-5, 1e-5, 0.1, 0.1, 0.1].map(terms),
+        };
+        let solve_noise = solve_cost(sinscal::calib::session::DEFAULT_MODEL, Some(noise));
         let mut text: heapless::String<1536> = heapless::String::new();
         let _ = write!(
             text,
@@ -459,7 +477,8 @@ mod firmware {
         );
         let _ = write!(
             text,
-            "solve_step_instructions_default_model {solve_default}\nsolve_step_instructions_full_model {solve_full}\n"
+            "solve_step_instructions_default_model {solve_default}\nsolve_step_instructions_full_model {solve_full}\n\
+             solve_step_instructions_noise_model {solve_noise}\n"
         );
         let _ = writeln!(text, "part_queue_handover {}", HANDOVER.load(core::sync::atomic::Ordering::Relaxed));
         let _ = write!(

@@ -19,6 +19,16 @@
 //! session, and its standard error is what a second session of the same schedule right after it would differ
 //! by, over the square root of two.
 //!
+//! **Between dwells** ([`NoiseModel::repeat_covariance`]): the errors of two dwells' means are correlated by
+//! the noise slower than a dwell. Their covariance, with the same epoch as the variance above, is
+//! `E[(e_a - e'_a)(e_b - e'_b)] / 2`, `e'` the errors of the same session repeated right after it: for a dwell
+//! alone in its session exactly the Allan variance at its length. For the stationary terms it is
+//! `C(a, b) - C(a, b + L) / 2 - C(b, a + L) / 2` (`C` the covariance of window means, `L` the session's span);
+//! for the rate random walk `K^2 (L - mean |t - s|) / 2` over the two windows, for the ramp `R^2 L^2 / 2`.
+//! Bias instability (flicker) has no finite covariance; it is taken as eight Gauss-Markov processes of
+//! correlation times 0.01 s to 1e5 s, each of variance `B^2 ln 10 / pi`, whose Allan variance is
+//! `(2 ln 2 / pi) B^2` within 2 % for averaging times of 1 s to 1e4 s.
+//!
 //! The model is fixed-size and f32, so that the device computes the same variances as the workstation: it is
 //! part of the device's configuration (docs/formats.md#replay-file-ssrp-version-5).
 
@@ -126,6 +136,56 @@ fn gauss_markov_shape(x: f32) -> f32 {
     sum
 }
 
+/// A dwell's samples in its session: the index of its first sample (from the session's first) and its number
+/// of samples (those used and those left out as spikes: the dwell's span).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub struct Window {
+    /// The index of the dwell's first sample.
+    pub first_sample: u32,
+    /// Its samples.
+    pub samples: u32,
+}
+
+impl Window {
+    /// The window `shift` samples later.
+    fn later(self, shift: u64) -> (u64, u64) {
+        let first = self.first_sample as u64 + shift;
+        (first, first + self.samples as u64)
+    }
+}
+
+/// Correlation times of the Gauss-Markov processes that stand for bias instability, s.
+const FLICKER_TIMES_S: [f32; 8] = [0.01, 0.1, 1.0, 10.0, 100.0, 1e3, 1e4, 1e5];
+/// The variance of each of them per unit `B^2`: `ln 10 / pi` (module documentation).
+const FLICKER_VARIANCE: f32 = core::f32::consts::LN_10 / core::f32::consts::PI;
+
+/// `u - 1 + e^-u` without cancellation: its power series `u^2/2 - u^3/6 + ...` below 1.
+fn u_minus_one_plus_exp(u: f32) -> f32 {
+    if u >= 1.0 {
+        return u - 1.0 + libm::expf(-u);
+    }
+    let (mut term, mut sum) = (u * u / 2.0, 0.0f32);
+    for k in 3..14 {
+        sum += term;
+        term *= -u / k as f32;
+    }
+    sum
+}
+
+/// The covariance of the means of two windows of a first-order Gauss-Markov process of variance `var` and
+/// correlation time `tc_s`: `[start, end)` in seconds, the same window or disjoint ones.
+fn gauss_markov_windows(var: f32, tc_s: f32, x: (f32, f32), y: (f32, f32), same: bool) -> f32 {
+    let (tx, ty) = (x.1 - x.0, y.1 - y.0);
+    if same {
+        return 2.0 * var * tc_s * tc_s * u_minus_one_plus_exp(tx / tc_s) / (tx * tx);
+    }
+    let gap_s = if x.0 <= y.0 { y.0 - x.1 } else { x.0 - y.1 }.max(0.0);
+    let fx = -libm::expm1f(-tx / tc_s);
+    let fy = -libm::expm1f(-ty / tc_s);
+    var * tc_s * tc_s * fx * fy * libm::expf(-gap_s / tc_s) / (tx * ty)
+}
+
 /// Values per channel on the wire.
 pub const TERM_VALUES: usize = 7;
 
@@ -153,6 +213,65 @@ impl NoiseModel {
     pub fn mean_variance(&self, channel: usize, samples: u32) -> f32 {
         let duration_s = samples.max(1) as f32 * self.sample_interval_s;
         self.channels[channel].mean_variance(duration_s)
+    }
+
+    /// The covariance of the errors of channel `channel`'s means over dwells `a` and `b` of a session spanning
+    /// `span_samples` samples, U^2, with the session as the epoch (module documentation): for one dwell alone
+    /// in its session the Allan variance at its length.
+    pub fn repeat_covariance(&self, channel: usize, a: Window, b: Window, span_samples: u32) -> f32 {
+        let t = &self.channels[channel];
+        let dt = self.sample_interval_s;
+        let same = a == b;
+        let span = span_samples as u64;
+        let seconds = |w: (u64, u64)| (w.0 as f32 * dt, w.1 as f32 * dt);
+        let (wa, wb) = (a.later(0), b.later(0));
+        let (wa_later, wb_later) = (a.later(span), b.later(span));
+        // A stationary term's covariance C of window means: C(a, b) - C(a, b + L) / 2 - C(b, a + L) / 2.
+        let stationary = |c: &dyn Fn((u64, u64), (u64, u64), bool) -> f32| {
+            c(wa, wb, same) - 0.5 * c(wa, wb_later, false) - 0.5 * c(wb, wa_later, false)
+        };
+        let mut v = 0.0f32;
+        if same {
+            v += t.white_u_sqrt_s * t.white_u_sqrt_s / (a.samples.max(1) as f32 * dt);
+        }
+        if t.quantisation_u_s > 0.0 {
+            // The carry model: a window's mean error is (carry before - carry at its end) q / T, carries of
+            // variance Q^2 (IEEE Q): 2 Q^2 / T^2 alone, -Q^2 / (T_x T_y) for windows that share a carry.
+            let q2 = t.quantisation_u_s * t.quantisation_u_s;
+            v += stationary(&|x, y, same| {
+                let (tx, ty) = ((x.1 - x.0) as f32 * dt, (y.1 - y.0) as f32 * dt);
+                if same {
+                    2.0 * q2 / (tx * tx)
+                } else if x.1 == y.0 || y.1 == x.0 {
+                    -q2 / (tx * ty)
+                } else {
+                    0.0
+                }
+            });
+        }
+        if t.gauss_markov_u > 0.0 && t.gauss_markov_time_s > 0.0 {
+            let (var, tc) = (t.gauss_markov_u * t.gauss_markov_u, t.gauss_markov_time_s);
+            v += stationary(&|x, y, same| gauss_markov_windows(var, tc, seconds(x), seconds(y), same));
+        }
+        if t.instability_u > 0.0 {
+            let var = FLICKER_VARIANCE * t.instability_u * t.instability_u;
+            for tc in FLICKER_TIMES_S {
+                v += stationary(&|x, y, same| gauss_markov_windows(var, tc, seconds(x), seconds(y), same));
+            }
+        }
+        let span_s = span as f32 * dt;
+        if t.random_walk_u_per_sqrt_s > 0.0 {
+            // The mean of |t - s| over the two windows: T / 3 within one, the distance of the middles between two.
+            let mean_abs_s = if same {
+                a.samples as f32 * dt / 3.0
+            } else {
+                let mid = |w: (u64, u64)| (w.0 + w.1) as f32 * 0.5 * dt;
+                (mid(wa) - mid(wb)).abs()
+            };
+            let k2 = t.random_walk_u_per_sqrt_s * t.random_walk_u_per_sqrt_s;
+            v += 0.5 * k2 * (span_s - mean_abs_s);
+        }
+        v + 0.5 * t.ramp_u_per_s * t.ramp_u_per_s * span_s * span_s
     }
 }
 
@@ -204,6 +323,57 @@ mod tests {
         let peak =
             (1..400).map(|i| i as f32 * 0.01).max_by(|a, b| gauss_markov_shape(*a).total_cmp(&gauss_markov_shape(*b)));
         assert!((peak.unwrap() - 1.89).abs() < 0.02, "{peak:?}");
+    }
+
+    /// One dwell alone in its session: its covariance with itself is the Allan variance at its length, term by
+    /// term (bias instability within the 2 % of its Gauss-Markov stand-in).
+    #[test]
+    fn a_dwell_alone_has_the_allan_variance() {
+        let dt = 0.01;
+        let terms = [
+            ChannelNoiseTerms { white_u_sqrt_s: 1e-3, ..Default::default() },
+            ChannelNoiseTerms { quantisation_u_s: 1e-4, ..Default::default() },
+            ChannelNoiseTerms { gauss_markov_u: 1e-3, gauss_markov_time_s: 20.0, ..Default::default() },
+            ChannelNoiseTerms { gauss_markov_u: 1e-3, gauss_markov_time_s: 0.05, ..Default::default() },
+            ChannelNoiseTerms { random_walk_u_per_sqrt_s: 1e-5, ..Default::default() },
+            ChannelNoiseTerms { ramp_u_per_s: 1e-7, ..Default::default() },
+            ChannelNoiseTerms { instability_u: 1e-4, ..Default::default() },
+        ];
+        for (k, t) in terms.iter().enumerate() {
+            let m = NoiseModel { sample_interval_s: dt, channels: [*t; 6] };
+            for samples in [100u32, 6000, 30_000] {
+                let w = Window { first_sample: 0, samples };
+                let (cov, avar) = (m.repeat_covariance(0, w, w, samples), t.allan_variance(samples as f32 * dt));
+                let tolerance = if k == 6 { 0.025 } else { 2e-3 };
+                assert!((cov / avar - 1.0).abs() < tolerance, "term {k}, {samples} samples: {cov:e} against {avar:e}");
+            }
+        }
+    }
+
+    /// Two dwells: white noise does not correlate them; a slow Gauss-Markov process does, positively, and the
+    /// covariance is symmetric.
+    #[test]
+    fn slow_noise_correlates_two_dwells() {
+        let white = NoiseModel { sample_interval_s: 0.01, channels: [white(1e-3); 6] };
+        let (a, b) = (Window { first_sample: 0, samples: 6000 }, Window { first_sample: 7000, samples: 6000 });
+        assert_eq!(white.repeat_covariance(0, a, b, 13_000), 0.0);
+        let slow = ChannelNoiseTerms { gauss_markov_u: 1e-3, gauss_markov_time_s: 1000.0, ..Default::default() };
+        let m = NoiseModel { sample_interval_s: 0.01, channels: [slow; 6] };
+        let (ab, ba) = (m.repeat_covariance(0, a, b, 13_000), m.repeat_covariance(0, b, a, 13_000));
+        let (aa, bb) = (m.repeat_covariance(0, a, a, 13_000), m.repeat_covariance(0, b, b, 13_000));
+        assert!((ab / ba - 1.0).abs() < 1e-5, "{ab:e} {ba:e}");
+        assert!(ab > 0.0 && ab < aa.sqrt() * bb.sqrt(), "{ab:e} {aa:e} {bb:e}");
+        // Nearly the whole Allan variance of the pair is common: the correlation is high.
+        assert!(ab / (aa * bb).sqrt() > 0.5, "{}", ab / (aa * bb).sqrt());
+    }
+
+    #[test]
+    fn the_series_of_u_minus_one_plus_exp_matches_f64() {
+        for u in [1e-4f64, 1e-2, 0.3, 0.999, 1.0, 5.0] {
+            let exact = u - 1.0 + (-u).exp();
+            let got = u_minus_one_plus_exp(u as f32) as f64;
+            assert!((got / exact - 1.0).abs() < 1e-4, "{u}: {got:e} against {exact:e}");
+        }
     }
 
     #[test]

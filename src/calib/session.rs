@@ -6,11 +6,14 @@
 //! noise model ([`ChannelSettings::noise`], docs/method.md#noise-model) the model's at the dwell's length;
 //! without, the session's pooled honest noise of the raw mean ([`pool_mean_noise`],
 //! docs/method.md#honest-errors) over the dwell's number of samples. Either is never below the f32 resolution
-//! of a mean (2^-23 of the Earth rate, of g), which keeps the weights finite on noise-free data.
+//! of a mean (2^-23 of the Earth rate, of g), which keeps the weights finite on noise-free data. With a noise
+//! model and each dwell's first sample, the estimator also takes the correlation between dwells into the
+//! covariance.
 
 use crate::calib::align::DwellValue;
 use crate::calib::dwell::{pool_mean_noise, DwellSummary};
 use crate::calib::general::{ChannelDwell, ChannelError, ChannelEstimator, ChannelSettings, Model, Term};
+use crate::calib::noise_model::Window;
 use crate::nav::earth::{Site, EARTH_RATE_RADPS};
 use crate::nav::frames::Attitude;
 
@@ -34,6 +37,9 @@ pub struct SessionDwell<'a> {
     pub heading_known: bool,
     /// The dwell's statistics.
     pub summary: &'a DwellSummary,
+    /// The index of the dwell's first sample in the session (from its first sample); with a noise model, the
+    /// dwells' windows give the correlation between them (docs/method.md#noise-model). `None`: not known.
+    pub first_sample: Option<u32>,
 }
 
 /// Smallest variance of a dwell mean, (unit)^2: the f32 resolution of a mean of magnitude `scale`.
@@ -75,6 +81,8 @@ where
             force_mean_b_mps2: force,
             rate_mean_var_b_radps2: [0, 1, 2].map(|i| variance(i).max(rate_floor)),
             force_mean_var_b_mps2sq: [0, 1, 2].map(|i| variance(3 + i).max(force_floor)),
+            // The dwell's span: the samples used and those left out as spikes.
+            window: d.first_sample.map(|first_sample| Window { first_sample, samples: s.samples + s.spikes }),
         })?;
     }
     Ok(estimator)

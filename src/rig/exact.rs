@@ -114,6 +114,7 @@ pub fn session() -> Vec<ChannelDwell, POSES> {
                 force_mean_b_mps2: [0, 1, 2].map(|i| fa[i] + t[3 + i]),
                 rate_mean_var_b_radps2: [rate_std * rate_std; 3],
                 force_mean_var_b_mps2sq: [force_std * force_std; 3],
+                window: None,
             });
         }
     }

@@ -267,6 +267,11 @@ pub struct CalibrationSequence {
     /// The turntable attitude of each position.
     schedule: Vec<Attitude, MAX_POSITIONS>,
     inputs: Vec<PositionInput, MAX_POSITIONS>,
+    /// The index of each completed dwell's first sample ([`feed_sequence`]'s count).
+    starts: Vec<u32, MAX_POSITIONS>,
+    /// The index of the sample being fed (`u32::MAX` before the first), and of the current dwell's first.
+    sample: u32,
+    dwell_start: u32,
     collector: DwellCollector,
     phase: Phase,
     index: usize,
@@ -307,6 +312,9 @@ impl CalibrationSequence {
             site,
             schedule: stored,
             inputs: Vec::new(),
+            starts: Vec::new(),
+            sample: u32::MAX,
+            dwell_start: 0,
             phase: Phase::WaitingForTable,
             index: 0,
             dwell_sample: 0,
@@ -348,6 +356,9 @@ impl CalibrationSequence {
         self.settings = settings;
         self.site = site;
         self.inputs.clear();
+        self.starts.clear();
+        self.sample = u32::MAX;
+        self.dwell_start = 0;
         self.phase = Phase::WaitingForTable;
         self.index = 0;
         self.dwell_sample = 0;
@@ -452,6 +463,7 @@ impl CalibrationSequence {
         let faults = self.faults;
         let Some(attitude) = self.schedule.get(self.index) else { return self.abort(AbortReason::TableLeft, false) };
         let _ = self.inputs.push(PositionInput { c_b_n: attitude.c_b_n(), summary });
+        let _ = self.starts.push(self.dwell_start);
         let event = Event::DwellCompleted { index: self.index, samples: summary.samples, faults };
         self.current_move = None;
         self.moving_samples = 0;
@@ -496,6 +508,7 @@ impl CalibrationSequence {
                     attitude: *a,
                     heading_known: mask.checked_shr(k as u32).unwrap_or(0) & 1 == 0,
                     summary: &p.summary,
+                    first_sample: self.starts.get(k).copied(),
                 });
                 let dwell_value = self.settings.calibration.dwell_value;
                 // The moves with the gyros' raw sample variance pooled over the dwells.
@@ -588,6 +601,9 @@ impl CalibrationSequence {
             }
             return Some(self.abort(AbortReason::TableLeft, false));
         }
+        if self.dwell_sample == 0 {
+            self.dwell_start = self.sample;
+        }
         self.dwell_sample = self.dwell_sample.saturating_add(1);
         let reading = match &item.reading {
             Ok(r) => r,
@@ -638,6 +654,7 @@ impl CalibrationSequence {
 pub fn feed_sequence(sequence: &mut CalibrationSequence, item: &QueueItem) -> [Option<Event>; 2] {
     let table = item.table;
     let in_position = table == TABLE_IN_POSITION || table as usize == sequence.position() + 1;
+    sequence.sample = sequence.sample.wrapping_add(1);
     let first = sequence.on_sample(in_position, item);
     let next = !in_position
         && matches!(first, Some(Event::DwellCompleted { .. }))

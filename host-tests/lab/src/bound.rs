@@ -616,6 +616,7 @@ mod tests {
                         force_mean_b_mps2: [y[3] as f32, y[4] as f32, y[5] as f32],
                         rate_mean_var_b_radps2: [var[0] as f32, var[1] as f32, var[2] as f32],
                         force_mean_var_b_mps2sq: [var[3] as f32, var[4] as f32, var[5] as f32],
+                        window: None,
                     })
                     .unwrap();
             }

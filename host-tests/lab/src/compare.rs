@@ -183,6 +183,7 @@ fn draw(lab: &Lab, rng: &mut ChaCha8Rng) -> Run {
             force_mean_b_mps2: f,
             rate_mean_var_b_radps2: [(rate_mean_std_radps * rate_mean_std_radps) as f32; 3],
             force_mean_var_b_mps2sq: [(force_mean_std_mps2 * force_mean_std_mps2) as f32; 3],
+            window: None,
         });
     }
     run

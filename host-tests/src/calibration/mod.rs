@@ -485,7 +485,11 @@ fn used_moves(
 
 /// The positions as the core's session: the reference attitude, whether it gives the heading, the statistics.
 pub fn session_dwells(positions: &[PositionResult]) -> impl Iterator<Item = SessionDwell<'_>> + Clone {
-    positions.iter().map(|p| SessionDwell {
+    // Each dwell's first sample counted from the first dwell's: rows are consecutive lines, and only the
+    // distances between dwells matter (docs/method.md#noise-model).
+    let origin = positions.iter().map(|p| p.first_line).min().unwrap_or(0);
+    positions.iter().map(move |p| SessionDwell {
+        first_sample: u32::try_from(p.first_line - origin).ok(),
         attitude: Attitude::from_degrees(
             p.attitude.pitch_deg as f32,
             p.attitude.roll_deg as f32,

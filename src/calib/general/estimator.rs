@@ -10,6 +10,7 @@ use crate::calib::general::settings::{AttitudeKnowledge, ChannelSettings};
 use crate::calib::general::solution::ChannelSolution;
 use crate::calib::general::terms::{columns, implausible_parameter, Model, PARAMETERS};
 use crate::calib::moves::{ChannelMove, MAX_MOVES};
+use crate::calib::noise_model::Window;
 use crate::math::linalg::{dot, norm, Mat3, Vec3};
 use crate::math::lsq::{inverse_gram, solve_upper, SqrtInfo};
 use crate::nav::earth::Site;
@@ -34,6 +35,9 @@ pub struct ChannelDwell {
     pub rate_mean_var_b_radps2: Vec3,
     /// Variance of each accelerometer mean, (m/s^2)^2.
     pub force_mean_var_b_mps2sq: Vec3,
+    /// The dwell's samples in its session; with a noise model in the settings and every used dwell's window,
+    /// the covariance includes the correlation between dwells (docs/method.md#noise-model).
+    pub window: Option<Window>,
 }
 
 /// Chi-square quantiles at 0.999 for 1 to 9 degrees of freedom (a dwell's six channels and the priors of its

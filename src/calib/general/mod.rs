@@ -38,10 +38,12 @@
 //! Memory: the problem holds [`MAX_DWELLS`] dwells (2.6 KB); a solution is 8.5 KB; solving uses about 30 KB of
 //! stack (three 36 x 36 factors, the SVD's workspace and the attitude of every dwell).
 //!
-//! Files: `terms` (the term table), `settings`, `error`, `estimator` (the dwells, the checks, Gauss-Newton),
+//! Files: `terms` (the term table), `settings`, `error`, `correlation` (the covariance the noise model's
+//! correlation between dwells adds), `estimator` (the dwells, the checks, Gauss-Newton),
 //! `linearise` (the prediction and its rows), `nuisance` (unknown headings and tilts), `observability` (blind
 //! spots and the gauge), `move_rows` (the moves' rows), `solution` (the solution and its statistics).
 
+mod correlation;
 mod error;
 mod estimator;
 mod linearise;

@@ -146,6 +146,7 @@ impl ChannelEstimator {
         sol.blind_spots = pass.blind_spots;
         sol.gauge = pass.gauge;
         sol.moves_refused = state.refused;
+        let correlation = self.correlation_term(state, pass, &used);
         for c in 0..n {
             let p = cols[c];
             if pass.determined[c] {
@@ -153,7 +154,8 @@ impl ChannelEstimator {
                 sol.parameters_si[p] = theta[p];
                 for d in 0..n {
                     if pass.determined[d] {
-                        sol.covariance_si[p][cols[d]] = pass.cov_scaled[c][d] * pass.scale[c] * pass.scale[d];
+                        let extra = correlation.as_ref().map_or(0.0, |e| e[c][d]);
+                        sol.covariance_si[p][cols[d]] = (pass.cov_scaled[c][d] + extra) * pass.scale[c] * pass.scale[d];
                     }
                 }
             } else {
