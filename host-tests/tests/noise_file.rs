@@ -150,3 +150,36 @@ fn calibrate_refuses_a_file_that_is_not_a_noise_file() {
     let text = String::from_utf8_lossy(&angles.get_output().stderr).to_string();
     assert!(text.contains("--noise"), "{text}");
 }
+
+/// `calibrate --noise recording`: the model named from the recording's own longest dwell is the one
+/// `sinscal noise` writes for it (the same errors as with that file), and the JSON says where it came from;
+/// a recording whose dwells are too short to name it is refused with the reason (exit 1).
+#[test]
+fn calibrate_with_the_recordings_own_noise_model() {
+    let dir = tempfile::tempdir().unwrap();
+    let example = dir.path().join("example.csv");
+    Command::cargo_bin("sinscal").unwrap().arg("example").arg("--out").arg(&example).assert().success();
+    noise_file(&example);
+    let file = example.with_extension("noise.json");
+    let own =
+        calibrate_json(&[example.as_os_str(), "--noise".as_ref(), "recording".as_ref()], &dir.path().join("r.json"));
+    let filed =
+        calibrate_json(&[example.as_os_str(), "--noise".as_ref(), file.as_os_str()], &dir.path().join("f.json"));
+    assert_eq!((own["noise"]["source"].as_str(), filed["noise"]["source"].as_str()), (Some("recording"), Some("file")));
+    assert_eq!(own["noise"]["channels"][3]["model"], "terms");
+    for key in ["gyro_bias_std_radps", "accel_bias_std_mps2", "gyro_bias_radps", "accel_bias_mps2"] {
+        assert_eq!(own[key], filed[key], "{key}");
+    }
+    // Dwells of 3 s: too few Allan octaves above 1 s.
+    let short = dir.path().join("short.csv");
+    Scenario { dwell_s: 3.0, ..Scenario::example() }.recording(5, "short.csv").write(&short).unwrap();
+    let out = Command::cargo_bin("sinscal")
+        .unwrap()
+        .arg("calibrate")
+        .arg(&short)
+        .args(["--noise", "recording"])
+        .assert()
+        .code(1);
+    let text = String::from_utf8_lossy(&out.get_output().stderr).to_string();
+    assert!(text.contains("too few to name"), "{text}");
+}

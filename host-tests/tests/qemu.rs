@@ -55,7 +55,7 @@ fn firmware_in_qemu_and_the_host_replay_agree_to_the_bit() {
         ramp_u_per_s: 1e-7 * scale,
     };
     let channels = [1e-5f32, 1e-5, 1e-5, 0.1, 0.1, 0.1].map(|s| Some(terms(s)));
-    let noisy = Options { noise: Some(NoiseTerms { channels }), ..Options::default() };
+    let noisy = Options { noise: Some(NoiseTerms { channels, from_recording: false }), ..Options::default() };
     for (rec, options) in [
         (&rec, Options::angles()),
         (

@@ -203,8 +203,10 @@ pub struct SamplingJson {
 /// The noise model each channel's errors rest on: where it came from, and per channel what it is.
 #[derive(Debug, Serialize)]
 pub struct NoiseJson {
-    /// "recording": the dwells' own Allan variances, pooled over the session (docs/method.md#honest-errors);
-    /// "file": the noise model of a noise file (`--noise`, docs/method.md#noise-model).
+    /// "recording": from the recording itself: the dwells' own Allan variances, pooled over the session
+    /// (docs/method.md#honest-errors), or with `--noise recording` the noise model named from its longest dwell
+    /// (the channels' `model` is then "terms"); "file": the noise model of a noise file (`--noise`,
+    /// docs/method.md#noise-model).
     pub source: &'static str,
     /// Gyro x, y, z, accelerometer x, y, z (the gyros absent without gyro data).
     pub channels: Vec<ChannelNoiseJson>,
@@ -279,7 +281,8 @@ impl NoiseJson {
                     }
                 })
                 .collect();
-            return NoiseJson { source: "file", channels };
+            let from_recording = c.options.noise.is_some_and(|t| t.from_recording);
+            return NoiseJson { source: if from_recording { "recording" } else { "file" }, channels };
         }
         let pooled = sinscal::calib::dwell::pool_mean_noise(c.positions.iter().map(|p| p.summary));
         let channels = (first..6)
@@ -507,8 +510,14 @@ fn poses_line(c: &Calibration) -> String {
 
 /// What the dwells were weighted by: the noise file's model or the session's own dwell noise.
 fn noise_line(c: &Calibration) -> String {
-    if c.noise.is_some() {
-        "each dwell weighted by the noise file's model at its length (docs/method.md#noise-model)".to_string()
+    if c.options.noise.is_some_and(|t| t.from_recording) {
+        "each dwell weighted by the noise model of the recording's longest dwell at its length, with the \
+         correlation between dwells (docs/method.md#noise-model)"
+            .to_string()
+    } else if c.noise.is_some() {
+        "each dwell weighted by the noise file's model at its length, with the correlation between dwells \
+         (docs/method.md#noise-model)"
+            .to_string()
     } else {
         "each dwell weighted by the session's own dwell noise (its Allan variances, pooled)".to_string()
     }

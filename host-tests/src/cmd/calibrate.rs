@@ -18,8 +18,8 @@ use crate::calibration::{
 use crate::calibration::{collect_dwells, prefilter_of, site_of};
 use crate::cmd::{write_json, ChecksFailed};
 use crate::io::error::InputError;
-use crate::io::recording::RecordingFile;
-use crate::io::recording::RowSource as _;
+use crate::io::noise_file::NoiseTerms;
+use crate::io::recording::{RecordingFile, RowSource};
 use sinscal::calib::general::MAX_DWELLS;
 
 /// The prefilter in front of the dwell statistics.
@@ -120,10 +120,23 @@ pub struct CalibrationArgs {
     #[arg(long, value_parser = parse_pose_tolerance)]
     pose_tolerance: Option<f64>,
     /// Channel method: weight each dwell by the noise model of this noise file (made once from a static run
-    /// of the IMU by `sinscal noise`): the variance of a dwell mean is the model's at the dwell's length
-    /// (docs/method.md#noise-model). Default: the session's own dwell noise.
-    #[arg(long, value_name = "NOISE_FILE")]
+    /// of the IMU by `sinscal noise`), or with 'recording' by the model named from the recording's own longest
+    /// dwell: the variance of a dwell mean is the model's at the dwell's length, with the correlation between
+    /// dwells (docs/method.md#noise-model). Default: the session's own dwell noise.
+    #[arg(long, value_name = "NOISE_FILE|recording")]
     noise: Option<std::path::PathBuf>,
+}
+
+/// The `--noise` value that names the model from the recording itself.
+pub const NOISE_FROM_RECORDING: &str = "recording";
+
+/// The noise terms of the recording's own longest dwell, as `sinscal noise` names them (its noise file, read
+/// back as a noise file is read).
+fn noise_of_recording(rec: &impl RowSource) -> anyhow::Result<NoiseTerms> {
+    let file = crate::cmd::noise::characterise(rec, crate::cmd::noise::DEFAULT_MIN_TAU_S)?;
+    let text = serde_json::to_string(&file)?;
+    let terms = crate::io::noise_file::NoiseFile::parse(&text, rec.source())?.terms;
+    Ok(NoiseTerms { from_recording: true, ..terms })
 }
 
 /// `--pose-tolerance`: degrees in [0, 10] (a bad value is a usage error, exit 2).
@@ -157,7 +170,7 @@ fn parse_prefilter_a(text: &str) -> Result<Coefficient, String> {
 impl CalibrationArgs {
     /// The calibration options these arguments ask for; `firmware_path` when they go through the firmware
     /// path (which takes the recording's attitudes as its reference).
-    pub fn options(&self, firmware_path: bool) -> anyhow::Result<Options> {
+    pub fn options(&self, firmware_path: bool, rec: &impl RowSource) -> anyhow::Result<Options> {
         let coefficient = self.prefilter_a;
         let usage = |text: &str| -> ! {
             clap::Error::raw(clap::error::ErrorKind::ArgumentConflict, format!("{text}\n")).exit()
@@ -177,6 +190,7 @@ impl CalibrationArgs {
             usage("--noise: the angle method weights by its own dwell noise (--method channels)")
         }
         let noise = match &self.noise {
+            Some(path) if path.as_os_str() == NOISE_FROM_RECORDING => Some(noise_of_recording(rec)?),
             Some(path) => Some(crate::io::noise_file::NoiseFile::read(path)?.terms),
             None => None,
         };
@@ -214,9 +228,9 @@ impl CalibrationArgs {
 
 /// Runs `sinscal calibrate`.
 pub fn run(args: Args) -> anyhow::Result<()> {
-    let options = args.calibration.options(args.on.is_some())?;
     // The rows are read in passes, never held (docs/formats.md#speed-and-memory).
     let rec = RecordingFile::open(&args.recording)?;
+    let options = args.calibration.options(args.on.is_some(), &rec)?;
     let cal = match args.on {
         None => calibrate(&rec, &options),
         Some(OnArg::Host) => calibrate_on_host(&rec, &options),

@@ -10,7 +10,7 @@ use crate::analysis::noise_terms::{noise_model_above, NoiseModel};
 use crate::analysis::CHANNELS;
 use crate::cmd::{json_to_stdout, write_json};
 use crate::io::error::InputError;
-use crate::io::recording::{Recording, Row, TimeSteps};
+use crate::io::recording::{RecordingFile, RowSource, TimeSteps};
 
 /// Arguments of `sinscal noise`.
 #[derive(clap::Args)]
@@ -61,7 +61,8 @@ pub struct NoiseFile {
 
 /// Runs `sinscal noise`.
 pub fn run(args: Args) -> anyhow::Result<()> {
-    let rec = Recording::read(&args.recording)?;
+    // Read in passes: only the longest dwell's samples are held.
+    let rec = RecordingFile::open(&args.recording)?;
     let file = characterise(&rec, args.min_tau)?;
     if !json_to_stdout(Some(&args.out)) {
         super::out(&summary(&file))?;
@@ -69,21 +70,22 @@ pub fn run(args: Args) -> anyhow::Result<()> {
     write_json(&args.out, &file)
 }
 
-/// The noise file of a recording's longest dwell, fitted at averaging times of at least `min_tau_s`.
-pub fn characterise(rec: &Recording, min_tau_s: f64) -> Result<NoiseFile, InputError> {
-    let (pos, rows) = longest_dwell(rec)
-        .ok_or_else(|| InputError::at(&rec.source, 1, "no dwell (no row with pos > 0) to characterise"))?;
-    let median_step_s = || TimeSteps::of(rows.iter().map(|r| r.t_s)).median_s().unwrap_or(1.0);
-    let rate_hz = rec.header.rate_hz.unwrap_or_else(|| 1.0 / median_step_s());
-    let first = if rec.has_gyro { 0 } else { 3 };
+/// The noise file of a recording's longest dwell, fitted at averaging times of at least `min_tau_s`. Two
+/// passes over the rows; only that dwell's samples are held.
+pub fn characterise(rec: &impl RowSource, min_tau_s: f64) -> Result<NoiseFile, InputError> {
+    let source = rec.source().to_string();
+    let (pos, rows) = longest_dwell(rec)?
+        .ok_or_else(|| InputError::at(&source, 1, "no dwell (no row with pos > 0) to characterise"))?;
+    let median_step_s = || TimeSteps::of(rows.iter().map(|r| r.0)).median_s().unwrap_or(1.0);
+    let rate_hz = rec.header().rate_hz.unwrap_or_else(|| 1.0 / median_step_s());
+    let first = if rec.has_gyro() { 0 } else { 3 };
     let mut channels = Vec::new();
     for i in first..6 {
-        let samples: Vec<f64> =
-            rows.iter().map(|r| if i < 3 { r.rate_b_radps[i] } else { r.force_b_mps2[i - 3] }).collect();
+        let samples: Vec<f64> = rows.iter().map(|r| r.2[i]).collect();
         let model = noise_model_above(CHANNELS[i], i < 3, &samples, rate_hz, min_tau_s).ok_or_else(|| {
             InputError::at(
-                &rec.source,
-                rows[0].line,
+                &source,
+                rows[0].1,
                 format!(
                     "dwell {pos}: {} samples are too few to name {}'s noise (the Allan variance needs {} octaves)",
                     rows.len(),
@@ -94,26 +96,31 @@ pub fn characterise(rec: &Recording, min_tau_s: f64) -> Result<NoiseFile, InputE
         })?;
         channels.push(model);
     }
-    Ok(NoiseFile {
-        schema: "sinscal-noise/1",
-        source: rec.source.clone(),
-        pos,
-        samples: rows.len(),
-        rate_hz,
-        min_tau_s,
-        channels,
-    })
+    Ok(NoiseFile { schema: "sinscal-noise/1", source, pos, samples: rows.len(), rate_hz, min_tau_s, channels })
 }
 
-/// The longest dwell: its label and rows.
-fn longest_dwell(rec: &Recording) -> Option<(u32, Vec<&Row>)> {
-    let mut labels: Vec<u32> = rec.rows.iter().map(|r| r.pos).filter(|p| *p > 0).collect();
-    labels.sort_unstable();
-    labels.dedup();
-    labels
-        .into_iter()
-        .map(|p| (p, rec.rows.iter().filter(|r| r.pos == p).collect::<Vec<_>>()))
-        .max_by_key(|(_, rows)| rows.len())
+/// One row of the dwell characterised: its time, s, its line, and the six channels (SI).
+type DwellRow = (f64, usize, [f64; 6]);
+
+/// The longest dwell (the larger label of equally long ones): its label and rows, from two passes.
+fn longest_dwell(rec: &impl RowSource) -> Result<Option<(u32, Vec<DwellRow>)>, InputError> {
+    let mut counts: std::collections::HashMap<u32, usize> = std::collections::HashMap::new();
+    rec.for_each_row(&mut |r| {
+        if r.pos > 0 {
+            *counts.entry(r.pos).or_default() += 1;
+        }
+        Ok(())
+    })?;
+    let Some((&pos, _)) = counts.iter().max_by_key(|(p, n)| (**n, **p)) else { return Ok(None) };
+    let mut rows = Vec::with_capacity(counts[&pos]);
+    rec.for_each_row(&mut |r| {
+        if r.pos == pos {
+            let (w, f) = (r.rate_b_radps, r.force_b_mps2);
+            rows.push((r.t_s, r.line, [w[0], w[1], w[2], f[0], f[1], f[2]]));
+        }
+        Ok(())
+    })?;
+    Ok(Some((pos, rows)))
 }
 
 /// The human summary: one line per channel.

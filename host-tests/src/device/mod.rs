@@ -240,7 +240,12 @@ pub fn calibration_of_record(record: &[u8]) -> Result<Calibration, anyhow::Error
         rows: Vec::new(),
         has_gyro: note.has_gyro,
     };
-    let options = note.options()?;
+    let mut options = note.options()?;
+    // The noise model the device weighted by, and where the workstation had it from.
+    options.noise = configured.configuration.noise.map(|m| crate::io::noise_file::NoiseTerms {
+        channels: core::array::from_fn(|i| (note.has_gyro || i >= 3).then_some(m.channels[i])),
+        from_recording: note.options.noise_from_recording,
+    });
     let mut calibration = calibration_from_outcome(&rec, &options, &note.plan, &outcome)?;
     calibration.on = "device";
     Ok(calibration)

@@ -55,6 +55,9 @@ pub struct OptionsNote {
     /// The pose tolerance asked for, degrees (`None`: the recording's header or the default).
     #[serde(default)]
     pub pose_tolerance_deg: Option<f64>,
+    /// Whether the noise model (carried in the device's configuration) was named from the recording itself.
+    #[serde(default)]
+    pub noise_from_recording: bool,
 }
 
 /// Note format written.
@@ -97,6 +100,7 @@ impl Provenance {
                 estimate_attitudes: options.estimate_attitudes,
                 rest_force_tolerance_mps2: options.rest_force_tolerance_mps2,
                 pose_tolerance_deg: options.pose_tolerance_deg,
+                noise_from_recording: options.noise.is_some_and(|t| t.from_recording),
             },
             plan: plan.clone(),
         }
@@ -122,7 +126,7 @@ impl Provenance {
         let o = &self.options;
         let bad = |what: &str, v: &str| anyhow::anyhow!("the record's provenance note: {what} '{v}'");
         Ok(Options {
-            // The noise model travels in the device's configuration, not in the note.
+            // The noise model travels in the device's configuration, not in the note: `device show` puts it back.
             noise: None,
             prefilter: match o.prefilter.as_str() {
                 "hmmkf" => PrefilterKind::HmmKf,

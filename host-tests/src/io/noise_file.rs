@@ -31,6 +31,8 @@ pub struct NoiseFile {
 pub struct NoiseTerms {
     /// Per channel (gyro x, y, z, accelerometer x, y, z).
     pub channels: [Option<ChannelNoiseTerms>; 6],
+    /// Named from the calibration recording itself (`calibrate --noise recording`), not read from a file.
+    pub from_recording: bool,
 }
 
 impl NoiseFile {
@@ -72,7 +74,7 @@ impl NoiseFile {
         if channels[3..].iter().any(Option::is_none) {
             return Err(bad("the three accelerometer channels are needed".into()));
         }
-        Ok(NoiseFile { source: source.to_string(), terms: NoiseTerms { channels } })
+        Ok(NoiseFile { source: source.to_string(), terms: NoiseTerms { channels, from_recording: false } })
     }
 }
 
