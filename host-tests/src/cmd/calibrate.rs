@@ -127,6 +127,28 @@ pub struct CalibrationArgs {
     noise: Option<std::path::PathBuf>,
 }
 
+impl CalibrationArgs {
+    /// `options` completed from the open recording (after every usage error has been reported): the noise
+    /// model named from it (`--noise recording`), and without `--model` outside the firmware path the default
+    /// for its attitudes ([`default_model`]).
+    pub fn with_recording(
+        &self,
+        options: Options,
+        firmware_path: bool,
+        rec: &impl RowSource,
+    ) -> anyhow::Result<Options> {
+        let noise = match &self.noise {
+            Some(path) if path.as_os_str() == NOISE_FROM_RECORDING => Some(noise_of_recording(rec)?),
+            _ => options.noise,
+        };
+        let model = match self.model {
+            None if !firmware_path => default_model(self.estimate_attitudes, rec),
+            _ => options.model,
+        };
+        Ok(Options { noise, model, ..options })
+    }
+}
+
 /// The model `calibrate` fits without `--model`: [`DEFAULT_MODEL`] (chosen on turntable sessions), and for
 /// poses whose attitudes are estimated from the data (hand-placed, `--estimate-attitudes`, or levelled from
 /// the accelerometers by an importer; not on the firmware path, which takes them as a reference) every term: a hand-held sensor has them all, and the `|f| = g` fit of many
@@ -185,7 +207,7 @@ fn parse_prefilter_a(text: &str) -> Result<Coefficient, String> {
 impl CalibrationArgs {
     /// The calibration options these arguments ask for; `firmware_path` when they go through the firmware
     /// path (which takes the recording's attitudes as its reference).
-    pub fn options(&self, firmware_path: bool, rec: &impl RowSource) -> anyhow::Result<Options> {
+    pub fn options(&self, firmware_path: bool) -> anyhow::Result<Options> {
         let coefficient = self.prefilter_a;
         let usage = |text: &str| -> ! {
             clap::Error::raw(clap::error::ErrorKind::ArgumentConflict, format!("{text}\n")).exit()
@@ -205,7 +227,8 @@ impl CalibrationArgs {
             usage("--noise: the angle method weights by its own dwell noise (--method channels)")
         }
         let noise = match &self.noise {
-            Some(path) if path.as_os_str() == NOISE_FROM_RECORDING => Some(noise_of_recording(rec)?),
+            // Named from the recording once it is open ([`CalibrationArgs::with_recording`]).
+            Some(path) if path.as_os_str() == NOISE_FROM_RECORDING => None,
             Some(path) => Some(crate::io::noise_file::NoiseFile::read(path)?.terms),
             None => None,
         };
@@ -214,8 +237,8 @@ impl CalibrationArgs {
                 usage("--model: the angle method estimates the biases (and the reference offset) only")
             }
             Some(model) => model,
-            None if firmware_path => DEFAULT_MODEL,
-            None => default_model(self.estimate_attitudes, rec),
+            // Outside the firmware path the default depends on the recording ([`CalibrationArgs::with_recording`]).
+            None => DEFAULT_MODEL,
         };
         Ok(Options {
             method,
@@ -244,9 +267,10 @@ impl CalibrationArgs {
 
 /// Runs `sinscal calibrate`.
 pub fn run(args: Args) -> anyhow::Result<()> {
+    let options = args.calibration.options(args.on.is_some())?;
     // The rows are read in passes, never held (docs/formats.md#speed-and-memory).
     let rec = RecordingFile::open(&args.recording)?;
-    let options = args.calibration.options(args.on.is_some(), &rec)?;
+    let options = args.calibration.with_recording(options, args.on.is_some(), &rec)?;
     let cal = match args.on {
         None => calibrate(&rec, &options),
         Some(OnArg::Host) => calibrate_on_host(&rec, &options),

@@ -132,8 +132,9 @@ fn report_run(run: &DeviceRun, json: Option<&std::path::Path>) -> anyhow::Result
 }
 
 fn device_run(a: RunArgs) -> anyhow::Result<()> {
+    let options = a.calibration.options(true)?;
     let rec = RecordingFile::open(&a.recording)?;
-    let options = a.calibration.options(true, &rec)?;
+    let options = a.calibration.with_recording(options, true, &rec)?;
     let (replay, plan) = replay_for(&rec, &options)?;
     let run = match (&a.target.port, &a.target.flash) {
         (Some(port), _) => {
