@@ -142,7 +142,7 @@ impl CalibrationArgs {
             _ => options.noise,
         };
         let model = match self.model {
-            None if !firmware_path => default_model(self.estimate_attitudes, rec),
+            None if !firmware_path && options.method == Method::Channels => default_model(self.estimate_attitudes, rec),
             _ => options.model,
         };
         Ok(Options { noise, model, ..options })
@@ -151,8 +151,8 @@ impl CalibrationArgs {
 
 /// The model `calibrate` fits without `--model`: [`DEFAULT_MODEL`] (chosen on turntable sessions), and for
 /// poses whose attitudes are estimated from the data (hand-placed, `--estimate-attitudes`, or levelled from
-/// the accelerometers by an importer; not on the firmware path, which takes them as a reference) every term: a hand-held sensor has them all, and the `|f| = g` fit of many
-/// poses has the freedom for them. Measured on the imu_tk Xsens session (docs/method.md#default-estimator):
+/// the accelerometers by an importer; not on the firmware path, which takes them as a reference) every term: a
+/// hand-held sensor has them all, and the `|f| = g` fit of many poses has the freedom for them. Measured on the imu_tk Xsens session (docs/method.md#default-estimator):
 /// chi-square 304 on 190 degrees of freedom with every term, 4,678 on 199 with imu_tk's own terms (biases,
 /// scale factors and misalignments of both triads), 17 times the dwell noise with the turntable default.
 pub fn default_model(estimate_attitudes: bool, rec: &impl RowSource) -> Model {
