@@ -49,7 +49,7 @@ impl ChannelEstimator {
                     let (wk, wl) = (dk.window?, dl.window?);
                     let mut cov = model.repeat_covariance(ch, wk, wl, span);
                     if k == l {
-                        cov -= Self::weighted_variance(dl, ch);
+                        cov -= dl.channel(ch).1;
                     }
                     if cov == 0.0 {
                         continue;
@@ -69,15 +69,6 @@ impl ChannelEstimator {
         Some(sandwich(&pass.cov_scaled, &s, n))
     }
 
-    /// The variance dwell `d`'s channel `ch` was weighted by.
-    fn weighted_variance(d: &crate::calib::general::ChannelDwell, ch: usize) -> f32 {
-        if ch < 3 {
-            d.rate_mean_var_b_radps2[ch]
-        } else {
-            d.force_mean_var_b_mps2sq[ch - 3]
-        }
-    }
-
     /// `b_k,ch`: dwell `k`'s rows, nuisances eliminated, applied to an error of one SI unit in its channel `ch`
     /// (whitened: 1 / its standard deviation in that channel's row, 0 in the others and the priors').
     fn unit_error_rows(&self, state: &State<'_>, pass: &Pass, k: usize, ch: usize) -> [f32; PARAMETERS] {
@@ -88,7 +79,7 @@ impl ChannelEstimator {
         self.add_prior_rows(d, &state.attitude[k], &mut rows);
         let first = if self.settings.use_gyro { 0 } else { 3 };
         let row = ch - first;
-        let inverse_std = 1.0 / libm::sqrtf(Self::weighted_variance(d, ch));
+        let inverse_std = 1.0 / libm::sqrtf(d.channel(ch).1);
         for (r, y) in rows.y.iter_mut().enumerate().take(rows.rows) {
             *y = if r == row { inverse_std } else { 0.0 };
         }

@@ -40,6 +40,18 @@ pub struct ChannelDwell {
     pub window: Option<Window>,
 }
 
+impl ChannelDwell {
+    /// Channel `ch`'s mean and the variance it is weighted by (gyro x, y, z in rad/s and (rad/s)^2,
+    /// accelerometer x, y, z in m/s^2 and (m/s^2)^2).
+    pub(super) fn channel(&self, ch: usize) -> (f32, f32) {
+        if ch < 3 {
+            (self.rate_mean_b_radps[ch], self.rate_mean_var_b_radps2[ch])
+        } else {
+            (self.force_mean_b_mps2[ch - 3], self.force_mean_var_b_mps2sq[ch - 3])
+        }
+    }
+}
+
 /// Chi-square quantiles at 0.999 for 1 to 9 degrees of freedom (a dwell's six channels and the priors of its
 /// three attitude angles).
 pub(super) const CHI2_999: [f32; 9] = [10.828, 13.816, 16.266, 18.467, 20.515, 22.458, 24.322, 26.124, 27.877];

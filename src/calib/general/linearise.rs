@@ -141,11 +141,7 @@ impl ChannelEstimator {
         let first = if self.settings.use_gyro { 0 } else { 3 };
         let g = self.site.gravity_mps2;
         for ch in first..6 {
-            let (measured, var) = if ch < 3 {
-                (d.rate_mean_b_radps[ch], d.rate_mean_var_b_radps2[ch])
-            } else {
-                (d.force_mean_b_mps2[ch - 3], d.force_mean_var_b_mps2sq[ch - 3])
-            };
+            let (measured, var) = d.channel(ch);
             let weight = if structural {
                 if ch < 3 {
                     1.0 / EARTH_RATE_RADPS

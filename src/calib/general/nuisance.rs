@@ -217,11 +217,7 @@ impl ChannelEstimator {
                 }
             }
             for ch in first..6 {
-                let (measured, var) = if ch < 3 {
-                    (d.rate_mean_b_radps[ch], d.rate_mean_var_b_radps2[ch])
-                } else {
-                    (d.force_mean_b_mps2[ch - 3], d.force_mean_var_b_mps2sq[ch - 3])
-                };
+                let (measured, var) = d.channel(ch);
                 let r = measured - lin.pred[ch];
                 let j = [0, 1, 2].map(|m| if active[m] { lin.d_attitude[ch][m] } else { 0.0 });
                 for a in 0..3 {
