@@ -16,13 +16,18 @@ fn noise_file(recording: &std::path::Path) -> Value {
     serde_json::from_str(&std::fs::read_to_string(&out).unwrap()).unwrap()
 }
 
+/// A SIMULATION of one level 600-s pose with the example's white noise, written to `dir/static.csv`.
+fn static_pose(dir: &std::path::Path, seed: u64) -> std::path::PathBuf {
+    let path = dir.join("static.csv");
+    let scenario = Scenario { dwell_s: 600.0, positions_deg: vec![[0.0, 0.0, 0.0]], ..Scenario::example() };
+    scenario.recording(seed, "static.csv").write(&path).unwrap();
+    path
+}
+
 #[test]
 fn white_noise_of_a_simulated_static_pose_is_named_with_its_coefficient() {
     let dir = tempfile::tempdir().unwrap();
-    let path = dir.path().join("static.csv");
-    let scenario = Scenario { dwell_s: 600.0, positions_deg: vec![[0.0, 0.0, 0.0]], ..Scenario::example() };
-    scenario.recording(5, "static.csv").write(&path).unwrap();
-    let v = noise_file(&path);
+    let v = noise_file(&static_pose(dir.path(), 5));
     assert_eq!(v["schema"], "sinscal-noise/1");
     assert_eq!((v["samples"].as_u64(), v["rate_hz"].as_f64()), (Some(60_000), Some(100.0)));
     let channels = v["channels"].as_array().unwrap();
@@ -69,9 +74,7 @@ fn calibrate_json(args: &[&std::ffi::OsStr], json: &std::path::Path) -> Value {
 #[test]
 fn calibrate_with_a_noise_file_weights_by_it_on_either_path() {
     let dir = tempfile::tempdir().unwrap();
-    let path = dir.path().join("static.csv");
-    let scenario = Scenario { dwell_s: 600.0, positions_deg: vec![[0.0, 0.0, 0.0]], ..Scenario::example() };
-    scenario.recording(7, "static.csv").write(&path).unwrap();
+    let path = static_pose(dir.path(), 7);
     noise_file(&path);
     let noise = path.with_extension("noise.json");
     let truth = dir.path().join("truth.json");

@@ -18,7 +18,7 @@
 mod common;
 
 use common::{data_dir, data_file};
-use sinscal::calib::dwell::{DwellCollector, Prefilter};
+use sinscal::calib::dwell::{DwellCollector, DwellSummary, Prefilter};
 use sinscal::calib::noise_model::NoiseModel;
 use sinscal::ImuSample;
 use sinscal_host::cmd::noise::{characterise, DEFAULT_MIN_TAU_S};
@@ -41,8 +41,8 @@ fn noise_model_of(rec: &Recording, rows: &[Row], rate_hz: f64) -> NoiseModel {
     terms.model(1.0 / rate_hz, true).expect("a usable model")
 }
 
-/// The core's dwell mean of each channel and its used samples.
-fn dwell_means(rows: &[Row]) -> ([f64; 6], u32) {
+/// The core's statistics of one dwell of `rows` (no prefilter).
+fn dwell_summary(rows: &[Row]) -> DwellSummary {
     let mut c = DwellCollector::new(&Prefilter::None).unwrap();
     for r in rows {
         let s = ImuSample {
@@ -51,7 +51,12 @@ fn dwell_means(rows: &[Row]) -> ([f64; 6], u32) {
         };
         c.update(&s).unwrap();
     }
-    let s = c.summary().unwrap();
+    c.summary().unwrap()
+}
+
+/// The core's dwell mean of each channel and its used samples.
+fn dwell_means(rows: &[Row]) -> ([f64; 6], u32) {
+    let s = dwell_summary(rows);
     let (w, f) = (s.rate_mean_b_radps, s.force_mean_b_mps2);
     ([w[0], w[1], w[2], f[0], f[1], f[2]].map(f64::from), s.samples)
 }
@@ -213,17 +218,7 @@ fn psins_two_dwell_sessions_need_the_correlation_between_dwells() {
             let settings = ChannelSettings { model: Model::BIASES, noise: Some(model), ..ChannelSettings::default() };
             let mut estimates: Vec<[(f64, f64); 6]> = Vec::new();
             for s in eval.chunks_exact(session) {
-                let summaries = [&s[..dwell], &s[dwell + gap..]].map(|d| {
-                    let mut c = DwellCollector::new(&Prefilter::None).unwrap();
-                    for r in d {
-                        let sample = ImuSample {
-                            rate_b_radps: r.rate_b_radps.map(|v| v as f32),
-                            force_b_mps2: r.force_b_mps2.map(|v| v as f32),
-                        };
-                        c.update(&sample).unwrap();
-                    }
-                    c.summary().unwrap()
-                });
+                let summaries = [&s[..dwell], &s[dwell + gap..]].map(dwell_summary);
                 let starts = [0u32, (dwell + gap) as u32];
                 let dwells = (0..2).map(|k| SessionDwell {
                     attitude,
