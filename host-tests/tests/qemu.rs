@@ -43,7 +43,7 @@ fn firmware_in_qemu_and_the_host_replay_agree_to_the_bit() {
     assert_eq!(spiked.rows[1500].pos, 1);
     spiked.rows[1500].rate_b_radps[0] += 0.029_67;
     let tolerant = Options { pose_tolerance_deg: Some(0.5), ..Options::default() };
-    // A noise model with every term (the Gauss-Markov's exponentials on either side of its series), so that
+    // A noise model with every term (the exponentials of Gauss-Markov and sway on either side of their series), so that
     // the dwell variances computed on the target are those of x86.
     let terms = |scale: f32| sinscal::calib::noise_model::ChannelNoiseTerms {
         quantisation_u_s: 1e-3 * scale,
@@ -53,6 +53,8 @@ fn firmware_in_qemu_and_the_host_replay_agree_to_the_bit() {
         gauss_markov_time_s: if scale < 1e-3 { 10.0 } else { 100.0 },
         random_walk_u_per_sqrt_s: 1e-5 * scale,
         ramp_u_per_s: 1e-7 * scale,
+        sway_u_s: 1e-3 * scale,
+        sway_time_s: if scale < 1e-3 { 10.0 } else { 100.0 },
     };
     let channels = [1e-5f32, 1e-5, 1e-5, 0.1, 0.1, 0.1].map(|s| Some(terms(s)));
     let noisy = Options { noise: Some(NoiseTerms { channels, from_recording: false }), ..Options::default() };

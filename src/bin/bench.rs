@@ -461,6 +461,8 @@ mod firmware {
             gauss_markov_time_s: 30.0,
             random_walk_u_per_sqrt_s: 1e-5 * s,
             ramp_u_per_s: 0.0,
+            sway_u_s: 1e-3 * s,
+            sway_time_s: 5.0,
         };
         let noise = sinscal::calib::noise_model::NoiseModel {
             sample_interval_s: 0.01,

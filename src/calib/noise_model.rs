@@ -5,9 +5,14 @@
 //! The Allan variance of the model at averaging time `tau` is
 //!
 //! `AVAR(tau) = 3 Q^2 / tau^2 + N^2 / tau + (2 ln 2 / pi) B^2 + sigma^2 g(tau / T) + K^2 tau / 3 + R^2 tau^2 / 2`
+//! `          + S^2 h(tau / T_S) / tau^2`
 //!
 //! with `g(x) = (2 x - 3 + 4 e^-x - e^-2x) / x^2` for the Gauss-Markov process of standard deviation `sigma`
-//! and correlation time `T`.
+//! and correlation time `T`, and `h(x) = 3 - 4 e^-x + e^-2x` for **sway**: a channel whose integral (the angle
+//! of a gyro, the velocity of an accelerometer) is a first-order Gauss-Markov process of standard deviation `S`
+//! and correlation time `T_S`, as a vehicle's or a building's sway leaves a bounded tilt. Averaged over much
+//! less than `T_S` it is white noise (`N^2 = 2 S^2 / T_S`); over much more its mean falls as `1 / tau`, like
+//! quantisation (`Q = S`), because the angle it integrates to stays bounded.
 //!
 //! **The variance of a dwell mean** is the model's Allan variance at the dwell's length `T_d`: half the mean
 //! square difference of the means of two adjacent dwells of that length. For white noise it is the familiar
@@ -54,6 +59,11 @@ pub struct ChannelNoiseTerms {
     pub random_walk_u_per_sqrt_s: f32,
     /// Rate ramp R, U / s.
     pub ramp_u_per_s: f32,
+    /// Sway S: the standard deviation of the channel's bounded integral, U s (rad for a gyro, m/s for an
+    /// accelerometer).
+    pub sway_u_s: f32,
+    /// Sway's correlation time T_S, s (> 0 when S is).
+    pub sway_time_s: f32,
 }
 
 impl ChannelNoiseTerms {
@@ -67,6 +77,8 @@ impl ChannelNoiseTerms {
             self.gauss_markov_time_s,
             self.random_walk_u_per_sqrt_s,
             self.ramp_u_per_s,
+            self.sway_u_s,
+            self.sway_time_s,
         ]
     }
 
@@ -80,17 +92,20 @@ impl ChannelNoiseTerms {
             gauss_markov_time_s: v[4],
             random_walk_u_per_sqrt_s: v[5],
             ramp_u_per_s: v[6],
+            sway_u_s: v[7],
+            sway_time_s: v[8],
         }
     }
 
-    /// Every coefficient finite and >= 0, a Gauss-Markov term with a positive correlation time, and some term
-    /// that makes the variance positive at every length.
+    /// Every coefficient finite and >= 0, a Gauss-Markov term and sway with positive correlation times, and
+    /// some term that makes the variance positive at every length.
     pub fn is_valid(&self) -> bool {
         let v = self.to_array();
         let finite = v.iter().all(|x| x.is_finite() && *x >= 0.0);
         let gm_ok = self.gauss_markov_u == 0.0 || self.gauss_markov_time_s > 0.0;
-        let any = v.iter().enumerate().any(|(i, x)| i != 4 && *x > 0.0);
-        finite && gm_ok && any
+        let sway_ok = self.sway_u_s == 0.0 || self.sway_time_s > 0.0;
+        let any = v.iter().enumerate().any(|(i, x)| i != 4 && i != 8 && *x > 0.0);
+        finite && gm_ok && sway_ok && any
     }
 
     /// The model's Allan variance at `tau_s` (> 0), U^2.
@@ -104,6 +119,9 @@ impl ChannelNoiseTerms {
             + sq(self.ramp_u_per_s) * tau * tau / 2.0;
         if self.gauss_markov_u > 0.0 && self.gauss_markov_time_s > 0.0 {
             v += sq(self.gauss_markov_u) * gauss_markov_shape(tau / self.gauss_markov_time_s);
+        }
+        if self.sway_u_s > 0.0 && self.sway_time_s > 0.0 {
+            v += sq(self.sway_u_s) * sway_shape(tau / self.sway_time_s) / (tau * tau);
         }
         v
     }
@@ -134,6 +152,42 @@ fn gauss_markov_shape(x: f32) -> f32 {
         minus_two *= -2.0;
     }
     sum
+}
+
+/// `h(x) = 3 - 4 e^-x + e^-2x`: `tau^2` times the Allan variance of unit sway at `tau = x T_S` (the angle
+/// `theta` Gauss-Markov: `(3 R(0) - 4 R(tau) + R(2 tau)) / tau^2` with `R` its autocovariance). Below `x = 1`
+/// its power series `sum_{k >= 1} (-1)^k (2^k - 4) / k! x^k` (`2x - 2x^3/3 + x^4/2 - ...`), 16 terms: the
+/// first left out is below 1e-9 of the sum.
+fn sway_shape(x: f32) -> f32 {
+    if x >= 1.0 {
+        return 3.0 - 4.0 * libm::expf(-x) + libm::expf(-2.0 * x);
+    }
+    let (mut power, mut factorial, mut two_k, mut sign) = (x, 1.0f32, 2.0f32, -1.0f32);
+    let mut sum = 0.0f32;
+    for k in 1..17 {
+        sum += sign * (two_k - 4.0) / factorial * power;
+        power *= x;
+        factorial *= (k + 1) as f32;
+        two_k *= 2.0;
+        sign = -sign;
+    }
+    sum
+}
+
+/// The covariance of the means of two windows of sway of variance `var` (of the integral) and correlation time
+/// `tc_s`: `[start, end)` in seconds, the same window or disjoint ones. A window's mean is the change of the
+/// integral over it divided by its length: `2 var (1 - e^-T/T_S) / T^2` alone; disjoint windows share no sample
+/// but the integral's memory, `-var e^-gap/T_S (1 - e^-T_x/T_S) (1 - e^-T_y/T_S) / (T_x T_y)`: negative, as what
+/// one window's angle gains the next gives back.
+fn sway_windows(var: f32, tc_s: f32, x: (f32, f32), y: (f32, f32), same: bool) -> f32 {
+    let (tx, ty) = (x.1 - x.0, y.1 - y.0);
+    let fx = -libm::expm1f(-tx / tc_s);
+    if same {
+        return 2.0 * var * fx / (tx * tx);
+    }
+    let gap_s = if x.0 <= y.0 { y.0 - x.1 } else { x.0 - y.1 }.max(0.0);
+    let fy = -libm::expm1f(-ty / tc_s);
+    -var * fx * fy * libm::expf(-gap_s / tc_s) / (tx * ty)
 }
 
 /// A dwell's samples in its session: the index of its first sample (from the session's first) and its number
@@ -187,7 +241,7 @@ fn gauss_markov_windows(var: f32, tc_s: f32, x: (f32, f32), y: (f32, f32), same:
 }
 
 /// Values per channel on the wire.
-pub const TERM_VALUES: usize = 7;
+pub const TERM_VALUES: usize = 9;
 
 /// The noise model of the six channels (gyro x, y, z in rad/s, accelerometer x, y, z in m/s^2) and the sample
 /// interval of the calibration it is applied to.
@@ -252,6 +306,10 @@ impl NoiseModel {
         if t.gauss_markov_u > 0.0 && t.gauss_markov_time_s > 0.0 {
             let (var, tc) = (t.gauss_markov_u * t.gauss_markov_u, t.gauss_markov_time_s);
             v += stationary(&|x, y, same| gauss_markov_windows(var, tc, seconds(x), seconds(y), same));
+        }
+        if t.sway_u_s > 0.0 && t.sway_time_s > 0.0 {
+            let (var, tc) = (t.sway_u_s * t.sway_u_s, t.sway_time_s);
+            v += stationary(&|x, y, same| sway_windows(var, tc, seconds(x), seconds(y), same));
         }
         if t.instability_u > 0.0 {
             let var = FLICKER_VARIANCE * t.instability_u * t.instability_u;
@@ -338,6 +396,8 @@ mod tests {
             ChannelNoiseTerms { random_walk_u_per_sqrt_s: 1e-5, ..Default::default() },
             ChannelNoiseTerms { ramp_u_per_s: 1e-7, ..Default::default() },
             ChannelNoiseTerms { instability_u: 1e-4, ..Default::default() },
+            ChannelNoiseTerms { sway_u_s: 1e-4, sway_time_s: 2.0, ..Default::default() },
+            ChannelNoiseTerms { sway_u_s: 1e-4, sway_time_s: 500.0, ..Default::default() },
         ];
         for (k, t) in terms.iter().enumerate() {
             let m = NoiseModel { sample_interval_s: dt, channels: [*t; 6] };
@@ -367,6 +427,37 @@ mod tests {
         assert!(ab / (aa * bb).sqrt() > 0.5, "{}", ab / (aa * bb).sqrt());
     }
 
+    /// Sway: white noise of `N^2 = 2 S^2 / T_S` averaged over much less than its correlation time, quantisation
+    /// of `Q = S` over much more; the series and the closed form agree at the switch and with f64.
+    #[test]
+    fn sway_is_white_when_short_and_quantisation_when_long() {
+        let (s, tc) = (1e-4f32, 10.0f32);
+        let sway = ChannelNoiseTerms { sway_u_s: s, sway_time_s: tc, ..Default::default() };
+        let white = ChannelNoiseTerms { white_u_sqrt_s: (2.0 * s * s / tc).sqrt(), ..Default::default() };
+        let quantisation = ChannelNoiseTerms { quantisation_u_s: s, ..Default::default() };
+        assert!((sway.allan_variance(0.01) / white.allan_variance(0.01) - 1.0).abs() < 1e-3);
+        assert!((sway.allan_variance(1e4) / quantisation.allan_variance(1e4) - 1.0).abs() < 1e-3);
+        let closed = |x: f64| 3.0 - 4.0 * (-x).exp() + (-2.0 * x).exp();
+        for x in [1e-3f64, 0.1, 0.5, 0.999_999] {
+            assert!((sway_shape(x as f32) as f64 / closed(x) - 1.0).abs() < 1e-5, "{x}");
+        }
+    }
+
+    /// Two adjacent dwells of sway anticorrelate (the angle one gains the next gives back); far apart they do not
+    /// correlate.
+    #[test]
+    fn sway_anticorrelates_adjacent_dwells() {
+        let sway = ChannelNoiseTerms { sway_u_s: 1e-4, sway_time_s: 5.0, ..Default::default() };
+        let m = NoiseModel { sample_interval_s: 0.01, channels: [sway; 6] };
+        let (a, b) = (Window { first_sample: 0, samples: 1000 }, Window { first_sample: 1000, samples: 1000 });
+        let far = Window { first_sample: 100_000, samples: 1000 };
+        let (ab, aa) = (m.repeat_covariance(0, a, b, 2000), m.repeat_covariance(0, a, a, 2000));
+        assert!(ab < 0.0 && -ab < aa, "{ab:e} {aa:e}");
+        // A session of 2,000 s: the dwells and their repeats all hundreds of correlation times apart.
+        let af = m.repeat_covariance(0, a, far, 200_000);
+        assert!(af.abs() < 1e-6 * aa, "{af:e} {aa:e}");
+    }
+
     #[test]
     fn the_series_of_u_minus_one_plus_exp_matches_f64() {
         for u in [1e-4f64, 1e-2, 0.3, 0.999, 1.0, 5.0] {
@@ -388,6 +479,10 @@ mod tests {
         m.channels[4] = ChannelNoiseTerms { gauss_markov_u: 1e-3, ..Default::default() };
         assert!(!m.is_valid(false), "Gauss-Markov without its time");
         m.channels[4].gauss_markov_time_s = 10.0;
+        assert!(m.is_valid(false));
+        m.channels[4] = ChannelNoiseTerms { sway_u_s: 1e-3, ..Default::default() };
+        assert!(!m.is_valid(false), "sway without its time");
+        m.channels[4].sway_time_s = 10.0;
         assert!(m.is_valid(false));
         m.sample_interval_s = 0.0;
         assert!(!m.is_valid(false));

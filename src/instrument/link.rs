@@ -10,7 +10,7 @@ use super::crc::Crc32;
 /// Version of the link protocol (the first byte of every frame).
 pub const PROTOCOL_VERSION: u8 = 1;
 /// Longest body of a frame, bytes.
-pub const MAX_BODY_BYTES: usize = 1280;
+pub const MAX_BODY_BYTES: usize = 1312;
 /// Bytes of a frame around its body: version, kind, seq, CRC.
 pub const FRAME_OVERHEAD_BYTES: usize = 3 + 4;
 /// Longest frame before stuffing, bytes.

@@ -9,7 +9,7 @@ use plotters::style::text_anchor::{HPos, Pos, VPos};
 use plotters::coord::combinators::LogCoord;
 use plotters::coord::combinators::{BindKeyPoints, WithKeyPoints};
 
-use crate::analysis::noise_terms::{sig, FitPoint, NoiseModel};
+use crate::analysis::noise_terms::{sig, FitPoint, NoiseModel, Term};
 use crate::analysis::{Analysis, CHANNELS};
 use crate::plot::{display_unit, figure, log_ticks, short_name, tick_label, Png};
 use crate::stats::noise::{log_spaced_clusters, overlapping_allan_deviation, welch_psd};
@@ -183,13 +183,14 @@ type Area<'a> = DrawingArea<Png<'a>, plotters::coord::Shift>;
 const GREY: RGBColor = RGBColor(150, 150, 150);
 const BLUE: RGBColor = RGBColor(30, 70, 200);
 const RED: RGBColor = RGBColor(200, 30, 30);
-const TERM_COLOURS: [RGBColor; 6] = [
+const TERM_COLOURS: [RGBColor; Term::ALL.len()] = [
     RGBColor(140, 40, 160),
     RGBColor(230, 120, 0),
     RGBColor(30, 140, 60),
     RGBColor(0, 150, 160),
     RGBColor(150, 90, 40),
     RGBColor(220, 40, 150),
+    RGBColor(40, 70, 200),
 ];
 
 fn legend_line(c: RGBColor, width: u32) -> impl Fn((i32, i32)) -> PathElement<(i32, i32)> {

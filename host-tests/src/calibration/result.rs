@@ -229,7 +229,8 @@ pub struct ChannelNoiseJson {
     /// taken as known).
     pub degrees_of_freedom: Option<f64>,
     /// The noise file's terms, SI (`quantisation_u_s`, `white_u_sqrt_s`, `instability_u`, `gauss_markov_u`,
-    /// `gauss_markov_time_s`, `random_walk_u_per_sqrt_s`, `ramp_u_per_s`; U = rad/s or m/s^2).
+    /// `gauss_markov_time_s`, `random_walk_u_per_sqrt_s`, `ramp_u_per_s`, `sway_u_s`, `sway_time_s`; U = rad/s
+    /// or m/s^2).
     #[serde(skip_serializing_if = "Option::is_none")]
     pub terms: Option<NoiseTermsJson>,
 }
@@ -251,6 +252,10 @@ pub struct NoiseTermsJson {
     pub random_walk_u_per_sqrt_s: f64,
     /// Rate ramp R, U / s.
     pub ramp_u_per_s: f64,
+    /// Sway S (the standard deviation of the channel's bounded integral), U s.
+    pub sway_u_s: f64,
+    /// Sway's correlation time, s.
+    pub sway_time_s: f64,
 }
 
 impl NoiseJson {
@@ -277,6 +282,8 @@ impl NoiseJson {
                             gauss_markov_time_s: t.gauss_markov_time_s as f64,
                             random_walk_u_per_sqrt_s: t.random_walk_u_per_sqrt_s as f64,
                             ramp_u_per_s: t.ramp_u_per_s as f64,
+                            sway_u_s: t.sway_u_s as f64,
+                            sway_time_s: t.sway_time_s as f64,
                         }),
                     }
                 })

@@ -96,7 +96,8 @@ impl NoiseTerms {
     }
 }
 
-/// One channel's terms from its `terms` list (`term`, `value_si`, and `tau_c_s` for the Gauss-Markov term).
+/// One channel's terms from its `terms` list (`term`, `value_si`, and `tau_c_s` for the Gauss-Markov term and
+/// sway).
 fn channel_terms(c: &Value, name: &str) -> Result<ChannelNoiseTerms, String> {
     let terms = c.get("terms").and_then(Value::as_array).ok_or("no \"terms\" list")?;
     let mut t = ChannelNoiseTerms::default();
@@ -118,13 +119,16 @@ fn channel_terms(c: &Value, name: &str) -> Result<ChannelNoiseTerms, String> {
             "bias_instability" => t.instability_u = value,
             "rate_random_walk" => t.random_walk_u_per_sqrt_s = value,
             "rate_ramp" => t.ramp_u_per_s = value,
-            "gauss_markov" => {
+            "gauss_markov" | "sway" => {
                 let tau = term.get("tau_c_s").and_then(Value::as_f64).unwrap_or(0.0);
                 if !(tau.is_finite() && tau > 0.0) {
-                    return Err(format!("term gauss_markov: tau_c_s {tau} is not a positive number of seconds"));
+                    return Err(format!("term {kind}: tau_c_s {tau} is not a positive number of seconds"));
                 }
-                t.gauss_markov_u = value;
-                t.gauss_markov_time_s = tau as f32;
+                if kind == "sway" {
+                    (t.sway_u_s, t.sway_time_s) = (value, tau as f32);
+                } else {
+                    (t.gauss_markov_u, t.gauss_markov_time_s) = (value, tau as f32);
+                }
             }
             other => return Err(format!("unknown term \"{other}\"")),
         }

@@ -836,6 +836,16 @@ pub fn gauss_markov_allan_variance(sigma: f64, tau_c_s: f64, tau_s: f64) -> f64 
     sigma * sigma * (tau_c_s / tau_s).powi(2) * (2.0 * x - 3.0 + 4.0 * (-x).exp() - (-2.0 * x).exp())
 }
 
+/// Allan variance of sway at averaging time `tau_s`: a channel whose integral is a first-order Gauss-Markov
+/// process of standard deviation `sigma` (rad for a gyro, m/s for an accelerometer) and correlation time
+/// `tau_c_s`: `sigma^2 (3 - 4 e^-x + e^-2x) / tau^2` with `x = tau / tau_c`; white noise of `N^2 = 2 sigma^2 /
+/// tau_c` for `tau << tau_c`, quantisation of `Q = sigma` for `tau >> tau_c`.
+pub fn sway_allan_variance(sigma: f64, tau_c_s: f64, tau_s: f64) -> f64 {
+    let x = tau_s / tau_c_s;
+    let shape = if x < 1e-3 { 2.0 * x - 2.0 / 3.0 * x.powi(3) } else { 3.0 - 4.0 * (-x).exp() + (-2.0 * x).exp() };
+    sigma * sigma * shape / (tau_s * tau_s)
+}
+
 /// The power-law noise types of an Allan variance, in the terms of a rate sensor (IEEE Std 952-1997 Annex C),
 /// with the names of the frequency-standards literature in brackets: they set the equivalent degrees of
 /// freedom of an Allan point ([`overlapping_allan_edf`]).

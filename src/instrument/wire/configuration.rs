@@ -21,7 +21,7 @@ use crate::run::sequence::{Estimator, SequenceSettings};
 use crate::sensor::adis::Model;
 
 /// Bytes of a configuration's fixed part (IMU, estimator, site, positions, terms: 14; run settings: 12; rest
-/// limits: 12; pose tolerance: 4; noise model: 4 + 6 x 7 x 4).
+/// limits: 12; pose tolerance: 4; noise model: 4 + 6 x 9 x 4).
 pub const FIXED_BYTES: usize = 14 + 12 + 12 + 4 + NOISE_BYTES;
 /// Bytes of the noise model: the sample interval (0: no model) and each channel's terms.
 pub const NOISE_BYTES: usize = 4 + 6 * TERM_VALUES * 4;

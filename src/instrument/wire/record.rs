@@ -16,7 +16,7 @@ use super::outcome::{encode_part, OutcomeView};
 use crate::calib::compensation::{self, Compensation};
 
 /// Version of the record layout (2: a dwell's spikes counted, no prefilter start term).
-pub const RECORD_VERSION: u16 = 3;
+pub const RECORD_VERSION: u16 = 4;
 /// Bytes of the record's head.
 pub const RECORD_HEAD_BYTES: usize = 12;
 

@@ -93,9 +93,10 @@ fn noise_model(rng: &mut Rng) -> NoiseModel {
         for x in &mut v {
             *x = if rng.below(3) == 0 { 0.0 } else { rng.positive() };
         }
-        // Some term beyond the correlation time, and that time wherever the Gauss-Markov sigma is.
+        // Some term beyond the correlation times, and those times wherever the Gauss-Markov sigma and sway are.
         v[1] = rng.positive();
         v[4] = rng.positive();
+        v[8] = rng.positive();
         ChannelNoiseTerms::from_array(v)
     });
     NoiseModel { sample_interval_s: rng.positive(), channels }

@@ -12,7 +12,7 @@ use crate::run::sequence::{SequenceError, SequenceSettings};
 /// File magic.
 pub const MAGIC: [u8; 4] = *b"SSRP";
 /// File version.
-pub const VERSION: u16 = 5;
+pub const VERSION: u16 = 6;
 
 /// Bytes of a replay file's header with `positions` positions: magic and version, the configuration, the frame
 /// count.
