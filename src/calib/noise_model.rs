@@ -35,7 +35,7 @@
 //! `(2 ln 2 / pi) B^2` within 2 % for averaging times of 1 s to 1e4 s.
 //!
 //! The model is fixed-size and f32, so that the device computes the same variances as the workstation: it is
-//! part of the device's configuration (docs/formats.md#replay-file-ssrp-version-5).
+//! part of the device's configuration (docs/formats.md#replay-file-ssrp-version-6).
 
 /// ln 2 / pi * 2: the Allan variance of unit bias instability.
 const BIAS_INSTABILITY_AVAR: f32 = 2.0 * core::f32::consts::LN_2 / core::f32::consts::PI;

@@ -156,10 +156,12 @@ mod tests {
     #[test]
     fn reads_the_terms_into_the_cores_fields() {
         let gx = r#"{"channel": "gx_radps", "terms": [{"term": "quantization", "value_si": 2e-6},
-            {"term": "gauss_markov", "value_si": 3e-5, "tau_c_s": 0.05}, {"term": "rate_random_walk", "value_si": 1e-7}]}"#;
+            {"term": "gauss_markov", "value_si": 3e-5, "tau_c_s": 0.05}, {"term": "rate_random_walk", "value_si": 1e-7},
+            {"term": "sway", "value_si": 4e-4, "tau_c_s": 3.5}]}"#;
         let f = NoiseFile::parse(&file(&format!("{gx},{}", accel())), "f").unwrap().terms;
         let g = f.channels[0].unwrap();
         assert_eq!((g.quantisation_u_s, g.gauss_markov_u, g.gauss_markov_time_s), (2e-6, 3e-5, 0.05));
+        assert_eq!((g.sway_u_s, g.sway_time_s), (4e-4, 3.5));
         assert_eq!((g.white_u_sqrt_s, g.random_walk_u_per_sqrt_s), (0.0, 1e-7));
         assert_eq!(f.channels[4].unwrap().white_u_sqrt_s, 1e-4);
         assert!(f.channels[1].is_none());
@@ -178,6 +180,7 @@ mod tests {
             (file(r#"{"channel": "bx", "terms": []}"#), "unknown channel"),
             (file(r#"{"channel": "ax_mps2", "terms": [{"term": "white", "value_si": -1}]}"#), "non-negative"),
             (file(r#"{"channel": "ax_mps2", "terms": [{"term": "gauss_markov", "value_si": 1}]}"#), "tau_c_s"),
+            (file(r#"{"channel": "ax_mps2", "terms": [{"term": "sway", "value_si": 1}]}"#), "term sway: tau_c_s"),
             (file(r#"{"channel": "ax_mps2", "terms": [{"term": "pink", "value_si": 1}]}"#), "unknown term"),
             (file(r#"{"channel": "ax_mps2", "terms": [{"term": "white", "value_si": 1}]}"#), "three accelerometer"),
         ] {
