@@ -56,6 +56,7 @@ fn recording(poses: &[Pose], n: usize, has_gyro: bool, noise: (f64, f64), rng: &
                 rate_b_radps: if has_gyro { noisy_w } else { [0.0; 3] },
                 force_b_mps2: noisy_f,
                 temp_c: None,
+                turn_axis: None,
                 line: 0,
             });
             t += 0.01;

@@ -156,6 +156,7 @@ fn recording(model: &Model, has_gyro: bool) -> (Recording, Ideal) {
             rate_b_radps: if has_gyro { w_meas } else { [0.0; 3] },
             force_b_mps2: f_meas,
             temp_c: None,
+            turn_axis: None,
             line: 0,
         });
         ideal.push((w, f));

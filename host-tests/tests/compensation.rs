@@ -241,6 +241,7 @@ fn exact_recording(theta: &[f32; PARAMETERS]) -> (Recording, Vec<(V3, V3)>) {
                 rate_b_radps: gyro.measure(w, f),
                 force_b_mps2: accel.measure(f, [0.0; 3]),
                 temp_c: None,
+                turn_axis: None,
                 line: 0,
             });
             ideal.push((w, f));

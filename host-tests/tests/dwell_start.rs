@@ -58,6 +58,7 @@ fn recording(skip: usize) -> Recording {
                 rate_b_radps: rate,
                 force_b_mps2: f,
                 temp_c: None,
+                turn_axis: None,
                 line: rows.len() + 10,
             });
         }

@@ -239,6 +239,9 @@ fn ferraris_session_rows_get_positions_and_attitudes_of_their_labels() {
     assert_eq!(rec.header.gravity_mps2, None);
     let pos: Vec<u32> = rec.rows.iter().map(|r| r.pos).collect();
     assert_eq!(pos, [0, 0, 1, 1, 0, 2, 2, 0, 3, 3, 0, 4, 4, 0, 5, 5, 0, 6, 6, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0]);
+    // The turn label's rows [20, 25) carry its axis in the `turn` column; no other row has one.
+    let turns: Vec<Option<usize>> = rec.rows.iter().map(|r| r.turn_axis).collect();
+    assert_eq!(turns, (0..30).map(|n| (20..25).contains(&n).then_some(0)).collect::<Vec<_>>());
     let r = &rec.rows[3];
     assert_eq!((r.t_s, r.pitch_deg, r.roll_deg, r.heading_deg, r.line), (3.0 / 102.4, 0.0, -90.0, None, 5));
     assert_eq!(r.rate_b_radps, [1f64.to_radians(), (-2f64).to_radians(), 0.5f64.to_radians()]);
@@ -634,6 +637,11 @@ fn real_imucal_ferraris_session_matches_provenance_and_reaches_calibrate() {
         assert!(along > 9.0, "{label}: {along}");
     }
     assert!(comment(&rec, "latitude_source").contains("inferred"));
+    // The three labelled turns, x, y and z in that order, each one run of rows in the `turn` column.
+    let starts = rec.rows.windows(2).filter(|w| w[1].turn_axis.is_some() && w[0].turn_axis != w[1].turn_axis);
+    let axes: Vec<usize> = starts.filter_map(|w| w[1].turn_axis).collect();
+    assert_eq!(axes, [0, 1, 2], "the turns x_rot, y_rot, z_rot");
+    println!("imucal: {} rows in the three labelled turns", rec.rows.iter().filter(|r| r.turn_axis.is_some()).count());
     // The library import gives the same recording as the file the command line wrote.
     let direct =
         import_imucal(&csv, &dir.join("imucal-ferraris/example_ferraris_session_list.json"), None).unwrap().recording;

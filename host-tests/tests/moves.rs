@@ -215,3 +215,47 @@ fn a_move_to_a_dwell_that_was_not_added_is_refused_not_a_panic() {
         assert!(matches!(result, Err(sinscal::calib::general::ChannelError::BadMove { index: 0 })), "{result:?}");
     }
 }
+
+/// A labelled turn after the last dwell (as a Ferraris session ends with its turns): the scenario's positions
+/// and four more, level at headings 0, 120, 240 and 0 (a full turn about the body z axis in three moves); the
+/// last three dwells' rows made `pos = 0`, and the rows from the level dwell to the last labelled `turn = z`.
+/// Exact data: the turn is an observation beside the 14 moves, its error after the fit within the horizontal
+/// Earth rate it leaves out, every parameter recovered; the same rows without the label are a run after the
+/// last dwell, not used.
+#[test]
+fn a_labelled_turn_after_the_last_dwell_is_an_observation() {
+    let mut s = exact(1.0);
+    let level = s.schedule.positions_deg.len() as u32 + 1;
+    s.schedule.positions_deg.extend([[0.0, 0.0, 0.0], [0.0, 0.0, 120.0], [0.0, 0.0, 240.0], [0.0, 0.0, 0.0]]);
+    let mut rec = simulate(&s, 3, "exact, a labelled turn at the end");
+    let first = rec.rows.iter().rposition(|r| r.pos == level).expect("the level dwell") + 1;
+    let end = rec.rows.iter().position(|r| r.pos == level + 3).expect("the last dwell");
+    for row in &mut rec.rows {
+        if row.pos > level {
+            row.pos = 0;
+        }
+    }
+    let unlabelled = run(&rec, true);
+    for row in &mut rec.rows[first..end] {
+        row.turn_axis = Some(2);
+    }
+    let text = rec.to_csv();
+    assert!(text.lines().any(|l| l.ends_with(",z")), "the turn column is written");
+    let cal = run(&rec, true);
+    assert_eq!(unlabelled.moves.len(), 14, "without the label the rows after the last dwell are not a move");
+    assert_eq!(cal.moves.len(), 15, "the 14 moves and the turn");
+    let turn = cal.moves.iter().find(|m| m.turn == Some("z")).expect("the turn about z is used");
+    // A full turn, and the Earth rate about up over the minute it lasts.
+    assert!((turn.angle_deg - 360.0).abs() < 0.5, "a full turn: {} deg", turn.angle_deg);
+    // A turn's reference is the Earth's rotation about up; the horizontal part turns with the body and is its
+    // noise (docs/method.md#moves): over the two stops of this turn it does not average out.
+    let error_rad = turn.residual_rad.iter().map(|x| x * x).sum::<f64>().sqrt();
+    assert!(error_rad < EARTH_RATE_RADPS * turn.duration_s, "the turn: {error_rad} rad left");
+    let worst = assert_recovered(&cal, &truth(&s), 1e-5);
+    println!("a labelled turn after the last dwell: worst error {worst:.2e} of the scale");
+    // The device's table signal has no turns: the firmware path refuses them, with the reason, rather than
+    // calibrate without them.
+    let full = Options { model: Model::FULL, ..Options::default() };
+    let err = sinscal_host::calibration::firmware_path::calibrate_on_host(&rec, &full).expect_err("refused");
+    assert!(err.to_string().contains("no labelled turns"), "{err}");
+}

@@ -244,6 +244,7 @@ fn recording_of_model(
             rate_b_radps: w,
             force_b_mps2: f,
             temp_c: None,
+            turn_axis: None,
             line: k + 2,
         })
         .collect();

@@ -43,6 +43,7 @@ fn row(t_s: f64, pos: u32, rate: [f64; 3], force: [f64; 3]) -> Row {
         rate_b_radps: rate,
         force_b_mps2: force,
         temp_c: None,
+        turn_axis: None,
         line: 0,
     }
 }

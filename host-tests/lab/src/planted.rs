@@ -287,6 +287,7 @@ fn construct(record: &Recording, source: Source, segmentation: String, pieces: &
                 rate_b_radps: [out[0], out[1], out[2]],
                 force_b_mps2: [out[3], out[4], out[5]],
                 temp_c: r.temp_c,
+                turn_axis: None,
                 line: r.line,
             });
             source_rows.push(i);
@@ -975,6 +976,7 @@ mod tests {
                 rate_b_radps: [0.0; 3],
                 force_b_mps2: [ax(i), 0.0, 9.8],
                 temp_c: None,
+                turn_axis: None,
                 line: i + 2,
             })
             .collect();

@@ -86,6 +86,14 @@ pub fn replay_parts(
             ),
         ));
     }
+    if moves && rec.has_turns() {
+        return Err(InputError::file(
+            source,
+            "the firmware path has no labelled turns (the device's table signal says moving or in position, not \
+             which turn; docs/method.md#moves): calibrate it without --on, or without gyro scale factors and \
+             misalignments in --model",
+        ));
+    }
     let prefilter = prefilter_of(options, rec)?;
     let (dwells, rows) = write_frames(rec, frames)?;
     let frames = u32::try_from(rows)

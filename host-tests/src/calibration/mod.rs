@@ -223,15 +223,17 @@ pub struct Calibration {
 /// calibrated gyros' rotation is from the reference's. Its fields are the calibration JSON's `moves` entries.
 #[derive(Clone, Debug, PartialEq, serde::Serialize)]
 pub struct UsedMove {
-    /// Label of the dwell before it.
+    /// Label of the dwell before it (0 for a labelled turn).
     pub from_pos: u32,
-    /// Label of the dwell after it.
+    /// Label of the dwell after it (0 for a labelled turn).
     pub to_pos: u32,
+    /// The body axis of a labelled turn (`x`, `y`, `z`), `None` for a move between dwells.
+    pub turn: Option<&'static str>,
     /// Line of its first row.
     pub first_line: usize,
     /// Duration, s.
     pub duration_s: f64,
-    /// The angle the gyros measured, deg.
+    /// The angle the gyros measured, deg (of a turn: the angle turned, not the end's rotation).
     pub angle_deg: f64,
     /// The rotation error after the fit, body frame at the start of the move, rad.
     pub residual_rad: [f64; 3],
@@ -471,11 +473,16 @@ fn used_moves(
         .zip(integrated)
         .enumerate()
         .map(|(k, (m, c))| UsedMove {
-            from_pos: positions[m.from].pos,
-            to_pos: positions[m.to].pos,
+            from_pos: if m.turn_axis.is_some() { 0 } else { positions[m.from].pos },
+            to_pos: if m.turn_axis.is_some() { 0 } else { positions[m.to].pos },
+            turn: m.turn_axis.and_then(|a| crate::io::recording::TURN_AXES.get(a).copied()),
             first_line: m.first_line,
             duration_s: c.duration_s as f64,
-            angle_deg: (sinscal::math::linalg::norm(c.rotation.to_rotation_vector()) as f64).to_degrees(),
+            angle_deg: (sinscal::math::linalg::norm(match c.turn {
+                Some(t) => t.angle_sum_b_rad,
+                None => c.rotation.to_rotation_vector(),
+            }) as f64)
+                .to_degrees(),
             residual_rad: solution.move_residual_rad[k].map(|x| x as f64),
             statistic: solution.move_statistic[k] as f64,
             refused: k < 64 && solution.moves_refused & (1 << k) != 0,

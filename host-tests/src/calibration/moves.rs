@@ -54,11 +54,16 @@ pub fn model_uses_moves(model: Model) -> bool {
 }
 
 /// The moves of a recording: every run of rows with `pos = 0` between two dwells (a run before the first dwell
-/// or after the last is not a move), gathered row by row beside the dwells' pass ([`MoveCollector::push`]).
+/// or after the last is not a move), and every labelled turn (a run of rows with the same `turn` axis, wherever
+/// it lies), gathered row by row beside the dwells' pass ([`MoveCollector::push`]). A run between two dwells
+/// that holds a labelled turn is not a move: its turns are the observations (the rows are not used twice).
 #[derive(Debug, Default)]
 pub struct MoveCollector {
     moves: Vec<MoveSamples>,
     current: Option<MoveSamples>,
+    /// Whether the current run holds a labelled turn.
+    current_holds_turn: bool,
+    turn: Option<MoveSamples>,
     last_dwell: Option<usize>,
     previous_t_s: Option<f64>,
 }
@@ -68,13 +73,33 @@ impl MoveCollector {
     pub fn push(&mut self, row: &Row, dwell: Option<usize>, source: &str) -> Result<(), InputError> {
         let dt_s = self.previous_t_s.map(|t| row.t_s - t);
         self.previous_t_s = Some(row.t_s);
+        if self.turn.as_ref().is_some_and(|t| t.turn_axis != row.turn_axis) {
+            self.finish_turn();
+        }
+        if let (Some(axis), Some(dt_s)) = (row.turn_axis, dt_s) {
+            if dt_s.is_nan() || dt_s <= 0.0 {
+                return Err(InputError::at(source, row.line, "time does not increase within a turn".to_string()));
+            }
+            let from = self.last_dwell.unwrap_or(0);
+            let turn = self.turn.get_or_insert_with(|| MoveSamples {
+                from,
+                to: from,
+                first_line: row.line,
+                turn_axis: Some(axis),
+                samples: Vec::new(),
+            });
+            turn.samples.push(MoveRow::of(row, dt_s));
+            self.current_holds_turn = true;
+        }
         match dwell {
             Some(i) => {
                 if let Some(m) = self.current.take() {
-                    if m.from != i && !m.samples.is_empty() && self.moves.len() < MAX_MOVES {
+                    let whole = !std::mem::take(&mut self.current_holds_turn);
+                    if whole && m.from != i && !m.samples.is_empty() && self.moves.len() < MAX_MOVES {
                         self.moves.push(MoveSamples { to: i, ..m });
                     }
                 }
+                self.current_holds_turn = false;
                 self.last_dwell = Some(i);
             }
             None => {
@@ -96,8 +121,18 @@ impl MoveCollector {
         Ok(())
     }
 
-    /// The moves gathered (a run after the last dwell is dropped).
-    pub fn finish(self) -> Vec<MoveSamples> {
+    /// The turn being gathered, as an observation.
+    fn finish_turn(&mut self) {
+        if let Some(t) = self.turn.take() {
+            if !t.samples.is_empty() && self.moves.len() < MAX_MOVES {
+                self.moves.push(t);
+            }
+        }
+    }
+
+    /// The moves and turns gathered (a run after the last dwell is dropped, a turn there is not).
+    pub fn finish(mut self) -> Vec<MoveSamples> {
+        self.finish_turn();
         self.moves
     }
 }
@@ -132,12 +167,6 @@ pub fn integrate(
 
 /// Samples at the start of a turn whose mean force gives up in the body (the body is at rest there).
 pub const REST_SAMPLES: usize = 5;
-
-/// A turn about body axis `axis` of the rows `rows` (a labelled turn that starts and ends at rest).
-pub fn axis_turn(rows: &[Row], axis: usize, first_line: usize) -> MoveSamples {
-    let samples = rows.windows(2).map(|w| MoveRow::of(&w[1], w[1].t_s - w[0].t_s)).collect();
-    MoveSamples { from: 0, to: 0, first_line, turn_axis: Some(axis), samples }
-}
 
 /// Passes of integration and solution at most.
 pub const MAX_MOVE_PASSES: u32 = 10;
@@ -191,4 +220,59 @@ pub fn solve_with_moves(
     }
     solution.converged &= settled;
     Ok((solution, integrated, passes))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn row(line: usize, pos: u32, turn_axis: Option<usize>) -> Row {
+        Row {
+            t_s: line as f64 * 0.01,
+            pos,
+            pitch_deg: 0.0,
+            roll_deg: 0.0,
+            heading_deg: None,
+            rate_b_radps: [0.0, 0.0, 1.0],
+            force_b_mps2: [0.0, 0.0, 9.8],
+            temp_c: None,
+            turn_axis,
+            line,
+        }
+    }
+
+    /// Collects `rows` (the dwell index of a row: its `pos` less one, `None` for 0).
+    fn collect(rows: &[Row]) -> Vec<MoveSamples> {
+        let mut c = MoveCollector::default();
+        for r in rows {
+            c.push(r, r.pos.checked_sub(1).map(|p| p as usize), "r.csv").unwrap();
+        }
+        c.finish()
+    }
+
+    /// A run between two dwells is a move; with a labelled turn in it, the turn alone (its rows are not used
+    /// twice); a turn after the last dwell is kept, a plain run there is not.
+    #[test]
+    fn turns_are_gathered_wherever_they_lie_and_replace_the_move_that_holds_them() {
+        let plain = [row(1, 1, None), row(2, 0, None), row(3, 0, None), row(4, 2, None), row(5, 0, None)];
+        let moves = collect(&plain);
+        assert_eq!(
+            moves.iter().map(|m| (m.from, m.to, m.turn_axis, m.samples.len())).collect::<Vec<_>>(),
+            [(0, 1, None, 2)]
+        );
+        let turned = [
+            row(1, 1, None),
+            row(2, 0, None),
+            row(3, 0, Some(2)),
+            row(4, 0, Some(2)),
+            row(5, 2, None),
+            row(6, 0, Some(0)),
+            row(7, 0, Some(0)),
+            row(8, 0, Some(1)),
+        ];
+        let moves = collect(&turned);
+        let seen: Vec<(Option<usize>, usize, usize)> =
+            moves.iter().map(|m| (m.turn_axis, m.first_line, m.samples.len())).collect();
+        assert_eq!(seen, [(Some(2), 3, 2), (Some(0), 6, 2), (Some(1), 8, 1)]);
+    }
 }

@@ -660,11 +660,13 @@ fn moves_table(out: &mut String, c: &Calibration) {
     );
     for m in &c.moves {
         let r = m.residual_rad.map(|x| x * ARCSEC_PER_RAD);
+        let between = match m.turn {
+            Some(axis) => format!("turn about {axis}"),
+            None => format!("{:>4} -> {:<4}", m.from_pos, m.to_pos),
+        };
         let _ = writeln!(
             out,
-            " {:>4} -> {:<4} {:>6} {:>8.2} s {:>6.1} deg | {:>+9.2} {:>+9.2} {:>+9.2} | {}",
-            m.from_pos,
-            m.to_pos,
+            " {between:<12} {:>6} {:>8.2} s {:>6.1} deg | {:>+9.2} {:>+9.2} {:>+9.2} | {}",
             m.first_line,
             m.duration_s,
             m.angle_deg,

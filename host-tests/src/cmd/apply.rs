@@ -66,7 +66,7 @@ pub fn apply(rec: &impl RowSource, model: &CalibrationModel, out: &Path) -> Resu
     let mut header = rec.header().clone();
     let key = calibration_key(&header.comments);
     header.comments.push(format!("{key}: {}", model.source));
-    write_file(out, &header, rec.has_gyro(), rec.has_temp(), |writer| {
+    write_file(out, &header, rec.has_gyro(), rec.extra_columns(), |writer| {
         let mut rows = 0;
         rec.for_each_row(&mut |row| {
             let mut row = row.clone();

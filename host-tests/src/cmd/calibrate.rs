@@ -110,8 +110,8 @@ pub struct CalibrationArgs {
     /// m/s^2 (default 0.5); a raw, uncalibrated accelerometer may need more.
     #[arg(long, value_parser = parse_tolerance)]
     rest_force_tolerance: Option<f32>,
-    /// Channel method: do not use the moves between dwells (they are used when the model has gyro scale factors
-    /// or misalignments: docs/method.md#moves).
+    /// Channel method: do not use the moves between dwells and the labelled turns (they are used when the model
+    /// has gyro scale factors or misalignments: docs/method.md#moves).
     #[arg(long)]
     no_moves: bool,
     /// Channel method: how well the recording's attitudes are known, degrees (one standard deviation, each axis;

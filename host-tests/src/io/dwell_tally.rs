@@ -246,6 +246,7 @@ mod tests {
             rate_b_radps: [0.0; 3],
             force_b_mps2: [0.0, 0.0, 9.8],
             temp_c: None,
+            turn_axis: None,
             line,
         }
     }

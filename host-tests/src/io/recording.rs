@@ -76,6 +76,9 @@ pub struct Row {
     pub force_b_mps2: [f64; 3],
     /// Sensor temperature, deg C, if recorded.
     pub temp_c: Option<f64>,
+    /// The body axis (0 = x, 1 = y, 2 = z) of a labelled turn the row belongs to: a turn about that axis that
+    /// ends where it started (a Ferraris turn), `turn` column `x`, `y` or `z`; only on rows with `pos = 0`.
+    pub turn_axis: Option<usize>,
     /// Line number in the file (1-based), for messages.
     pub line: usize,
 }
@@ -96,6 +99,20 @@ pub struct Recording {
 
 /// The gyro columns, present as a group or absent (accelerometer-only data).
 pub const GYRO_COLUMNS: [&str; 3] = ["gx_radps", "gy_radps", "gz_radps"];
+
+/// The optional `turn` column: its cells name the body axis of a labelled turn (docs/formats.md#columns).
+pub const TURN_COLUMN: &str = "turn";
+/// The `turn` cells of the axes x, y, z.
+pub const TURN_AXES: [&str; 3] = ["x", "y", "z"];
+
+/// The optional columns a recording writes beside the required ones and the gyros.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub struct ExtraColumns {
+    /// `temp_c`.
+    pub temp: bool,
+    /// `turn`.
+    pub turn: bool,
+}
 
 /// Largest relative disagreement between the header's `rate_hz` and the median time step of `t_s`.
 pub const RATE_TOLERANCE: f64 = 0.01;
@@ -160,7 +177,7 @@ impl Recording {
     /// Nothing is checked: [`Recording::write`] checks.
     pub fn to_csv(&self) -> String {
         let mut out = Vec::new();
-        RecordingWriter::unchecked(&mut out, &self.header, self.has_gyro, RowSource::has_temp(self))
+        RecordingWriter::unchecked(&mut out, &self.header, self.has_gyro, RowSource::extra_columns(self))
             .and_then(|mut w| self.rows.iter().try_for_each(|r| w.row(r)))
             .expect("into memory, without the rules, writing cannot fail");
         String::from_utf8(out).expect("the writer writes UTF-8")
@@ -170,7 +187,7 @@ impl Recording {
     /// (docs/formats.md#bad-input): the header's numbers within their bounds, every value finite, times strictly
     /// increasing, and `rate_hz` agreeing with them. Nothing is written when a rule is broken ([`write_file`]).
     pub fn write(&self, path: &Path) -> Result<(), InputError> {
-        write_file(path, &self.header, self.has_gyro, RowSource::has_temp(self), |w| {
+        write_file(path, &self.header, self.has_gyro, RowSource::extra_columns(self), |w| {
             self.rows.iter().try_for_each(|r| w.row(r)).map_err(|e| e.writing(path))
         })
     }
@@ -221,7 +238,7 @@ impl WriteError {
 pub struct RecordingWriter<W: std::io::Write> {
     out: W,
     has_gyro: bool,
-    with_temp: bool,
+    extras: ExtraColumns,
     rate_hz: Option<f64>,
     rows: usize,
     steps: TimeSteps,
@@ -232,16 +249,26 @@ pub struct RecordingWriter<W: std::io::Write> {
 }
 
 impl<W: std::io::Write> RecordingWriter<W> {
-    /// Writes the header and the column line (with the gyro columns if `has_gyro`, `temp_c` if `with_temp`).
-    pub fn new(out: W, header: &Header, has_gyro: bool, with_temp: bool) -> Result<RecordingWriter<W>, WriteError> {
+    /// Writes the header and the column line (with the gyro columns if `has_gyro`, and the `extras`).
+    pub fn new(
+        out: W,
+        header: &Header,
+        has_gyro: bool,
+        extras: ExtraColumns,
+    ) -> Result<RecordingWriter<W>, WriteError> {
         check_header_writable(header).map_err(WriteError::Refused)?;
-        let mut writer = RecordingWriter::unchecked(out, header, has_gyro, with_temp)?;
+        let mut writer = RecordingWriter::unchecked(out, header, has_gyro, extras)?;
         writer.checked = true;
         Ok(writer)
     }
 
     /// [`RecordingWriter::new`] without the rules.
-    fn unchecked(out: W, header: &Header, has_gyro: bool, with_temp: bool) -> Result<RecordingWriter<W>, WriteError> {
+    fn unchecked(
+        out: W,
+        header: &Header,
+        has_gyro: bool,
+        extras: ExtraColumns,
+    ) -> Result<RecordingWriter<W>, WriteError> {
         let h = header;
         let mut text = String::new();
         text.push_str("# sinscal-recording: 1\n");
@@ -270,13 +297,20 @@ impl<W: std::io::Write> RecordingWriter<W> {
         }
         let names: Vec<&str> = COLUMNS.into_iter().filter(|c| has_gyro || !GYRO_COLUMNS.contains(c)).collect();
         text.push_str(&names.join(","));
-        text.push_str(if with_temp { ",temp_c\n" } else { "\n" });
+        if extras.temp {
+            text.push_str(",temp_c");
+        }
+        if extras.turn {
+            text.push(',');
+            text.push_str(TURN_COLUMN);
+        }
+        text.push('\n');
         let mut out = out;
         out.write_all(text.as_bytes()).map_err(WriteError::Io)?;
         Ok(RecordingWriter {
             out,
             has_gyro,
-            with_temp,
+            extras,
             rate_hz: h.rate_hz,
             rows: 0,
             steps: TimeSteps::default(),
@@ -294,6 +328,9 @@ impl<W: std::io::Write> RecordingWriter<W> {
         let angles = [r.pitch_deg, r.roll_deg, r.heading_deg.unwrap_or(0.0)];
         if self.checked && (!r.t_s.is_finite() || values.chain(&angles).any(|v| !v.is_finite())) {
             return Err(WriteError::Refused(format!("row {k}: a value is not a finite number")));
+        }
+        if self.checked && r.turn_axis.is_some_and(|a| a > 2 || r.pos != 0) {
+            return Err(WriteError::Refused(format!("row {k}: a turn's axis on a row in a position or beyond z")));
         }
         if self.checked && r.t_s <= self.previous_t_s {
             return Err(WriteError::Refused(format!(
@@ -314,8 +351,11 @@ impl<W: std::io::Write> RecordingWriter<W> {
             let _ = write!(out, "{gx:e},{gy:e},{gz:e},");
         }
         let _ = write!(out, "{ax},{ay},{az}");
-        if self.with_temp {
+        if self.extras.temp {
             let _ = write!(out, ",{}", r.temp_c.map(|t| t.to_string()).unwrap_or_default());
+        }
+        if self.extras.turn {
+            let _ = write!(out, ",{}", r.turn_axis.and_then(|a| TURN_AXES.get(a)).copied().unwrap_or_default());
         }
         out.push('\n');
         self.out.write_all(out.as_bytes()).map_err(WriteError::Io)
@@ -342,7 +382,7 @@ pub fn write_file<T>(
     path: &Path,
     header: &Header,
     has_gyro: bool,
-    with_temp: bool,
+    extras: ExtraColumns,
     rows: impl FnOnce(&mut RecordingWriter<std::io::BufWriter<std::fs::File>>) -> Result<T, InputError>,
 ) -> Result<T, InputError> {
     let name = path.file_name().map_or("out".into(), |n| n.to_string_lossy().into_owned());
@@ -350,7 +390,7 @@ pub fn write_file<T>(
     let file = std::fs::File::create(&partial).map_err(|e| InputError::io(path, e))?;
     let written = (|| {
         let out = std::io::BufWriter::with_capacity(1 << 20, file);
-        let mut writer = RecordingWriter::new(out, header, has_gyro, with_temp).map_err(|e| e.writing(path))?;
+        let mut writer = RecordingWriter::new(out, header, has_gyro, extras).map_err(|e| e.writing(path))?;
         let value = rows(&mut writer)?;
         writer.finish().map_err(|e| e.writing(path))?;
         std::fs::rename(&partial, path).map_err(|e| InputError::io(path, e))?;
@@ -393,6 +433,12 @@ pub trait RowSource {
     fn has_gyro(&self) -> bool;
     /// Whether the rows have a `temp_c` column.
     fn has_temp(&self) -> bool;
+    /// Whether the rows have a `turn` column.
+    fn has_turns(&self) -> bool;
+    /// The optional columns the rows have.
+    fn extra_columns(&self) -> ExtraColumns {
+        ExtraColumns { temp: self.has_temp(), turn: self.has_turns() }
+    }
     /// Gives every row to `sink`, in file order; the first error (of the reader's or the sink's) stops the pass.
     fn for_each_row(&self, sink: &mut dyn FnMut(&Row) -> Result<(), InputError>) -> Result<(), InputError>;
 
@@ -420,6 +466,9 @@ impl RowSource for Recording {
     fn has_temp(&self) -> bool {
         self.rows.iter().any(|r| r.temp_c.is_some())
     }
+    fn has_turns(&self) -> bool {
+        self.rows.iter().any(|r| r.turn_axis.is_some())
+    }
     fn for_each_row(&self, sink: &mut dyn FnMut(&Row) -> Result<(), InputError>) -> Result<(), InputError> {
         self.rows.iter().try_for_each(sink)
     }
@@ -435,6 +484,7 @@ pub struct RecordingFile {
     header: Header,
     has_gyro: bool,
     has_temp: bool,
+    has_turns: bool,
     /// Lines up to and including the column line.
     head_lines: usize,
     column_line: String,
@@ -470,7 +520,7 @@ impl RecordingFile {
         let mut lines = head.iter().enumerate().map(|(i, l)| (i + 1, l.as_str()));
         let (header, header_line, column_line, rate_line) = parse_header(&mut lines, &|| head.len(), &source)?;
         let columns = parse_columns(column_line, header_line, &source)?;
-        let (has_gyro, has_temp) = (columns.gyro.is_some(), columns.temp.is_some());
+        let (has_gyro, has_temp, has_turns) = (columns.gyro.is_some(), columns.temp.is_some(), columns.turn.is_some());
         Ok(RecordingFile {
             path: path.to_path_buf(),
             column_line: column_line.to_string(),
@@ -478,6 +528,7 @@ impl RecordingFile {
             header,
             has_gyro,
             has_temp,
+            has_turns,
             head_lines: head.len(),
             header_line,
             rate_line,
@@ -533,6 +584,9 @@ impl RowSource for RecordingFile {
     }
     fn has_temp(&self) -> bool {
         self.has_temp
+    }
+    fn has_turns(&self) -> bool {
+        self.has_turns
     }
     fn for_each_row(&self, sink: &mut dyn FnMut(&Row) -> Result<(), InputError>) -> Result<(), InputError> {
         self.pass(CHUNK_BYTES, sink)
@@ -616,13 +670,14 @@ fn parse_finite(cell: &str) -> Option<f64> {
 }
 
 /// Where the columns of a recording are: their names, the indices of the required columns (`t_s`, `pos`, the
-/// attitude and the accelerometers), of the gyros if present, and of `temp_c` if present.
+/// attitude and the accelerometers), of the gyros if present, and of `temp_c` and `turn` if present.
 struct Columns<'a> {
     names: Vec<&'a str>,
     /// `t_s`, `pos`, `pitch_deg`, `roll_deg`, `heading_deg`, `ax_mps2`, `ay_mps2`, `az_mps2`.
     index: [usize; 8],
     gyro: Option<[usize; 3]>,
     temp: Option<usize>,
+    turn: Option<usize>,
 }
 
 /// Finds the columns by name: every name at most once, the required ones present, the gyros all three or none.
@@ -654,7 +709,11 @@ fn parse_columns<'t>(column_line: &'t str, line: usize, source: &str) -> Result<
         }
     };
     let temp = find("temp_c");
-    Ok(Columns { names, index, gyro, temp })
+    let turn = find(TURN_COLUMN);
+    if turn.is_some() && gyro.is_none() {
+        return Err(bad(format!("column '{TURN_COLUMN}' without the gyro columns: a turn is seen by the gyros")));
+    }
+    Ok(Columns { names, index, gyro, temp, turn })
 }
 
 /// Whether the text before the colon of a `# ...: ...` header line is a key (one word of letters, digits, `_`,
@@ -1094,10 +1153,12 @@ fn trim_cell(cell: &str) -> &str {
 }
 
 /// The cells of a data row that the reader uses, by slot: the eight of [`Columns::index`], then the gyros,
-/// then `temp_c`.
-const SLOTS: usize = 12;
+/// then `temp_c` and `turn`.
+const SLOTS: usize = 13;
 /// Slot of `temp_c`.
 const TEMP_SLOT: usize = 11;
+/// Slot of `turn`.
+const TURN_SLOT: usize = 12;
 
 /// Reads the data rows after the column line, one line at a time, without allocating per line.
 struct RowParser<'c> {
@@ -1123,7 +1184,7 @@ impl<'c> RowParser<'c> {
             .copied()
             .map(Some)
             .chain(columns.gyro.map_or([None; 3], |g| g.map(Some)))
-            .chain([columns.temp]);
+            .chain([columns.temp, columns.turn]);
         for (slot, column) in used.enumerate() {
             if let Some(c) = column {
                 slot_of[c] = Some(slot);
@@ -1179,6 +1240,20 @@ impl<'c> RowParser<'c> {
             Some(_) if !cells[TEMP_SLOT].is_empty() => Some(num(TEMP_SLOT)?),
             _ => None,
         };
+        let turn_axis = match cells[TURN_SLOT] {
+            "" => None,
+            cell => {
+                let axis = TURN_AXES.iter().position(|a| *a == cell).ok_or_else(|| {
+                    bad(format!("column '{TURN_COLUMN}': '{cell}' is not an axis (x, y, z or empty)"))
+                })?;
+                if pos != 0 {
+                    return Err(bad(format!(
+                        "column '{TURN_COLUMN}': a turn about {cell} in position {pos} (a turn's rows have pos 0)"
+                    )));
+                }
+                Some(axis)
+            }
+        };
         self.rows.push(Row {
             t_s,
             pos,
@@ -1188,6 +1263,7 @@ impl<'c> RowParser<'c> {
             rate_b_radps,
             force_b_mps2: [num(5)?, num(6)?, num(7)?],
             temp_c,
+            turn_axis,
             line: n,
         });
         Ok(())
@@ -1273,6 +1349,28 @@ mod tests {
         assert_eq!(r.rows[0].heading_deg, None);
         assert_eq!(r.rows[0].roll_deg, 90.0);
         assert_eq!(r.rows[0].rate_b_radps, [1e-5, 2e-5, 3e-5]);
+    }
+
+    /// The `turn` column: an axis on rows with `pos = 0`, read and written back; an axis that is not x, y or z,
+    /// a turn in a position and a turn without gyros are refused.
+    #[test]
+    fn the_turn_column_names_the_axis_of_a_labelled_turn() {
+        let head = "# sinscal-recording: 1\n# latitude_deg: 10\n\
+            t_s,pos,pitch_deg,roll_deg,heading_deg,gx_radps,gy_radps,gz_radps,ax_mps2,ay_mps2,az_mps2,turn\n";
+        let text =
+            format!("{head}0.0,1,0,0,,0,0,0,0,0,9.8,\n0.1,0,0,0,,0,0,6.3,0,0,9.8,z\n0.2,0,0,0,,0,0,0,0,0,9.8,\n");
+        let r = Recording::parse(&text, "r.csv").unwrap();
+        assert_eq!(r.rows.iter().map(|r| r.turn_axis).collect::<Vec<_>>(), [None, Some(2), None]);
+        assert!(RowSource::has_turns(&r));
+        let again = Recording::parse(&r.to_csv(), "r.csv").unwrap();
+        assert_eq!(again.rows.iter().map(|r| r.turn_axis).collect::<Vec<_>>(), [None, Some(2), None]);
+        let bad_axis = format!("{head}0.0,0,0,0,,0,0,0,0,0,9.8,w\n");
+        assert!(err(&bad_axis).contains("'w' is not an axis"), "{}", err(&bad_axis));
+        let in_position = format!("{head}0.0,2,0,0,,0,0,0,0,0,9.8,x\n");
+        assert!(err(&in_position).contains("in position 2"), "{}", err(&in_position));
+        let no_gyro = "# sinscal-recording: 1\n# latitude_deg: 10\n\
+            t_s,pos,pitch_deg,roll_deg,heading_deg,ax_mps2,ay_mps2,az_mps2,turn\n0.0,0,0,0,,0,0,9.8,x\n";
+        assert!(err(no_gyro).contains("without the gyro columns"), "{}", err(no_gyro));
     }
 
     #[test]

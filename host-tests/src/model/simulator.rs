@@ -637,6 +637,7 @@ fn simulated_rows(scenario: &ScenarioFile, seed: u64, boundaries: &[Boundary], d
             rate_b_radps: w,
             force_b_mps2: f,
             temp_c,
+            turn_axis: None,
             line: 0,
         });
     }

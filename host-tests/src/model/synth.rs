@@ -262,6 +262,7 @@ impl Scenario {
                 rate_b_radps: w,
                 force_b_mps2: f,
                 temp_c: None,
+                turn_axis: None,
                 line: 0,
             });
             tick += 1;

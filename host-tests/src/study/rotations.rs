@@ -16,7 +16,7 @@ use sinscal::calib::moves::ChannelMove;
 use sinscal::math::linalg::norm;
 
 use super::LabelledTurn;
-use crate::calibration::moves::{axis_turn, integrate, solve_with_moves, MoveSamples};
+use crate::calibration::moves::{integrate, solve_with_moves, MoveSamples};
 use crate::calibration::{channel_session, ChannelSession, Options};
 use crate::io::error::InputError;
 use crate::io::recording::Recording;
@@ -177,6 +177,11 @@ fn fit(
 }
 
 /// The label of a hand move between two poses.
+/// The imucal label of the turn about body axis `axis`.
+fn turn_label(axis: usize) -> String {
+    crate::io::import::FERRARIS_ROTATIONS.get(axis).copied().unwrap_or("turn").to_string()
+}
+
 fn move_label(rec_positions: &[crate::calibration::PositionResult], m: &MoveSamples) -> String {
     format!("move at line {} (pose {} to {})", m.first_line, rec_positions[m.from].pos, rec_positions[m.to].pos)
 }
@@ -213,14 +218,13 @@ pub fn ferraris_gyro_matrix(rec: &Recording, turns: &[LabelledTurn]) -> M3 {
 /// The Ferraris session: fitted with its three labelled turns (imucal's data), then with the hand moves
 /// between the faces, each checked on the other's rotations, and with both.
 pub fn ferraris_rotations(rec: &Recording, turns: &[LabelledTurn]) -> Result<RotationStudy, InputError> {
+    // The turns and the hand moves as `calibrate` gathers them: the turns from the recording's `turn` column.
     let s = session(rec, false)?;
-    let closed: Vec<(String, MoveSamples)> = turns
-        .iter()
-        .map(|(label, axis, range)| {
-            (label.clone(), axis_turn(&rec.rows[range.clone()], *axis, rec.rows[range.start].line))
-        })
-        .collect();
-    let hand: Vec<(String, MoveSamples)> = s.moves.iter().map(|m| (move_label(&s.positions, m), m.clone())).collect();
+    let (turned, moved): (Vec<&MoveSamples>, Vec<&MoveSamples>) = s.moves.iter().partition(|m| m.turn_axis.is_some());
+    let closed: Vec<(String, MoveSamples)> =
+        turned.into_iter().map(|m| (turn_label(m.turn_axis.unwrap_or(0)), m.clone())).collect();
+    let hand: Vec<(String, MoveSamples)> =
+        moved.into_iter().map(|m| (move_label(&s.positions, m), m.clone())).collect();
     let only = |v: &[(String, MoveSamples)]| v.iter().map(|(_, m)| m.clone()).collect::<Vec<_>>();
     let both: Vec<MoveSamples> = only(&closed).into_iter().chain(only(&hand)).collect();
     let mut study =

@@ -529,6 +529,7 @@ fn records_to_recording(
             rate_b_radps: convert(&r[1..4], &layout.gyro, &layout.axes, dt_s),
             force_b_mps2: convert(&r[4..7], &layout.accel, &layout.axes, dt_s),
             temp_c: None,
+            turn_axis: None,
             line: *n,
         })
         .collect();

@@ -136,8 +136,8 @@ pub fn import_imucal(csv: &Path, labels: &Path, latitude_deg: Option<f64>) -> Re
 /// `acc_x/y/z` in m/s^2, found by name, at [`IMUCAL_RATE_HZ`]) and its label file ([`parse_imucal_labels`]).
 ///
 /// Row times are t_s = n_samples / 102.4. Rows whose sample index lies in a static label's `[start, end)` get that
-/// pose's position and attitude ([`FERRARIS_POSES`], heading empty); all other rows, the turns included, get
-/// pos = 0 (pitch 0, roll 0, heading empty). The latitude is `latitude_deg` or [`IMUCAL_DEFAULT_LATITUDE_DEG`]
+/// pose's position and attitude ([`FERRARIS_POSES`], heading empty); all other rows get pos = 0 (pitch 0, roll 0,
+/// heading empty), and those of a turn label (`x_rot`, `y_rot`, `z_rot`) its axis in the `turn` column. The latitude is `latitude_deg` or [`IMUCAL_DEFAULT_LATITUDE_DEG`]
 /// (inferred); gravity is left to the normal-gravity formula.
 pub fn parse_imucal(
     csv_text: &str,
@@ -238,8 +238,11 @@ fn imucal_session_rows<'a>(
         };
         let rate_degps = [num(1)?, num(2)?, num(3)?];
         let force_b_mps2 = [num(4)?, num(5)?, num(6)?];
-        let pose = labels.iter().filter(|r| (r.start..r.end).contains(&sample)).find_map(|r| ferraris_pose(&r.label));
-        rows.push(labelled_row(sample as f64 / IMUCAL_RATE_HZ, pose, rate_degps.map(f64::to_radians), force_b_mps2, n));
+        let holding = || labels.iter().filter(|r| (r.start..r.end).contains(&sample));
+        let pose = holding().find_map(|r| ferraris_pose(&r.label));
+        let turn = holding().find_map(|r| turn_axis(&r.label));
+        let rate_b_radps = rate_degps.map(f64::to_radians);
+        rows.push(labelled_row(sample as f64 / IMUCAL_RATE_HZ, (pose, turn), rate_b_radps, force_b_mps2, n));
     }
     Ok((rows, first_sample, previous))
 }
@@ -270,10 +273,16 @@ fn check_every_pose_sampled(
     Ok(())
 }
 
-/// A row of an imucal session: the pose's position and attitude, or pos = 0 outside the static poses.
+/// The body axis of a Ferraris turn label (`x_rot`, `y_rot`, `z_rot`), `None` for any other label.
+fn turn_axis(label: &str) -> Option<usize> {
+    FERRARIS_ROTATIONS.iter().position(|r| *r == label)
+}
+
+/// A row of an imucal session: the pose's position and attitude, or pos = 0 outside the static poses, with the
+/// axis of the labelled turn it belongs to.
 fn labelled_row(
     t_s: f64,
-    pose: Option<&FerrarisPose>,
+    (pose, turn): (Option<&FerrarisPose>, Option<usize>),
     rate_b_radps: [f64; 3],
     force_b_mps2: [f64; 3],
     line: usize,
@@ -287,6 +296,7 @@ fn labelled_row(
         rate_b_radps,
         force_b_mps2,
         temp_c: None,
+        turn_axis: turn.filter(|_| pose.is_none()),
         line,
     }
 }
@@ -343,7 +353,7 @@ pub const HAND_PLACED_POSE_TOLERANCE_DEG: f64 = 1.0;
 ///
 /// Counts are converted with the nominal scales [`IMUCAL_RAW_ACCEL_LSB_PER_G`] (g = [`STANDARD_GRAVITY_MPS2`]) and
 /// [`IMUCAL_RAW_GYRO_LSB_PER_DEGPS`]; the header comments and the summary say so. Labels map to positions as in
-/// [`parse_imucal`]; the turns get pos = 0; any other label is an error.
+/// [`parse_imucal`]; the turns get pos = 0 and their axis; any other label is an error.
 pub fn parse_imucal_raw(text: &str, source: &str, latitude_deg: Option<f64>) -> Result<Imported, InputError> {
     let (latitude_deg, latitude_source) = imucal_site(latitude_deg)?;
     let mut lines =
@@ -397,7 +407,8 @@ pub fn parse_imucal_raw(text: &str, source: &str, latitude_deg: Option<f64>) -> 
         };
         let force_b_mps2 = [num(2)?, num(3)?, num(4)?].map(|c| c * mpss_per_count);
         let rate_b_radps = [num(5)?, num(6)?, num(7)?].map(|c| c * radps_per_count);
-        samples.push((sample, labelled_row(sample as f64 / IMUCAL_RAW_RATE_HZ, pose, rate_b_radps, force_b_mps2, n)));
+        let t_s = sample as f64 / IMUCAL_RAW_RATE_HZ;
+        samples.push((sample, labelled_row(t_s, (pose, turn_axis(label)), rate_b_radps, force_b_mps2, n)));
     }
     if samples.is_empty() {
         return Err(InputError::at(source, column_line_number, "no data rows"));

@@ -265,6 +265,7 @@ fn levelled_rows(
             rate_b_radps: *w,
             force_b_mps2: *f,
             temp_c: None,
+            turn_axis: None,
             line: *n,
         })
         .collect();

@@ -157,6 +157,7 @@ fn psins_rows<'a>(
             rate_b_radps: [0, 1, 2].map(|i| counts[i] as f64 * h.gyro_radps_per_count[i]),
             force_b_mps2: [0, 1, 2].map(|i| counts[i + 3] as f64 * h.accel_mps2_per_count[i]),
             temp_c: None,
+            turn_axis: None,
             line: n,
         });
     }
