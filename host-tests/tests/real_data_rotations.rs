@@ -94,3 +94,44 @@ fn imutk_gyro_matrix_from_the_hand_moves() {
     assert!(half.held_out.len() >= 10);
     assert!(calibrated < 0.1 * raw, "{calibrated} vs {raw}");
 }
+
+/// REAL DATA: `calibrate` itself on the imported Ferraris session with the gyro terms: its three labelled turns
+/// and five hand moves are observations; the hand moves misfit white rate noise, so their error is named from
+/// their residuals (between 0.3 and 3 deg per axis) and the fit passes its checks; `T_g` within 2 of its
+/// standard errors of imucal's `K_g R_g` (the reference values). With exact labels (pose tolerance 0)
+/// no error is named and the fit check fails, as a turntable's misfit moves must.
+#[test]
+fn calibrate_uses_the_ferraris_turns_and_names_the_hand_moves_error() {
+    let Some(dir) = common::data_dir() else { return };
+    let rec = common::ferraris_session(&dir);
+    let model = sinscal_host::calibration::estimates::parse_model(
+        "biases,accel_scale_factor,gyro_scale_factor,gyro_misalignment",
+    )
+    .expect("model");
+    let options = sinscal_host::calibration::Options { model, ..Default::default() };
+    let cal = sinscal_host::calibration::calibrate(&rec, &options).expect("calibrate");
+    let turns = cal.moves.iter().filter(|m| m.turn.is_some()).count();
+    assert_eq!((turns, cal.moves.len()), (3, 8), "three turns and five hand moves");
+    let error_deg = cal.move_error_rad.to_degrees();
+    println!("REAL DATA imucal Ferraris: hand moves' error {error_deg:.3} deg per axis");
+    assert!((0.3..3.0).contains(&error_deg), "{error_deg}");
+    let checks = sinscal_host::calibration::checks::checks(&cal);
+    assert!(checks.iter().all(|c| c.passed), "{checks:?}");
+    let imucal = [[1.027903, -0.000467, -0.006591], [-0.000218, 0.982424, -0.002735], [0.009698, 0.007628, 0.998234]];
+    let s = cal.channels.as_ref().expect("general estimator");
+    for (i, row) in imucal.iter().enumerate() {
+        for (j, reference) in row.iter().enumerate() {
+            let p = if i == j { 15 + i } else { 18 + sinscal::calib::general::misalignment_index(i, j) };
+            let (v, e) = s.estimate(p).expect("estimated");
+            let value = v as f64 + if i == j { 1.0 } else { 0.0 };
+            let z = (value - reference) / e as f64;
+            println!("  T_g[{i}][{j}] {value:+.5} +- {e:.5} against {reference:+.6}: {z:+.2} standard errors");
+            assert!(z.abs() < 2.0, "T_g[{i}][{j}]: {z:.2} standard errors from imucal's");
+        }
+    }
+    let exact = sinscal_host::calibration::Options { pose_tolerance_deg: Some(0.0), ..options };
+    let cal = sinscal_host::calibration::calibrate(&rec, &exact).expect("calibrate");
+    assert_eq!(cal.move_error_rad, 0.0);
+    let fit = sinscal_host::calibration::checks::checks(&cal).into_iter().find(|c| c.check == "fit").expect("fit");
+    assert!(!fit.passed, "misfit moves with exact labels fail the fit check");
+}

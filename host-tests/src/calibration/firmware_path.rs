@@ -273,6 +273,7 @@ pub fn calibration_from_outcome(
         // The outcome does not carry the moves' residuals.
         moves: Vec::new(),
         move_passes: 0,
+        move_error_rad: 0.0,
     };
     Ok(match result {
         SequenceSolution::Angles(r) => {

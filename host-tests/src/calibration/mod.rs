@@ -210,6 +210,9 @@ pub struct Calibration {
     pub moves: Vec<UsedMove>,
     /// Passes of move integration and solution (0 without moves).
     pub move_passes: u32,
+    /// The moves' error beyond white rate noise, rad per axis, named from their residuals when they misfit it
+    /// (0: they fit, or none were used; docs/method.md#moves).
+    pub move_error_rad: f64,
     /// The pose tolerance the general estimator used, degrees (0: exact labels; the angle method's is 0).
     pub pose_tolerance_deg: f64,
     /// What the fit check adds when it fails: the alternative that fits (`sinscal calibrate` sets it).
@@ -365,8 +368,8 @@ pub fn calibrate_channels(recording: &impl RowSource, options: &Options) -> Resu
     let with_moves = has_gyro && options.use_moves && moves::model_uses_moves(options.model);
     let ChannelSession { estimator, positions, rate_var_radps2, prefilter, moves: move_samples } =
         channel_session(recording, options, with_moves)?;
-    let (solution, integrated, move_passes) = if move_samples.is_empty() {
-        (estimator.solve().map_err(|e| channel_error(e, &positions, source))?, Vec::new(), 0)
+    let (solution, integrated, move_passes, move_error_rad) = if move_samples.is_empty() {
+        (estimator.solve().map_err(|e| channel_error(e, &positions, source))?, Vec::new(), 0, 0.0)
     } else {
         moves::solve_with_moves(&estimator, &move_samples, rate_var_radps2, 0)
             .map_err(|e| channel_error(e, &positions, source))?
@@ -395,6 +398,7 @@ pub fn calibrate_channels(recording: &impl RowSource, options: &Options) -> Resu
         on: "recording",
         moves: used_moves,
         move_passes,
+        move_error_rad: f64::from(move_error_rad),
     })
 }
 
@@ -608,6 +612,7 @@ pub fn calibrate_angles(recording: &impl RowSource, options: &Options) -> Result
         on: "recording",
         moves: Vec::new(),
         move_passes: 0,
+        move_error_rad: 0.0,
     })
 }
 

@@ -3,7 +3,7 @@
 //! again after each solution until the estimate stops changing.
 
 use sinscal::calib::general::{
-    implausible_parameter, ChannelError, ChannelEstimator, ChannelSolution, Model, Term, PARAMETERS,
+    implausible_parameter, AttitudeKnowledge, ChannelError, ChannelEstimator, ChannelSolution, Model, Term, PARAMETERS,
 };
 use sinscal::calib::moves::{ChannelMove, MoveSums, MAX_MOVES, MOVE_PARAMETERS};
 
@@ -171,27 +171,73 @@ pub const REST_SAMPLES: usize = 5;
 /// Passes of integration and solution at most.
 pub const MAX_MOVE_PASSES: u32 = 10;
 
+/// Significance at which the moves between dwells misfit white rate noise, so that their error beyond it is
+/// named ([`move_error_update`]).
+pub const MOVE_MISFIT_ALPHA: f64 = 0.001;
+
+/// The moves' error beyond white rate noise, rad per axis, after a solution with `current` (rad): 0 while the
+/// moves between dwells (not the labelled turns) fit their noise (their chi-square below its upper
+/// [`MOVE_MISFIT_ALPHA`] quantile); otherwise the error that brings their chi-square to its degrees of freedom,
+/// by one step of `error^2 <- error^2 S / R` from their mean square residual per row at first (S their chi-square,
+/// R their rows: hand moves, whose rotations white rate noise does not explain; docs/method.md#moves).
+pub fn move_error_update(solution: &ChannelSolution, moves: &[MoveSamples], current: f32) -> f32 {
+    let (mut chi2, mut rows, mut square_rad2) = (0.0f64, 0u32, 0.0f64);
+    for (k, m) in moves.iter().enumerate().take(MAX_MOVES) {
+        if m.turn_axis.is_some() || solution.move_statistic[k] < 0.0 {
+            continue;
+        }
+        chi2 += solution.move_statistic[k] as f64;
+        rows += u32::from(solution.move_rows[k]);
+        square_rad2 += solution.move_residual_rad[k].iter().map(|x| (*x as f64).powi(2)).sum::<f64>();
+    }
+    if rows == 0 {
+        return 0.0;
+    }
+    let r = rows as f64;
+    if current <= 0.0 {
+        let misfit = chi2 > crate::stats::linfit::chi_square_quantile_upper(MOVE_MISFIT_ALPHA, r);
+        return if misfit { (square_rad2 / r).sqrt() as f32 } else { 0.0 };
+    }
+    ((current as f64).powi(2) * chi2 / r).sqrt() as f32
+}
+
 /// The solution with the moves, without the dwells in `exclude`: the moves integrated with the prior (none at
 /// first), solved, and integrated again with the estimate until no gyro parameter changes by more than 1e-3 of
 /// its standard error, or the change stops shrinking below 0.05 of it (the rounding of f32). The solution's
 /// `converged` is false when the passes ran out first; an estimate that leaves every instrument's range is
-/// refused ([`ChannelError::Diverged`]). Returns the solution, the moves of its last pass and the passes made.
+/// refused ([`ChannelError::Diverged`]). When the poses are not known exactly (a pose tolerance, or attitudes
+/// estimated: hand-placed poses) and the moves between them misfit their white rate noise, their error beyond it
+/// is named from their residuals ([`move_error_update`]) and updated after every solution.
+/// Returns the solution, the moves of its last pass, the passes made and the moves' error (rad per axis, 0 when
+/// they fit).
 pub fn solve_with_moves(
     estimator: &ChannelEstimator,
     moves: &[MoveSamples],
     rate_var_radps2: [f32; 3],
     exclude: u64,
-) -> Result<(ChannelSolution, Vec<ChannelMove>, u32), ChannelError> {
+) -> Result<(ChannelSolution, Vec<ChannelMove>, u32, f32), ChannelError> {
+    let mut estimator = estimator.clone();
     let mut prior = [0.0f32; PARAMETERS];
     let mut integrated = integrate(moves, &prior, rate_var_radps2)?;
-    let solve = |integrated: &[ChannelMove]| {
+    let solve = |estimator: &ChannelEstimator, integrated: &[ChannelMove]| {
         if exclude == 0 {
             estimator.solve_with(integrated)
         } else {
             estimator.solve_excluding_with(exclude, integrated)
         }
     };
-    let mut solution = solve(&integrated)?;
+    let mut solution = solve(&estimator, &integrated)?;
+    // Only between poses not known exactly (hand-placed): a turntable's moves that misfit fail the fit check.
+    let settings = estimator.settings();
+    let hand_placed = settings.pose_tolerance_rad > 0.0 || settings.attitude == AttitudeKnowledge::Unknown;
+    for _ in 0..if hand_placed { MOVE_ERROR_STEPS } else { 0 } {
+        let error = move_error_update(&solution, moves, estimator.move_error_rad());
+        if error == estimator.move_error_rad() {
+            break;
+        }
+        estimator.set_move_error_rad(error);
+        solution = solve(&estimator, &integrated)?;
+    }
     let mut passes = 1;
     let mut previous = f32::INFINITY;
     let mut settled = false;
@@ -215,12 +261,19 @@ pub fn solve_with_moves(
         }
         previous = largest;
         integrated = integrate(moves, &prior, rate_var_radps2)?;
-        solution = solve(&integrated)?;
+        solution = solve(&estimator, &integrated)?;
+        if estimator.move_error_rad() > 0.0 {
+            estimator.set_move_error_rad(move_error_update(&solution, moves, estimator.move_error_rad()));
+            solution = solve(&estimator, &integrated)?;
+        }
         passes += 1;
     }
     solution.converged &= settled;
-    Ok((solution, integrated, passes))
+    Ok((solution, integrated, passes, estimator.move_error_rad()))
 }
+
+/// Steps of the moves' error after the first solution ([`move_error_update`]).
+const MOVE_ERROR_STEPS: usize = 4;
 
 #[cfg(test)]
 mod tests {

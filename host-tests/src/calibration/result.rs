@@ -158,6 +158,9 @@ pub struct CalibrationJson {
     /// Extra: passes of move integration and solution.
     #[serde(skip_serializing_if = "is_zero")]
     pub move_passes: u32,
+    /// Extra: the moves' error beyond white rate noise, rad per axis, when they misfit it (docs/method.md#moves).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub move_error_rad: Option<f64>,
     /// Extra: where it ran: "recording" (values read directly), or the firmware path "host" / "qemu".
     pub on: &'static str,
     /// Extra: sampling counters of the firmware path.
@@ -446,6 +449,7 @@ impl CalibrationJson {
             converged: c.converged,
             moves: c.moves.clone(),
             move_passes: c.move_passes,
+            move_error_rad: (c.move_error_rad > 0.0).then_some(c.move_error_rad),
             on: c.on,
             sampling: c.sampling.map(|s| SamplingJson {
                 events: s.events,
@@ -658,6 +662,14 @@ fn moves_table(out: &mut String, c: &Calibration) {
         out,
         " from -> to      line  duration      angle | error after the fit [arcsec]: x    y    z | statistic"
     );
+    if c.move_error_rad > 0.0 {
+        let _ = writeln!(
+            out,
+            " the moves between positions misfit their white rate noise: each weighted with an error of {:.3} deg \
+             per axis more, named from their residuals (hand moves; docs/method.md#moves)",
+            c.move_error_rad.to_degrees()
+        );
+    }
     for m in &c.moves {
         let r = m.residual_rad.map(|x| x * ARCSEC_PER_RAD);
         let between = match m.turn {

@@ -135,7 +135,7 @@ fn fit(
 ) -> Result<RotationFit, (String, String)> {
     let rate_var = s.rate_var_radps2;
     let bad = |e: sinscal::calib::general::ChannelError| (name.to_string(), e.to_string());
-    let (solution, _, passes) = solve_with_moves(&s.estimator, fitted, rate_var, 0).map_err(bad)?;
+    let (solution, _, passes, _) = solve_with_moves(&s.estimator, fitted, rate_var, 0).map_err(bad)?;
     if !solution.converged {
         return Err((name.to_string(), format!("the fit did not converge in {passes} passes")));
     }

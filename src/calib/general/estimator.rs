@@ -62,12 +62,25 @@ pub struct ChannelEstimator {
     pub(super) site: Site,
     pub(super) settings: ChannelSettings,
     pub(super) dwells: Vec<ChannelDwell, MAX_DWELLS>,
+    /// The error of a move between dwells beyond white rate noise, rad per axis (0: none; not for a turn).
+    pub(super) move_error_rad: f32,
 }
 
 impl ChannelEstimator {
     /// An estimator for one site.
     pub fn new(site: Site, settings: ChannelSettings) -> ChannelEstimator {
-        ChannelEstimator { site, settings, dwells: Vec::new() }
+        ChannelEstimator { site, settings, dwells: Vec::new(), move_error_rad: 0.0 }
+    }
+
+    /// Gives every move between dwells an error of `rad` per axis beyond white rate noise, in quadrature
+    /// (hand moves: docs/method.md#moves); a labelled turn keeps its own. Negative or not finite: 0.
+    pub fn set_move_error_rad(&mut self, rad: f32) {
+        self.move_error_rad = if rad.is_finite() && rad > 0.0 { rad } else { 0.0 };
+    }
+
+    /// The error of a move beyond white rate noise, rad per axis ([`ChannelEstimator::set_move_error_rad`]).
+    pub fn move_error_rad(&self) -> f32 {
+        self.move_error_rad
     }
 
     /// The settings.

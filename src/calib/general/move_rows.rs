@@ -138,6 +138,11 @@ impl ChannelEstimator {
         // The covariance in the basis; an unknown heading also leaves the horizontal Earth rate's direction
         // unknown when it is not estimated: its angle over the move is added as noise.
         let mut cov = frame.mul(&m.covariance_rad2).mul(&frame.transpose());
+        if m.turn.is_none() {
+            for i in 0..3 {
+                cov.0[i][i] += self.move_error_rad * self.move_error_rad;
+            }
+        }
         if unresolved {
             let horizontal = self.site.earth_rate_north_radps() * m.duration_s;
             for i in 0..3 {
