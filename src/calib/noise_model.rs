@@ -154,6 +154,11 @@ fn gauss_markov_shape(x: f32) -> f32 {
     sum
 }
 
+/// The time between two disjoint windows `[start, end)` in seconds, in either order (0 when they touch).
+fn gap_s(x: (f32, f32), y: (f32, f32)) -> f32 {
+    if x.0 <= y.0 { y.0 - x.1 } else { x.0 - y.1 }.max(0.0)
+}
+
 /// `h(x) = 3 - 4 e^-x + e^-2x`: `tau^2` times the Allan variance of unit sway at `tau = x T_S` (the angle
 /// `theta` Gauss-Markov: `(3 R(0) - 4 R(tau) + R(2 tau)) / tau^2` with `R` its autocovariance). Below `x = 1`
 /// its power series `sum_{k >= 1} (-1)^k (2^k - 4) / k! x^k` (`2x - 2x^3/3 + x^4/2 - ...`), 16 terms: the
@@ -185,7 +190,7 @@ fn sway_windows(var: f32, tc_s: f32, x: (f32, f32), y: (f32, f32), same: bool) -
     if same {
         return 2.0 * var * fx / (tx * tx);
     }
-    let gap_s = if x.0 <= y.0 { y.0 - x.1 } else { x.0 - y.1 }.max(0.0);
+    let gap_s = gap_s(x, y);
     let fy = -libm::expm1f(-ty / tc_s);
     -var * fx * fy * libm::expf(-gap_s / tc_s) / (tx * ty)
 }
@@ -234,7 +239,7 @@ fn gauss_markov_windows(var: f32, tc_s: f32, x: (f32, f32), y: (f32, f32), same:
     if same {
         return 2.0 * var * tc_s * tc_s * u_minus_one_plus_exp(tx / tc_s) / (tx * tx);
     }
-    let gap_s = if x.0 <= y.0 { y.0 - x.1 } else { x.0 - y.1 }.max(0.0);
+    let gap_s = gap_s(x, y);
     let fx = -libm::expm1f(-tx / tc_s);
     let fy = -libm::expm1f(-ty / tc_s);
     var * tc_s * tc_s * fx * fy * libm::expf(-gap_s / tc_s) / (tx * ty)
