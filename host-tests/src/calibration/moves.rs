@@ -94,7 +94,7 @@ impl MoveCollector {
         match dwell {
             Some(i) => {
                 if let Some(m) = self.current.take() {
-                    let whole = !std::mem::take(&mut self.current_holds_turn);
+                    let whole = !self.current_holds_turn;
                     if whole && m.from != i && !m.samples.is_empty() && self.moves.len() < MAX_MOVES {
                         self.moves.push(MoveSamples { to: i, ..m });
                     }
