@@ -431,6 +431,7 @@ pub fn channel_session(
     let mut collector = with_moves.then(moves::MoveCollector::default);
     let dwells = collect_dwells(recording, &prefilter, MAX_DWELLS, collector.as_mut())?;
     let moves = collector.map_or_else(Vec::new, moves::MoveCollector::finish);
+    moves::check_turns(&moves, source)?;
     let mut positions = Vec::with_capacity(dwells.len());
     for (dwell, summary) in dwells {
         let attitude = dwell.attitude(source)?;

@@ -165,6 +165,33 @@ pub fn integrate(
         .collect()
 }
 
+/// Largest distance of a labelled turn's raw integrated angle about its axis from a whole number of turns (at
+/// least one), deg: beyond it the labels do not hold a whole turn (a turn cut, or a label on the wrong rows).
+pub const TURN_ANGLE_TOLERANCE_DEG: f64 = 45.0;
+
+/// Refuses a labelled turn whose raw gyro, integrated about its axis, is not within
+/// [`TURN_ANGLE_TOLERANCE_DEG`] of a whole number of turns (at least one): its reference would be wrong.
+pub fn check_turns(moves: &[MoveSamples], source: &str) -> Result<(), InputError> {
+    for m in moves {
+        let Some(axis) = m.turn_axis else { continue };
+        let angle_deg: f64 =
+            m.samples.iter().map(|r| f64::from(r.rate_b_radps[axis]) * f64::from(r.dt_s)).sum::<f64>().to_degrees();
+        let turns = (angle_deg / 360.0).round();
+        if turns == 0.0 || (angle_deg - 360.0 * turns).abs() > TURN_ANGLE_TOLERANCE_DEG {
+            return Err(InputError::at(
+                source,
+                m.first_line,
+                format!(
+                    "the labelled turn about {} turns {angle_deg:.1} deg: not a whole turn within \
+                     {TURN_ANGLE_TOLERANCE_DEG} deg (a turn cut, or its label on other rows)",
+                    crate::io::recording::TURN_AXES[axis]
+                ),
+            ));
+        }
+    }
+    Ok(())
+}
+
 /// Samples at the start of a turn whose mean force gives up in the body (the body is at rest there).
 pub const REST_SAMPLES: usize = 5;
 
@@ -301,6 +328,19 @@ mod tests {
             c.push(r, r.pos.checked_sub(1).map(|p| p as usize), "r.csv").unwrap();
         }
         c.finish()
+    }
+
+    /// A labelled turn of a whole turn is taken; one cut to half a turn, or of no turn at all, is refused with
+    /// its line.
+    #[test]
+    fn a_turn_that_is_not_a_whole_turn_is_refused() {
+        // 1 rad/s about z for 628 samples of 10 ms: 359.8 deg.
+        let turn = |n: usize| vec![row(1, 1, None)].into_iter().chain((2..2 + n).map(|l| row(l, 0, Some(2))));
+        assert!(check_turns(&collect(&turn(628).collect::<Vec<_>>()), "r.csv").is_ok());
+        for n in [314, 20] {
+            let e = check_turns(&collect(&turn(n).collect::<Vec<_>>()), "r.csv").unwrap_err().to_string();
+            assert!(e.contains("r.csv:2:") && e.contains("not a whole turn"), "{e}");
+        }
     }
 
     /// A run between two dwells is a move; with a labelled turn in it, the turn alone (its rows are not used
