@@ -83,6 +83,10 @@ pub struct Options {
     /// General estimator: the channels' noise terms from a noise file (`--noise`, docs/method.md#noise-model);
     /// `None`: the session's own dwell noise.
     pub noise: Option<NoiseTerms>,
+    /// General estimator: the moves and turns left out of the fit to check it (bit k = the k-th in the
+    /// recording's order, from 0; `--hold-out-moves`): integrated with the calibration afterwards, their
+    /// rotation error reported as held out (docs/method.md#held-out-moves).
+    pub hold_out_moves: u64,
 }
 
 /// The core's noise model of `options.noise` for `recording`: its sample interval is the recording's (the
@@ -140,6 +144,7 @@ impl Default for Options {
             use_moves: true,
             pose_tolerance_deg: None,
             noise: None,
+            hold_out_moves: 0,
         }
     }
 }
@@ -244,6 +249,9 @@ pub struct UsedMove {
     pub statistic: f64,
     /// Whether it was left out: its rotation was more than 45 deg from the reference's (no move of the table).
     pub refused: bool,
+    /// Whether it was held out of the fit (`--hold-out-moves`): its residual is the calibration's error on a
+    /// rotation it did not see.
+    pub held_out: bool,
 }
 
 fn to_f32(v: [f64; 3]) -> [f32; 3] {
@@ -366,15 +374,20 @@ pub fn calibrate_channels(recording: &impl RowSource, options: &Options) -> Resu
     let has_gyro = recording.has_gyro();
     let (site, gravity_source) = site_of(header);
     let with_moves = has_gyro && options.use_moves && moves::model_uses_moves(options.model);
-    let ChannelSession { estimator, positions, rate_var_radps2, prefilter, moves: move_samples } =
+    let ChannelSession { estimator, positions, rate_var_radps2, prefilter, moves: all_moves } =
         channel_session(recording, options, with_moves)?;
+    let (move_samples, held) = moves::hold_out(all_moves, options.hold_out_moves, source)?;
     let (solution, integrated, move_passes, move_error_rad) = if move_samples.is_empty() {
         (estimator.solve().map_err(|e| channel_error(e, &positions, source))?, Vec::new(), 0, 0.0)
     } else {
         moves::solve_with_moves(&estimator, &move_samples, rate_var_radps2, 0)
             .map_err(|e| channel_error(e, &positions, source))?
     };
-    let used_moves = used_moves(&move_samples, &integrated, &solution, &positions);
+    let mut used_moves = used_moves(&move_samples, &integrated, &solution, &positions);
+    let checked = moves::check_held_out(&estimator, &solution, &held, rate_var_radps2)
+        .map_err(|e| channel_error(e, &positions, source))?;
+    used_moves.extend(held_out_moves(&held, &checked, &positions));
+    used_moves.sort_by_key(|m| m.first_line);
     let without_suspect = leave_out_suspects(&estimator, &solution, &positions, &move_samples, rate_var_radps2);
     Ok(Calibration {
         pose_tolerance_deg: pose_tolerance_deg(options, header),
@@ -448,7 +461,8 @@ pub fn channel_session(
     // With reference attitudes the Earth rate is always in the gyro model ("unobservable" stays a property of the
     // schedule). Without any, it is in the model only where the gyros resolve it (docs/method.md#unknown-attitudes).
     let noise = pool_mean_noise(positions.iter().map(|p| p.summary)).map(|m| m.white_equivalent_var);
-    let earth_rate_resolved = attitude == AttitudeKnowledge::Reference
+    let headings_known = positions.iter().all(|p| p.attitude.heading_deg.is_some());
+    let earth_rate_resolved = (attitude == AttitudeKnowledge::Reference && headings_known)
         || !has_gyro
         || gyros_resolve_earth_rate(&noise, positions.iter().map(|p| p.summary.samples));
     let settings = ChannelSettings {
@@ -491,6 +505,35 @@ fn used_moves(
             residual_rad: solution.move_residual_rad[k].map(|x| x as f64),
             statistic: solution.move_statistic[k] as f64,
             refused: k < 64 && solution.moves_refused & (1 << k) != 0,
+            held_out: false,
+        })
+        .collect()
+}
+
+/// What the report says of each move held out of the fit: its rotation error with the calibration applied.
+fn held_out_moves(
+    samples: &[moves::MoveSamples],
+    checked: &[(sinscal::calib::moves::ChannelMove, [f32; 3])],
+    positions: &[PositionResult],
+) -> Vec<UsedMove> {
+    samples
+        .iter()
+        .zip(checked)
+        .map(|(m, (c, residual))| UsedMove {
+            from_pos: if m.turn_axis.is_some() { 0 } else { positions[m.from].pos },
+            to_pos: if m.turn_axis.is_some() { 0 } else { positions[m.to].pos },
+            turn: m.turn_axis.and_then(|a| crate::io::recording::TURN_AXES.get(a).copied()),
+            first_line: m.first_line,
+            duration_s: c.duration_s as f64,
+            angle_deg: (sinscal::math::linalg::norm(match c.turn {
+                Some(t) => t.angle_sum_b_rad,
+                None => c.rotation.to_rotation_vector(),
+            }) as f64)
+                .to_degrees(),
+            residual_rad: residual.map(|x| x as f64),
+            statistic: -1.0,
+            refused: false,
+            held_out: true,
         })
         .collect()
 }

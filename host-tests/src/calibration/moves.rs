@@ -253,10 +253,24 @@ pub fn solve_with_moves(
             estimator.solve_excluding_with(exclude, integrated)
         }
     };
-    let mut solution = solve(&estimator, &integrated)?;
     // Only between poses not known exactly (hand-placed): a turntable's moves that misfit fail the fit check.
     let settings = estimator.settings();
     let hand_placed = settings.pose_tolerance_rad > 0.0 || settings.attitude == AttitudeKnowledge::Unknown;
+    let start_rad = if settings.pose_tolerance_rad > 0.0 { settings.pose_tolerance_rad } else { HAND_MOVE_START_RAD };
+    let mut solution = match solve(&estimator, &integrated) {
+        Ok(s) if s.converged || !hand_placed => s,
+        Err(e) if !hand_placed => return Err(e),
+        // Hand moves weighted by their white rate noise alone can pull the fit away (a hand move misses by a
+        // degree, where white noise allows arcseconds): solved again with the moves' error started at the
+        // poses' tolerance, then named from the residuals as below.
+        first => {
+            estimator.set_move_error_rad(start_rad);
+            match solve(&estimator, &integrated) {
+                Ok(s) => s,
+                Err(e) => return Err(first.err().unwrap_or(e)),
+            }
+        }
+    };
     for _ in 0..if hand_placed { MOVE_ERROR_STEPS } else { 0 } {
         let error = move_error_update(&solution, moves, estimator.move_error_rad());
         if error == estimator.move_error_rad() {
@@ -299,8 +313,49 @@ pub fn solve_with_moves(
     Ok((solution, integrated, passes, estimator.move_error_rad()))
 }
 
+/// The moves split into those the fit uses and those `hold_out` (bit k = the k-th move, from 0) keeps out of it
+/// to check it; a bit beyond the moves is bad input.
+pub fn hold_out(
+    moves: Vec<MoveSamples>,
+    hold_out: u64,
+    source: &str,
+) -> Result<(Vec<MoveSamples>, Vec<MoveSamples>), InputError> {
+    let named = 64 - hold_out.leading_zeros() as usize;
+    if named > moves.len() {
+        return Err(InputError::file(
+            source,
+            format!(
+                "--hold-out-moves: move {named} named, the recording has {} moves and turns the model uses",
+                moves.len()
+            ),
+        ));
+    }
+    let (held, fitted): (Vec<_>, Vec<_>) =
+        moves.into_iter().enumerate().partition(|(k, _)| *k < 64 && hold_out & (1 << k) != 0);
+    Ok((fitted.into_iter().map(|(_, m)| m).collect(), held.into_iter().map(|(_, m)| m).collect()))
+}
+
+/// The moves held out of a solution, integrated with its calibration, each with its rotation error against the
+/// solution's attitudes (rad, body frame at the start of the move; without the part about up when a heading is
+/// unknown).
+pub fn check_held_out(
+    estimator: &ChannelEstimator,
+    solution: &ChannelSolution,
+    held: &[MoveSamples],
+    rate_var_radps2: [f32; 3],
+) -> Result<Vec<(ChannelMove, [f32; 3])>, ChannelError> {
+    let integrated = integrate(held, &solution.parameters_si, rate_var_radps2)?;
+    let residuals = estimator.move_residuals(&solution.parameters_si, solution, &integrated);
+    Ok(integrated.into_iter().zip(residuals).collect())
+}
+
 /// Steps of the moves' error after the first solution ([`move_error_update`]).
 const MOVE_ERROR_STEPS: usize = 4;
+
+/// The hand moves' error, rad per axis, a second start takes when the first solution (the moves weighted by
+/// their white rate noise alone) ran away or did not converge, and the poses have no tolerance of their own
+/// (attitudes estimated): 1 deg, a hand-placed pose's usual error.
+const HAND_MOVE_START_RAD: f32 = 0.017_453_292;
 
 #[cfg(test)]
 mod tests {

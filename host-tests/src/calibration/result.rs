@@ -685,7 +685,9 @@ fn moves_table(out: &mut String, c: &Calibration) {
             r[0],
             r[1],
             r[2],
-            if m.refused {
+            if m.held_out {
+                "held out of the fit: the calibration's error on it".to_string()
+            } else if m.refused {
                 "left out: more than 45 deg from the reference's rotation, no move of the table".to_string()
             } else if m.statistic >= 0.0 {
                 format!("{:.1}", m.statistic)

@@ -125,6 +125,11 @@ pub struct CalibrationArgs {
     /// dwells (docs/method.md#noise-model). Default: the session's own dwell noise.
     #[arg(long, value_name = "NOISE_FILE|recording")]
     noise: Option<std::path::PathBuf>,
+    /// Channel method: leave these moves and turns out of the fit to check it, numbered from 1 in the
+    /// recording's order as the summary lists them (e.g. 2,4): each is integrated with the calibration
+    /// afterwards and its rotation error reported as held out (docs/method.md#held-out-moves).
+    #[arg(long, value_name = "LIST", value_parser = parse_move_list)]
+    hold_out_moves: Option<u64>,
 }
 
 impl CalibrationArgs {
@@ -185,6 +190,18 @@ fn parse_pose_tolerance(text: &str) -> Result<f64, String> {
     }
 }
 
+/// `--hold-out-moves`: a comma list of move numbers from 1 to 64, as a bit set (bit k = move k + 1).
+fn parse_move_list(text: &str) -> Result<u64, String> {
+    let mut bits = 0u64;
+    for item in text.split(',') {
+        match item.trim().parse::<u32>() {
+            Ok(k @ 1..=64) => bits |= 1 << (k - 1),
+            _ => return Err(format!("'{}' is not a move number from 1 to 64", item.trim())),
+        }
+    }
+    Ok(bits)
+}
+
 /// `--rest-force-tolerance`: a positive number of m/s^2 (a bad value is a usage error, exit 2).
 fn parse_tolerance(text: &str) -> Result<f32, String> {
     match text.parse::<f32>() {
@@ -222,6 +239,12 @@ impl CalibrationArgs {
         }
         if self.estimate_attitudes && firmware_path {
             usage("--estimate-attitudes: the firmware path takes the recording's attitudes as its reference")
+        }
+        if self.hold_out_moves.is_some() && (method == Method::Angles || firmware_path || self.no_moves) {
+            usage(
+                "--hold-out-moves: the moves are observations of the host's general estimator only (--method \
+                   channels, without --on and --no-moves)",
+            )
         }
         if self.noise.is_some() && method == Method::Angles {
             usage("--noise: the angle method weights by its own dwell noise (--method channels)")
@@ -261,6 +284,7 @@ impl CalibrationArgs {
             use_moves: !self.no_moves,
             pose_tolerance_deg: self.pose_tolerance,
             noise,
+            hold_out_moves: self.hold_out_moves.unwrap_or(0),
         })
     }
 }

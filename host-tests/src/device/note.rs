@@ -128,6 +128,8 @@ impl Provenance {
         Ok(Options {
             // The noise model travels in the device's configuration, not in the note: `device show` puts it back.
             noise: None,
+            // The device's fit uses every move (the firmware path has no held-out moves).
+            hold_out_moves: 0,
             prefilter: match o.prefilter.as_str() {
                 "hmmkf" => PrefilterKind::HmmKf,
                 "none" => PrefilterKind::None,

@@ -44,6 +44,7 @@ pub mod noise;
 pub mod noise_extension;
 pub mod psins;
 pub mod report;
+pub mod rests;
 pub mod rotations;
 
 use std::path::{Path, PathBuf};

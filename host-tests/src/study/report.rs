@@ -14,7 +14,8 @@ use crate::model::synth::MICRO_G;
 use crate::plot::{figure, Png};
 use crate::stats::noise::NoiseTerms;
 use crate::study::noise_extension::ExtraTerm;
-use crate::study::rotations::{HeldOut, RotationStudy};
+use crate::study::rests::rms;
+use crate::study::rotations::{RotationFit, RotationStudy};
 use crate::study::{
     unit_of, ChannelNoise, Curve, FactoryComparison, NoiseExtension, Pose, PoseStudy, Study, CHANNELS, SCHEMA,
 };
@@ -347,71 +348,121 @@ fn factory_section(o: &mut String, p: &PoseStudy) {
     let _ = writeln!(o, "| offset [counts] | {} | not given | |", fmt3(f.fitted_offset_counts, 1.0, 1));
 }
 
-/// 8. The gyro matrix from the rotations beside the reference, and the held-out rotations.
+/// 8. The gyro matrix from the rotations beside the reference, and each calibration's checks on the rests.
 fn rotations_section(o: &mut String, r: &RotationStudy) {
     let _ = writeln!(o, "\n## 8. Gyro matrix from the rotations (docs/method.md#moves)\n");
     let _ = writeln!(
         o,
-        "The static poses with their attitudes estimated (biases, accelerometer scale factors and, where the \
-         poses determine them, misalignments) and the gyro scale factors and misalignments from rotations: T_g = I + S + M, row i = gyro i, ± the standard error \
-         of the fit's noise. Reference: {}.",
+        "Each fit is `sinscal calibrate --model full` itself (the study has no fit of its own), with some moves \
+         held out where named: T_g = I + S + M, row i = gyro i, ± its standard error. Reference: {}. Each \
+         calibration is checked on the session's rests (docs/method.md#held-out-moves): the gravity direction \
+         carried by the compensated gyros across every motion between two rests, against the one measured after \
+         it, and |f| - g of the rests without a label.",
         r.reference_name
     );
-    let cell = |v: f64, e: Option<f64>| match e {
-        Some(e) => format!("{v:+.5} ± {e:.5}"),
-        None => format!("{v:+.5}"),
-    };
     for f in &r.fits {
-        let _ = writeln!(
-            o,
-            "\n**Fitted on {}** ({} rotations, {} passes; chi-square {:.1} on {} degrees of freedom)\n",
-            f.name, f.rotations, f.passes, f.chi_square, f.degrees_of_freedom
-        );
-        let _ = writeln!(o, "| T_g | x | y | z | reference x | y | z |\n|---|---|---|---|---|---|---|");
-        for i in 0..3 {
-            let _ = writeln!(
-                o,
-                "| {} | {} | {} | {} | {} | {} | {} |",
-                ["x", "y", "z"][i],
-                cell(f.t_g[i][0], Some(f.t_g_std[i][0])),
-                cell(f.t_g[i][1], Some(f.t_g_std[i][1])),
-                cell(f.t_g[i][2], Some(f.t_g_std[i][2])),
-                cell(r.reference_t_g[i][0], None),
-                cell(r.reference_t_g[i][1], None),
-                cell(r.reference_t_g[i][2], None)
-            );
-        }
-        let worst = (0..9)
-            .map(|k| (k / 3, k % 3))
-            .map(|(i, j)| ((f.t_g[i][j] - r.reference_t_g[i][j]) / f.t_g_std[i][j].max(1e-12)).abs())
-            .fold(0.0f64, f64::max);
-        let _ = writeln!(o, "\nLargest difference from the reference: {worst:.1} standard errors.");
-        if !f.held_out.is_empty() {
-            let _ = writeln!(
-                o,
-                "\n| held out | angle [deg] | error raw [deg] | error calibrated [deg] | components |\n|---|---|---|---|---|"
-            );
-            for h in &f.held_out {
-                let _ = writeln!(
-                    o,
-                    "| {} | {:.1} | {:.3} | {:.3} | {} |",
-                    h.label, h.angle_deg, h.raw_error_deg, h.calibrated_error_deg, h.components
-                );
-            }
-            let rms = |g: &dyn Fn(&HeldOut) -> f64| {
-                (f.held_out.iter().map(|h| g(h) * g(h)).sum::<f64>() / f.held_out.len() as f64).sqrt()
-            };
-            let _ = writeln!(
-                o,
-                "\nRMS error of the held-out rotations: raw {:.3} deg, calibrated {:.3} deg.",
-                rms(&|h| h.raw_error_deg),
-                rms(&|h| h.calibrated_error_deg)
-            );
-        }
+        fit_section(o, r, f);
     }
     for (name, why) in &r.refused {
         let _ = writeln!(o, "\n**Fitted on {name}: refused** ({why}).");
     }
+}
+
+/// One fit of section 8: its matrix beside the reference, its transitions and rests.
+fn fit_section(o: &mut String, r: &RotationStudy, f: &RotationFit) {
+    let cell = |v: f64, e: Option<f64>| match e {
+        Some(e) => format!("{v:+.5} ± {e:.5}"),
+        None => format!("{v:+.5}"),
+    };
+    let _ = writeln!(
+        o,
+        "\n**Fitted on {}**: `{}` ({} moves and turns, {} passes; chi-square {:.1} on {} degrees of freedom; hand \
+         moves' error {:.3} deg; checks {})\n",
+        f.name,
+        f.command,
+        f.rotations,
+        f.passes,
+        f.chi_square,
+        f.degrees_of_freedom,
+        f.move_error_deg,
+        if f.checks_passed { "all passed" } else { "FAILED" }
+    );
+    let _ = writeln!(o, "| T_g | x | y | z | reference x | y | z |\n|---|---|---|---|---|---|---|");
+    for i in 0..3 {
+        let _ = writeln!(
+            o,
+            "| {} | {} | {} | {} | {} | {} | {} |",
+            ["x", "y", "z"][i],
+            cell(f.t_g[i][0], Some(f.t_g_std[i][0])),
+            cell(f.t_g[i][1], Some(f.t_g_std[i][1])),
+            cell(f.t_g[i][2], Some(f.t_g_std[i][2])),
+            cell(r.reference_t_g[i][0], None),
+            cell(r.reference_t_g[i][1], None),
+            cell(r.reference_t_g[i][2], None)
+        );
+    }
+    let _ = writeln!(o, "\nLargest difference from the reference: {:.1} standard errors.", worst_z(r, f));
+    if !f.transitions.is_empty() {
+        let _ = writeln!(
+            o,
+            "\n| motion between two rests | in the fit | turned [deg] | gravity carried: error raw [deg] | calibrated [deg] |\n|---|---|---|---|---|"
+        );
+        for t in &f.transitions {
+            let _ = writeln!(
+                o,
+                "| {} | {} | {:.1} | {:.3} | {:.3} |",
+                t.label,
+                if t.used_in_fit { "yes" } else { "held out" },
+                t.angle_deg,
+                t.raw_error_deg,
+                t.calibrated_error_deg
+            );
+        }
+        let held = |pick: &dyn Fn(&crate::study::rests::Transition) -> bool| {
+            let chosen: Vec<_> = f.transitions.iter().filter(|t| pick(t)).collect();
+            (
+                chosen.len(),
+                rms(chosen.iter().map(|t| t.raw_error_deg)),
+                rms(chosen.iter().map(|t| t.calibrated_error_deg)),
+            )
+        };
+        let (n, raw, cal) = held(&|t| !t.used_in_fit);
+        let _ =
+            writeln!(o, "\nRMS over the {n} motions the fit did not use: raw {raw:.3} deg, calibrated {cal:.3} deg.");
+        let (n, raw, cal) = held(&|t| !t.turn);
+        let _ = writeln!(
+            o,
+            "RMS over the {n} motions that are not labelled turns: raw {raw:.3} deg, calibrated {cal:.3} deg."
+        );
+    }
+    if !f.rests.is_empty() {
+        let _ = writeln!(
+            o,
+            "\n| rest without a label | samples | \\|f\\| - g raw [m/s^2] | calibrated [m/s^2] |\n|---|---|---|---|"
+        );
+        for rest in &f.rests {
+            let _ = writeln!(
+                o,
+                "| {} | {} | {:+.4} | {:+.4} |",
+                rest.label, rest.samples, rest.raw_error_mps2, rest.calibrated_error_mps2
+            );
+        }
+        let _ = writeln!(
+            o,
+            "\nRMS |f| - g over the {} rests without a label: raw {:.4} m/s^2, calibrated {:.4} m/s^2.",
+            f.rests.len(),
+            rms(f.rests.iter().map(|r| r.raw_error_mps2)),
+            rms(f.rests.iter().map(|r| r.calibrated_error_mps2))
+        );
+    }
+}
+
+/// The largest difference of a fit's T_g from the reference, in its standard errors.
+pub fn worst_z(r: &RotationStudy, f: &RotationFit) -> f64 {
+    (0..9)
+        .map(|k| (k / 3, k % 3))
+        .map(|(i, j)| ((f.t_g[i][j] - r.reference_t_g[i][j]) / f.t_g_std[i][j].max(1e-12)).abs())
+        .fold(0.0f64, f64::max)
 }
 
 /// The rotation part of the study JSON.
@@ -421,6 +472,7 @@ fn rotations_json(r: &RotationStudy) -> Value {
         "reference_t_g": r.reference_t_g,
         "fits": r.fits.iter().map(|f| json!({
             "fitted_on": f.name,
+            "command": f.command,
             "rotations": f.rotations,
             "t_g": f.t_g,
             "t_g_std": f.t_g_std,
@@ -429,12 +481,21 @@ fn rotations_json(r: &RotationStudy) -> Value {
             "chi_square": f.chi_square,
             "degrees_of_freedom": f.degrees_of_freedom,
             "passes": f.passes,
-            "held_out": f.held_out.iter().map(|h| json!({
-                "rotation": h.label,
-                "angle_deg": h.angle_deg,
-                "raw_error_deg": h.raw_error_deg,
-                "calibrated_error_deg": h.calibrated_error_deg,
-                "components": h.components,
+            "move_error_deg": f.move_error_deg,
+            "checks_passed": f.checks_passed,
+            "transitions": f.transitions.iter().map(|t| json!({
+                "motion": t.label,
+                "turn": t.turn,
+                "used_in_fit": t.used_in_fit,
+                "angle_deg": t.angle_deg,
+                "raw_error_deg": t.raw_error_deg,
+                "calibrated_error_deg": t.calibrated_error_deg,
+            })).collect::<Vec<_>>(),
+            "rests": f.rests.iter().map(|x| json!({
+                "rest": x.label,
+                "samples": x.samples,
+                "raw_error_mps2": x.raw_error_mps2,
+                "calibrated_error_mps2": x.calibrated_error_mps2,
             })).collect::<Vec<_>>(),
         })).collect::<Vec<_>>(),
         "refused": r.refused.iter().map(|(n, w)| json!({"fitted_on": n, "reason": w})).collect::<Vec<_>>(),

@@ -1,48 +1,31 @@
-//! The gyro matrix from a session's rotations (docs/method.md#moves), beside the data author's reference, with
-//! held-out rotations: rotations not used in a fit, integrated with that fit's calibration applied, and their
-//! error against the reference rotation in degrees (raw: integrated without any calibration).
+//! The gyro matrix from a session's rotations as `sinscal calibrate` gives it (docs/method.md#moves), beside the
+//! data author's reference, and checked on the session's rests (docs/method.md#held-out-moves).
 //!
-//! The static poses are loaded into the general estimator with their attitudes estimated from the data (the
-//! poses are hand-placed); the model is the biases, the accelerometer scale factors and the gyro scale factors
-//! and misalignments. Two kinds of rotation:
-//! - a labelled full turn (Ferraris): it ends where it started, so its reference rotation is the Earth's alone
-//!   (a closed move, three components);
-//! - a hand move between two static poses: its reference rotation is the one between the two poses' estimated
-//!   attitudes, without its part about the vertical (the headings are unknown: two components, the imu_tk
-//!   comparison of gravity directions).
+//! Each fit is a call of the product, `calibrate` with `--model full` and the default options, the whole
+//! recording or with some of its moves and turns held out (`--hold-out-moves`): the study has no fit of its
+//! own. Each calibration is then checked independently of the estimator ([`super::rests`]): the gravity
+//! direction carried by the compensated gyros across every motion between two rests (the moves the fit used
+//! and those it did not), and the compensated specific force of the rests that carry no label.
 
-use sinscal::calib::general::{ChannelSolution, Model, Term, PARAMETERS};
-use sinscal::calib::moves::ChannelMove;
-use sinscal::math::linalg::norm;
+use sinscal::calib::general::Model;
 
+use super::rests::{find_rests, rest_forces, transitions, RestForce, Transition};
 use super::LabelledTurn;
-use crate::calibration::moves::{integrate, solve_with_moves, MoveSamples};
-use crate::calibration::{channel_session, ChannelSession, Options};
+use crate::calibration::result::CalibrationJson;
+use crate::calibration::{calibrate, Calibration, Estimates, Options};
+use crate::io::calibration_model::CalibrationModel;
 use crate::io::error::InputError;
 use crate::io::recording::Recording;
 use crate::model::synth::M3;
 
-/// One rotation held out of a fit.
-#[derive(Clone, Debug, PartialEq)]
-pub struct HeldOut {
-    /// Which rotation ("x_rot", "move 3 (pose 3 to 4)").
-    pub label: String,
-    /// The angle the raw gyros measured, deg.
-    pub angle_deg: f64,
-    /// Error against the reference, integrated without calibration, deg.
-    pub raw_error_deg: f64,
-    /// Error against the reference, integrated with the fit's calibration applied, deg.
-    pub calibrated_error_deg: f64,
-    /// Components compared: 3, or 2 without the part about the vertical.
-    pub components: usize,
-}
-
-/// One fit of the gyro matrix.
+/// One calibration of the session and its checks.
 #[derive(Clone, Debug, PartialEq)]
 pub struct RotationFit {
-    /// What it used ("the three labelled turns", ...).
+    /// What it used ("every move and turn", ...).
     pub name: String,
-    /// Rotations used.
+    /// The command line that gives it (`sinscal calibrate --model full ...`).
+    pub command: String,
+    /// Moves and turns the fit used.
     pub rotations: usize,
     /// `T_g = I + S + M` (row i = gyro i), 1.
     pub t_g: M3,
@@ -56,8 +39,14 @@ pub struct RotationFit {
     pub degrees_of_freedom: u32,
     /// Integration and solution passes.
     pub passes: u32,
-    /// Rotations held out of this fit, checked with its calibration.
-    pub held_out: Vec<HeldOut>,
+    /// The hand moves' error calibrate named, deg per axis (0: none).
+    pub move_error_deg: f64,
+    /// Whether every check of the calibration passed (its exit status 0).
+    pub checks_passed: bool,
+    /// Every motion between two consecutive rests, checked with the calibration.
+    pub transitions: Vec<Transition>,
+    /// The rests without a label, checked with the calibration.
+    pub rests: Vec<RestForce>,
 }
 
 /// The rotation part of a study.
@@ -82,108 +71,73 @@ impl RotationStudy {
             refused: Vec::new(),
         }
     }
-
-    /// Adds a fit, or its refusal.
-    fn add(&mut self, fit: Result<RotationFit, (String, String)>) {
-        match fit {
-            Ok(f) => self.fits.push(f),
-            Err(r) => self.refused.push(r),
-        }
-    }
 }
 
-/// The model of the rotation fits: the biases, the accelerometer scale factors, the gyro scale factors and
-/// misalignments, and the accelerometer misalignments when the poses determine them (`with_accel_misalignment`:
-/// many poses; six faces with unknown attitudes do not).
-pub fn rotation_model(with_accel_misalignment: bool) -> Model {
-    let m = Model::BIASES.with(Term::AccelScaleFactor).with(Term::GyroScaleFactor).with(Term::GyroMisalignment);
-    if with_accel_misalignment {
-        m.with(Term::AccelMisalignment)
-    } else {
-        m
-    }
-}
+/// The model of the rotation fits: every term (`--model full`); the estimator says which the session cannot
+/// carry.
+pub const ROTATION_MODEL: Model = Model::FULL;
 
-/// The static poses in the general estimator, and the hand moves between them.
-fn session(rec: &Recording, with_accel_misalignment: bool) -> Result<ChannelSession, InputError> {
-    let model = rotation_model(with_accel_misalignment);
-    let options = Options { model, estimate_attitudes: true, ..Options::default() };
-    channel_session(rec, &options, true)
-}
-
-/// `T_g` and its standard errors from a solution.
-fn gyro_matrix(s: &ChannelSolution) -> (M3, M3) {
+/// `T_g` and its standard errors as calibrate reports them (with the fit scale of each gyro,
+/// docs/method.md#fit-scale).
+fn gyro_matrix(e: &Estimates) -> (M3, M3) {
     let mut t = [[0.0; 3]; 3];
     let mut std = [[0.0; 3]; 3];
     for i in 0..3 {
         for j in 0..3 {
             let p = if i == j { 15 + i } else { 18 + sinscal::calib::general::misalignment_index(i, j) };
-            let (v, e) = s.estimate(p).map_or((0.0, 0.0), |(v, e)| (v as f64, e as f64));
-            t[i][j] = v + if i == j { 1.0 } else { 0.0 };
-            std[i][j] = e;
+            t[i][j] = e.value_si[p].unwrap_or(0.0) + if i == j { 1.0 } else { 0.0 };
+            std[i][j] = e.std_si[p].unwrap_or(0.0);
         }
     }
     (t, std)
 }
 
-/// Fits the gyro matrix with `fitted` and checks `held_out` (with their labels) against it.
+/// The moves and turns of `cal` as `--hold-out-moves` numbers them (from 1), those `keep` selects.
+fn move_numbers(cal: &Calibration, keep: impl Fn(&crate::calibration::UsedMove) -> bool) -> Vec<usize> {
+    cal.moves.iter().enumerate().filter(|(_, m)| keep(m)).map(|(k, _)| k + 1).collect()
+}
+
+/// The session calibrated by the product with the moves numbered `held_out` (from 1) held out, and checked on
+/// the session's rests; `unlabelled_rests`: also the still periods of the unlabelled rows.
 fn fit(
-    s: &ChannelSession,
+    rec: &Recording,
     name: &str,
-    fitted: &[MoveSamples],
-    held_out: &[(String, MoveSamples)],
+    held_out: &[usize],
+    unlabelled_rests: bool,
 ) -> Result<RotationFit, (String, String)> {
-    let rate_var = s.rate_var_radps2;
-    let bad = |e: sinscal::calib::general::ChannelError| (name.to_string(), e.to_string());
-    let (solution, _, passes, _) = solve_with_moves(&s.estimator, fitted, rate_var, 0).map_err(bad)?;
-    if !solution.converged {
-        return Err((name.to_string(), format!("the fit did not converge in {passes} passes")));
-    }
-    let samples: Vec<MoveSamples> = held_out.iter().map(|(_, m)| m.clone()).collect();
-    let raw = integrate(&samples, &[0.0; PARAMETERS], rate_var).map_err(bad)?;
-    let calibrated = integrate(&samples, &solution.parameters_si, rate_var).map_err(bad)?;
-    let raw_errors = s.estimator.move_residuals(&[0.0; PARAMETERS], &solution, &raw);
-    let calibrated_errors = s.estimator.move_residuals(&solution.parameters_si, &solution, &calibrated);
-    let held_out = held_out
-        .iter()
-        .zip(&raw)
-        .enumerate()
-        .map(|(k, ((label, m), r)): (usize, (&(String, MoveSamples), &ChannelMove))| {
-            let twist_free = m.turn_axis.is_none() && {
-                let dwells = s.estimator.dwells();
-                dwells[m.from].heading_rad.is_none() || dwells[m.to].heading_rad.is_none()
-            };
-            HeldOut {
-                label: label.clone(),
-                angle_deg: (norm(r.rotation.to_rotation_vector()) as f64).to_degrees(),
-                raw_error_deg: (norm(raw_errors[k]) as f64).to_degrees(),
-                calibrated_error_deg: (norm(calibrated_errors[k]) as f64).to_degrees(),
-                components: if twist_free { 2 } else { 3 },
-            }
-        })
-        .collect();
-    let (t_g, t_g_std) = gyro_matrix(&solution);
+    let mask = held_out.iter().fold(0u64, |m, k| m | 1 << (k - 1));
+    let options = Options { model: ROTATION_MODEL, hold_out_moves: mask, ..Options::default() };
+    let list = held_out.iter().map(usize::to_string).collect::<Vec<_>>().join(",");
+    let command = format!(
+        "sinscal calibrate --model full{}",
+        if held_out.is_empty() { String::new() } else { format!(" --hold-out-moves {list}") }
+    );
+    let refused = |e: String| (name.to_string(), e);
+    let cal = calibrate(rec, &options).map_err(|e| refused(e.to_string()))?;
+    let Some(solution) = cal.channels.as_ref() else { return Err(refused("no general estimator".into())) };
+    let text = serde_json::to_string(&CalibrationJson::new(&cal)).map_err(|e| refused(e.to_string()))?;
+    let model = CalibrationModel::parse(&text, "the study's calibration").map_err(|e| refused(e.to_string()))?;
+    let rests = find_rests(rec, unlabelled_rests);
+    let fitted: Vec<usize> = cal.moves.iter().filter(|m| !m.held_out && !m.refused).map(|m| m.first_line).collect();
+    let used = |lines: std::ops::Range<usize>| fitted.iter().any(|l| lines.contains(l));
+    let (t_g, t_g_std) = gyro_matrix(&cal.estimates);
+    let g = cal.site.gravity_mps2 as f64;
     Ok(RotationFit {
         name: name.to_string(),
+        command,
         rotations: fitted.len(),
         t_g,
         t_g_std,
-        gyro_bias_radps: [0, 1, 2].map(|i| solution.estimate(i).map_or((0.0, 0.0), |(v, e)| (v as f64, e as f64))),
+        gyro_bias_radps: [0, 1, 2]
+            .map(|i| (cal.estimates.value_si[i].unwrap_or(0.0), cal.estimates.std_si[i].unwrap_or(0.0))),
         chi_square: solution.chi_square as f64,
         degrees_of_freedom: solution.degrees_of_freedom,
-        passes,
-        held_out,
+        passes: cal.move_passes,
+        move_error_deg: cal.move_error_rad.to_degrees(),
+        checks_passed: crate::calibration::checks::checks(&cal).iter().all(|c| c.passed),
+        transitions: transitions(rec, &rests, &model, used),
+        rests: rest_forces(rec, &rests, &model, g),
     })
-}
-
-/// The label of a hand move between two poses.
-/// The imucal label of the turn about body axis `axis`.
-fn turn_label(axis: usize) -> String {
-    crate::io::import::FERRARIS_ROTATIONS.get(axis).copied().unwrap_or("turn").to_string()
-}
-
-fn move_label(rec_positions: &[crate::calibration::PositionResult], m: &MoveSamples) -> String {
-    format!("move at line {} (pose {} to {})", m.first_line, rec_positions[m.from].pos, rec_positions[m.to].pos)
 }
 
 /// imucal's Ferraris formulas for the gyro matrix: the gyro output less the static bias (the mean of every
@@ -215,40 +169,45 @@ pub fn ferraris_gyro_matrix(rec: &Recording, turns: &[LabelledTurn]) -> M3 {
     t
 }
 
-/// The Ferraris session: fitted with its three labelled turns (imucal's data), then with the hand moves
-/// between the faces, each checked on the other's rotations, and with both.
+/// The Ferraris session calibrated with every move and turn (the product's answer), with its three labelled
+/// turns only (the hand moves held out) and with its hand moves only (the turns held out); each checked on the
+/// session's rests, labelled and not.
 pub fn ferraris_rotations(rec: &Recording, turns: &[LabelledTurn]) -> Result<RotationStudy, InputError> {
-    // The turns and the hand moves as `calibrate` gathers them: the turns from the recording's `turn` column.
-    let s = session(rec, false)?;
-    let (turned, moved): (Vec<&MoveSamples>, Vec<&MoveSamples>) = s.moves.iter().partition(|m| m.turn_axis.is_some());
-    let closed: Vec<(String, MoveSamples)> =
-        turned.into_iter().map(|m| (turn_label(m.turn_axis.unwrap_or(0)), m.clone())).collect();
-    let hand: Vec<(String, MoveSamples)> =
-        moved.into_iter().map(|m| (move_label(&s.positions, m), m.clone())).collect();
-    let only = |v: &[(String, MoveSamples)]| v.iter().map(|(_, m)| m.clone()).collect::<Vec<_>>();
-    let both: Vec<MoveSamples> = only(&closed).into_iter().chain(only(&hand)).collect();
     let mut study =
         RotationStudy::new("imucal's Ferraris formulas on the same turns", ferraris_gyro_matrix(rec, turns));
-    study.add(fit(&s, "the three labelled turns", &only(&closed), &hand));
-    study.add(fit(&s, "the hand moves between the faces", &only(&hand), &closed));
-    study.add(fit(&s, "the turns and the hand moves", &both, &[]));
+    let options = Options { model: ROTATION_MODEL, ..Options::default() };
+    let all = calibrate(rec, &options)?;
+    let hand = move_numbers(&all, |m| m.turn.is_none());
+    let turned = move_numbers(&all, |m| m.turn.is_some());
+    for (name, held_out) in [
+        ("every move and turn", Vec::new()),
+        ("the three labelled turns (the hand moves held out)", hand),
+        ("the hand moves between the faces (the turns held out)", turned),
+    ] {
+        match fit(rec, name, &held_out, true) {
+            Ok(f) => study.fits.push(f),
+            Err(r) => study.refused.push(r),
+        }
+    }
     Ok(study)
 }
 
-/// The imu_tk session: fitted with every hand move between its static poses, and with every other move, checked
-/// on the rest. The reference is the Xsens factory gyro misalignment (its gains are the importer's nominal
-/// gains, so its scale factors are 0 here).
+/// The imu_tk session calibrated with every hand move between its static poses, and with every other move
+/// held out (2nd, 4th, ...), each checked on the motions between its poses. The reference is the Xsens factory
+/// gyro misalignment (its gains are the importer's nominal gains, so its scale factors are 0 here).
 pub fn imutk_rotations(rec: &Recording) -> Result<RotationStudy, InputError> {
-    let s = session(rec, true)?;
-    let hand: Vec<(String, MoveSamples)> = s.moves.iter().map(|m| (move_label(&s.positions, m), m.clone())).collect();
-    let all: Vec<MoveSamples> = hand.iter().map(|(_, m)| m.clone()).collect();
-    let even: Vec<MoveSamples> = hand.iter().step_by(2).map(|(_, m)| m.clone()).collect();
-    let odd: Vec<(String, MoveSamples)> = hand.iter().skip(1).step_by(2).cloned().collect();
     let mut study = RotationStudy::new(
         "Xsens factory calibration (gyro misalignment; gains = the importer's nominal gains)",
         [[1.0, -0.01, -0.02], [0.0, 1.0, 0.04], [-0.01, 0.01, 1.0]],
     );
-    study.add(fit(&s, "every hand move", &all, &[]));
-    study.add(fit(&s, "every other hand move (1st, 3rd, ...)", &even, &odd));
+    let options = Options { model: ROTATION_MODEL, ..Options::default() };
+    let all = calibrate(rec, &options)?;
+    let every_other = move_numbers(&all, |_| true).into_iter().filter(|k| k % 2 == 0).take(64).collect::<Vec<_>>();
+    for (name, held_out) in [("every hand move", Vec::new()), ("every other hand move (1st, 3rd, ...)", every_other)] {
+        match fit(rec, name, &held_out, false) {
+            Ok(f) => study.fits.push(f),
+            Err(r) => study.refused.push(r),
+        }
+    }
     Ok(study)
 }
