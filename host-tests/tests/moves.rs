@@ -253,9 +253,73 @@ fn a_labelled_turn_after_the_last_dwell_is_an_observation() {
     assert!(error_rad < EARTH_RATE_RADPS * turn.duration_s, "the turn: {error_rad} rad left");
     let worst = assert_recovered(&cal, &truth(&s), 1e-5);
     println!("a labelled turn after the last dwell: worst error {worst:.2e} of the scale");
-    // The device's table signal has no turns: the firmware path refuses them, with the reason, rather than
-    // calibrate without them.
+    // The device's sequence solves when the table leaves its last position: the firmware path refuses a turn
+    // after it, with the reason, rather than calibrate without it.
     let full = Options { model: Model::FULL, ..Options::default() };
     let err = sinscal_host::calibration::firmware_path::calibrate_on_host(&rec, &full).expect_err("refused");
-    assert!(err.to_string().contains("no labelled turns"), "{err}");
+    assert!(err.to_string().contains("after the last dwell"), "{err}");
+}
+
+/// Table moves, hand moves and a labelled turn between two dwells, exact data: the scenario's positions and four
+/// more, level at headings 0, 120, 240 and 0 (a full turn about body z in three moves, the two dwells inside it
+/// made `pos = 0` and its rows labelled `turn = z`); positions 9 to 13 without their headings (hand-placed: each
+/// move to or from them is compared without its part about up). The direct path uses the 14 moves and the turn
+/// and recovers every gyro scale factor and misalignment to 1e-6 and every parameter to 1e-5 of its scale; the
+/// firmware path integrates the turn too (once, with no prior), and in QEMU the Cortex-M4F gives the same JSON
+/// as x86.
+#[test]
+fn table_moves_hand_moves_and_a_turn_between_dwells() {
+    let mut s = exact(1.0);
+    let level = s.schedule.positions_deg.len() as u32 + 1;
+    s.schedule.positions_deg.extend([[0.0, 0.0, 0.0], [0.0, 0.0, 120.0], [0.0, 0.0, 240.0], [0.0, 0.0, 0.0]]);
+    let mut rec = simulate(&s, 5, "exact, a labelled turn between two dwells");
+    let first = rec.rows.iter().rposition(|r| r.pos == level).expect("the level dwell") + 1;
+    let end = rec.rows.iter().position(|r| r.pos == level + 3).expect("the dwell after the turn");
+    for row in &mut rec.rows {
+        if row.pos == level + 1 || row.pos == level + 2 {
+            row.pos = 0;
+        }
+        if (9..=13).contains(&row.pos) {
+            row.heading_deg = None;
+        }
+    }
+    for row in &mut rec.rows[first..end] {
+        row.turn_axis = Some(2);
+    }
+    let rec = Recording::parse(&rec.to_csv(), "turn-between.csv").expect("parse");
+    let options = Options { model: Model::FULL, ..Options::default() };
+    let direct = calibrate(&rec, &options).expect("calibrate");
+    let turns = direct.moves.iter().filter(|m| m.turn.is_some()).count();
+    assert_eq!((direct.moves.len(), turns), (15, 1), "14 moves and the turn (the run holding it is no move)");
+    let t = truth(&s);
+    let worst = assert_recovered(&direct, &t, 1e-5);
+    let gyro_matrix_error = |cal: &Calibration| {
+        let s = cal.channels.as_ref().expect("general estimator");
+        (15..24).map(|i| (s.estimate(i).expect("determined").0 as f64 - t[i]).abs()).fold(0.0f64, f64::max)
+    };
+    let worst_gyro = gyro_matrix_error(&direct);
+    println!("direct path: every parameter within {worst:.2e} of its scale, the gyro matrix within {worst_gyro:.2e}");
+    assert!(worst_gyro < 1e-6, "{worst_gyro}");
+    let firmware = sinscal_host::calibration::firmware_path::calibrate_on_host(&rec, &options).expect("--on host");
+    let worst_firmware = gyro_matrix_error(&firmware);
+    println!("firmware path (one pass, no prior): the gyro matrix within {worst_firmware:.2e}");
+    assert!(worst_firmware < 1e-4, "{worst_firmware}");
+    // Without the turn's label the firmware path's answer is another (its rows a move, not a turn).
+    let mut unlabelled = rec.clone();
+    for row in &mut unlabelled.rows {
+        row.turn_axis = None;
+    }
+    let without =
+        sinscal_host::calibration::firmware_path::calibrate_on_host(&unlabelled, &options).expect("--on host");
+    assert_ne!(gyro_matrix_error(&without), worst_firmware, "the firmware path used the turn");
+    if common::qemu_available(" (the turn in QEMU)") {
+        let qemu = sinscal_host::calibration::qemu::calibrate_on_qemu(&rec, &options).expect("--on qemu");
+        let json = |c: &Calibration| {
+            let mut v = serde_json::to_value(sinscal_host::calibration::result::CalibrationJson::new(c)).unwrap();
+            v.as_object_mut().unwrap().remove("on");
+            v
+        };
+        assert_eq!(json(&qemu), json(&firmware), "--on qemu and --on host differ");
+        println!("--on qemu: the same JSON as --on host");
+    }
 }

@@ -84,7 +84,16 @@ pub struct MoveSums {
     sum_force_mps: Vec3,
     /// `sum dt^2`, s^2.
     sum_dt2_s2: f32,
+    /// The measured force summed over the first [`TURN_REST_SAMPLES`] samples, m/s^2: up at the start of a turn.
+    rest_force_sum_mps2: Vec3,
 }
+
+/// Samples at the start of a turn whose mean force gives up in the body (the body is at rest there).
+pub const TURN_REST_SAMPLES: u32 = 5;
+
+/// Largest distance of a turn's integrated angle about its axis from a whole number of turns, rad (45 deg):
+/// beyond it the labels do not hold a whole turn (a turn cut, or a label on the wrong samples).
+pub const TURN_ANGLE_TOLERANCE_RAD: f32 = core::f32::consts::FRAC_PI_4;
 
 /// A turn about one body axis: the integral of the calibrated rate over it is the axis times the turns made (a
 /// full turn is no rotation at all, so the rotation alone would not show the axis: a gyro misalignment tilts
@@ -162,12 +171,18 @@ impl MoveSums {
             sum_angle_rad: [0.0; 3],
             sum_force_mps: [0.0; 3],
             sum_dt2_s2: 0.0,
+            rest_force_sum_mps2: [0.0; 3],
         })
     }
 
     /// One sample: the gyro and accelerometer outputs (body, rad/s and m/s^2, the means over the interval that
     /// ends with it) and that interval, s.
     pub fn push(&mut self, rate_b_radps: Vec3, force_meas_b_mps2: Vec3, dt_s: f32) {
+        if self.integrator.samples() < TURN_REST_SAMPLES {
+            for i in 0..3 {
+                self.rest_force_sum_mps2[i] += force_meas_b_mps2[i];
+            }
+        }
         let b_a = self.accel_bias_b_mps2;
         let force_b_mps2 = self.accel_inverse.mul_vec([0, 1, 2].map(|i| force_meas_b_mps2[i] - b_a[i]));
         let gf = self.g_sensitivity.mul_vec(force_b_mps2);
@@ -247,9 +262,25 @@ impl MoveSums {
         }
     }
 
-    /// The move as a turn about body axis `axis` (0, 1, 2) that ends where it started, with up in the body at
-    /// rest before it: the reference is the axis times the whole turns nearest to the integrated rate.
-    pub fn finish_turn(&self, axis: usize, up_b: Vec3, rate_var_radps2: Vec3) -> ChannelMove {
+    /// The whole turns (at least one) the integrated rate about body axis `axis` makes, when it is within
+    /// [`TURN_ANGLE_TOLERANCE_RAD`] of them.
+    pub fn whole_turns(&self, axis: usize) -> Option<f32> {
+        let angle = self.sum_angle_rad[axis.min(2)];
+        let turns = libm::roundf(angle / core::f32::consts::TAU);
+        let near = libm::fabsf(angle - turns * core::f32::consts::TAU) <= TURN_ANGLE_TOLERANCE_RAD;
+        (turns != 0.0 && near).then_some(turns)
+    }
+
+    /// The move as a turn about body axis `axis` (0, 1, 2) that ends where it started, up in the body at rest
+    /// before it the direction of the mean measured force of its first [`TURN_REST_SAMPLES`]: the reference is
+    /// the axis times the whole turns nearest to the integrated rate. `None` when that force has no direction.
+    pub fn finish_turn(&self, axis: usize, rate_var_radps2: Vec3) -> Option<ChannelMove> {
+        let sum = self.rest_force_sum_mps2;
+        let n = crate::math::linalg::norm(sum);
+        if n.is_nan() || n <= 0.0 {
+            return None;
+        }
+        let up_b = sum.map(|x| x / n);
         let p = self.inverse;
         // The integral's sensitivities: `-P e_i` times dt, d_j or f_j dt summed (no transport).
         let bias = scaled(&p, self.duration_s);
@@ -262,7 +293,7 @@ impl MoveSums {
         for i in 0..3 {
             covariance_rad2.0[i][i] = rate_var_radps2[i] * self.sum_dt2_s2;
         }
-        ChannelMove {
+        Some(ChannelMove {
             from: 0,
             to: 0,
             turn: Some(AxisTurn { up_b, angle_b_rad, angle_sum_b_rad: self.sum_angle_rad }),
@@ -271,7 +302,7 @@ impl MoveSums {
             prior_si: self.prior_si,
             jacobian: jacobian_of(&bias, &angle, &force),
             covariance_rad2,
-        }
+        })
     }
 }
 

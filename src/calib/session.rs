@@ -12,7 +12,9 @@
 
 use crate::calib::align::DwellValue;
 use crate::calib::dwell::{pool_mean_noise, DwellSummary};
-use crate::calib::general::{ChannelDwell, ChannelError, ChannelEstimator, ChannelSettings, Model, Term};
+use crate::calib::general::{
+    AttitudeKnowledge, ChannelDwell, ChannelError, ChannelEstimator, ChannelSettings, Model, Term, MAX_DWELLS,
+};
 use crate::calib::noise_model::Window;
 use crate::nav::earth::{Site, EARTH_RATE_RADPS};
 use crate::nav::frames::Attitude;
@@ -22,6 +24,26 @@ use crate::nav::frames::Attitude;
 /// Under a real laboratory's errors the scale factor keeps the gravity model's error and the vertical scale
 /// factor out of the vertical bias.
 pub const DEFAULT_MODEL: Model = Model::BIASES.with(Term::AccelScaleFactor);
+
+/// Whether gyros of per-sample noise variance `noise_var` (the pooled white-equivalent noise, gyro x, y, z first)
+/// resolve the Earth rate in dwells of `samples` (at most [`MAX_DWELLS`] are counted): the standard error of the
+/// median dwell's mean, on its worst axis, is below a third of the Earth rate.
+pub fn gyros_resolve_earth_rate(noise_var: &[f32; 6], samples: impl Iterator<Item = u32>) -> bool {
+    let mut counts = [0u32; MAX_DWELLS];
+    let mut n = 0;
+    for (slot, s) in counts.iter_mut().zip(samples) {
+        *slot = s;
+        n += 1;
+    }
+    if n == 0 {
+        return false;
+    }
+    let counts = &mut counts[..n];
+    counts.sort_unstable();
+    let median = counts[n / 2].max(1) as f32;
+    let worst = noise_var[..3].iter().fold(0.0f32, |m, v| m.max(*v));
+    libm::sqrtf(worst / median) < EARTH_RATE_RADPS / 3.0
+}
 
 /// The general estimator's settings with the default terms.
 pub fn default_channel_settings() -> ChannelSettings {
@@ -62,6 +84,14 @@ where
     // The pooled noise of the dwell mean (the raw mean of the used samples, with or without prefilter).
     let raw_q = pool_mean_noise(dwells.clone().map(|d| *d.summary)).map(|m| m.white_equivalent_var);
     let (rate_floor, force_floor) = (resolution_floor(EARTH_RATE_RADPS), resolution_floor(site.gravity_mps2));
+    let mut settings = settings;
+    // A heading the data would give only through the Earth rate (attitudes unknown, or a heading not given)
+    // needs gyros that resolve it; otherwise the Earth rate is left out (docs/method.md#unknown-attitudes).
+    let heading_from_earth_rate =
+        settings.attitude == AttitudeKnowledge::Unknown || dwells.clone().any(|d| !d.heading_known);
+    if settings.use_gyro && heading_from_earth_rate {
+        settings.earth_rate_resolved &= gyros_resolve_earth_rate(&raw_q, dwells.clone().map(|d| d.summary.samples));
+    }
     let mut estimator = ChannelEstimator::new(site, settings);
     for d in dwells {
         let s = d.summary;

@@ -16,6 +16,16 @@ use crate::sensor::source::{ClassifiedError, ImuSource, ReadFault};
 /// table that reports its position number uses 1 to 64 instead, and 0 means moving.
 pub const TABLE_IN_POSITION: u8 = 255;
 
+/// The turntable signals of a labelled full turn about body x, y and z (moving, back to where it started:
+/// docs/method.md#moves). A table that reports its turns uses them instead of 0 while it makes one.
+pub const TABLE_TURN: [u8; 3] = [252, 253, 254];
+
+/// The body axis (0, 1, 2) of a turn signal, `None` for any other.
+#[inline]
+pub fn turn_axis_of(table: u8) -> Option<usize> {
+    TABLE_TURN.iter().position(|t| *t == table)
+}
+
 /// What travels from the interrupt to the processing loop: a reading, or the fault that replaced it, with
 /// the turntable's signal latched at the same moment.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -23,7 +33,8 @@ pub struct QueueItem {
     /// The reading, or the kind of fault that replaced it.
     pub reading: Result<ImuReading, ReadFault>,
     /// The turntable's signal when the sample was taken: 0 = moving, k = in position k (1-based, as the
-    /// replay file's table byte), [`TABLE_IN_POSITION`] = in position (a board that does not say which).
+    /// replay file's table byte), [`TABLE_TURN`] = moving, a labelled full turn about body x, y or z,
+    /// [`TABLE_IN_POSITION`] = in position (a board that does not say which).
     /// Latched in the interrupt with the sample, so that a processing loop running up to
     /// `QUEUE_SLOTS - 1` samples behind still sees the table as it was for this sample.
     pub table: u8,

@@ -17,6 +17,13 @@
 //! [`MoveSums`] (at the ADIS output interval, [`SAMPLE_PERIOD_S`]; no prior calibration, so one pass: the
 //! host's direct path integrates again with each estimate), at most [`MAX_SEQUENCE_MOVES`] of them. A read
 //! fault during a move, or an abort of the position it ends at, drops that move.
+//!
+//! Turns: samples whose table signal is one of [`TABLE_TURN`] (the table making a labelled full turn about body
+//! x, y or z, back to where it started) are a turn, an observation of its own (up at its start: the mean force of
+//! its first [`TURN_REST_SAMPLES`](crate::calib::moves::TURN_REST_SAMPLES)); the move between two dwells that holds a turn is not a move (its samples
+//! are the turn's), as on the host's direct path. A read fault during a turn drops it, and so does an
+//! integrated angle about its axis not within 45 deg of a whole number of turns. The sequence solves when the
+//! table leaves its last position: a turn after it is not seen.
 
 use heapless::Vec;
 
@@ -32,11 +39,28 @@ use crate::calib::session::{default_channel_settings, session_estimator, Session
 use crate::math::linalg::{dot, Vec3};
 use crate::nav::earth::Site;
 use crate::nav::frames::Attitude;
-use crate::run::sampling::{QueueItem, TABLE_IN_POSITION};
+use crate::run::sampling::{turn_axis_of, QueueItem, TABLE_IN_POSITION};
 
 /// Most moves a sequence integrates (one between each two of the first 17 positions); a move is about 600
 /// bytes.
 pub const MAX_SEQUENCE_MOVES: usize = 16;
+
+/// What a motion integrated by the sequence is.
+#[derive(Clone, Copy, Debug, PartialEq)]
+enum Motion {
+    /// A move from this position to the next.
+    Between(usize),
+    /// A labelled full turn about body `axis` (0, 1, 2).
+    Turn(usize),
+}
+
+/// A turn being integrated: its axis, its sums, and whether a read fault spoiled it.
+#[derive(Clone, Debug)]
+struct TurnInProgress {
+    axis: usize,
+    sums: MoveSums,
+    spoiled: bool,
+}
 
 /// The interval between two samples of the IMU, s: the ADIS output rate.
 pub const SAMPLE_PERIOD_S: f32 = 1.0 / crate::sensor::adis::OUTPUT_RATE_HZ as f32;
@@ -285,12 +309,14 @@ pub struct CalibrationSequence {
     rate2_max_radps2: f32,
     force2_bounds_mps2sq: (f32, f32),
     result: Option<SequenceSolution>,
-    /// The moves integrated: the position each starts from (it ends at the next) and its sums.
-    moves: Vec<(usize, MoveSums), MAX_SEQUENCE_MOVES>,
+    /// The moves and turns integrated: what each is and its sums.
+    moves: Vec<(Motion, MoveSums), MAX_SEQUENCE_MOVES>,
     /// The move being integrated since the last dwell ended.
     current_move: Option<(usize, MoveSums)>,
     /// Its samples with the table reported moving (a move without any, between contiguous dwells, is no move).
     moving_samples: u32,
+    /// The turn being integrated.
+    current_turn: Option<TurnInProgress>,
 }
 
 impl CalibrationSequence {
@@ -328,6 +354,7 @@ impl CalibrationSequence {
             moves: Vec::new(),
             current_move: None,
             moving_samples: 0,
+            current_turn: None,
         })
     }
 
@@ -368,6 +395,7 @@ impl CalibrationSequence {
         self.moves.clear();
         self.current_move = None;
         self.moving_samples = 0;
+        self.current_turn = None;
         Ok(())
     }
 
@@ -382,13 +410,24 @@ impl CalibrationSequence {
         }
     }
 
-    /// Moves integrated so far.
+    /// Moves and turns integrated so far.
     pub fn moves(&self) -> usize {
         self.moves.len()
     }
 
-    /// One sample between two dwells: into the move being integrated; a read fault ends that move.
+    /// One sample between two dwells: into the move being integrated, or into the turn the table signal names;
+    /// a read fault ends that move and spoils that turn.
     fn on_move_sample(&mut self, item: &QueueItem) {
+        let axis = turn_axis_of(item.table);
+        if self.current_turn.as_ref().is_some_and(|t| Some(t.axis) != axis) {
+            self.close_turn();
+        }
+        if let Some(axis) = axis {
+            // A move that holds a turn is no move: it ends here, and the samples are the turn's.
+            self.current_move = None;
+            self.on_turn_sample(axis, item);
+            return;
+        }
         let Some((_, sums)) = self.current_move.as_mut() else { return };
         if item.table == 0 {
             self.moving_samples = self.moving_samples.saturating_add(1);
@@ -396,6 +435,28 @@ impl CalibrationSequence {
         match &item.reading {
             Ok(r) => sums.push(r.sample.rate_b_radps, r.sample.force_b_mps2, SAMPLE_PERIOD_S),
             Err(_) => self.current_move = None,
+        }
+    }
+
+    /// One sample of a turn about body `axis`: a new turn when none is being integrated and there is room.
+    fn on_turn_sample(&mut self, axis: usize, item: &QueueItem) {
+        if self.current_turn.is_none() && self.uses_moves() && self.moves.len() < MAX_SEQUENCE_MOVES {
+            self.current_turn =
+                MoveSums::new(&[0.0; PARAMETERS]).ok().map(|sums| TurnInProgress { axis, sums, spoiled: false });
+        }
+        let Some(turn) = self.current_turn.as_mut() else { return };
+        match &item.reading {
+            Ok(r) => turn.sums.push(r.sample.rate_b_radps, r.sample.force_b_mps2, SAMPLE_PERIOD_S),
+            Err(_) => turn.spoiled = true,
+        }
+    }
+
+    /// Ends the turn being integrated: kept when no fault spoiled it and it turned a whole number of turns (at
+    /// least one) within [`TURN_ANGLE_TOLERANCE_RAD`](crate::calib::moves::TURN_ANGLE_TOLERANCE_RAD).
+    fn close_turn(&mut self) {
+        let Some(turn) = self.current_turn.take() else { return };
+        if !turn.spoiled && turn.sums.whole_turns(turn.axis).is_some() {
+            let _ = self.moves.push((Motion::Turn(turn.axis), turn.sums));
         }
     }
 
@@ -436,7 +497,7 @@ impl CalibrationSequence {
     fn abort(&mut self, reason: AbortReason, in_position: bool) -> Event {
         let event = Event::DwellAborted { index: self.index, reason, at_sample: self.dwell_sample };
         // The body may have moved: the move that ended at this position no longer has its end.
-        if self.moves.last().is_some_and(|(from, _)| from + 1 == self.index) {
+        if self.moves.last().is_some_and(|(m, _)| *m == Motion::Between(self.index.wrapping_sub(1))) {
             self.moves.pop();
         }
         self.aborts = self.aborts.saturating_add(1);
@@ -514,9 +575,15 @@ impl CalibrationSequence {
                 // The moves with the gyros' raw sample variance pooled over the dwells.
                 let var = pooled_rate_var_radps2(self.inputs.iter().map(|p| p.summary));
                 let mut moves: Vec<ChannelMove, MAX_SEQUENCE_MOVES> = Vec::new();
-                for (from, sums) in &self.moves {
+                for (motion, sums) in &self.moves {
                     // Capacity: as many as the sums.
-                    let _ = moves.push(sums.finish(*from, from + 1, var));
+                    let finished = match *motion {
+                        Motion::Between(from) => Some(sums.finish(from, from + 1, var)),
+                        Motion::Turn(axis) => sums.finish_turn(axis, var),
+                    };
+                    if let Some(m) = finished {
+                        let _ = moves.push(m);
+                    }
                 }
                 session_estimator(dwells, self.site, settings, dwell_value)
                     .and_then(|estimator| estimator.solve_with(&moves))
@@ -580,9 +647,10 @@ impl CalibrationSequence {
         if let Some(attitude) = self.schedule.get(self.index) {
             self.up_b = attitude.c_b_n().row(2);
         }
+        self.close_turn();
         if let Some((from, sums)) = self.current_move.take() {
             if from + 1 == self.index && self.moving_samples > 0 {
-                let _ = self.moves.push((from, sums));
+                let _ = self.moves.push((Motion::Between(from), sums));
             }
         }
         self.collector.reset();

@@ -86,14 +86,6 @@ pub fn replay_parts(
             ),
         ));
     }
-    if moves && rec.has_turns() {
-        return Err(InputError::file(
-            source,
-            "the firmware path has no labelled turns (the device's table signal says moving or in position, not \
-             which turn; docs/method.md#moves): calibrate it without --on, or without gyro scale factors and \
-             misalignments in --model",
-        ));
-    }
     let prefilter = prefilter_of(options, rec)?;
     let (dwells, rows) = write_frames(rec, frames)?;
     let frames = u32::try_from(rows)
@@ -151,8 +143,9 @@ pub fn replay_parts(
 }
 
 /// One frame per row of `rec` to `out` (the table byte: the row's dwell in order of first appearance, from 1;
-/// 0 between dwells), with the dwells found, each one contiguous stretch of rows (one turntable stop, as the
-/// firmware path needs). Returns the dwells and the number of rows.
+/// between dwells 0, or in a labelled turn `TABLE_TURN` of its axis), with the dwells found, each one contiguous
+/// stretch of rows (one turntable stop, as the firmware path needs). A turn after the last dwell is refused: the
+/// device's sequence solves when the table leaves its last position. Returns the dwells and the number of rows.
 fn write_frames(rec: &impl RowSource, out: &mut dyn std::io::Write) -> Result<(Vec<DwellTally>, u64), InputError> {
     let source = rec.source();
     let mut tallies = DwellTallies::new(sinscal::calib::angles::MAX_POSITIONS, "the core's limit");
@@ -167,7 +160,14 @@ fn write_frames(rec: &impl RowSource, out: &mut dyn std::io::Write) -> Result<(V
     };
     let mut record = [0u8; 1 + BURST32_LEN];
     let (mut rows, mut previous) = (0u64, 0);
+    // The first line of a turn after the last dwell so far.
+    let mut turn_after: Option<usize> = None;
     rec.for_each_row(&mut |row| {
+        if row.pos != 0 {
+            turn_after = None;
+        } else if row.turn_axis.is_some() && turn_after.is_none() {
+            turn_after = Some(row.line);
+        }
         let known = tallies.dwells.len();
         let dwell = tallies.push(row, source)?;
         if dwell.is_some_and(|i| i < known) && row.pos != previous {
@@ -188,10 +188,24 @@ fn write_frames(rec: &impl RowSource, out: &mut dyn std::io::Write) -> Result<(V
         let burst = Burst { diag_stat: 0, gyro_lsb: gyro, accel_lsb: accel, temp_raw, data_counter: rows as u16 };
         rows += 1;
         // At most MAX_POSITIONS (24) dwells: the table byte holds every index.
-        record[0] = dwell.map_or(0, |i| i + 1) as u8;
+        record[0] = match (dwell, row.turn_axis) {
+            (Some(i), _) => i as u8 + 1,
+            (None, Some(axis)) => sinscal::run::sampling::TABLE_TURN[axis.min(2)],
+            (None, None) => 0,
+        };
         encode_burst(REPLAY_MODEL, &burst, &mut record[1..]);
         out.write_all(&record).map_err(|e| InputError::file(source, format!("writing the replay file: {e}")))
     })?;
+    if let Some(line) = turn_after {
+        return Err(InputError::at(
+            source,
+            line,
+            "a labelled turn after the last dwell: the device's sequence solves when the table leaves its last \
+             position, so it never sees the turn (docs/method.md#moves); turn before the last position, or \
+             calibrate without --on"
+                .to_string(),
+        ));
+    }
     Ok((tallies.at_least_one(source)?, rows))
 }
 

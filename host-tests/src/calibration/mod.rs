@@ -458,8 +458,10 @@ pub fn channel_session(
         positions.push(PositionResult { pos: dwell.pos, first_line: dwell.first_line, attitude, summary, angles });
     }
     let attitude = if options.estimate_attitudes { AttitudeKnowledge::Unknown } else { attitude_knowledge(header) };
-    // With reference attitudes the Earth rate is always in the gyro model ("unobservable" stays a property of the
-    // schedule). Without any, it is in the model only where the gyros resolve it (docs/method.md#unknown-attitudes).
+    // With reference attitudes whose headings are known the Earth rate is always in the gyro model
+    // ("unobservable" stays a property of the schedule). Without attitudes, or with headings unknown (labelled
+    // faces), it is in the model only where the gyros resolve it: a heading from the Earth rate of a gyro that
+    // does not resolve it is a nuisance the data do not inform (docs/method.md#unknown-attitudes).
     let noise = pool_mean_noise(positions.iter().map(|p| p.summary)).map(|m| m.white_equivalent_var);
     let headings_known = positions.iter().all(|p| p.attitude.heading_deg.is_some());
     let earth_rate_resolved = (attitude == AttitudeKnowledge::Reference && headings_known)

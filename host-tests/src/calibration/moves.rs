@@ -20,7 +20,8 @@ pub struct MoveSamples {
     /// Line of the move's first row.
     pub first_line: usize,
     /// A labelled turn about this body axis (0, 1, 2) back to where it started (a Ferraris turn): `from` and `to`
-    /// are then not used, and up at the start is the direction of the mean force of its first [`REST_SAMPLES`].
+    /// are then not used, and up at the start is the direction of the mean force of its first
+    /// [`TURN_REST_SAMPLES`](sinscal::calib::moves::TURN_REST_SAMPLES).
     pub turn_axis: Option<usize>,
     /// Its rows.
     pub samples: Vec<MoveRow>,
@@ -153,14 +154,7 @@ pub fn integrate(
                 sums.push(r.rate_b_radps, r.force_b_mps2, r.dt_s);
             }
             let Some(axis) = m.turn_axis else { return Ok(sums.finish(m.from, m.to, rate_var_radps2)) };
-            let rest = &m.samples[..m.samples.len().min(REST_SAMPLES)];
-            let sum =
-                rest.iter().map(|r| r.force_b_mps2).fold([0.0f32; 3], |a, f| [a[0] + f[0], a[1] + f[1], a[2] + f[2]]);
-            let n = sinscal::math::linalg::norm(sum);
-            if n.is_nan() || n <= 0.0 {
-                return Err(ChannelError::BadMove { index });
-            }
-            Ok(sums.finish_turn(axis, sum.map(|x| x / n), rate_var_radps2))
+            sums.finish_turn(axis, rate_var_radps2).ok_or(ChannelError::BadMove { index })
         })
         .collect()
 }
@@ -191,9 +185,6 @@ pub fn check_turns(moves: &[MoveSamples], source: &str) -> Result<(), InputError
     }
     Ok(())
 }
-
-/// Samples at the start of a turn whose mean force gives up in the body (the body is at rest there).
-pub const REST_SAMPLES: usize = 5;
 
 /// Passes of integration and solution at most.
 pub const MAX_MOVE_PASSES: u32 = 10;
@@ -258,7 +249,7 @@ pub fn solve_with_moves(
     let hand_placed = settings.pose_tolerance_rad > 0.0 || settings.attitude == AttitudeKnowledge::Unknown;
     let start_rad = if settings.pose_tolerance_rad > 0.0 { settings.pose_tolerance_rad } else { HAND_MOVE_START_RAD };
     let mut solution = match solve(&estimator, &integrated) {
-        Ok(s) if s.converged || !hand_placed => s,
+        Ok(s) => s,
         Err(e) if !hand_placed => return Err(e),
         // Hand moves weighted by their white rate noise alone can pull the fit away (a hand move misses by a
         // degree, where white noise allows arcseconds): solved again with the moves' error started at the
