@@ -4,7 +4,9 @@
 //! up/down-pair (Ferraris) formulas on the same poses, and the PSINS record's header.
 //!
 //! The fullest determined model: the terms of the catalogue taken in order from none, each kept when it has a
-//! determined parameter of its own and every parameter determined before stays determined.
+//! determined parameter of its own, every parameter determined before stays determined, and the calibration
+//! passes its plausibility check (static poses see the gyro matrix only through the Earth rate's vertical part,
+//! the same direction as gravity's: a consumer gyro's g-sensitivity read as a gyro matrix is tens of units).
 
 mod common;
 
@@ -50,7 +52,8 @@ fn fullest_determined_model_with(rec: &Recording, options: Options) -> (Model, C
         let trial = model.with(term);
         let Ok(cal) = calibrate(rec, &Options { model: trial, ..options }) else { continue };
         let (first, count) = term.parameters();
-        let own = (first..first + count).any(|i| cal.estimates.value_si[i].is_some());
+        let own = (first..first + count).any(|i| cal.estimates.value_si[i].is_some())
+            && sinscal_host::calibration::checks::plausibility(&cal.estimates).passed;
         let kept =
             best.as_ref().is_none_or(|b| b.estimates.determined.iter().all(|i| cal.estimates.determined.contains(i)));
         if own && kept {
@@ -290,14 +293,12 @@ impl FerrarisRuns {
         let (labels_model, labels_fullest) = fullest_determined_model(rec);
         let (estimated_model, estimated_fullest) = fullest_determined_model_with(rec, estimated);
         let full = Model::BIASES.with(Term::AccelScaleFactor).with(Term::GyroGSensitivity);
-        // With the labels as the reference the Earth rate stays in the gyro model: the unknown headings make the
-        // gyro scale factors and the reference offset determined (and, on these gyros, imprecise), and the
-        // g-sensitivity would then undetermine them.
-        let labels_fullest_terms = Model::BIASES
-            .with(Term::AccelScaleFactor)
-            .with(Term::AccelMisalignment)
-            .with(Term::GyroScaleFactor)
-            .with(Term::ReferenceOffset);
+        // With the labels as the reference the tilts are known: the accelerometer misalignments are determined.
+        // The headings are unknown and these gyros do not resolve the Earth rate: its vertical part alone is in
+        // the model, and it points where gravity does, so the static faces see the gyro matrix and the
+        // g-sensitivity alike; the gyro matrix read from them is implausible, the g-sensitivity is kept.
+        let labels_fullest_terms =
+            Model::BIASES.with(Term::AccelScaleFactor).with(Term::AccelMisalignment).with(Term::GyroGSensitivity);
         assert_eq!(labels_model, labels_fullest_terms, "fullest determined model, labels");
         // Six poses give six |f| = g equations: no room for the misalignments.
         assert_eq!(estimated_model, full, "fullest determined model, estimated attitudes");
@@ -379,7 +380,7 @@ fn ferraris_beside_imucal_formulas_and_the_held_out_rests() {
 
 /// The held-out rests under each calibration and the formulas, and what the data themselves allow.
 fn ferraris_held_out(rec: &Recording, runs: &FerrarisRuns, formulas: (&M3, [f64; 3]), g: f64) {
-    let intervals = unlabelled_static_intervals(rec, 102.4);
+    let intervals = unlabelled_static_intervals(rec);
     let rms = |(t, b): (&M3, [f64; 3])| held_out_rms_mps2(t, b, g, &intervals);
     let mut values: Vec<f64> = runs.cals.iter().map(accelerometer_model).map(|(t, b)| rms((&t, b))).collect();
     values.push(rms(formulas));

@@ -615,8 +615,10 @@ pub fn summary(c: &Calibration) -> String {
     if c.channels.as_ref().is_some_and(|s| c.has_gyro && !s.earth_rate_resolved) {
         let _ = writeln!(
             out,
-            "Gyros: their dwell means do not resolve the Earth rate ({:.1} deg/h): it is left out of the gyro model, \
-             no heading is estimated, and the dwells do not exercise the gyro scale factors and misalignments{}",
+            "Gyros: their dwell means do not resolve the Earth rate ({:.1} deg/h): no heading is estimated, its \
+             vertical part W sin L stays in the gyro model and its horizontal part, of unknown direction, is noise \
+             (docs/method.md#unknown-attitudes); the dwells exercise the gyro scale factors and misalignments only \
+             through the vertical part{}",
             sinscal::nav::earth::EARTH_RATE_RADPS as f64 / DEG_PER_HOUR,
             if c.moves.is_empty() { "" } else { " (the moves do)" }
         );

@@ -427,8 +427,12 @@ fn fit_section(o: &mut String, r: &RotationStudy, f: &RotationFit) {
             )
         };
         let (n, raw, cal) = held(&|t| !t.used_in_fit);
-        let _ =
-            writeln!(o, "\nRMS over the {n} motions the fit did not use: raw {raw:.3} deg, calibrated {cal:.3} deg.");
+        if n > 0 {
+            let _ = writeln!(
+                o,
+                "\nRMS over the {n} motions the fit did not use: raw {raw:.3} deg, calibrated {cal:.3} deg."
+            );
+        }
         let (n, raw, cal) = held(&|t| !t.turn);
         let _ = writeln!(
             o,

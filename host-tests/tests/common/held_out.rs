@@ -14,45 +14,19 @@ pub struct Interval {
     pub mean_force_b_mps2: [f64; 3],
 }
 
-/// Static intervals among the unlabelled rows: windows of 1 s where every accelerometer axis varies by less
-/// than 0.05 m/s^2 (standard deviation) and the gyros read below 0.05 rad/s, merged; each of at least 2 s.
-pub fn unlabelled_static_intervals(rec: &Recording, rate_hz: f64) -> Vec<Interval> {
-    let window = rate_hz.round() as usize;
-    let mut flags = vec![false; rec.rows.len()];
-    let mut start = 0;
-    while start + window <= rec.rows.len() {
-        let rows = &rec.rows[start..start + window];
-        let mut ok = rows.iter().all(|r| r.pos == 0);
-        for axis in 0..3 {
-            let m = rows.iter().map(|r| r.force_b_mps2[axis]).sum::<f64>() / window as f64;
-            let v = rows.iter().map(|r| (r.force_b_mps2[axis] - m).powi(2)).sum::<f64>() / window as f64;
-            ok &= v.sqrt() < 0.05;
-            ok &= rows.iter().all(|r| r.rate_b_radps[axis].abs() < 0.05);
-        }
-        if ok {
-            flags[start..start + window].iter_mut().for_each(|f| *f = true);
-        }
-        start += window / 4;
-    }
-    let mut out = Vec::new();
-    let mut k = 0;
-    while k < flags.len() {
-        if !flags[k] {
-            k += 1;
-            continue;
-        }
-        let begin = k;
-        while k < flags.len() && flags[k] {
-            k += 1;
-        }
-        if k - begin >= 2 * window {
-            let rows = &rec.rows[begin..k];
+/// The rests among the unlabelled rows, as the study finds them (`sinscal_host::study::rests::find_rests`: still
+/// periods of at least 2 s holding neither a label nor a turn).
+pub fn unlabelled_static_intervals(rec: &Recording) -> Vec<Interval> {
+    sinscal_host::study::rests::find_rests(rec, true)
+        .into_iter()
+        .filter(|r| r.pos == 0)
+        .map(|r| {
+            let rows = &rec.rows[r.rows.clone()];
             let n = rows.len() as f64;
-            let mean_force_b_mps2 = [0, 1, 2].map(|i| rows.iter().map(|r| r.force_b_mps2[i]).sum::<f64>() / n);
-            out.push(Interval { rows: begin..k, mean_force_b_mps2 });
-        }
-    }
-    out
+            let mean_force_b_mps2 = [0, 1, 2].map(|i| rows.iter().map(|x| x.force_b_mps2[i]).sum::<f64>() / n);
+            Interval { rows: r.rows, mean_force_b_mps2 }
+        })
+        .collect()
 }
 
 /// The accelerometer model of a calibration: `T_a` (identity plus the scale factors and misalignments; absent or

@@ -87,7 +87,9 @@ impl core::fmt::Display for ChannelError {
                 degrees_0_360(fits_rad),
                 degrees_0_360(given_rad)
             ),
-            ChannelError::NothingToEstimate => f.write_str("the model has no term these data can inform"),
+            ChannelError::NothingToEstimate => {
+                f.write_str("the model has no term these data can inform: the schedule determines none of them")
+            }
             ChannelError::TooManyMoves => write!(f, "more than {MAX_MOVES} moves"),
             ChannelError::BadMove { index } => write!(
                 f,

@@ -158,6 +158,11 @@ impl ChannelEstimator {
     pub fn solve_with(&self, moves: &[ChannelMove]) -> Result<ChannelSolution, ChannelError> {
         self.check_plausible()?;
         let solution = self.solve_excluding_with(0, moves)?;
+        // A model of which the schedule determines no term at all is no calibration (one static pose with every
+        // term: each is confounded with another).
+        if (0..PARAMETERS).all(|p| solution.estimate(p).is_none()) {
+            return Err(ChannelError::NothingToEstimate);
+        }
         self.check_headings(&solution, moves)?;
         Ok(solution)
     }

@@ -13,6 +13,9 @@ pub(super) struct Linearised {
     pub(super) pred: [f32; 6],
     pub(super) jac: [[f32; PARAMETERS]; 6],
     pub(super) d_attitude: [[f32; 3]; 6],
+    /// Variance each gyro's mean gains from a horizontal Earth rate of unknown direction, (rad/s)^2 (0 when the
+    /// whole Earth rate is predicted).
+    pub(super) horizontal_var_radps2: [f32; 3],
 }
 
 /// `T = I + S + M` of one sensor from the parameters: scale factors from index `scale_first`, misalignments
@@ -36,7 +39,10 @@ pub fn g_sensitivity_radps_per_mps2(theta: &[f32; PARAMETERS]) -> Mat3 {
 }
 
 /// Prediction and Jacobian of one dwell at the parameters `theta` and the attitude `c_ref` (`C_b^n`).
-/// Without `earth_rate` the gyros are predicted without the Earth rate.
+/// Without `earth_rate` (the heading not given and not resolved by the gyros) the gyros are predicted with the
+/// Earth rate's vertical part `W sin L up` alone, which no heading changes; its horizontal part `W cos L`, of
+/// unknown direction, is noise: over a uniform heading its covariance in the body is `(W cos L)^2 / 2 (I - up
+/// up^T)`, of which each gyro's variance is kept (`horizontal_var_radps2`).
 pub(super) fn linearise(
     theta: &[f32; PARAMETERS],
     c_ref: &Mat3,
@@ -52,8 +58,11 @@ pub(super) fn linearise(
         c_ref
     };
     let f_n = site.force_at_rest_n_mps2();
-    let w_n = if earth_rate { site.earth_rate_n_radps() } else { [0.0; 3] };
+    let w_full = site.earth_rate_n_radps();
+    let w_n = if earth_rate { w_full } else { [0.0, 0.0, w_full[2]] };
     let ct = c_true.transpose();
+    let up_b = ct.mul_vec([0.0, 0.0, 1.0]);
+    let horizontal = if earth_rate { 0.0 } else { 0.5 * w_full[1] * w_full[1] };
     let f_b = ct.mul_vec(f_n);
     let w_b = ct.mul_vec(w_n);
     let t_a = sensor_matrix(theta, 6, 9);
@@ -63,7 +72,12 @@ pub(super) fn linearise(
     let fa = t_a.mul_vec(f_b);
     let wg = t_g.mul_vec(w_b);
     let gf = g_mat.mul_vec(f_b);
-    let mut out = Linearised { pred: [0.0; 6], jac: [[0.0; PARAMETERS]; 6], d_attitude: [[0.0; 3]; 6] };
+    let mut out = Linearised {
+        pred: [0.0; 6],
+        jac: [[0.0; PARAMETERS]; 6],
+        d_attitude: [[0.0; 3]; 6],
+        horizontal_var_radps2: [0, 1, 2].map(|i| horizontal * (1.0 - up_b[i] * up_b[i]).max(0.0)),
+    };
     for i in 0..3 {
         out.pred[i] = wg[i] + theta[i] + gf[i];
         out.pred[3 + i] = fa[i] + theta[3 + i];
@@ -118,7 +132,8 @@ pub(super) struct DwellRows {
 pub(super) const DWELL_ROWS: usize = 9;
 
 impl ChannelEstimator {
-    /// Prediction and Jacobian of one dwell (the Earth rate only when the gyros resolve it).
+    /// Prediction and Jacobian of one dwell (the whole Earth rate when the gyros resolve it, else its vertical
+    /// part).
     pub(super) fn linearise(&self, theta: &[f32; PARAMETERS], c_ref: &Mat3, model: Model) -> Linearised {
         linearise(theta, c_ref, &self.site, model, self.settings.earth_rate_resolved)
     }
@@ -142,6 +157,7 @@ impl ChannelEstimator {
         let g = self.site.gravity_mps2;
         for ch in first..6 {
             let (measured, var) = d.channel(ch);
+            let var = if ch < 3 { var + lin.horizontal_var_radps2[ch] } else { var };
             let weight = if structural {
                 if ch < 3 {
                     1.0 / EARTH_RATE_RADPS
