@@ -38,8 +38,14 @@ pub fn gyros_resolve_earth_rate(noise_var: &[f32; 6], samples: impl Iterator<Ite
     if n == 0 {
         return false;
     }
-    let counts = &mut counts[..n];
-    counts.sort_unstable();
+    // Insertion sort: at most 64 counts, and a few dozen bytes of code where `sort_unstable` costs kilobytes.
+    for k in 1..n {
+        let mut j = k;
+        while j > 0 && counts[j - 1] > counts[j] {
+            counts.swap(j - 1, j);
+            j -= 1;
+        }
+    }
     let median = counts[n / 2].max(1) as f32;
     let worst = noise_var[..3].iter().fold(0.0f32, |m, v| m.max(*v));
     libm::sqrtf(worst / median) < EARTH_RATE_RADPS / 3.0
