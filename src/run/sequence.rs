@@ -18,12 +18,12 @@
 //! host's direct path integrates again with each estimate), at most [`MAX_SEQUENCE_MOVES`] of them. A read
 //! fault during a move, or an abort of the position it ends at, drops that move.
 //!
-//! Turns: samples whose table signal is one of [`TABLE_TURN`] (the table making a labelled full turn about body
-//! x, y or z, back to where it started) are a turn, an observation of its own (up at its start: the mean force of
-//! its first [`TURN_REST_SAMPLES`](crate::calib::moves::TURN_REST_SAMPLES)); the move between two dwells that holds a turn is not a move (its samples
-//! are the turn's), as on the host's direct path. A read fault during a turn drops it, and so does an
-//! integrated angle about its axis not within 45 deg of a whole number of turns. The sequence solves when the
-//! table leaves its last position: a turn after it is not seen.
+//! Turns: samples whose table signal is one of [`TABLE_TURN`](crate::run::sampling::TABLE_TURN) (the table
+//! making a labelled full turn about body x, y or z, back to where it started) are a turn, an observation of its
+//! own (`MoveSums::finish_turn`: up at its start from the mean force of its first samples); the move between two
+//! dwells that holds a turn is not a move (its samples are the turn's), as on the host's direct path. A read
+//! fault during a turn drops it, and so does an integrated angle about its axis not within 45 deg of a whole
+//! number of turns. The sequence solves when the table leaves its last position: a turn after it is not seen.
 
 use heapless::Vec;
 

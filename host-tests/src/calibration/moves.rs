@@ -160,8 +160,10 @@ pub fn integrate(
 }
 
 /// Largest distance of a labelled turn's raw integrated angle about its axis from a whole number of turns (at
-/// least one), deg: beyond it the labels do not hold a whole turn (a turn cut, or a label on the wrong rows).
-pub const TURN_ANGLE_TOLERANCE_DEG: f64 = 45.0;
+/// least one), deg: beyond it the labels do not hold a whole turn (a turn cut, or a label on the wrong rows). The
+/// core's tolerance, which the device's sequence applies.
+pub const TURN_ANGLE_TOLERANCE_DEG: f64 =
+    sinscal::calib::moves::TURN_ANGLE_TOLERANCE_RAD as f64 * 180.0 / std::f64::consts::PI;
 
 /// Refuses a labelled turn whose raw gyro, integrated about its axis, is not within
 /// [`TURN_ANGLE_TOLERANCE_DEG`] of a whole number of turns (at least one): its reference would be wrong.
@@ -177,7 +179,7 @@ pub fn check_turns(moves: &[MoveSamples], source: &str) -> Result<(), InputError
                 m.first_line,
                 format!(
                     "the labelled turn about {} turns {angle_deg:.1} deg: not a whole turn within \
-                     {TURN_ANGLE_TOLERANCE_DEG} deg (a turn cut, or its label on other rows)",
+                     {TURN_ANGLE_TOLERANCE_DEG:.0} deg (a turn cut, or its label on other rows)",
                     crate::io::recording::TURN_AXES[axis]
                 ),
             ));

@@ -374,9 +374,51 @@ impl<W: std::io::Write> RecordingWriter<W> {
     }
 }
 
+/// Where a recording is written, and how.
+#[derive(Clone, Debug, PartialEq, Eq)]
+pub enum Output {
+    /// A regular file, or none yet, at this path (a symbolic link's target): written to a scratch file beside it
+    /// and renamed onto it once whole.
+    Replace(std::path::PathBuf),
+    /// Something that is not a regular file (a FIFO, a character device): written in place, never replaced.
+    InPlace(std::path::PathBuf),
+}
+
+/// How `path` is written ([`Output`]): through a symbolic link to its target (relative to the link's folder),
+/// in place when it is not a regular file; refused when it is a directory or a read-only file (a rename would
+/// replace what may not be written).
+pub fn output_of(path: &Path) -> Result<Output, InputError> {
+    let mut target = path.to_path_buf();
+    // At most 40 links deep, as the kernel resolves them.
+    for _ in 0..40 {
+        match std::fs::symlink_metadata(&target) {
+            Ok(m) if m.file_type().is_symlink() => {
+                let link = std::fs::read_link(&target).map_err(|e| InputError::io(path, e))?;
+                target = match target.parent() {
+                    Some(dir) if link.is_relative() => dir.join(link),
+                    _ => link,
+                };
+            }
+            Ok(m) if m.is_dir() => return Err(InputError::file(&path.display().to_string(), "is a directory")),
+            Ok(m) if m.is_file() && m.permissions().readonly() => {
+                return Err(InputError::file(
+                    &path.display().to_string(),
+                    format!("{} is read-only: not replaced", target.display()),
+                ))
+            }
+            Ok(m) if m.is_file() => return Ok(Output::Replace(target)),
+            Ok(_) => return Ok(Output::InPlace(target)),
+            Err(e) if e.kind() == std::io::ErrorKind::NotFound => return Ok(Output::Replace(target)),
+            Err(e) => return Err(InputError::io(path, e)),
+        }
+    }
+    Err(InputError::file(&path.display().to_string(), "more than 40 symbolic links deep"))
+}
+
 /// Writes a recording file at `path`: `rows` writes the rows through the writer (with the reader's rules), which
-/// streams them through a buffer into a scratch file beside `path`, renamed to `path` once every row is written and
-/// the writer's closing checks pass. A refusal or an I/O error leaves `path` as it was and no scratch file, and the
+/// streams them through a buffer. A regular file (or a symbolic link's target, [`output_of`]) is written to a
+/// scratch file beside it, renamed onto it once every row is written and the writer's closing checks pass: a
+/// refusal or an I/O error leaves it as it was and no scratch file. A FIFO or a device is written in place. The
 /// text is never whole in memory. Returns what `rows` returns.
 pub fn write_file<T>(
     path: &Path,
@@ -385,17 +427,27 @@ pub fn write_file<T>(
     extras: ExtraColumns,
     rows: impl FnOnce(&mut RecordingWriter<std::io::BufWriter<std::fs::File>>) -> Result<T, InputError>,
 ) -> Result<T, InputError> {
-    let name = path.file_name().map_or("out".into(), |n| n.to_string_lossy().into_owned());
-    let partial = path.with_file_name(format!(".{name}.partial"));
-    let file = std::fs::File::create(&partial).map_err(|e| InputError::io(path, e))?;
-    let written = (|| {
+    let write = |file: std::fs::File| -> Result<T, InputError> {
         let out = std::io::BufWriter::with_capacity(1 << 20, file);
         let mut writer = RecordingWriter::new(out, header, has_gyro, extras).map_err(|e| e.writing(path))?;
         let value = rows(&mut writer)?;
         writer.finish().map_err(|e| e.writing(path))?;
-        std::fs::rename(&partial, path).map_err(|e| InputError::io(path, e))?;
         Ok(value)
-    })();
+    };
+    let target = match output_of(path)? {
+        Output::InPlace(target) => {
+            let file = std::fs::OpenOptions::new().write(true).open(&target).map_err(|e| InputError::io(path, e))?;
+            return write(file);
+        }
+        Output::Replace(target) => target,
+    };
+    let name = target.file_name().map_or("out".into(), |n| n.to_string_lossy().into_owned());
+    let partial = target.with_file_name(format!(".{name}.partial"));
+    let file = std::fs::File::create(&partial).map_err(|e| InputError::io(path, e))?;
+    let written = write(file).and_then(|value| {
+        std::fs::rename(&partial, &target).map_err(|e| InputError::io(path, e))?;
+        Ok(value)
+    });
     if written.is_err() {
         let _ = std::fs::remove_file(&partial);
     }
