@@ -381,3 +381,45 @@ fn a_calibration_that_says_a_thing_twice_is_refused() {
         &["twice.json:", "key 'gyro_bias_radps' appears twice"],
     );
 }
+
+#[test]
+fn a_label_beyond_32_bits_is_named_as_such() {
+    // 4294967297 = 2^32 + 1: an integer, but no label (they are 32-bit); the message says which limit it passed.
+    let dir = tempfile::tempdir().unwrap();
+    let (head, mut rows) = split_rows(&example_text());
+    let mut cells: Vec<String> = rows[0].split(',').map(str::to_string).collect();
+    cells[1] = "4294967297".into();
+    rows[0] = cells.join(",");
+    let path = file(&dir, "big-label.csv", format!("{head}{}\n", rows.join("\n")));
+    refused(&[os("calibrate"), path.as_os_str()], 1, &["4294967297 is beyond the largest label, 4294967295"]);
+    // A label that is not a number at all says so, quoting at most 80 characters of it.
+    cells[1] = "x".repeat(300);
+    rows[0] = cells.join(",");
+    let path = file(&dir, "long-label.csv", format!("{head}{}\n", rows.join("\n")));
+    let stderr =
+        refused(&[os("calibrate"), path.as_os_str()], 1, &["is not a non-negative integer", "(300 characters)"]);
+    assert!(!stderr.contains(&"x".repeat(81)), "{stderr}");
+}
+
+#[test]
+fn a_calibration_json_with_a_byte_order_mark_is_read_as_without() {
+    // Recordings accept a byte-order mark; a calibration JSON an editor saved with one is read the same.
+    let dir = tempfile::tempdir().unwrap();
+    let (rec, cal) = calibrated_example(&dir);
+    let mut bom = vec![0xef, 0xbb, 0xbf];
+    bom.extend(std::fs::read(&cal).unwrap());
+    let cal_bom = file(&dir, "cal-bom.json", bom);
+    let (plain, marked) = (dir.path().join("plain.csv"), dir.path().join("marked.csv"));
+    for (c, out) in [(&cal, &plain), (&cal_bom, &marked)] {
+        sinscal().arg("apply").arg("--calibration").arg(c).arg("--out").arg(out).arg(&rec).assert().success();
+    }
+    let strip = |p: &Path| {
+        std::fs::read_to_string(p)
+            .unwrap()
+            .lines()
+            .filter(|l| !l.starts_with("# calibration"))
+            .collect::<Vec<_>>()
+            .join("\n")
+    };
+    assert_eq!(strip(&plain), strip(&marked));
+}

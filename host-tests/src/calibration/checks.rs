@@ -13,6 +13,7 @@ use sinscal::nav::earth::Site;
 use sinscal::nav::frames::Attitude;
 
 use crate::calibration::{gyros_resolve_earth_rate, Calibration, Estimates};
+use crate::io::recording::shown;
 use crate::io::recording::DwellAttitude;
 
 /// The level below which a chi-square's p-value says the model misfits the data.
@@ -161,8 +162,10 @@ pub fn plausibility(e: &Estimates) -> Check {
             let value = of[p].unwrap_or(f64::NAN);
             let limit = limit_of(p);
             let detail = format!(
-                "{what}{} = {value:e} (SI) is not finite or beyond the plausible {limit:e} of any instrument",
-                parameter_name(p)
+                "{what}{} = {} (SI) is not finite or beyond the plausible {} of any instrument",
+                parameter_name(p),
+                shown(value),
+                shown(limit as f64)
             );
             return Check::new("plausibility", false, detail);
         }
@@ -218,7 +221,9 @@ pub fn failed_in_json(v: &Value) -> Vec<String> {
             numbers_of(&v[field], &mut numbers);
             if let Some(x) = numbers.iter().find(|x| !x.is_finite() || x.abs() > limit) {
                 lines.push(format!(
-                    "check failed: plausibility: {field} has {x:e}, beyond the plausible {limit:e} of any instrument"
+                    "check failed: plausibility: {field} has {}, beyond the plausible {} of any instrument",
+                    shown(*x),
+                    shown(limit)
                 ));
             }
         }

@@ -45,7 +45,7 @@ pub fn run(args: Args) -> anyhow::Result<()> {
     super::out(&summary(&rec, rows, &model, &out))?;
     // The output is written; a calibration that failed its checks, or whose estimates are implausible, still
     // makes the run fail loudly (exit 3, docs/cli.md#checks).
-    let text = std::fs::read_to_string(&calibration).map_err(|e| InputError::io(&calibration, e))?;
+    let text = CalibrationModel::text_of(&calibration)?;
     let document: serde_json::Value = serde_json::from_str(&text)
         .map_err(|e| InputError::at(&calibration.display().to_string(), e.line().max(1), e.to_string()))?;
     let failed = failed_in_json(&document);

@@ -71,10 +71,20 @@ fn json_field(term: Term) -> Option<&'static str> {
 }
 
 impl CalibrationModel {
+    /// The text of a calibration JSON file, without the byte-order mark some editors write (recordings accept
+    /// one too).
+    pub fn text_of(path: &Path) -> Result<String, InputError> {
+        let text = std::fs::read_to_string(path).map_err(|e| InputError::io(path, e))?;
+        Ok(match text.strip_prefix('\u{feff}') {
+            Some(rest) => rest.to_string(),
+            None => text,
+        })
+    }
+
     /// Reads a calibration JSON file.
     pub fn read(path: &Path) -> Result<CalibrationModel, InputError> {
         let name = path.display().to_string();
-        let text = std::fs::read_to_string(path).map_err(|e| InputError::io(path, e))?;
+        let text = CalibrationModel::text_of(path)?;
         let mut model = CalibrationModel::parse(&text, &name)?;
         model.source = path.file_name().map_or(name, |f| f.to_string_lossy().into_owned());
         Ok(model)
@@ -382,8 +392,9 @@ fn check_plausible(model: &CalibrationModel) -> Result<(), String> {
     for (field, values, limit, unit) in limits {
         if let Some((k, v)) = values.iter().enumerate().find(|(_, v)| v.is_nan() || v.abs() > limit) {
             return Err(format!(
-                "{field}[{k}] = {} {unit} is beyond the plausible {limit:e} {unit} of any instrument",
-                crate::io::recording::shown(*v)
+                "{field}[{k}] = {} {unit} is beyond the plausible {} {unit} of any instrument",
+                crate::io::recording::shown(*v),
+                crate::io::recording::shown(limit)
             ));
         }
     }

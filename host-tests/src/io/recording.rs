@@ -958,6 +958,16 @@ pub fn gravity_ok(gravity_mps2: f64) -> bool {
     (9.7..=9.9).contains(&gravity_mps2)
 }
 
+/// A field quoted in a message: at most 80 characters of it, and its length when it is longer.
+pub fn clipped(field: &str) -> String {
+    let count = field.chars().count();
+    if count <= 80 {
+        field.to_string()
+    } else {
+        format!("{}... ({count} characters)", field.chars().take(80).collect::<String>())
+    }
+}
+
 /// `x` for a message: six significant digits, in exponent form when it is large or small (`1e300` is not
 /// printed as 301 digits, nor 0.009999999999990905 as it falls out of a subtraction).
 pub fn shown(x: f64) -> String {
@@ -1279,8 +1289,14 @@ impl<'c> RowParser<'c> {
             None => self.first_t = Some((n, t_s)),
         }
         self.previous_t = Some(t_s);
-        let pos: u32 =
-            cells[1].parse().map_err(|_| bad(format!("column 'pos': '{}' is not a non-negative integer", cells[1])))?;
+        let pos: u32 = cells[1].parse().map_err(|_| {
+            let digits = !cells[1].is_empty() && cells[1].bytes().all(|b| b.is_ascii_digit());
+            bad(if digits {
+                format!("column 'pos': {} is beyond the largest label, {} (32 bits)", clipped(cells[1]), u32::MAX)
+            } else {
+                format!("column 'pos': '{}' is not a non-negative integer", clipped(cells[1]))
+            })
+        })?;
         let heading_deg = if cells[4].is_empty() { None } else { Some(num(4)?) };
         let pitch_deg = num(2)?;
         let roll_deg = num(3)?;
