@@ -481,3 +481,16 @@ fn the_command_line_reads_a_layout_and_labels_and_refuses_a_missing_layout() {
     assert_eq!(refused.status.code(), Some(1));
     assert!(String::from_utf8_lossy(&refused.stderr).contains("beyond the binary record of 5 fields"));
 }
+
+#[test]
+fn skip_lines_past_the_end_says_so() {
+    // A layout that skips every line of the file: the message names the lines and the skip, not a field.
+    let dir = tempfile::tempdir().unwrap();
+    let input = write(dir.path(), "short.txt", b"t wx wy wz fx fy fz\n0 0 0 0 0 0 9.8\n");
+    let layout = format!(
+        "format = \"text\"\n[text]\nskip_lines = 5\n[time]\nfield = 0\nunit = \"s\"\n\
+         [gyro]\nfields = [1, 2, 3]\nunit = \"rad/s\"\n[accel]\nfields = [4, 5, 6]\nunit = \"m/s^2\"\n{SITE}"
+    );
+    let err = import(&[&input], &layout, None, None).expect_err("no records").to_string();
+    assert!(err.contains("no records: the file has 2 lines, skip_lines skips 5"), "{err}");
+}

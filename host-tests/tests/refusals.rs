@@ -423,3 +423,11 @@ fn a_calibration_json_with_a_byte_order_mark_is_read_as_without() {
     };
     assert_eq!(strip(&plain), strip(&marked));
 }
+
+#[test]
+fn a_flash_image_that_is_a_directory_is_named_not_read_as_empty() {
+    // It used to say "no calibration record is stored": the firmware could not open it and saw an empty flash.
+    let dir = tempfile::tempdir().unwrap();
+    let flash = dir.path().as_os_str();
+    refused(&[os("device"), os("show"), os("--qemu"), os("--flash"), flash], 1, &["a directory, not a flash image"]);
+}

@@ -49,6 +49,11 @@ impl Drop for QemuDevice {
 /// Boots the device firmware in QEMU (mps2-an386): its flash is the host file `flash`, its IMU replays the
 /// frames of `replay` (none: the IMU delivers nothing), its UART0 is the link.
 pub fn boot_qemu(flash: &Path, replay: Option<&Path>) -> Result<QemuDevice, String> {
+    // The firmware opens the image itself: what it cannot open would read as an empty flash.
+    if let Some(m) = std::fs::metadata(flash).ok().filter(|m| !m.is_file()) {
+        let what = if m.is_dir() { "a directory" } else { "not a regular file" };
+        return Err(format!("--flash {}: {what}, not a flash image file (created if missing)", flash.display()));
+    }
     let elf = match std::env::var_os("SINSCAL_DEVICE_FIRMWARE") {
         Some(p) => PathBuf::from(p),
         None => firmware_binary(DEVICE_FIRMWARE)?,

@@ -206,10 +206,21 @@ fn read_text_records(
                     )
                 })?;
                 records[count][slot] = parse_finite(cell).ok_or_else(|| {
-                    InputError::at(source, n, format!("field {}: '{cell}' is not a finite number", f + first_field))
+                    let quoted = crate::io::recording::clipped(cell);
+                    InputError::at(source, n, format!("field {}: '{quoted}' is not a finite number", f + first_field))
                 })?;
             }
             count += 1;
+        }
+        if fields_here.is_none() {
+            let total = text.lines().count();
+            return Err(InputError::file(
+                source,
+                format!(
+                    "no records: the file has {total} lines, skip_lines skips {skip_lines}, and the rest are empty \
+                     or comments"
+                ),
+            ));
         }
         if count != records.len() {
             return Err(InputError::file(source, format!("{count} records, {} has {}", sources[0], records.len())));
