@@ -721,3 +721,15 @@ fn real_imutk_xsens_static_detection_finds_the_poses() {
     assert!(stats.iter().all(|s| s.samples >= 300 && s.heading_deg.is_none()));
     assert_round_trip(&rec);
 }
+
+#[test]
+fn imutk_files_swapped_are_refused_as_swapped() {
+    // The gyro file given as the accelerometer's: its median |f| at the accelerometer's gains is not g, the other
+    // file's is. Both said; and a file that is neither is refused with its median |f|.
+    let (acc, gyro) = imutk_files();
+    let err = parse_imutk(&gyro, "gyro.mat", &acc, "acc.mat", None, &short_detection()).unwrap_err().to_string();
+    assert!(err.starts_with("gyro.mat: the accelerometer and gyro files seem swapped"), "{err}");
+    assert!(err.contains("acc.mat's is 9.8"), "{err}");
+    let err = parse_imutk(&gyro, "gyro.mat", &gyro, "gyro2.mat", None, &short_detection()).unwrap_err().to_string();
+    assert!(err.contains("not imu_tk accelerometer counts"), "{err}");
+}

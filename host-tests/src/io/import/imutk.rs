@@ -169,6 +169,55 @@ pub fn import_imutk(
     )
 }
 
+/// Largest relative distance of the accelerometer file's median |f| (at the nominal gains) from gravity: a
+/// hand-held session rests most of the time, so its median specific force is g.
+pub const IMUTK_MAX_MEDIAN_FORCE_ERROR: f64 = 0.2;
+
+/// The median |f| of counts read with the accelerometer's nominal gains, m/s^2.
+fn median_force_mps2(counts: &[ImutkCounts]) -> f64 {
+    let mut norms: Vec<f64> = counts
+        .iter()
+        .map(|(_, _, c)| {
+            let f = [0, 1, 2].map(|i| (c[i] - IMUTK_OFFSET_COUNTS) / IMUTK_ACCEL_GAIN_COUNTS_PER_MPS2[i]);
+            (f[0] * f[0] + f[1] * f[1] + f[2] * f[2]).sqrt()
+        })
+        .collect();
+    norms.sort_by(f64::total_cmp);
+    norms.get(norms.len() / 2).copied().unwrap_or(0.0)
+}
+
+/// The accelerometer file reads as gravity: its median |f| within [`IMUTK_MAX_MEDIAN_FORCE_ERROR`] of g; when it
+/// does not and the gyro file does, the two are swapped.
+fn check_accelerometer_file(
+    acc: &[ImutkCounts],
+    gyro: &[ImutkCounts],
+    acc_source: &str,
+    gyro_source: &str,
+) -> Result<(), InputError> {
+    let near_g = |f: f64| (f / IMUTK_GRAVITY_MPS2 - 1.0).abs() <= IMUTK_MAX_MEDIAN_FORCE_ERROR;
+    let (acc_f, gyro_f) = (median_force_mps2(acc), median_force_mps2(gyro));
+    if near_g(acc_f) {
+        return Ok(());
+    }
+    let shown = crate::io::recording::shown;
+    let reason = if near_g(gyro_f) {
+        format!(
+            "the accelerometer and gyro files seem swapped: this file's median |f| is {} m/s^2 at the \
+             accelerometer's nominal gains, {gyro_source}'s is {}, near g ({IMUTK_GRAVITY_MPS2})",
+            shown(acc_f),
+            shown(gyro_f)
+        )
+    } else {
+        format!(
+            "its median |f| is {} m/s^2 at the accelerometer's nominal gains, not within {} % of g \
+             ({IMUTK_GRAVITY_MPS2}): not imu_tk accelerometer counts",
+            shown(acc_f),
+            IMUTK_MAX_MEDIAN_FORCE_ERROR * 100.0
+        )
+    };
+    Err(InputError::file(acc_source, reason))
+}
+
 /// Parses imu_tk text counts: an accelerometer file and a gyro file (`xsens_acc.mat`, `xsens_gyro.mat`: plain
 /// text despite the name), each with lines `t_s x y z`, x, y, z in unsigned 16-bit counts. The two files must have
 /// the same number of samples at the same times (within [`IMUTK_MAX_TIME_MISMATCH_S`]).
@@ -204,6 +253,7 @@ pub fn parse_imutk(
         .iter()
         .map(|(_, _, c)| [0, 1, 2].map(|i| (c[i] - IMUTK_OFFSET_COUNTS) / IMUTK_GYRO_GAIN_COUNTS_PER_RADPS[i]))
         .collect();
+    check_accelerometer_file(&acc, &gyro, acc_source, gyro_source)?;
     let t_s: Vec<f64> = acc.iter().map(|(_, t, _)| *t).collect();
     let floor_variance_mps2sq: f64 = IMUTK_ACCEL_GAIN_COUNTS_PER_MPS2.iter().map(|g| 1.0 / (g * g) / 12.0).sum();
     let intervals = detect_static_intervals(&force, &t_s, rate_hz, detection, floor_variance_mps2sq)
