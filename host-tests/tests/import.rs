@@ -295,7 +295,13 @@ fn ferraris_bad_input_names_file_line_and_reason() {
     );
     assert!(err(&csv, &FERRARIS_LABELS.replace("x_rot", "w_rot")).starts_with("s_list.json:8: unknown label 'w_rot'"));
     assert!(err(&csv, &FERRARIS_LABELS.replace("\"start\": 17, \"end\": 19", "\"start\": 40, \"end\": 50"))
-        .starts_with("s_list.json:7: label 'z_a' [40, 50) holds no sample of s.csv"));
+        .starts_with("s_list.json:7: label 'z_a' [40, 50) reaches past the samples of s.csv (0..29)"));
+    // An end past the data is not clipped to it, and a label given twice is not read as its last value.
+    assert!(err(&csv, &FERRARIS_LABELS.replace("\"start\": 20, \"end\": 25", "\"start\": 20, \"end\": 31"))
+        .starts_with("s_list.json:8: label 'x_rot' [20, 31) reaches past the samples"));
+    let twice = FERRARIS_LABELS.replace("\"x_rot\"", "\"x_p\": {\"start\": 2, \"end\": 3},\n  \"x_rot\"");
+    let e = err(&csv, &twice);
+    assert!(e.starts_with("s_list.json:") && e.contains("key 'x_p' appears twice"), "{e}");
     assert!(parse_imucal_labels("[1, 2]", "l.json")
         .unwrap_err()
         .to_string()

@@ -311,7 +311,7 @@ fn check_t(t: &M3, sensor: &str) -> Result<(), String> {
 
 /// A JSON value read only to refuse an object that has one key twice (at any depth): its `Deserialize`
 /// walks the document and fails on the second occurrence, naming the key.
-struct NoDuplicateKeys;
+pub(crate) struct NoDuplicateKeys;
 
 impl<'de> serde::Deserialize<'de> for NoDuplicateKeys {
     fn deserialize<D: serde::Deserializer<'de>>(deserializer: D) -> Result<Self, D::Error> {

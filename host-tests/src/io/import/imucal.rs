@@ -26,6 +26,10 @@ fn json_line_of(text: &str, label: &str) -> usize {
 pub fn parse_imucal_labels(text: &str, source: &str) -> Result<Vec<LabelRange>, InputError> {
     let value: serde_json::Value = serde_json::from_str(text)
         .map_err(|e| InputError::at(source, e.line().max(1), format!("not valid JSON: {e}")))?;
+    // serde_json keeps the last of two equal keys: labels given twice are refused instead.
+    if let Err(e) = serde_json::from_str::<crate::io::calibration_model::NoDuplicateKeys>(text) {
+        return Err(InputError::at(source, e.line().max(1), e.to_string()));
+    }
     let object = value.as_object().ok_or_else(|| {
         InputError::at(source, 1, "expected a JSON object of labels ({\"x_p\": {\"start\": .., \"end\": ..}, ...})")
     })?;
@@ -256,6 +260,17 @@ fn check_every_pose_sampled(
     csv_source: &str,
     (first_sample, last_sample): (u64, u64),
 ) -> Result<(), InputError> {
+    // A label past the data is not clipped to it: its rows would not be what the label says.
+    if let Some(r) = labels.iter().find(|r| r.end > last_sample + 1 || r.start < first_sample) {
+        return Err(InputError::at(
+            labels_source,
+            json_line_of(labels_text, &r.label),
+            format!(
+                "label '{}' [{}, {}) reaches past the samples of {csv_source} ({first_sample}..{last_sample})",
+                r.label, r.start, r.end
+            ),
+        ));
+    }
     for pose in &FERRARIS_POSES {
         if !rows.iter().any(|r| r.pos == pose.pos) {
             let range = labels.iter().find(|r| r.label == pose.label);
