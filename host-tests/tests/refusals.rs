@@ -431,3 +431,25 @@ fn a_flash_image_that_is_a_directory_is_named_not_read_as_empty() {
     let flash = dir.path().as_os_str();
     refused(&[os("device"), os("show"), os("--qemu"), os("--flash"), flash], 1, &["a directory, not a flash image"]);
 }
+
+#[test]
+fn align_of_readings_that_are_not_gravity_is_refused_with_the_reason() {
+    // All-zero readings printed "+- NaN" and "force and rate are parallel"; readings in g aligned silently.
+    let dir = tempfile::tempdir().unwrap();
+    let (head, rows) = split_rows(&example_text());
+    for (name, scale) in [("zeros.csv", 0.0), ("in-g.csv", 1.0 / 9.80665)] {
+        let scaled: Vec<String> = rows
+            .iter()
+            .map(|row| {
+                let mut cells: Vec<String> = row.split(',').map(str::to_string).collect();
+                for cell in &mut cells[5..11] {
+                    *cell = format!("{:?}", cell.parse::<f64>().unwrap() * scale);
+                }
+                cells.join(",")
+            })
+            .collect();
+        let path = file(&dir, name, format!("{head}{}\n", scaled.join("\n")));
+        let stderr = refused(&[os("align"), path.as_os_str()], 1, &["dwell 1:", "define no attitude"]);
+        assert!(!stderr.contains("NaN"), "{stderr}");
+    }
+}

@@ -142,6 +142,24 @@ fn align_dwell(dwell: &Dwell<'_>, has_gyro: bool, site: &Site, source: &str) -> 
     let reference = dwell.attitude(source)?;
     let forces: Vec<[f64; 3]> = dwell.rows.iter().map(|r| r.force_b_mps2).collect();
     let (force, force_var) = mean_and_variance(&forces);
+    // Readings that are not gravity (zeros, accelerometers in g) define no attitude: refused, not aligned.
+    let norm = (force[0] * force[0] + force[1] * force[1] + force[2] * force[2]).sqrt();
+    let limit = f64::from(sinscal::calib::limits::FORCE_MAGNITUDE_ERROR_MAX_RELATIVE);
+    let g = f64::from(site.gravity_mps2);
+    if !((norm / g - 1.0).abs() <= limit) {
+        return Err(InputError::at(
+            source,
+            dwell.first_line(),
+            format!(
+                "dwell {}: |f| is {} m/s^2, more than {} % from g ({}): these readings define no attitude \
+                 (accelerometers in g, or not at rest?)",
+                dwell.pos,
+                crate::io::recording::shown(norm),
+                crate::io::recording::shown(limit * 100.0),
+                crate::io::recording::shown(g)
+            ),
+        ));
+    }
     let mut note = None;
     let angles = if has_gyro {
         let rates: Vec<[f64; 3]> = dwell.rows.iter().map(|r| r.rate_b_radps).collect();
