@@ -146,7 +146,7 @@ fn align_dwell(dwell: &Dwell<'_>, has_gyro: bool, site: &Site, source: &str) -> 
     let norm = (force[0] * force[0] + force[1] * force[1] + force[2] * force[2]).sqrt();
     let limit = f64::from(sinscal::calib::limits::FORCE_MAGNITUDE_ERROR_MAX_RELATIVE);
     let g = f64::from(site.gravity_mps2);
-    if !((norm / g - 1.0).abs() <= limit) {
+    if norm.is_nan() || (norm / g - 1.0).abs() > limit {
         return Err(InputError::at(
             source,
             dwell.first_line(),
