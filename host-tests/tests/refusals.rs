@@ -453,3 +453,22 @@ fn align_of_readings_that_are_not_gravity_is_refused_with_the_reason() {
         assert!(!stderr.contains("NaN"), "{stderr}");
     }
 }
+
+#[test]
+fn navigate_of_times_in_milliseconds_is_refused_with_the_hint() {
+    // Times in ms without a rate_hz: read as 0.1 Hz, this ran a 16.7-h navigation of absurd values.
+    let dir = tempfile::tempdir().unwrap();
+    let (_, cal) = calibrated_example(&dir);
+    let (head, rows) = split_rows(&example_text());
+    let head: String = head.lines().filter(|l| !l.starts_with("# rate_hz")).map(|l| format!("{l}\n")).collect();
+    let ms: Vec<String> = rows
+        .iter()
+        .map(|row| {
+            let (t, rest) = row.split_once(',').unwrap();
+            format!("{:?},{rest}", t.parse::<f64>().unwrap() * 1000.0)
+        })
+        .collect();
+    let path = file(&dir, "ms.csv", format!("{head}{}\n", ms.join("\n")));
+    let args = [os("navigate"), os("--calibration"), cal.as_os_str(), path.as_os_str()];
+    refused(&args, 1, &["a sample rate of 0.1 Hz", "times in milliseconds?"]);
+}

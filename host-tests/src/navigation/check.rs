@@ -248,9 +248,14 @@ fn chosen_dwell<'a>(
     })
 }
 
-/// The header's rate, or the rate measured over the dwell when the header has none.
+/// Slowest sample rate `navigate` integrates, Hz: an IMU slower than this is no strapdown IMU, and a recording
+/// whose times are in milliseconds reads as 0.1 Hz.
+pub const MIN_NAVIGATION_RATE_HZ: f64 = 1.0;
+
+/// The header's rate, or the rate measured over the dwell when the header has none; at least
+/// [`MIN_NAVIGATION_RATE_HZ`].
 fn sample_rate_hz(source: &str, header_rate_hz: Option<f64>, dwell: &DwellTally) -> Result<f64, InputError> {
-    Ok(match header_rate_hz {
+    let rate_hz = match header_rate_hz {
         Some(r) if r > 0.0 => r,
         _ => {
             let span = dwell.last_t_s - dwell.first_t_s;
@@ -259,7 +264,19 @@ fn sample_rate_hz(source: &str, header_rate_hz: Option<f64>, dwell: &DwellTally)
             }
             (dwell.samples - 1) as f64 / span
         }
-    })
+    };
+    if rate_hz < MIN_NAVIGATION_RATE_HZ {
+        return Err(InputError::file(
+            source,
+            format!(
+                "a sample rate of {} Hz ({}): below the {MIN_NAVIGATION_RATE_HZ} Hz of any strapdown IMU; times in \
+                 milliseconds? (t_s is in seconds)",
+                crate::io::recording::shown(rate_hz),
+                if header_rate_hz.is_some() { "the header's rate_hz" } else { "measured over the dwell's times" }
+            ),
+        ));
+    }
+    Ok(rate_hz)
 }
 
 /// The runs: uncompensated, calibrated, the second calibration if any, and the truth removed when the
