@@ -318,7 +318,20 @@ fn bad_layouts_are_refused_with_a_reason() {
     refused(&base, &swapped, &["swapped.txt:12:", "does not increase"]);
     // A record too short for the layout, and a binary file that ends inside a record.
     let short = write(dir.path(), "short.txt", format!("{}0.5 1 2\n", text).as_bytes());
-    refused(&base, &short, &["3 fields", "beyond the record"]);
+    refused(&base, &short, &["short.txt:", "3 fields, the first record has 7"]);
+    // A record with a field more is not read past, and one field read as two quantities is a layout mistake.
+    let long = write(
+        dir.path(),
+        "long.txt",
+        format!(
+            "{}1000 1 2 3 4 5 6 7
+",
+            text
+        )
+        .as_bytes(),
+    );
+    refused(&base, &long, &["long.txt:", "8 fields, the first record has 7"]);
+    refused(&base.replace("[1, 2, 3]", "[4, 5, 6]"), &input, &["field 4 is read as both gyro x and accel x"]);
     let bin = format!(
         "format = \"binary\"\n[binary]\ntype = \"f64\"\nendian = \"little\"\nfields = 7\n[time]\nfield = 0\n\
          [gyro]\nfields = [1, 2, 3]\nunit = \"rad/s\"\n[accel]\nfields = [4, 5, 6]\nunit = \"m/s^2\"\n{SITE}"

@@ -190,6 +190,14 @@ fn read_text_records(
                     .map(|&(slot, f)| (slot, f - first_field))
                     .collect();
             }
+            if fields_here.is_some_and(|width| cells.len() != width) {
+                let width = fields_here.unwrap_or(0);
+                return Err(InputError::at(
+                    source,
+                    n,
+                    format!("{} fields, the first record has {width}: every record has the same fields", cells.len()),
+                ));
+            }
             if count == records.len() {
                 if k > 0 {
                     return Err(InputError::at(source, n, format!("more records than {}", sources[0])));

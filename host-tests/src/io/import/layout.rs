@@ -260,6 +260,14 @@ impl Layout {
         let accel = channel(&file.accel, "accel", &|u, inc| accel_unit(u, inc, g)).map_err(bad)?;
         let axes = axes(file.axes.as_ref()).map_err(bad)?;
         let layout = Layout { storage, time, gyro, accel, axes, latitude_deg, gravity_mps2, height_m };
+        // One field read as two quantities (gyro fields pointing at the accelerometer's) is a layout mistake.
+        let slots = layout.slots();
+        for (k, &(slot, field)) in slots.iter().enumerate() {
+            if let Some(&(other, _)) = slots[..k].iter().find(|(_, f)| *f == field) {
+                let name = |s: usize| ["time", "gyro x", "gyro y", "gyro z", "accel x", "accel y", "accel z"][s];
+                return Err(bad(format!("field {field} is read as both {} and {}", name(other), name(slot))));
+            }
+        }
         if let Storage::Binary { fields, .. } = layout.storage {
             if let Some((_, f)) = layout.slots().into_iter().find(|&(_, f)| f >= fields) {
                 return Err(bad(format!(
