@@ -191,6 +191,10 @@ fn bad_messages_get_an_error_reply_and_the_device_keeps_running() {
     body.extend_from_slice(&4000u16.to_le_bytes());
     body.extend_from_slice(&note);
     assert_eq!(refused(c.request("note", kind::ANNOTATE, &body)).0, ErrorCode::NoteTooLong);
+    // The host's own note too long is the host's refusal, before anything is sent, with both lengths.
+    let err = c.annotate(&[b'x'; 3000]).unwrap_err();
+    assert!(matches!(err, LinkError::NoteTooLong { len: 3000, max: 2048 }), "{err}");
+    assert!(err.to_string().starts_with("the provenance note is 3000 bytes, the device keeps at most 2048"));
     // Configure during a run.
     c.configure(&good).unwrap();
     c.request("start", kind::START, &[]).unwrap();

@@ -30,6 +30,17 @@ pub enum LinkError {
     /// A reply that does not follow the protocol.
     #[error("link: malformed reply to {0}")]
     Malformed(&'static str),
+    /// The host built a provenance note longer than the device keeps: refused before it is sent.
+    #[error(
+        "the provenance note is {len} bytes, the device keeps at most {max} (its calibration options and one line \
+         per position: fewer positions, or shorter labels)"
+    )]
+    NoteTooLong {
+        /// The note's length, bytes.
+        len: usize,
+        /// The device's limit, bytes.
+        max: usize,
+    },
 }
 
 /// The device's identity.
@@ -249,11 +260,7 @@ impl<T: Read + Write> Client<T> {
     /// Sends the provenance note in parts.
     pub fn annotate(&mut self, note: &[u8]) -> Result<(), LinkError> {
         if note.len() > MAX_NOTE_BYTES {
-            return Err(LinkError::Refused {
-                what: "the note",
-                code: ErrorCode::NoteTooLong,
-                detail: MAX_NOTE_BYTES as u32,
-            });
+            return Err(LinkError::NoteTooLong { len: note.len(), max: MAX_NOTE_BYTES });
         }
         let total = note.len() as u16;
         let mut offset = 0;
