@@ -346,7 +346,7 @@ pub fn check_held_out(
 const MOVE_ERROR_STEPS: usize = 4;
 
 /// The hand moves' error, rad per axis, a second start takes when the first solution (the moves weighted by
-/// their white rate noise alone) ran away or did not converge, and the poses have no tolerance of their own
+/// their white rate noise alone) ran away (refused as diverged), and the poses have no tolerance of their own
 /// (attitudes estimated): 1 deg, a hand-placed pose's usual error.
 const HAND_MOVE_START_RAD: f32 = 0.017_453_292;
 
