@@ -235,7 +235,7 @@ fn apply_of_an_implausible_scale_factor_fails() {
     assert_eq!((code, written), (3, true), "{stderr}");
     assert_eq!(
         stderr.trim(),
-        "sinscal: check failed: plausibility: accel_scale_factor_std has 1e13, beyond the plausible 1e0 of any instrument"
+        "sinscal: check failed: plausibility: accel_scale_factor_std has 1e13, beyond the plausible 1 of any instrument"
     );
 }
 
