@@ -494,22 +494,37 @@ fn used_moves(
         .zip(integrated)
         .enumerate()
         .map(|(k, (m, c))| UsedMove {
-            from_pos: if m.turn_axis.is_some() { 0 } else { positions[m.from].pos },
-            to_pos: if m.turn_axis.is_some() { 0 } else { positions[m.to].pos },
-            turn: m.turn_axis.and_then(|a| crate::io::recording::TURN_AXES.get(a).copied()),
-            first_line: m.first_line,
-            duration_s: c.duration_s as f64,
-            angle_deg: (sinscal::math::linalg::norm(match c.turn {
-                Some(t) => t.angle_sum_b_rad,
-                None => c.rotation.to_rotation_vector(),
-            }) as f64)
-                .to_degrees(),
             residual_rad: solution.move_residual_rad[k].map(|x| x as f64),
             statistic: solution.move_statistic[k] as f64,
             refused: k < 64 && solution.moves_refused & (1 << k) != 0,
-            held_out: false,
+            ..move_report(m, c, positions)
         })
         .collect()
+}
+
+/// What the report says of a move or turn whatever its fit: where, how long, the angle turned; no residual
+/// yet, the statistic of a move left out.
+fn move_report(
+    m: &moves::MoveSamples,
+    c: &sinscal::calib::moves::ChannelMove,
+    positions: &[PositionResult],
+) -> UsedMove {
+    UsedMove {
+        from_pos: if m.turn_axis.is_some() { 0 } else { positions[m.from].pos },
+        to_pos: if m.turn_axis.is_some() { 0 } else { positions[m.to].pos },
+        turn: m.turn_axis.and_then(|a| crate::io::recording::TURN_AXES.get(a).copied()),
+        first_line: m.first_line,
+        duration_s: c.duration_s as f64,
+        angle_deg: (sinscal::math::linalg::norm(match c.turn {
+            Some(t) => t.angle_sum_b_rad,
+            None => c.rotation.to_rotation_vector(),
+        }) as f64)
+            .to_degrees(),
+        residual_rad: [0.0; 3],
+        statistic: -1.0,
+        refused: false,
+        held_out: false,
+    }
 }
 
 /// What the report says of each move held out of the fit: its rotation error with the calibration applied.
@@ -522,20 +537,9 @@ fn held_out_moves(
         .iter()
         .zip(checked)
         .map(|(m, (c, residual))| UsedMove {
-            from_pos: if m.turn_axis.is_some() { 0 } else { positions[m.from].pos },
-            to_pos: if m.turn_axis.is_some() { 0 } else { positions[m.to].pos },
-            turn: m.turn_axis.and_then(|a| crate::io::recording::TURN_AXES.get(a).copied()),
-            first_line: m.first_line,
-            duration_s: c.duration_s as f64,
-            angle_deg: (sinscal::math::linalg::norm(match c.turn {
-                Some(t) => t.angle_sum_b_rad,
-                None => c.rotation.to_rotation_vector(),
-            }) as f64)
-                .to_degrees(),
             residual_rad: residual.map(|x| x as f64),
-            statistic: -1.0,
-            refused: false,
             held_out: true,
+            ..move_report(m, c, positions)
         })
         .collect()
 }
