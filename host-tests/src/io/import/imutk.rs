@@ -171,7 +171,7 @@ pub fn import_imutk(
 
 /// Largest relative distance of the accelerometer file's median |f| (at the nominal gains) from gravity: a
 /// hand-held session rests most of the time, so its median specific force is g.
-pub const IMUTK_MAX_MEDIAN_FORCE_ERROR: f64 = 0.2;
+pub const IMUTK_MAX_MEDIAN_FORCE_ERROR_RELATIVE: f64 = 0.2;
 
 /// The median |f| of counts read with the accelerometer's nominal gains, m/s^2.
 fn median_force_mps2(counts: &[ImutkCounts]) -> f64 {
@@ -186,7 +186,7 @@ fn median_force_mps2(counts: &[ImutkCounts]) -> f64 {
     norms.get(norms.len() / 2).copied().unwrap_or(0.0)
 }
 
-/// The accelerometer file reads as gravity: its median |f| within [`IMUTK_MAX_MEDIAN_FORCE_ERROR`] of g; when it
+/// The accelerometer file reads as gravity: its median |f| within [`IMUTK_MAX_MEDIAN_FORCE_ERROR_RELATIVE`] of g; when it
 /// does not and the gyro file does, the two are swapped.
 fn check_accelerometer_file(
     acc: &[ImutkCounts],
@@ -194,7 +194,7 @@ fn check_accelerometer_file(
     acc_source: &str,
     gyro_source: &str,
 ) -> Result<(), InputError> {
-    let near_g = |f: f64| (f / IMUTK_GRAVITY_MPS2 - 1.0).abs() <= IMUTK_MAX_MEDIAN_FORCE_ERROR;
+    let near_g = |f: f64| (f / IMUTK_GRAVITY_MPS2 - 1.0).abs() <= IMUTK_MAX_MEDIAN_FORCE_ERROR_RELATIVE;
     let (acc_f, gyro_f) = (median_force_mps2(acc), median_force_mps2(gyro));
     if near_g(acc_f) {
         return Ok(());
@@ -212,7 +212,7 @@ fn check_accelerometer_file(
             "its median |f| is {} m/s^2 at the accelerometer's nominal gains, not within {} % of g \
              ({IMUTK_GRAVITY_MPS2}): not imu_tk accelerometer counts",
             shown(acc_f),
-            IMUTK_MAX_MEDIAN_FORCE_ERROR * 100.0
+            IMUTK_MAX_MEDIAN_FORCE_ERROR_RELATIVE * 100.0
         )
     };
     Err(InputError::file(acc_source, reason))
