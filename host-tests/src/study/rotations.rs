@@ -9,7 +9,7 @@
 
 use sinscal::calib::general::Model;
 
-use super::rests::{find_rests, rest_forces, transitions, RestForce, Transition};
+use super::rests::{find_rests, rest_forces, transitions, Rest, RestForce, Transition};
 use super::LabelledTurn;
 use crate::calibration::result::CalibrationJson;
 use crate::calibration::{calibrate, Calibration, Estimates, Options};
@@ -63,6 +63,14 @@ pub struct RotationStudy {
 }
 
 impl RotationStudy {
+    /// Adds a fit, or its refusal.
+    fn add(&mut self, fit: Result<RotationFit, (String, String)>) {
+        match fit {
+            Ok(f) => self.fits.push(f),
+            Err(r) => self.refused.push(r),
+        }
+    }
+
     fn new(reference_name: &str, reference_t_g: M3) -> RotationStudy {
         RotationStudy {
             reference_name: reference_name.to_string(),
@@ -98,26 +106,31 @@ fn move_numbers(cal: &Calibration, keep: impl Fn(&crate::calibration::UsedMove) 
 }
 
 /// The session calibrated by the product with the moves numbered `held_out` (from 1) held out, and checked on
-/// the session's rests; `unlabelled_rests`: also the still periods of the unlabelled rows.
-fn fit(
+/// `rests`.
+fn fit(rec: &Recording, name: &str, held_out: &[usize], rests: &[Rest]) -> Result<RotationFit, (String, String)> {
+    let mask = held_out.iter().fold(0u64, |m, k| m | 1 << (k - 1));
+    let options = Options { model: ROTATION_MODEL, hold_out_moves: mask, ..Options::default() };
+    let cal = calibrate(rec, &options).map_err(|e| (name.to_string(), e.to_string()))?;
+    checked_fit(rec, name, held_out, &cal, rests)
+}
+
+/// A calibration of the session (`held_out`: the moves it left out, numbered from 1) checked on `rests`.
+fn checked_fit(
     rec: &Recording,
     name: &str,
     held_out: &[usize],
-    unlabelled_rests: bool,
+    cal: &Calibration,
+    rests: &[Rest],
 ) -> Result<RotationFit, (String, String)> {
-    let mask = held_out.iter().fold(0u64, |m, k| m | 1 << (k - 1));
-    let options = Options { model: ROTATION_MODEL, hold_out_moves: mask, ..Options::default() };
     let list = held_out.iter().map(usize::to_string).collect::<Vec<_>>().join(",");
     let command = format!(
         "sinscal calibrate --model full{}",
         if held_out.is_empty() { String::new() } else { format!(" --hold-out-moves {list}") }
     );
     let refused = |e: String| (name.to_string(), e);
-    let cal = calibrate(rec, &options).map_err(|e| refused(e.to_string()))?;
     let Some(solution) = cal.channels.as_ref() else { return Err(refused("no general estimator".into())) };
-    let text = serde_json::to_string(&CalibrationJson::new(&cal)).map_err(|e| refused(e.to_string()))?;
+    let text = serde_json::to_string(&CalibrationJson::new(cal)).map_err(|e| refused(e.to_string()))?;
     let model = CalibrationModel::parse(&text, "the study's calibration").map_err(|e| refused(e.to_string()))?;
-    let rests = find_rests(rec, unlabelled_rests);
     let fitted: Vec<usize> = cal.moves.iter().filter(|m| !m.held_out && !m.refused).map(|m| m.first_line).collect();
     let used = |lines: std::ops::Range<usize>| fitted.iter().any(|l| lines.contains(l));
     let (t_g, t_g_std) = gyro_matrix(&cal.estimates);
@@ -134,9 +147,9 @@ fn fit(
         degrees_of_freedom: solution.degrees_of_freedom,
         passes: cal.move_passes,
         move_error_deg: cal.move_error_rad.to_degrees(),
-        checks_passed: crate::calibration::checks::checks(&cal).iter().all(|c| c.passed),
-        transitions: transitions(rec, &rests, &model, used),
-        rests: rest_forces(rec, &rests, &model, g),
+        checks_passed: crate::calibration::checks::checks(cal).iter().all(|c| c.passed),
+        transitions: transitions(rec, rests, &model, used),
+        rests: rest_forces(rec, rests, &model, g),
     })
 }
 
@@ -179,15 +192,13 @@ pub fn ferraris_rotations(rec: &Recording, turns: &[LabelledTurn]) -> Result<Rot
     let all = calibrate(rec, &options)?;
     let hand = move_numbers(&all, |m| m.turn.is_none());
     let turned = move_numbers(&all, |m| m.turn.is_some());
+    let rests = find_rests(rec, true);
+    study.add(checked_fit(rec, "every move and turn", &[], &all, &rests));
     for (name, held_out) in [
-        ("every move and turn", Vec::new()),
         ("the three labelled turns (the hand moves held out)", hand),
         ("the hand moves between the faces (the turns held out)", turned),
     ] {
-        match fit(rec, name, &held_out, true) {
-            Ok(f) => study.fits.push(f),
-            Err(r) => study.refused.push(r),
-        }
+        study.add(fit(rec, name, &held_out, &rests));
     }
     Ok(study)
 }
@@ -203,11 +214,8 @@ pub fn imutk_rotations(rec: &Recording) -> Result<RotationStudy, InputError> {
     let options = Options { model: ROTATION_MODEL, ..Options::default() };
     let all = calibrate(rec, &options)?;
     let every_other = move_numbers(&all, |_| true).into_iter().filter(|k| k % 2 == 0).take(64).collect::<Vec<_>>();
-    for (name, held_out) in [("every hand move", Vec::new()), ("every other hand move (1st, 3rd, ...)", every_other)] {
-        match fit(rec, name, &held_out, false) {
-            Ok(f) => study.fits.push(f),
-            Err(r) => study.refused.push(r),
-        }
-    }
+    let rests = find_rests(rec, false);
+    study.add(checked_fit(rec, "every hand move", &[], &all, &rests));
+    study.add(fit(rec, "every other hand move (1st, 3rd, ...)", &every_other, &rests));
     Ok(study)
 }
