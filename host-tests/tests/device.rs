@@ -2,7 +2,7 @@
 //! through the emulated IMU, result, store in the flash file) then `sinscal device show` (a second boot reads the
 //! record back): the same JSON, equal to `calibrate --on host` in every field but "on". And bad messages over the
 //! link: each gets an error reply and the device keeps answering. Needs qemu-system-arm and the thumbv7em target
-//! (scripts/setup installs both); in CI (CI=true) a missing QEMU is a failure, elsewhere the test reports itself
+//! (scripts/setup installs both); in CI (`SINSCAL_REQUIRE_ALL` set by .ci/run) a missing QEMU is a failure, elsewhere the test reports itself
 //! as skipped.
 
 mod common;

@@ -154,10 +154,7 @@ fn sway_is_found_where_it_is_planted() {
 
 #[test]
 fn noise_model_of_the_measured_data_sets() {
-    let Some(dir) = common::data_dir() else {
-        println!("SKIPPED (real-data test): SINSCAL_DATA is not set");
-        return;
-    };
+    let Some(dir) = common::data_dir() else { return };
     let psins = import_psins(&common::data_file(&dir, "psins-lasergyro/lasergyro.imu"), None).expect("psins");
     let acc = common::data_file(&dir, "imu-tk-xsens/xsens_acc.mat");
     let gyro = common::data_file(&dir, "imu-tk-xsens/xsens_gyro.mat");

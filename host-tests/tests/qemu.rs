@@ -1,6 +1,6 @@
 //! The firmware in QEMU (mps2-an386, Cortex-M4F) against the same replay path on x86: byte-identical
 //! outcomes (every f32 bit), and identical `sinscal calibrate --on host|qemu` JSON. Needs qemu-system-arm
-//! and the thumbv7em target (scripts/setup installs both); in CI (CI=true) a missing QEMU is a failure,
+//! and the thumbv7em target (scripts/setup installs both); in CI (`SINSCAL_REQUIRE_ALL` set by .ci/run) a missing QEMU is a failure,
 //! elsewhere the test reports itself as skipped.
 
 mod common;

@@ -2,6 +2,8 @@
 //! docs/formats.md#bad-input): one test per case, each on a file or an argument built here from
 //! the built-in example (a SIMULATION), with its exit status and the words of its message.
 
+mod common;
+
 use std::path::{Path, PathBuf};
 use std::process::Stdio;
 
@@ -210,7 +212,7 @@ fn a_closed_or_full_standard_output_is_no_panic() {
         assert_eq!(out.status.code(), Some(1), "{stderr}");
         assert!(stderr.contains("writing to standard output"), "{stderr}");
     } else {
-        println!("SKIPPED (no /dev/full on this machine): the full-device half of this test");
+        common::skipped_here("the full-device half of this test", "no /dev/full on this machine");
     }
 }
 

@@ -388,3 +388,21 @@ fn the_figures_link_no_c_font_library() {
     let found: Vec<&str> = c_fonts.iter().copied().filter(|c| reached.contains(*c)).collect();
     assert!(found.is_empty(), "sinscal-host depends (Cargo.lock) on font crates that link C libraries: {found:?}");
 }
+
+mod common;
+
+/// A missing prerequisite is a failure where prerequisites are required (`.ci/run` sets the variable), and a skip
+/// written to the stderr handle elsewhere; `.ci/run` sets the variable.
+#[test]
+fn a_missing_prerequisite_fails_in_ci_and_is_reported_elsewhere() {
+    let mut out = Vec::new();
+    common::report_skip("a QEMU test", "qemu-system-arm not found", false, &mut out);
+    assert_eq!(String::from_utf8(out).unwrap(), "SKIPPED a QEMU test: qemu-system-arm not found\n");
+    let required = std::panic::catch_unwind(|| {
+        common::report_skip("a QEMU test", "qemu-system-arm not found", true, &mut Vec::new());
+    });
+    let message = *required.expect_err("a required prerequisite that is missing fails").downcast::<String>().unwrap();
+    assert!(message.contains("qemu-system-arm not found") && message.contains(common::REQUIRE_ALL), "{message}");
+    let ci = fs::read_to_string(root().join(".ci/run")).unwrap();
+    assert!(ci.contains(&format!("export {}=1", common::REQUIRE_ALL)), ".ci/run must require every prerequisite");
+}

@@ -1,7 +1,7 @@
 //! Helpers shared by the tests that read the measured data sets (`SINSCAL_DATA`).
 #![allow(dead_code)] // each test file uses what it needs
 
-use std::io::Write as _;
+use std::io::Write;
 use std::path::{Path, PathBuf};
 
 pub mod held_out;
@@ -17,15 +17,38 @@ pub fn data_dir() -> Option<PathBuf> {
             Some(if dir.is_relative() { root.expect("the repository root above the package").join(dir) } else { dir })
         }
         None => {
-            // Written to the stderr handle, not through eprintln!, so that the test harness's output capture
-            // does not hide it: a skipped test must say so in a plain `cargo test` run.
-            let _ = writeln!(
-                std::io::stderr(),
-                "SKIPPED (real-data test): SINSCAL_DATA is not set; set it to the shared data directory"
-            );
+            skipped("a real-data test", "SINSCAL_DATA is not set; set it to the shared data directory");
             None
         }
     }
+}
+
+/// The variable `.ci/run` sets: a test whose prerequisite (the shared data, QEMU, flip-link) is missing then fails
+/// instead of reporting itself skipped, so that a CI run cannot pass by skipping.
+pub const REQUIRE_ALL: &str = "SINSCAL_REQUIRE_ALL";
+
+/// Whether missing prerequisites are failures (`SINSCAL_REQUIRE_ALL` set to anything but empty or 0).
+pub fn prerequisites_required() -> bool {
+    std::env::var(REQUIRE_ALL).is_ok_and(|v| !v.is_empty() && v != "0")
+}
+
+/// Reports `what` as skipped because of `why`; a failure instead where prerequisites are required (CI).
+pub fn skipped(what: &str, why: &str) {
+    report_skip(what, why, prerequisites_required(), &mut std::io::stderr());
+}
+
+/// The report of a skip on `out` (the stderr handle: written to it directly, not through eprintln!, so that the
+/// test harness's output capture does not hide it and a plain `cargo test` run shows the skip); a panic naming
+/// the missing prerequisite when `required`.
+pub fn report_skip(what: &str, why: &str, required: bool, out: &mut dyn Write) {
+    assert!(!required, "{what} cannot run: {why}; {REQUIRE_ALL} is set (as in CI), so a missing prerequisite fails");
+    let _ = writeln!(out, "SKIPPED {what}: {why}");
+}
+
+/// A prerequisite that a machine may lack without fault (a device node, say): reported as skipped on the stderr
+/// handle even in CI.
+pub fn skipped_here(what: &str, why: &str) {
+    report_skip(what, why, false, &mut std::io::stderr());
 }
 
 /// A file of the data directory; missing is a failure (SINSCAL_DATA is set).
@@ -51,14 +74,14 @@ pub fn imutk_session(dir: &Path) -> sinscal_host::io::recording::Recording {
     sinscal_host::io::import::import_imutk(&acc, &gyro, None, &detection).expect("import").recording
 }
 
-/// Whether qemu-system-arm runs here. In CI (CI=true) a missing QEMU is a failure; elsewhere the caller's test is
-/// reported as skipped (`what` says what of it is skipped, e.g. " (--on qemu only)"; empty for all of it).
+/// Whether qemu-system-arm runs here. Where prerequisites are required (CI) a missing QEMU is a failure; elsewhere
+/// the caller's test is reported as skipped (`what` says what of it is skipped, e.g. " (--on qemu only)"; empty for
+/// all of it).
 pub fn qemu_available(what: &str) -> bool {
     let qemu = sinscal_host::calibration::qemu::QEMU;
     let found = std::process::Command::new(qemu).arg("--version").output().is_ok_and(|o| o.status.success());
     if !found {
-        assert!(std::env::var("CI").is_err(), "{qemu} is missing in CI: scripts/setup must install it");
-        println!("SKIPPED{what}: {qemu} not found (run scripts/setup)");
+        skipped(&format!("a QEMU test{what}"), &format!("{qemu} not found (run scripts/setup)"));
     }
     found
 }
