@@ -61,7 +61,7 @@ fn the_stm32f405_firmware_answers_its_link_as_the_same_device() {
     assert!(status.sampling.iter().all(|&n| n == 0), "samples without an IMU: {:?}", status.sampling);
     // The record's sectors hold no record (QEMU's flash there reads as zeros): nothing stored, read through the
     // board's flash driver and the core's store.
-    assert_eq!(read_record(c).unwrap(), None);
+    assert_eq!(read_record(c).unwrap().record, None);
     // A bad CRC is refused, an unknown kind too, and the device keeps answering.
     let mut wire = vec![0u8; MAX_WIRE_BYTES];
     let n = encode_frame(kind::STATUS, 7, &[], &mut wire).unwrap();

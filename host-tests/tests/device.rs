@@ -72,8 +72,9 @@ fn device_run_then_show_gives_the_host_replay_json() {
         assert_eq!(run_v, show_v, "model {model}: the stored record reads back as the run reported it");
         assert_eq!(run_v["on"], "device");
         assert_eq!(host_v["on"], "host");
+        assert_eq!(run_v["record"]["sequence"], store, "model {model}: the record the run stored");
         host_v["on"] = "device".into();
-        assert_eq!(run_v, host_v, "model {model}: the device's result equals the host replay's");
+        assert_eq!(without_record(run_v), host_v, "model {model}: the device's result equals the host replay's");
     }
     // The calibration firmware (the budget binary: its IMU is the board's SPI port, which QEMU leaves empty, so
     // it samples nothing) boots on the same flash: it finds the record, compensates with it, and gives it back.
@@ -84,8 +85,11 @@ fn device_run_then_show_gives_the_host_replay_json() {
     let status = firmware.client.status().unwrap();
     assert!(status.compensating && status.stored == Some(2), "{status:?}");
     assert_eq!(status.sampling[0], 0, "no data-ready events without an IMU");
-    let record = read_record(&mut firmware.client).unwrap().expect("a record");
-    let from_firmware = serde_json::to_value(CalibrationJson::new(&calibration_of_record(&record).unwrap())).unwrap();
+    let read = read_record(&mut firmware.client).unwrap();
+    let record = read.record.expect("a record");
+    assert_eq!((record.sequence, read.damaged_newer), (2, None));
+    let from_firmware =
+        serde_json::to_value(CalibrationJson::new(&calibration_of_record(&record, None).unwrap())).unwrap();
     assert_eq!(from_firmware, json(&show_json), "sinscal-firmware reads the record sinscal-device stored");
     drop(firmware);
     // `--port`: the same record through a serial port, here the pseudo-terminal QEMU gives UART0.
@@ -96,6 +100,54 @@ fn device_run_then_show_gives_the_host_replay_json() {
     let _ = qemu.wait();
     checked(port.status.code(), &String::from_utf8_lossy(&port.stderr), "full", "device show --port");
     assert_eq!(json(&port_json), json(&show_json), "the record read through a serial port");
+    newest_record_damaged(&flash, &show_json);
+}
+
+/// One bit of the newest record (2, in slot 1) cleared, as NOR flash can lose it: `device show` shows the older
+/// record 1, says in one line that the newest is damaged, and exits 3; the firmware's status says the same.
+fn newest_record_damaged(flash: &std::path::Path, show_json: &std::path::Path) {
+    let mut image = std::fs::read(flash).unwrap();
+    // QEMU's flash file: two slots of one 16-KiB sector each (docs/device.md); a record's payload starts 20 bytes
+    // into its slot.
+    let slot_bytes = 16 * 1024;
+    assert_eq!(image.len(), 2 * slot_bytes);
+    let at = slot_bytes + 20 + (slot_bytes + 20..image.len()).position(|i| image[i] & 0x10 != 0).unwrap();
+    image[at] &= !0x10;
+    std::fs::write(flash, &image).unwrap();
+    let show = sinscal()
+        .args(["device", "show", "--qemu", "--flash"])
+        .arg(flash)
+        .arg("--json")
+        .arg(show_json)
+        .output()
+        .unwrap();
+    let stderr = String::from_utf8_lossy(&show.stderr);
+    assert_eq!(show.status.code(), Some(3), "{stderr}");
+    let lines: Vec<&str> = stderr.lines().filter(|l| l.contains("stored_record")).collect();
+    assert_eq!(lines.len(), 1, "{stderr}");
+    assert!(lines[0].contains("newest record (2) is damaged") && lines[0].contains("older record 1"), "{stderr}");
+    let shown = json(show_json);
+    assert_eq!(
+        (shown["record"]["sequence"].as_u64(), shown["record"]["damaged_newer_sequence"].as_u64()),
+        (Some(1), Some(2))
+    );
+    assert_eq!(
+        shown["model"],
+        serde_json::json!(["gyro_bias", "accel_bias"]),
+        "the older record is the biases-only calibration"
+    );
+    let elf = firmware_binary("sinscal-firmware").unwrap();
+    let mut firmware = boot_elf(&elf, flash, None).unwrap();
+    let status = firmware.client.status().unwrap();
+    assert_eq!((status.stored, status.damaged_newer, status.compensating), (Some(1), Some(2), true), "{status:?}");
+}
+
+/// A device's calibration JSON without what only a device has: its record and the check of it.
+fn without_record(mut v: serde_json::Value) -> serde_json::Value {
+    let o = v.as_object_mut().unwrap();
+    o.remove("record");
+    o["checks"].as_array_mut().unwrap().retain(|c| c["check"] != "stored_record");
+    v
 }
 
 /// Boots `sinscal-device` with UART0 on a pseudo-terminal; the terminal's path from QEMU's message.
@@ -240,4 +292,38 @@ fn cobs(raw: &[u8]) -> Vec<u8> {
     out[code_at] = (out.len() - code_at) as u8;
     out.push(0);
     out
+}
+
+/// 19 positions: the record such a run could store passes the 16-KiB slot, and `device run` says so before the
+/// run starts (the limit and the bound), instead of after the whole calibration; 24 positions: the note passes
+/// the device's limit, said the same way.
+#[test]
+fn a_schedule_whose_record_or_note_could_not_be_kept_is_refused_before_the_run() {
+    if !common::qemu_available("") {
+        return;
+    }
+    let dir = tempfile::tempdir().unwrap();
+    for (positions, words) in [
+        (19, "refused before the run starts: the record of this run could take"),
+        (24, "the device keeps at most 2048"),
+    ] {
+        let poses = sinscal_host::model::synth::TABLE1_DEG;
+        let positions_deg: Vec<[f64; 3]> = (0..positions).map(|k| poses[k % 6]).collect();
+        let rec =
+            Scenario { dwell_s: 2.0, settle_s: 0.5, positions_deg, ..Scenario::example() }.recording(3, "many.csv");
+        let path = dir.path().join(format!("many{positions}.csv"));
+        rec.write(&path).unwrap();
+        let flash = dir.path().join(format!("flash{positions}.img"));
+        let started = std::time::Instant::now();
+        let run =
+            sinscal().args(["device", "run"]).arg(&path).args(["--qemu", "--flash"]).arg(&flash).output().unwrap();
+        let stderr = String::from_utf8_lossy(&run.stderr);
+        assert_eq!(run.status.code(), Some(1), "{positions} positions: {stderr}");
+        assert!(stderr.contains(words), "{positions} positions: {stderr}");
+        assert!(
+            !stderr.contains("position 1 of"),
+            "{positions} positions: no progress, the run never started: {stderr}"
+        );
+        println!("{positions} positions: refused after {:.1} s: {}", started.elapsed().as_secs_f64(), stderr.trim());
+    }
 }

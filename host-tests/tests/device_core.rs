@@ -215,11 +215,11 @@ fn every_request_and_refusal_in_order_then_the_record_at_the_next_boot() {
     // The next boot on the same flash: the record is found and compensates the stream.
     let mut again = Bench::boot(b.device.into_store().release());
     let status = again.ok(kind::STATUS, &[]);
-    let tail = &status[status.len() - 7..];
+    let tail = &status[status.len() - 12..];
     assert_eq!(
-        (tail[0], u32::from_le_bytes(tail[1..5].try_into().unwrap()), tail[5]),
-        (1, 1, 1),
-        "stored, seq 1, compensating"
+        (tail[0], u32::from_le_bytes(tail[1..5].try_into().unwrap()), tail[5], tail[7]),
+        (1, 1, 1, 0),
+        "stored, seq 1, compensating, no damaged newer record"
     );
     again.ok(kind::STREAM, &[1]);
     let streamed = again.feed(&replay, 200);
@@ -240,4 +240,44 @@ fn every_request_and_refusal_in_order_then_the_record_at_the_next_boot() {
     assert_eq!(u32::from_le_bytes(erased[..4].try_into().unwrap()), 2);
     assert_eq!(again.refused(kind::READ_RECORD, &0u32.to_le_bytes()), ErrorCode::NothingStored);
     assert!(!again.device.compensating());
+}
+
+/// A schedule whose record could not fit the storage slot is refused at the start, with the largest record the
+/// run could store as the detail, not after the whole run; the same schedule with the general estimator's
+/// smallest configuration that fits starts.
+#[test]
+fn a_run_whose_record_could_not_fit_the_slot_is_refused_before_it_starts() {
+    use sinscal::instrument::wire::configuration::DeviceConfiguration;
+    use sinscal::instrument::wire::record::max_record_bytes;
+    let rec = Scenario { dwell_s: 30.0, ..Scenario::example() }.recording(5, "example.csv");
+    let (replay, _) = sinscal_host::calibration::firmware_path::replay_file(&rec, &Options::default()).unwrap();
+    let config = configuration_body(&replay[..sinscal::rig::replay::replay_header_bytes(6)]).unwrap();
+    let mut configured = DeviceConfiguration::decode(&config).unwrap();
+    // 24 positions: the six poses four times over.
+    let (poses, labels) = (configured.configuration.schedule.clone(), configured.configuration.labels.clone());
+    for k in 1..4 {
+        for (p, l) in poses.iter().zip(&labels) {
+            configured.configuration.schedule.push(*p).unwrap();
+            configured.configuration.labels.push(l + 10 * k).unwrap();
+        }
+    }
+    let mut long = vec![0u8; sinscal::instrument::wire::configuration::MAX_DEVICE_BYTES];
+    let mut w = sinscal::instrument::wire::Writer::new(&mut long);
+    configured.encode(&mut w);
+    let n = w.written().unwrap();
+    long.truncate(n);
+    let mut b = Bench::boot(RamFlash(vec![0xFF; 32 * 1024]));
+    b.ok(kind::CONFIGURE, &long);
+    let c = &configured.configuration;
+    let bound = max_record_bytes(long.len(), 0, 24, c.estimator);
+    assert!(bound > 16 * 1024 - 20, "{bound}");
+    let (k, body) = b.ask(kind::START, &[]);
+    assert_eq!(k, kind::ERROR);
+    assert_eq!(ErrorCode::from_code(body[0]), Some(ErrorCode::TooLarge));
+    assert_eq!(u32::from_le_bytes(body[1..5].try_into().unwrap()) as usize, bound, "the detail is the bound");
+    assert_eq!(b.state(), DeviceState::Configured, "nothing started");
+    // The six positions fit, and start.
+    b.ok(kind::CONFIGURE, &config);
+    b.ok(kind::START, &[]);
+    assert_eq!(b.state(), DeviceState::Running);
 }

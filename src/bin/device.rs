@@ -25,7 +25,7 @@ mod firmware {
     use heapless::spsc::{Consumer, Producer, Queue};
     use sinscal::board::{exit, uart};
     use sinscal::instrument::device::{Action, Device};
-    use sinscal::instrument::main_loop::{log_counters, log_event, LinkPort};
+    use sinscal::instrument::main_loop::{log_boot, log_counters, log_event, LinkPort};
     use sinscal::instrument::store::RecordStore;
     use sinscal::rig::replay::{read_header, ByteSource, ReplayDevice};
     use sinscal::rig::semihost::{arg_path, FileSource, HostFileFlash};
@@ -104,7 +104,8 @@ mod firmware {
             fail("IMU initialisation failed");
         }
         let mut device = Device::new(model, store);
-        defmt::info!("sinscal-device: ready; stored calibration compensates: {=bool}", device.compensating());
+        defmt::info!("sinscal-device: ready");
+        log_boot(&device);
         let rx: &'static mut Queue<u8, { uart::RX_QUEUE_SLOTS }> =
             cortex_m::singleton!(: Queue<u8, { uart::RX_QUEUE_SLOTS }> = Queue::new()).unwrap_or_else(|| exit(2));
         let (rx_producer, rx_consumer): (_, Consumer<'static, u8>) = rx.split();

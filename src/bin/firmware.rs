@@ -33,7 +33,7 @@ mod firmware {
     use sinscal::board::mps2_an386::{self as board, exit, CycleDelay, Pl022, TIMER0_IRQ};
     use sinscal::board::{uart, watchdog};
     use sinscal::instrument::device::Device;
-    use sinscal::instrument::main_loop::{log_init_error, Instrument, LinkPort};
+    use sinscal::instrument::main_loop::{log_boot, log_init_error, Instrument, LinkPort};
     use sinscal::instrument::store::RecordStore;
     use sinscal::rig::semihost::{arg_path, CPath, HostFileFlash};
     use sinscal::run::sampling::{on_data_ready, QueueItem, SamplingStats, QUEUE_SLOTS, TABLE_IN_POSITION};
@@ -108,7 +108,8 @@ mod firmware {
         };
         let mut device = Device::new(Model::Adis16505_2, store);
         device.set_busy_hook(watchdog::feed);
-        defmt::info!("sinscal-firmware: stored calibration compensates: {=bool}", device.compensating());
+        defmt::info!("sinscal-firmware: ready");
+        log_boot(&device);
         let rx: &'static mut Queue<u8, { uart::RX_QUEUE_SLOTS }> =
             cortex_m::singleton!(: Queue<u8, { uart::RX_QUEUE_SLOTS }> = Queue::new()).unwrap_or_else(|| exit(2));
         let (rx_producer, rx_consumer) = rx.split();

@@ -11,11 +11,11 @@ use heapless::Vec;
 
 use super::link::{encode_frame, Frame, FrameError, MAX_BODY_BYTES};
 use super::message::{kind, DeviceState, ErrorCode, MAX_CHUNK_BYTES, MAX_NOTE_BYTES};
-use super::store::{RecordInfo, RecordStore};
+use super::store::{DamagedRecord, RecordInfo, RecordStore};
 use super::wire::codes::{ConfigurationRefusal, ImuCode};
 use super::wire::configuration::{DeviceConfiguration, MAX_DEVICE_BYTES, THRESHOLD_BYTES};
 use super::wire::outcome::{encode_part, OutcomeView};
-use super::wire::record::{Record, RecordHead, RECORD_HEAD_BYTES, RECORD_VERSION};
+use super::wire::record::{max_record_bytes, Record, RecordHead, RECORD_HEAD_BYTES, RECORD_VERSION};
 use super::wire::{Reader, Writer};
 use crate::calib::angles::MAX_POSITIONS;
 use crate::calib::compensation::{self, Compensation};
@@ -65,6 +65,8 @@ pub struct Device<F: NorFlash> {
     run: RunCounters,
     store: RecordStore<F>,
     stored: Option<RecordInfo>,
+    /// A damaged record newer than `stored`: the device fell back to an older record (or to none).
+    damaged: Option<DamagedRecord>,
     compensation: Compensation,
     compensation_from_record: bool,
     streaming: bool,
@@ -104,8 +106,13 @@ impl<F: NorFlash> Device<F> {
     /// loaded and compensates every sample from now on. (Kept out of line: the sequence it builds passes through
     /// its frame once, at boot, not through the caller's for good.)
     #[inline(never)]
-    pub fn new(model: Model, store: RecordStore<F>) -> Device<F> {
-        let mut d = Device {
+    pub fn new(model: Model, mut store: RecordStore<F>) -> Device<F> {
+        // The store is read before the device is built, so that the device is built once, in its final place
+        // (a method called on it before it is returned made the compiler build it in this frame and copy it out:
+        // 66 KB of stack instead of 9 KB).
+        let scan = store.scan().unwrap_or_default();
+        let compensation = scan.newest.and_then(|info| compensation_of_record(&mut store, &info));
+        Device {
             model,
             state: DeviceState::Idle,
             configuration: Vec::new(),
@@ -121,34 +128,31 @@ impl<F: NorFlash> Device<F> {
             .ok(),
             run: RunCounters::default(),
             store,
-            stored: None,
-            compensation: Compensation::IDENTITY,
-            compensation_from_record: false,
+            stored: scan.newest,
+            damaged: scan.damaged_newer,
+            compensation: compensation.unwrap_or(Compensation::IDENTITY),
+            compensation_from_record: compensation.is_some(),
             streaming: false,
             busy_hook: None,
             link: LinkStats::default(),
-        };
-        d.load_record();
-        d
+        }
     }
 
-    /// Reads the newest record and its compensation (identity if none is stored or it cannot be read).
-    fn load_record(&mut self) {
-        self.stored = self.store.newest().ok().flatten();
-        let mut compensation = None;
-        if let Some(info) = self.stored {
-            let mut head = [0u8; RECORD_HEAD_BYTES];
-            if self.store.read(&info, 0, &mut head).is_ok() {
-                if let Some(h) = RecordHead::decode(&head) {
-                    let mut bytes = [0u8; compensation::ENCODED_BYTES];
-                    if self.store.read(&info, RECORD_HEAD_BYTES, &mut bytes).is_ok() {
-                        compensation = Compensation::decode(&bytes[..h.compensation_bytes as usize]);
-                    }
-                }
-            }
-        }
-        self.compensation_from_record = compensation.is_some();
-        self.compensation = compensation.unwrap_or(Compensation::IDENTITY);
+    /// Finds the newest valid record and a damaged newer one (neither when the flash cannot be read).
+    fn scan_store(&mut self) {
+        let scan = self.store.scan().unwrap_or_default();
+        self.stored = scan.newest;
+        self.damaged = scan.damaged_newer;
+    }
+
+    /// The stored record in use, if any.
+    pub fn stored_record(&self) -> Option<RecordInfo> {
+        self.stored
+    }
+
+    /// A damaged record newer than the one in use: the device fell back to an older record (or to none).
+    pub fn damaged_record(&self) -> Option<DamagedRecord> {
+        self.damaged
     }
 
     /// A function called between the flash operations of a store (a board feeds its watchdog there: a store
@@ -314,6 +318,16 @@ fn record_of<'a>(
     Ok(Record::new(compensation, configuration, note, outcome))
 }
 
+/// The compensation of the record `info` (`None` if it cannot be read or decoded).
+fn compensation_of_record<F: NorFlash>(store: &mut RecordStore<F>, info: &RecordInfo) -> Option<Compensation> {
+    let mut head = [0u8; RECORD_HEAD_BYTES];
+    store.read(info, 0, &mut head).ok()?;
+    let h = RecordHead::decode(&head)?;
+    let mut bytes = [0u8; compensation::ENCODED_BYTES];
+    store.read(info, RECORD_HEAD_BYTES, &mut bytes).ok()?;
+    Compensation::decode(bytes.get(..h.compensation_bytes as usize)?)
+}
+
 /// A reply body's length and the board's action, or the error of an error reply.
 type Reply = Result<(usize, Action), (ErrorCode, u32)>;
 
@@ -413,10 +427,15 @@ impl<F: NorFlash> Device<F> {
             return Err((ErrorCode::Busy, 0));
         }
         let Some(configured) = &self.configured else { return Err((ErrorCode::NotConfigured, 0)) };
+        // The record this run could store must fit the slot: refused now, not after the whole run.
+        let c = &configured.configuration;
+        let record_bytes = max_record_bytes(self.configuration.len(), self.note.len(), c.schedule.len(), c.estimator);
+        if record_bytes > self.store.max_payload() {
+            return Err((ErrorCode::TooLarge, record_bytes as u32));
+        }
         let refused = (ErrorCode::Configuration, ConfigurationRefusal::Sequence.code());
         // The sequence built at boot, started again in place (never a second one on the stack).
         let sequence = self.sequence.as_mut().ok_or(refused)?;
-        let c = &configured.configuration;
         sequence.restart(&c.schedule, c.site, configured.sequence_settings()).map_err(|_| refused)?;
         self.run = RunCounters { sampling_at_start: *sampling, ..RunCounters::default() };
         self.state = DeviceState::Running;
@@ -442,6 +461,7 @@ impl<F: NorFlash> Device<F> {
         }
         w.u8(self.stored.is_some() as u8).u32(self.stored.map_or(0, |s| s.sequence));
         w.u8(self.compensation_from_record as u8).u8(self.streaming as u8);
+        w.u8(self.damaged.is_some() as u8).u32(self.damaged.map_or(0, |d| d.sequence));
         body_of(w.written())
     }
 
@@ -478,7 +498,7 @@ impl<F: NorFlash> Device<F> {
                 Ok(())
             })
             .map_err(|_| (ErrorCode::Flash, 0))?;
-        self.stored = self.store.newest().ok().flatten();
+        self.scan_store();
         self.compensation = compensation;
         self.compensation_from_record = true;
         let mut w = Writer::new(out);
@@ -504,6 +524,7 @@ impl<F: NorFlash> Device<F> {
         }
         let erases = self.store.erase_all().map_err(|_| (ErrorCode::Flash, 0))?;
         self.stored = None;
+        self.damaged = None;
         self.compensation = Compensation::IDENTITY;
         self.compensation_from_record = false;
         let mut w = Writer::new(out);

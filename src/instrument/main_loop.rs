@@ -129,6 +129,23 @@ pub fn log_event(e: &Event) {
     }
 }
 
+/// Logs, at boot, which record the device loaded (its sequence number and slot) and, in one warning, a damaged
+/// record newer than it: the device then compensates with the older record, or with none.
+pub fn log_boot<F: NorFlash>(device: &Device<F>) {
+    match device.stored_record() {
+        Some(r) => defmt::info!(
+            "stored calibration: record {=u32} (slot {=u8}); compensates: {=bool}",
+            r.sequence,
+            r.slot,
+            device.compensating()
+        ),
+        None => defmt::info!("no stored calibration: samples leave uncompensated"),
+    }
+    if let Some(d) = device.damaged_record() {
+        defmt::warn!("the newest record ({=u32}, slot {=u8}) is damaged (CRC mismatch): not used", d.sequence, d.slot);
+    }
+}
+
 /// Logs every counter of the sampling side and of the link (defmt).
 pub fn log_counters<F: NorFlash>(sampling: &SamplingStats, device: &Device<F>) {
     let s = sampling.counters();

@@ -60,7 +60,8 @@ wire_codes! {
         NotConfigured = 8,
         /// No result yet (read result, store).
         NoResult = 9,
-        /// The record would not fit the storage slot (detail: its length in bytes).
+        /// The record would not fit the storage slot (detail: its length in bytes; refusing a start, the largest
+        /// record the run could store).
         TooLarge = 10,
         /// The flash failed (detail: 0).
         Flash = 11,

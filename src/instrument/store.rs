@@ -109,6 +109,40 @@ pub struct RecordInfo {
     pub len: usize,
 }
 
+/// A record whose header is whole (magic, version, payload offset, a length the slot holds, a written CRC) but
+/// whose CRC does not match its header and payload: a record damaged after it was stored (or a store cut while
+/// its CRC was being programmed, the last bytes it writes).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub struct DamagedRecord {
+    /// The slot that holds it, 0 or 1.
+    pub slot: u8,
+    /// The sequence number its header gives.
+    pub sequence: u32,
+}
+
+/// What [`RecordStore::scan`] found: the newest valid record, and a damaged record newer than it, if any (the
+/// record a load would have taken had it not been damaged).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub struct StoreScan {
+    /// The newest valid record.
+    pub newest: Option<RecordInfo>,
+    /// A damaged record newer than [`StoreScan::newest`] (or the only record with a header).
+    pub damaged_newer: Option<DamagedRecord>,
+}
+
+/// What one slot holds.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+enum SlotContent {
+    /// No whole header: erased, never written, or a store cut before its header was complete.
+    Empty,
+    /// A valid record.
+    Valid(RecordInfo),
+    /// A whole header whose CRC does not match.
+    Damaged(DamagedRecord),
+}
+
 /// What a successful [`RecordStore::store`] did.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 #[cfg_attr(feature = "defmt", derive(defmt::Format))]
@@ -206,16 +240,41 @@ impl<F: NorFlash> RecordStore<F> {
     /// The newest valid record, `None` if neither slot holds one. Reads both slots whole (their payloads
     /// through the CRC).
     pub fn newest(&mut self) -> Result<Option<RecordInfo>, StoreError> {
-        let a = self.validate_slot(0)?;
-        let b = self.validate_slot(1)?;
-        Ok(match (a, b) {
-            (Some(a), Some(b)) => Some(if sequence_is_newer(b.sequence, a.sequence) { b } else { a }),
-            (a, b) => a.or(b),
-        })
+        Ok(self.scan()?.newest)
+    }
+
+    /// The newest valid record and a damaged record newer than it, if any: a load that falls back to an older
+    /// record because the newer one is damaged says so. Reads both slots whole.
+    pub fn scan(&mut self) -> Result<StoreScan, StoreError> {
+        let contents = [self.slot_content(0)?, self.slot_content(1)?];
+        let mut scan = StoreScan::default();
+        for content in contents {
+            if let SlotContent::Valid(info) = content {
+                if scan.newest.is_none_or(|n| sequence_is_newer(info.sequence, n.sequence)) {
+                    scan.newest = Some(info);
+                }
+            }
+        }
+        for content in contents {
+            if let SlotContent::Damaged(d) = content {
+                if scan.newest.is_none_or(|n| sequence_is_newer(d.sequence, n.sequence)) {
+                    scan.damaged_newer = Some(d);
+                }
+            }
+        }
+        Ok(scan)
     }
 
     /// The record in `slot` if it is valid: magic, version, payload offset, length within the slot, CRC.
     fn validate_slot(&mut self, slot: u8) -> Result<Option<RecordInfo>, StoreError> {
+        Ok(match self.slot_content(slot)? {
+            SlotContent::Valid(info) => Some(info),
+            _ => None,
+        })
+    }
+
+    /// What `slot` holds: a valid record, a whole header with a CRC that does not match, or no whole header.
+    fn slot_content(&mut self, slot: u8) -> Result<SlotContent, StoreError> {
         let base = self.slot_base(slot);
         let mut head = [0u8; CHUNK_BYTES];
         let head = &mut head[..self.payload_offset as usize];
@@ -227,7 +286,7 @@ impl<F: NorFlash> RecordStore<F> {
             || u32::from(payload_offset) != self.payload_offset
             || len > self.max_payload()
         {
-            return Ok(None);
+            return Ok(SlotContent::Empty);
         }
         let mut crc = Crc32::new();
         crc.update(&head[..CRC_COVERED_HEADER_BYTES]);
@@ -242,7 +301,14 @@ impl<F: NorFlash> RecordStore<F> {
             offset += n;
         }
         let sequence = le_u32(head, 8);
-        Ok((crc.finish() == stored_crc).then_some(RecordInfo { slot, sequence, len }))
+        Ok(if crc.finish() == stored_crc {
+            SlotContent::Valid(RecordInfo { slot, sequence, len })
+        } else if stored_crc == u32::MAX {
+            // The CRC's bytes still erased: a store cut before its last bytes, not a damaged record.
+            SlotContent::Empty
+        } else {
+            SlotContent::Damaged(DamagedRecord { slot, sequence })
+        })
     }
 
     /// Reads `out.len()` payload bytes of the record `info` from payload offset `offset`.
@@ -470,6 +536,10 @@ mod tests {
         flash.bytes[1024 + 20 + 57] &= !0x08;
         let mut store = RecordStore::new(flash, 1024).unwrap();
         assert_eq!(load(&mut store).unwrap(), (RecordInfo { slot: 0, sequence: 8, len: 100 }, payload(100, 4)));
+        // The fall back is said: the damaged record is newer than the one loaded.
+        let scan = store.scan().unwrap();
+        assert_eq!(scan.damaged_newer, Some(DamagedRecord { slot: 1, sequence: 9 }));
+        assert_eq!(scan.newest.map(|n| n.sequence), Some(8));
         // The next store replaces the bad slot, not the good one.
         let r = store.store_bytes(&payload(10, 6)).unwrap();
         assert_eq!((r.slot, r.sequence), (1, 9));
@@ -478,6 +548,33 @@ mod tests {
         flash.bytes[1024 + 12] &= 0xF0;
         let mut store = RecordStore::new(flash, 1024).unwrap();
         assert_eq!(store.newest().unwrap().map(|i| i.sequence), Some(8));
+    }
+
+    #[test]
+    fn only_a_damaged_record_newer_than_the_loaded_one_is_reported() {
+        // Damaged, but older than the valid record: nothing was lost, nothing to report.
+        let mut flash = Flash::erased(2);
+        write_raw(&mut flash, 0, FORMAT_VERSION, 8, &payload(100, 4));
+        write_raw(&mut flash, 1, FORMAT_VERSION, 9, &payload(100, 5));
+        flash.bytes[20 + 3] &= !0x01;
+        let mut store = RecordStore::new(flash, 1024).unwrap();
+        assert_eq!(store.scan().unwrap().damaged_newer, None);
+        assert_eq!(store.newest().unwrap().map(|i| i.sequence), Some(9));
+        // The only record, damaged: reported, and nothing loads.
+        let mut flash = Flash::erased(2);
+        write_raw(&mut flash, 1, FORMAT_VERSION, 1, &payload(40, 4));
+        flash.bytes[1024 + 20] &= !0x04;
+        let mut store = RecordStore::new(flash, 1024).unwrap();
+        let scan = store.scan().unwrap();
+        assert_eq!((scan.newest, scan.damaged_newer), (None, Some(DamagedRecord { slot: 1, sequence: 1 })));
+        // A header whose CRC bytes are still erased is a store cut before its last bytes: not damage.
+        let mut flash = Flash::erased(2);
+        write_raw(&mut flash, 0, FORMAT_VERSION, 8, &payload(100, 4));
+        let fields = header_fields(20, 9, 100);
+        flash.write(1024, &fields).unwrap();
+        let mut store = RecordStore::new(flash, 1024).unwrap();
+        let scan = store.scan().unwrap();
+        assert_eq!((scan.newest.map(|n| n.sequence), scan.damaged_newer), (Some(8), None));
     }
 
     #[test]

@@ -34,7 +34,7 @@ use panic_probe as _;
 mod app {
     use heapless::spsc::{Consumer, Producer, Queue};
     use sinscal::instrument::device::Device;
-    use sinscal::instrument::main_loop::{log_init_error, Instrument, LinkPort};
+    use sinscal::instrument::main_loop::{log_boot, log_init_error, Instrument, LinkPort};
     use sinscal::instrument::store::RecordStore;
     use sinscal::run::sampling::{on_data_ready, QueueItem, SamplingStats, QUEUE_SLOTS, TABLE_IN_POSITION};
     use sinscal::sensor::adis::{Adis, Model};
@@ -197,7 +197,7 @@ mod app {
         };
         let mut device = Device::new(IMU_MODEL, store);
         device.set_busy_hook(watchdog::main_loop_alive);
-        defmt::info!("stored calibration compensates: {=bool}", device.compensating());
+        log_boot(&device);
         let mut instrument = Instrument::new(&mut device, LinkPort::new(rx_queue, UsartTx(tx)));
         let mut longest_turn_us = 0;
         loop {

@@ -39,7 +39,7 @@ const DEG_PER_RAD: f64 = 57.29578;
 /// One check: its name, whether it passed, and a one-line detail.
 #[derive(Clone, Debug, PartialEq, Serialize)]
 pub struct Check {
-    /// `physics`, `fit`, `convergence`, `plausibility` or `spikes`.
+    /// `physics`, `fit`, `convergence`, `plausibility`, `spikes`, or for a device's record `stored_record`.
     pub check: &'static str,
     /// Whether the result passed it.
     pub passed: bool,
@@ -59,7 +59,25 @@ pub fn checks(c: &Calibration) -> Vec<Check> {
     if let Some(hint) = c.fit_hint.as_ref().filter(|_| !fit.passed) {
         fit.detail = format!("{hint}; {}", fit.detail);
     }
-    vec![physics(c), fit, convergence(c), plausibility(&c.estimates), spikes(c)]
+    let mut all = vec![physics(c), fit, convergence(c), plausibility(&c.estimates), spikes(c)];
+    all.extend(c.record.as_ref().map(stored_record));
+    all
+}
+
+/// Whether a device's record is its newest: a damaged newer record means the device compensates with an older
+/// calibration than the last one stored.
+pub fn stored_record(r: &crate::calibration::RecordIdentity) -> Check {
+    match r.damaged_newer {
+        None => Check::new("stored_record", true, format!("record {} is the newest stored", r.sequence)),
+        Some(newer) => Check::new(
+            "stored_record",
+            false,
+            format!(
+                "the newest record ({newer}) is damaged (its CRC does not match); shown: the older record {},                  which the device compensates with",
+                r.sequence
+            ),
+        ),
+    }
 }
 
 /// The checks that failed, as the lines `calibrate` prints on stderr (`check failed: fit: ...`).

@@ -268,6 +268,7 @@ pub fn calibration_from_outcome(
         pose_tolerance_deg: (outcome.configuration.pose_tolerance_rad as f64).to_degrees(),
         noise: outcome.configuration.noise,
         fit_hint: None,
+        record: None,
         source: source.to_string(),
         latitude_deg: rec.header().latitude_deg,
         site,

@@ -225,6 +225,22 @@ pub struct Calibration {
     /// The noise model the general estimator weighted the dwells by (`--noise`); `None`: the session's own
     /// dwell noise.
     pub noise: Option<NoiseModel>,
+    /// The device's record this calibration was stored as or read from (`device run`, `device show`); `None`
+    /// elsewhere.
+    pub record: Option<RecordIdentity>,
+}
+
+/// Which stored record a calibration is: its sequence number, when its run started, and a damaged newer record
+/// the device passed over.
+#[derive(Clone, Debug, PartialEq)]
+pub struct RecordIdentity {
+    /// The record's sequence number in the device's store.
+    pub sequence: u32,
+    /// The workstation's UTC time when it started the run that stored the record (from the record's note;
+    /// `None` for a record whose note does not carry it).
+    pub run_started_utc: Option<String>,
+    /// The sequence number of a damaged record newer than this one: the device fell back to this record.
+    pub damaged_newer: Option<u32>,
 }
 
 /// A move the general estimator used: between which dwells, where, how long, how far it turned, and how far the
@@ -393,6 +409,7 @@ pub fn calibrate_channels(recording: &impl RowSource, options: &Options) -> Resu
         pose_tolerance_deg: pose_tolerance_deg(options, header),
         noise: estimator.settings().noise,
         fit_hint: None,
+        record: None,
         without_suspect,
         source: source.to_string(),
         latitude_deg: header.latitude_deg,
@@ -644,6 +661,7 @@ pub fn calibrate_angles(recording: &impl RowSource, options: &Options) -> Result
         pose_tolerance_deg: 0.0,
         noise: None,
         fit_hint: None,
+        record: None,
         source: source.to_string(),
         latitude_deg: header.latitude_deg,
         site,

@@ -64,6 +64,17 @@ fn is_zero(x: &u32) -> bool {
     *x == 0
 }
 
+/// The device's record in the calibration JSON.
+#[derive(Clone, Debug, Serialize)]
+pub struct RecordJson {
+    /// Its sequence number in the device's store.
+    pub sequence: u32,
+    /// The workstation's UTC time when it started the run that stored it (ISO 8601), if the note carries it.
+    pub run_started_utc: Option<String>,
+    /// The sequence number of a damaged newer record the device passed over (`null`: none).
+    pub damaged_newer_sequence: Option<u32>,
+}
+
 /// The calibration JSON of docs/formats.md#calibration-json, with extra fields after the contract's.
 #[derive(Debug, Serialize)]
 pub struct CalibrationJson {
@@ -166,6 +177,9 @@ pub struct CalibrationJson {
     /// Extra: sampling counters of the firmware path.
     #[serde(skip_serializing_if = "Option::is_none")]
     pub sampling: Option<SamplingJson>,
+    /// Extra: the device's record (`device run`, `device show`).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub record: Option<RecordJson>,
     /// The checks run on the result, passed or failed (docs/formats.md#calibration-json-version-2): a failed one
     /// makes `calibrate` exit with status 3.
     pub checks: Vec<crate::calibration::checks::Check>,
@@ -458,6 +472,11 @@ impl CalibrationJson {
                 faults: [s.bus_errors, s.checksum_errors, s.stalled_counters, s.status_flags, s.dead_bus_frames],
                 missed_samples: s.missed_samples,
             }),
+            record: c.record.as_ref().map(|r| RecordJson {
+                sequence: r.sequence,
+                run_started_utc: r.run_started_utc.clone(),
+                damaged_newer_sequence: r.damaged_newer,
+            }),
             checks: crate::calibration::checks::checks(c),
             source: c.source.clone(),
             sinscal_version: env!("CARGO_PKG_VERSION"),
@@ -633,6 +652,10 @@ pub fn summary(c: &Calibration) -> String {
     }
     fit(&mut out, e, crate::calibration::checks::noise_dof(c));
     suspects(&mut out, c);
+    if let Some(r) = &c.record {
+        let started = r.run_started_utc.as_deref().map_or(String::new(), |t| format!(", its run started {t}"));
+        let _ = writeln!(out, "Stored record: {}{started}", r.sequence);
+    }
     checks_line(&mut out, &crate::calibration::checks::checks(c));
     out
 }

@@ -8,7 +8,9 @@ use std::path::PathBuf;
 use crate::calibration::Calibration;
 use crate::cmd::calibrate::{finish, CalibrationArgs};
 use crate::device::client::{Client, Status};
-use crate::device::{boot_qemu, calibration_of_record, read_record, replay_for, run_calibration, DeviceRun};
+use crate::device::{
+    boot_qemu, calibration_of_record, read_record, replay_for, run_calibration, DeviceRun, RecordRead,
+};
 use crate::io::recording::RecordingFile;
 
 /// Arguments of `sinscal device`.
@@ -160,15 +162,20 @@ fn device_run(a: RunArgs) -> anyhow::Result<()> {
     report_run(&run, a.json.as_deref())
 }
 
-fn show_record(record: Option<Vec<u8>>, json: Option<&std::path::Path>, what: &str) -> anyhow::Result<()> {
-    let Some(record) = record else {
-        eprintln!("{what}: no calibration record is stored");
+fn show_record(read: RecordRead, json: Option<&std::path::Path>, what: &str) -> anyhow::Result<()> {
+    let Some(record) = read.record else {
+        match read.damaged_newer {
+            Some(sequence) => eprintln!(
+                "{what}: no valid calibration record: the only one with a header ({sequence}) is damaged (its CRC \
+                 does not match); the device compensates nothing"
+            ),
+            None => eprintln!("{what}: no calibration record is stored"),
+        }
         std::process::exit(1);
     };
-    let calibration: Calibration = calibration_of_record(&record)?;
+    let calibration: Calibration = calibration_of_record(&record, read.damaged_newer)?;
     finish(&calibration, json)
 }
-
 fn device_show(a: ShowArgs) -> anyhow::Result<()> {
     match (&a.target.port, &a.target.flash) {
         (Some(port), _) => {

@@ -30,6 +30,21 @@ pub enum LinkError {
     /// A reply that does not follow the protocol.
     #[error("link: malformed reply to {0}")]
     Malformed(&'static str),
+    /// The record a run could store is larger than the device's storage slot: refused before the run starts.
+    #[error(
+        "refused before the run starts: the record of this run could take {len} bytes ({positions} positions, a note \
+         of {note} bytes), the device's storage slot holds {max}: fewer positions, or shorter labels"
+    )]
+    RecordTooLarge {
+        /// The largest record the run could store, bytes.
+        len: usize,
+        /// The slot's limit, bytes.
+        max: usize,
+        /// Positions of the schedule.
+        positions: usize,
+        /// The note's length, bytes.
+        note: usize,
+    },
     /// The host built a provenance note longer than the device keeps: refused before it is sent.
     #[error(
         "the provenance note is {len} bytes, the device keeps at most {max} (its calibration options and one line \
@@ -83,6 +98,8 @@ pub struct Status {
     pub compensating: bool,
     /// Whether the sample stream is on.
     pub streaming: bool,
+    /// The sequence number of a damaged record newer than the stored one in use (the device fell back).
+    pub damaged_newer: Option<u32>,
 }
 
 /// What a store did.
@@ -222,8 +239,8 @@ impl<T: Read + Write> Client<T> {
     pub fn status(&mut self) -> Result<Status, LinkError> {
         let body = self.request("status", kind::STATUS, &[])?;
         // state, position, positions; the sampling counters; 6 link counters; stored, sequence,
-        // compensating, streaming.
-        let fixed = 5 + 6 * 4 + 1 + 4 + 1 + 1;
+        // compensating, streaming; damaged, its sequence.
+        let fixed = 5 + 6 * 4 + 1 + 4 + 1 + 1 + 1 + 4;
         if body.len() < fixed || (body.len() - fixed) % 4 != 0 {
             return Err(LinkError::Malformed("status"));
         }
@@ -247,6 +264,10 @@ impl<T: Read + Write> Client<T> {
                 stored: (has != 0).then_some(sequence),
                 compensating: r.u8()? != 0,
                 streaming: r.u8()? != 0,
+                damaged_newer: {
+                    let (damaged, sequence) = (r.u8()?, r.u32()?);
+                    (damaged != 0).then_some(sequence)
+                },
             })
         };
         parse(&mut r).ok_or(LinkError::Malformed("status"))

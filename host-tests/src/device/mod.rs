@@ -18,11 +18,13 @@ use sinscal::rig::replay::{read_header, ReplayHeader};
 
 use crate::calibration::firmware_path::{calibration_from_outcome, write_replay_file, ReplayPlan};
 use crate::calibration::qemu::{firmware_binary, QEMU};
-use crate::calibration::{Calibration, Options};
+use crate::calibration::{Calibration, Options, RecordIdentity};
 use crate::io::error::InputError;
 use crate::io::recording::{Header, Recording, RowSource};
 use crate::io::ScratchFile;
 use client::{Client, LinkError, Stored};
+use sinscal::instrument::message::MAX_NOTE_BYTES;
+use sinscal::instrument::wire::record::max_record_bytes;
 
 pub use note::Provenance;
 
@@ -166,9 +168,20 @@ pub fn run_calibration<T: Read + Write>(
 ) -> Result<DeviceRun, anyhow::Error> {
     let source = rec.source();
     let header = replay_header(replay.path())?;
-    client.identify()?;
-    client.configure(&device_configuration_body(&header, thresholds.unwrap_or(Thresholds::REPLAY)))?;
-    let note = Provenance::of(rec, options, plan).to_bytes();
+    let identity = client.identify()?;
+    let body = device_configuration_body(&header, thresholds.unwrap_or(Thresholds::REPLAY));
+    let provenance = Provenance::of(rec, options, plan);
+    let note = provenance.to_bytes();
+    if note.len() > MAX_NOTE_BYTES {
+        return Err(LinkError::NoteTooLong { len: note.len(), max: MAX_NOTE_BYTES }.into());
+    }
+    let c = &header.configuration;
+    let len = max_record_bytes(body.len(), note.len(), c.schedule.len(), c.estimator);
+    if len > identity.max_record_bytes as usize {
+        let (max, positions) = (identity.max_record_bytes as usize, c.schedule.len());
+        return Err(LinkError::RecordTooLarge { len, max, positions, note: note.len() }.into());
+    }
+    client.configure(&body)?;
     client.annotate(&note)?;
     client.request("start", kind::START, &[])?;
     let status = loop {
@@ -185,6 +198,11 @@ pub fn run_calibration<T: Read + Write>(
     let mut calibration = calibration_from_outcome(rec, options, plan, &outcome)?;
     calibration.on = "device";
     let stored = client.store()?;
+    calibration.record = Some(RecordIdentity {
+        sequence: stored.sequence,
+        run_started_utc: provenance.run_started_utc,
+        damaged_newer: None,
+    });
     let record = client.read_all("the record", kind::READ_RECORD)?;
     let parts = split_record(&record)?;
     if parts.outcome != result || parts.note != note {
@@ -224,8 +242,8 @@ pub fn split_record(record: &[u8]) -> Result<RecordParts<'_>, anyhow::Error> {
 }
 
 /// The calibration of a stored record (the same report as the run that stored it).
-pub fn calibration_of_record(record: &[u8]) -> Result<Calibration, anyhow::Error> {
-    let parts = split_record(record)?;
+pub fn calibration_of_record(read: &DeviceRecord, damaged_newer: Option<u32>) -> Result<Calibration, anyhow::Error> {
+    let parts = split_record(&read.bytes)?;
     let configured =
         DeviceConfiguration::decode(parts.configuration).map_err(|e| anyhow::anyhow!("stored configuration: {e}"))?;
     let note = Provenance::from_bytes(parts.note)?;
@@ -253,6 +271,8 @@ pub fn calibration_of_record(record: &[u8]) -> Result<Calibration, anyhow::Error
     });
     let mut calibration = calibration_from_outcome(&rec, &options, &note.plan, &outcome)?;
     calibration.on = "device";
+    calibration.record =
+        Some(RecordIdentity { sequence: read.sequence, run_started_utc: note.run_started_utc, damaged_newer });
     Ok(calibration)
 }
 
@@ -263,12 +283,34 @@ pub fn replay_for(rec: &impl RowSource, options: &Options) -> Result<(ScratchFil
     Ok((replay, plan))
 }
 
-/// Reads the stored record of a device: `None` when nothing is stored.
-pub fn read_record<T: Read + Write>(client: &mut Client<T>) -> Result<Option<Vec<u8>>, LinkError> {
+/// Reads the stored record of a device (the one it uses, with its sequence number from the status) and whether a
+/// damaged newer record was passed over.
+pub fn read_record<T: Read + Write>(client: &mut Client<T>) -> Result<RecordRead, LinkError> {
     client.identify()?;
-    match client.read_all("the record", kind::READ_RECORD) {
-        Ok(r) => Ok(Some(r)),
-        Err(LinkError::Refused { code: sinscal::instrument::message::ErrorCode::NothingStored, .. }) => Ok(None),
-        Err(e) => Err(e),
-    }
+    let status = client.status()?;
+    let record = match client.read_all("the record", kind::READ_RECORD) {
+        Ok(bytes) => Some(DeviceRecord { bytes, sequence: status.stored.unwrap_or(0) }),
+        Err(LinkError::Refused { code: sinscal::instrument::message::ErrorCode::NothingStored, .. }) => None,
+        Err(e) => return Err(e),
+    };
+    Ok(RecordRead { record, damaged_newer: status.damaged_newer })
+}
+
+/// A record read from a device: its bytes and its sequence number.
+#[derive(Clone, Debug, PartialEq, Eq)]
+pub struct DeviceRecord {
+    /// The record's bytes.
+    pub bytes: Vec<u8>,
+    /// Its sequence number in the device's store.
+    pub sequence: u32,
+}
+
+/// What [`read_record`] found: the newest valid record (`None`: none is stored), and the sequence number of a
+/// damaged record newer than it, which the device passed over.
+#[derive(Clone, Debug, PartialEq, Eq)]
+pub struct RecordRead {
+    /// The record the device uses.
+    pub record: Option<DeviceRecord>,
+    /// A damaged newer record's sequence number.
+    pub damaged_newer: Option<u32>,
 }

@@ -29,6 +29,10 @@ pub struct Provenance {
     pub options: OptionsNote,
     /// The dwells: labels, first lines, reference attitudes.
     pub plan: ReplayPlan,
+    /// The workstation's UTC time when it started the run (ISO 8601, seconds); what `device show` reports as
+    /// when the record was made.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub run_started_utc: Option<String>,
 }
 
 /// The calibration options in the note.
@@ -103,6 +107,7 @@ impl Provenance {
                 noise_from_recording: options.noise.is_some_and(|t| t.from_recording),
             },
             plan: plan.clone(),
+            run_started_utc: Some(utc_iso8601(std::time::SystemTime::now())),
         }
     }
 
@@ -157,5 +162,44 @@ impl Provenance {
             use_moves: false,
             pose_tolerance_deg: o.pose_tolerance_deg,
         })
+    }
+}
+
+/// `time` as ISO 8601 UTC to the second (`2026-11-28T03:04:05Z`); the epoch for a time before it.
+pub fn utc_iso8601(time: std::time::SystemTime) -> String {
+    let seconds = time.duration_since(std::time::UNIX_EPOCH).map_or(0, |d| d.as_secs());
+    let (days, of_day) = (seconds / 86_400, seconds % 86_400);
+    let (year, month, day) = civil_from_days(days as i64);
+    format!("{year:04}-{month:02}-{day:02}T{:02}:{:02}:{:02}Z", of_day / 3600, of_day / 60 % 60, of_day % 60)
+}
+
+/// The proleptic Gregorian date of `days` since 1970-01-01 (the era-based conversion of H. Hinnant's
+/// "chrono-compatible low-level date algorithms").
+fn civil_from_days(days: i64) -> (i64, u32, u32) {
+    let z = days + 719_468;
+    let era = z.div_euclid(146_097);
+    let day_of_era = z.rem_euclid(146_097);
+    let year_of_era = (day_of_era - day_of_era / 1460 + day_of_era / 36_524 - day_of_era / 146_096) / 365;
+    let day_of_year = day_of_era - (365 * year_of_era + year_of_era / 4 - year_of_era / 100);
+    let mp = (5 * day_of_year + 2) / 153;
+    let day = (day_of_year - (153 * mp + 2) / 5 + 1) as u32;
+    let month = if mp < 10 { mp + 3 } else { mp - 9 } as u32;
+    let year = year_of_era + era * 400 + i64::from(month <= 2);
+    (year, month, day)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use std::time::{Duration, UNIX_EPOCH};
+
+    #[test]
+    fn utc_times_of_known_instants() {
+        assert_eq!(utc_iso8601(UNIX_EPOCH), "1970-01-01T00:00:00Z");
+        // 2000-02-29 (a leap day of a century divisible by 400) 12:34:56 UTC.
+        assert_eq!(utc_iso8601(UNIX_EPOCH + Duration::from_secs(951_827_696)), "2000-02-29T12:34:56Z");
+        // 2026-11-28 00:00:00 UTC, and the last second of 2100-02-28 (2100 is not a leap year).
+        assert_eq!(utc_iso8601(UNIX_EPOCH + Duration::from_secs(1_795_824_000)), "2026-11-28T00:00:00Z");
+        assert_eq!(utc_iso8601(UNIX_EPOCH + Duration::from_secs(4_107_542_399)), "2100-02-28T23:59:59Z");
     }
 }

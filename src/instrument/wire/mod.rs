@@ -24,7 +24,7 @@
 //! thresholds     settle samples u32, dwell samples u32, fewest samples u32 (the configure message only)
 //! ```
 //!
-//! Why hand-written and not a serialisation crate: the outcome is up to 34,424 bytes and is encoded in windows
+//! Why hand-written and not a serialisation crate: the outcome is up to 34,408 bytes and is encoded in windows
 //! (a link reply of 1 KiB, a flash page) without a buffer of the whole ([`Writer::window`]); the formats are
 //! fixed little-endian layouts that stored records and replay files already use; and the encoders are a few
 //! hundred bytes of flash (docs/firmware.md).

@@ -10,7 +10,7 @@
 
 use heapless::Vec;
 
-use super::codes::{AttitudeCode, FailureKind, SolutionCode};
+use super::codes::{AttitudeCode, EstimatorCode, FailureKind, SolutionCode};
 use super::configuration::Configuration;
 use super::{Reader, WireError, Writer};
 use crate::calib::align::AlignError;
@@ -24,9 +24,31 @@ use crate::run::sequence::{AbortReason, SequenceFailure, SequenceSolution};
 /// Magic of an encoded outcome.
 pub const MAGIC: [u8; 4] = *b"SSRO";
 /// Largest encoded outcome, bytes: the counters and failure (76), [`MAX_POSITIONS`] positions of 404 bytes,
-/// and the general estimator's solution (5,424 and 48 per dwell; the angle method's, 520 and 12 per position,
-/// is smaller). For 64 positions: 34,424.
-pub const MAX_BYTES: usize = 76 + MAX_POSITIONS * 404 + 5_424 + MAX_DWELLS * 48;
+/// and the general estimator's solution (5,404 and 48 per dwell; the angle method's, 1,228, is smaller). For 64
+/// positions: 34,408.
+pub const MAX_BYTES: usize =
+    HEAD_BYTES + MAX_POSITIONS * POSITION_BYTES + GENERAL_BYTES + MAX_DWELLS * GENERAL_DWELL_BYTES;
+
+/// Bytes of an outcome before its solution: magic, counters, failure, positions count, solution code.
+const HEAD_BYTES: usize = 76;
+/// Bytes per position of an outcome: its dwell summary.
+const POSITION_BYTES: usize = 404;
+/// Bytes of the general estimator's solution without its dwells, and per dwell.
+const GENERAL_BYTES: usize = 5_404;
+const GENERAL_DWELL_BYTES: usize = 48;
+/// Bytes of the angle method's solution: passes, convergence and last correction; nine estimates; two words;
+/// a residual for every possible position; chi-square and degrees of freedom; its covariance.
+const ANGLES_BYTES: usize = 12 + 9 * 12 + 8 + 12 * MAX_POSITIONS + 8 + 4 * MAX_PARAMETERS * MAX_PARAMETERS;
+
+/// The largest encoded outcome of a schedule of `positions` positions solved by `estimator`, bytes: what a
+/// device checks against its storage slot before a run starts (a solved run of every position reaches it).
+pub const fn max_bytes_for(positions: usize, estimator: EstimatorCode) -> usize {
+    let solution = match estimator {
+        EstimatorCode::Angles => ANGLES_BYTES,
+        EstimatorCode::General | EstimatorCode::GeneralWithoutGyros => GENERAL_BYTES + GENERAL_DWELL_BYTES * positions,
+    };
+    HEAD_BYTES + POSITION_BYTES * positions + solution
+}
 
 /// What a calibration produced, borrowed: from an [`Outcome`], or from a running device's sequence.
 #[derive(Clone, Copy, Debug)]

@@ -81,6 +81,22 @@ impl RecordHead {
     }
 }
 
+/// The largest record a run can store, bytes: its head, compensation, configuration (`configuration_bytes`),
+/// note (`note_bytes`) and the largest outcome of `positions` positions solved by `estimator`. A device refuses
+/// to start a run whose record could pass its storage slot, before the run rather than after it.
+pub const fn max_record_bytes(
+    configuration_bytes: usize,
+    note_bytes: usize,
+    positions: usize,
+    estimator: super::codes::EstimatorCode,
+) -> usize {
+    RECORD_HEAD_BYTES
+        + compensation::ENCODED_BYTES
+        + configuration_bytes
+        + note_bytes
+        + super::outcome::max_bytes_for(positions, estimator)
+}
+
 /// A record to store, from its parts.
 pub struct Record<'a> {
     compensation: Compensation,

@@ -242,6 +242,16 @@ fn outcomes_round_trip_whole_and_in_windows_and_truncations_are_refused() {
         let o = outcome(&mut rng);
         let n = o.encode(&mut bytes).unwrap();
         assert_eq!(Outcome::decode(&o.configuration, &bytes[..n]), Ok(o.clone()));
+        // The bound a device checks before a run: reached by a solved outcome of every position, never passed.
+        let estimator = match o.result {
+            Some(SequenceSolution::Angles(_)) => EstimatorCode::Angles,
+            _ => EstimatorCode::General,
+        };
+        let bound = super::outcome::max_bytes_for(o.positions.len(), estimator);
+        if o.result.is_some() {
+            assert_eq!(n, bound, "a solved outcome of {} positions", o.positions.len());
+        }
+        assert!(n <= super::outcome::max_bytes_for(o.configuration.schedule.len(), EstimatorCode::General));
         // A window of the encoding is the same bytes (a link reply, a flash page).
         let (start, len) = (rng.below(n as u64) as usize, 1 + rng.below(1024) as usize);
         let mut part = std::vec![0u8; len];
