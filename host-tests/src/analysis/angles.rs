@@ -207,6 +207,11 @@ pub const MAX_ANGLE_RAD: f64 = 1.0;
 
 /// Analyses an angles file.
 pub fn analyze_angles(file: &AnglesFile) -> Result<Analysis, InputError> {
+    // Three angles per position; the sensor terms (at most 30), the reference offset and, with more than one
+    // position, a position error per position and axis.
+    let positions = file.rows.len() as u64;
+    let columns = 6 + 30 + 3 + if positions > 1 { 3 * positions } else { 0 };
+    super::check_column_memory(&format!("{positions} positions"), 3 * file.rows.len(), columns, &file.source)?;
     let obs = AngleObservations::new(file);
     let mut problem = obs.problem(file);
     let selection = select(&mut problem, 0).map_err(|e| InputError::file(&file.source, e))?;

@@ -9,6 +9,9 @@ use crate::model::synth::{cross, mul_t_vec, M3};
 use super::observations::{BlockObs, Blocks, Session};
 use super::{AXES, ENU};
 
+/// Time constants of the warm-up's grid, from 5 s to the session's span.
+pub(super) const TAU_GRID_POINTS: usize = 48;
+
 /// A candidate column (or family of columns, one per time constant).
 #[derive(Clone, Debug)]
 pub(super) struct Candidate {
@@ -276,7 +279,8 @@ impl<'a> RecordingColumns<'a> {
         let t0 = self.session.t0;
         let span =
             self.session.dwells.iter().flat_map(|d| d.t.iter()).fold(0.0f64, |m, t| m.max(t - t0)).max(self.session.dt);
-        (0..48).map(|i| 5.0 * (span / 5.0f64).powf(i as f64 / 47.0)).collect()
+        let last = (TAU_GRID_POINTS - 1) as f64;
+        (0..TAU_GRID_POINTS).map(|i| 5.0 * (span / 5.0f64).powf(i as f64 / last)).collect()
     }
 
     /// The column of channel `c`: `f` of the block's times on its rows, zero elsewhere.

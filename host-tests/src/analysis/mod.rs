@@ -334,6 +334,34 @@ pub struct FigureData {
     pub residual_names: Vec<String>,
 }
 
+/// The most memory the selection's candidate columns may take, bytes: a column and its remainder after the base
+/// model, f64, for every candidate variant over every observation (docs/analysis.md#memory-limit).
+pub const MAX_COLUMN_BYTES: u64 = 768 << 20;
+
+/// Bytes the selection holds per candidate variant and observation: the column and its remainder, f64, and the
+/// fits' working copies (measured: peak resident memory over this estimate's 16 bytes was 1.5 at 150 and at 500
+/// dwells of 64 rows).
+const BYTES_PER_COLUMN_ENTRY: u64 = 24;
+
+/// Refuses `what` (its `observations` and candidate `columns`) when the columns would pass [`MAX_COLUMN_BYTES`],
+/// before any is built: the observations grow with the dwells (or positions) and so do the candidates (a
+/// position error per dwell and axis), so the columns' memory grows with the square of the dwells.
+fn check_column_memory(what: &str, observations: usize, columns: u64, source: &str) -> Result<(), InputError> {
+    let bytes = observations as u64 * columns * BYTES_PER_COLUMN_ENTRY;
+    if bytes <= MAX_COLUMN_BYTES {
+        return Ok(());
+    }
+    Err(InputError::file(
+        source,
+        format!(
+            "analyze: {what} give {observations} observations and {columns} candidate columns, {} MB of columns, \
+             beyond the {} MB the analysis holds (docs/analysis.md#memory-limit): analyze fewer at a time",
+            bytes >> 20,
+            MAX_COLUMN_BYTES >> 20
+        ),
+    ))
+}
+
 /// Reads `path` as an angles file when it starts with `# sinscal-angles`, otherwise as a recording (line by
 /// line, docs/analysis.md#speed-and-memory), and analyses it.
 pub fn analyze_path(path: &Path) -> Result<Analysis, InputError> {

@@ -29,10 +29,11 @@ pub fn analyze_recording(recording: &impl RowSource) -> Result<Analysis, InputEr
 fn analyze_session(mut session: Session, levelled: bool, source: &str) -> Result<Analysis, InputError> {
     let accel_bias_mps2 = if levelled { relevel(&mut session) } else { [0.0; 3] };
     let session = &session;
+    let blocks = Blocks::cut(session);
+    check_column_memory(session, &blocks, source)?;
     // The sample statistics are measured while the block observations are fitted (docs/analysis.md#speed-and-memory).
     let (problem, selection, measures) = std::thread::scope(|scope| {
         let measuring = scope.spawn(|| measure_samples(session));
-        let blocks = Blocks::cut(session);
         let mut problem = problem(session, &blocks, levelled.then_some(accel_bias_mps2));
         let selection = select(&mut problem, SAMPLE_TESTS);
         let measures = measuring.join().unwrap_or_else(|e| std::panic::resume_unwind(e));
@@ -85,6 +86,18 @@ fn relevel(session: &mut Session) -> [f64; 3] {
         }
     }
     bias
+}
+
+/// Refuses, before any candidate column is built, a session whose columns would pass the limit
+/// ([`super::check_column_memory`]).
+fn check_column_memory(session: &Session, blocks: &Blocks, source: &str) -> Result<(), InputError> {
+    let dwells = session.dwells.len() as u64;
+    let position_errors = if session.all_heading() && dwells > 1 { 3 * dwells } else { 0 };
+    // The base model and the sensor terms (at most 30), the reference offset, and per channel a drift, a
+    // temperature term and a warm-up per time constant of the grid.
+    let per_channel = 2 + super::candidates::TAU_GRID_POINTS as u64;
+    let columns = 30 + 3 + position_errors + 6 * per_channel;
+    super::check_column_memory(&format!("{dwells} dwells"), blocks.y.len(), columns, source)
 }
 
 /// The block means, the base model's bias columns and the catalogue's candidates. With attitudes levelled

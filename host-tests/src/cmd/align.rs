@@ -4,7 +4,7 @@
 use std::path::PathBuf;
 
 use crate::cmd::{json_to_stdout, write_json};
-use crate::io::recording::Recording;
+use crate::io::recording::RecordingFile;
 use crate::navigation::alignment::{align, summary};
 
 /// Arguments of `sinscal align`.
@@ -20,7 +20,7 @@ pub struct Args {
 /// Runs `sinscal align`.
 pub fn run(args: Args) -> anyhow::Result<()> {
     let Args { recording, json } = args;
-    let rec = Recording::read(&recording)?;
+    let rec = RecordingFile::open(&recording)?;
     let report = align(&rec)?;
     if !json_to_stdout(json.as_deref()) {
         super::out(&summary(&report))?;

@@ -1046,12 +1046,36 @@ fn read_chunk(reader: &mut impl BufRead, chunk_bytes: u64, bytes: &mut Vec<u8>) 
     Ok(())
 }
 
-/// Longest line a recording may have, bytes: a row of eleven numbers is about 200.
+/// Longest line a recording (or any text file sinscal reads) may have, bytes: a row of eleven numbers is about
+/// 200.
 pub const MAX_LINE_BYTES: u64 = 1 << 16;
 
 /// The reason for a line of [`MAX_LINE_BYTES`] or more.
 fn long_line() -> String {
-    format!("a line longer than {MAX_LINE_BYTES} bytes: not a line of a recording")
+    format!("a line longer than {MAX_LINE_BYTES} bytes: not a line of a text file sinscal reads")
+}
+
+/// The text of the file at `path`, read line by line: a line of [`MAX_LINE_BYTES`] or more is refused at its
+/// line number before the rest is read (a file of one 300-MB line is not held whole), as is text that is not
+/// UTF-8.
+pub fn read_text_capped(path: &Path) -> Result<String, InputError> {
+    let source = path.display().to_string();
+    let mut reader = std::io::BufReader::new(std::fs::File::open(path).map_err(|e| InputError::io(path, e))?);
+    let mut bytes = Vec::new();
+    for line in 1.. {
+        match read_line_capped(&mut reader, &mut bytes) {
+            Ok(0) => break,
+            Ok(_) => {}
+            Err(e) if e.kind() == std::io::ErrorKind::InvalidData => {
+                return Err(InputError::at(&source, line, e.to_string()))
+            }
+            Err(e) => return Err(InputError::io(path, e)),
+        }
+    }
+    String::from_utf8(bytes).map_err(|e| {
+        let at = e.utf8_error().valid_up_to();
+        InputError::file(&source, format!("byte {at} is not UTF-8: not a text file"))
+    })
 }
 
 /// Reads to the end of the line into `bytes`, at most [`MAX_LINE_BYTES`]: a longer line is an error (a file of

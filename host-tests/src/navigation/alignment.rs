@@ -18,8 +18,9 @@ use serde::Serialize;
 use sinscal::calib::align::{coarse_align, AlignError};
 use sinscal::nav::earth::{Site, EARTH_RATE_RADPS};
 
+use crate::io::dwell_tally::{DwellTallies, DwellTally};
 use crate::io::error::InputError;
-use crate::io::recording::{Dwell, Recording};
+use crate::io::recording::RowSource;
 
 /// A 3x3 matrix, row-major, f64.
 type M3 = [[f64; 3]; 3];
@@ -86,39 +87,72 @@ pub struct AlignmentReport {
     pub sinscal_version: &'static str,
 }
 
-/// Aligns every dwell of a recording.
-pub fn align(rec: &Recording) -> Result<AlignmentReport, InputError> {
-    let source = rec.source.as_str();
-    let h = &rec.header;
+/// Aligns every dwell of a recording, streaming its rows: per dwell only its tally and the running moments of
+/// its six channels are kept (at most [`crate::io::dwell_tally::MAX_DWELLS_READ`] dwells), never its rows.
+pub fn align(rec: &impl RowSource) -> Result<AlignmentReport, InputError> {
+    let source = rec.source();
+    let h = rec.header();
     let latitude_rad = h.latitude_deg.to_radians();
     let (site, gravity_source) = match h.gravity_mps2 {
         Some(g) => (Site { latitude_rad: latitude_rad as f32, gravity_mps2: g as f32 }, "header"),
         None => (Site::with_normal_gravity(latitude_rad as f32, h.height_m as f32), "normal_gravity"),
     };
-    let dwells = rec.dwells();
-    if dwells.is_empty() {
-        return Err(InputError::file(source, crate::io::dwell_tally::NO_DWELL));
-    }
-    let positions =
-        dwells.iter().map(|d| align_dwell(d, rec.has_gyro, &site, source)).collect::<Result<Vec<_>, _>>()?;
+    let mut tallies = DwellTallies::bounded();
+    let mut moments: Vec<Moments> = Vec::new();
+    rec.for_each_row(&mut |row| {
+        if let Some(i) = tallies.push(row, source)? {
+            if i == moments.len() {
+                moments.push(Moments::default());
+            }
+            moments[i].push(row.force_b_mps2, row.rate_b_radps);
+        }
+        Ok(())
+    })?;
+    let dwells = tallies.at_least_one(source)?;
+    let positions = dwells
+        .iter()
+        .zip(&moments)
+        .map(|(d, m)| align_dwell(d, m, rec.has_gyro(), &site, source))
+        .collect::<Result<Vec<_>, _>>()?;
     Ok(AlignmentReport {
         schema: "sinscal-alignment/1",
         source: source.to_string(),
         latitude_deg: h.latitude_deg,
         gravity_mps2: site.gravity_mps2 as f64,
         gravity_source,
-        gyro: rec.has_gyro,
+        gyro: rec.has_gyro(),
         positions,
         sinscal_version: env!("CARGO_PKG_VERSION"),
     })
 }
 
-/// Mean and variance of the mean (sample variance / N) of three channels.
-fn mean_and_variance(rows: &[[f64; 3]]) -> ([f64; 3], [f64; 3]) {
-    let n = rows.len() as f64;
-    let mean = [0, 1, 2].map(|i| rows.iter().map(|r| r[i]).sum::<f64>() / n);
-    let var = [0, 1, 2].map(|i| rows.iter().map(|r| (r[i] - mean[i]).powi(2)).sum::<f64>() / (n - 1.0) / n);
-    (mean, var)
+/// The running mean and sum of squared deviations of a dwell's specific force and rate (Welford's update).
+#[derive(Clone, Debug, Default)]
+struct Moments {
+    n: usize,
+    mean: [[f64; 3]; 2],
+    m2: [[f64; 3]; 2],
+}
+
+impl Moments {
+    /// Adds one row's specific force and rate.
+    fn push(&mut self, force: [f64; 3], rate: [f64; 3]) {
+        self.n += 1;
+        let n = self.n as f64;
+        for (k, v) in [force, rate].iter().enumerate() {
+            for i in 0..3 {
+                let delta = v[i] - self.mean[k][i];
+                self.mean[k][i] += delta / n;
+                self.m2[k][i] += delta * (v[i] - self.mean[k][i]);
+            }
+        }
+    }
+
+    /// Mean and variance of the mean (sample variance / N) of the specific force (`k` = 0) or the rate (1).
+    fn mean_and_variance(&self, k: usize) -> ([f64; 3], [f64; 3]) {
+        let n = self.n as f64;
+        (self.mean[k], self.m2[k].map(|m2| m2 / (n - 1.0) / n))
+    }
 }
 
 /// Angles of one attitude and their covariance, radians: (pitch, roll, heading) with `None` for a heading
@@ -130,18 +164,23 @@ struct Angles {
     covariance: M3,
 }
 
-fn align_dwell(dwell: &Dwell<'_>, has_gyro: bool, site: &Site, source: &str) -> Result<PositionAlignment, InputError> {
-    let n = dwell.rows.len();
+fn align_dwell(
+    dwell: &DwellTally,
+    moments: &Moments,
+    has_gyro: bool,
+    site: &Site,
+    source: &str,
+) -> Result<PositionAlignment, InputError> {
+    let n = dwell.samples;
     if n < MIN_DWELL_ROWS {
         return Err(InputError::at(
             source,
-            dwell.first_line(),
+            dwell.first_line,
             format!("dwell {}: {n} rows, align needs at least {MIN_DWELL_ROWS}", dwell.pos),
         ));
     }
     let reference = dwell.attitude(source)?;
-    let forces: Vec<[f64; 3]> = dwell.rows.iter().map(|r| r.force_b_mps2).collect();
-    let (force, force_var) = mean_and_variance(&forces);
+    let (force, force_var) = moments.mean_and_variance(0);
     // Readings that are not gravity (zeros, accelerometers in g) define no attitude: refused, not aligned.
     let norm = (force[0] * force[0] + force[1] * force[1] + force[2] * force[2]).sqrt();
     let limit = f64::from(sinscal::calib::limits::FORCE_MAGNITUDE_ERROR_MAX_RELATIVE);
@@ -149,7 +188,7 @@ fn align_dwell(dwell: &Dwell<'_>, has_gyro: bool, site: &Site, source: &str) -> 
     if norm.is_nan() || (norm / g - 1.0).abs() > limit {
         return Err(InputError::at(
             source,
-            dwell.first_line(),
+            dwell.first_line,
             format!(
                 "dwell {}: |f| is {} m/s^2, more than {} % from g ({}): these readings define no attitude \
                  (accelerometers in g, or not at rest?)",
@@ -162,15 +201,14 @@ fn align_dwell(dwell: &Dwell<'_>, has_gyro: bool, site: &Site, source: &str) -> 
     }
     let mut note = None;
     let angles = if has_gyro {
-        let rates: Vec<[f64; 3]> = dwell.rows.iter().map(|r| r.rate_b_radps).collect();
-        let (rate, rate_var) = mean_and_variance(&rates);
+        let (rate, rate_var) = moments.mean_and_variance(1);
         match coarse_align(force.map(|x| x as f32), rate.map(|x| x as f32), site) {
             Ok(c) => gyro_angles(&c.0.map(|row| row.map(f64::from)), force_var, rate_var, site),
             Err(AlignError::Degenerate) => {
                 note = Some("specific force and angular rate are parallel: heading not determined".to_string());
                 level_angles(force, force_var)
             }
-            Err(e) => return Err(InputError::at(source, dwell.first_line(), format!("dwell {}: {e}", dwell.pos))),
+            Err(e) => return Err(InputError::at(source, dwell.first_line, format!("dwell {}: {e}", dwell.pos))),
         }
     } else {
         level_angles(force, force_var)

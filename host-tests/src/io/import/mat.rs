@@ -11,7 +11,7 @@
 //! name, real part, imaginary part when complex) or an miCOMPRESSED element whose zlib stream inflates to one.
 //!
 //! Nothing here allocates from a size read in the file before checking it against the bytes that are there
-//! (a compressed element's inflated size against [`MAX_INFLATED_BYTES`] and deflate's largest ratio), and
+//! (a compressed element's inflated size against what is left of [`MAX_MAT_VALUE_BYTES`] and deflate's largest ratio), and
 //! nothing panics on bad input: every refusal is an [`InputError`] naming the file, the byte and the reason.
 
 use std::io::{Read as _, Write as _};
@@ -21,8 +21,39 @@ use crate::io::error::InputError;
 mod v73;
 pub use v73::write_mat_v73;
 
-/// Largest inflated size of one compressed element, bytes (2 GiB): a larger one is refused.
-pub const MAX_INFLATED_BYTES: usize = 1 << 31;
+/// The most a MAT-file may hold, bytes, counted across all its variables as their values in f64 (8 bytes each,
+/// whatever their stored width: int8 data count eight times their size): 512 MiB, 64 million values (three hours
+/// of six channels at 1 kHz). Checked before a compressed element is inflated (it may inflate to at most what is
+/// left) and before its values are converted; a file beyond it is refused.
+pub const MAX_MAT_VALUE_BYTES: usize = 512 << 20;
+
+/// What is left of [`MAX_MAT_VALUE_BYTES`] while a MAT-file is read.
+pub(super) struct ValueBudget {
+    /// Bytes left.
+    pub left: usize,
+}
+
+impl ValueBudget {
+    /// A whole budget.
+    pub fn new() -> ValueBudget {
+        ValueBudget { left: MAX_MAT_VALUE_BYTES }
+    }
+
+    /// Takes `count` values (as f64) from the budget, or refuses them.
+    pub fn take(&mut self, count: u64) -> Result<(), String> {
+        let bytes = count.saturating_mul(8);
+        if bytes > self.left as u64 {
+            return Err(format!(
+                "{count} values, {} MB as f64, more than the {} MB left of the {} MB sinscal reads from one MAT-file",
+                bytes >> 20,
+                self.left >> 20,
+                MAX_MAT_VALUE_BYTES >> 20
+            ));
+        }
+        self.left -= bytes as usize;
+        Ok(())
+    }
+}
 
 /// Bytes of the header of a level-5 MAT-file.
 const HEADER_BYTES: usize = 128;
@@ -118,7 +149,7 @@ impl MatMatrix {
 /// Refused with a reason (`source` names the file in it): a file that is not a MAT-file (text, a version 4
 /// file and an HDF5 file without MATLAB's header are named as such), HDF5 data that do not read, a dataset
 /// larger than the file can hold, an element cut short or larger than the bytes
-/// left, a compressed element that does not inflate or inflates beyond [`MAX_INFLATED_BYTES`], dimensions
+/// left, a compressed element that does not inflate, values beyond [`MAX_MAT_VALUE_BYTES`], dimensions
 /// whose product overflows or disagrees with the number of values, and a NaN or infinite value (named by its
 /// variable, row and column: sinscal reads finite values only).
 pub fn read_mat(bytes: &[u8], source: &str) -> Result<Vec<MatMatrix>, InputError> {
@@ -131,18 +162,20 @@ pub fn read_mat(bytes: &[u8], source: &str) -> Result<Vec<MatMatrix>, InputError
             );
             return Err(InputError::file(source, reason));
         }
-        let variables = v73::read_variables(bytes).map_err(|r| InputError::file(source, format!("MATLAB 7.3: {r}")))?;
+        let variables = v73::read_variables(bytes, &mut ValueBudget::new())
+            .map_err(|r| InputError::file(source, format!("MATLAB 7.3: {r}")))?;
         return matrices_or_refused(variables, source);
     }
     let order = header_byte_order(bytes).map_err(|reason| InputError::file(source, reason))?;
     let mut variables = Vec::new();
     let mut cursor = Cursor { bytes, pos: HEADER_BYTES, order };
+    let mut budget = ValueBudget::new();
     while cursor.pos < bytes.len() {
         let at = cursor.pos;
         if bytes[at..].len() < 8 && bytes[at..].iter().all(|&b| b == 0) {
             break; // the last element's padding
         }
-        let element = top_level_element(&mut cursor)
+        let element = top_level_element(&mut cursor, &mut budget)
             .map_err(|reason| InputError::file(source, format!("element at byte {at}: {reason}")))?;
         variables.push(element);
     }
@@ -305,24 +338,25 @@ impl<'a> Cursor<'a> {
 }
 
 /// One variable at the top level of the file: an miMATRIX, or an miCOMPRESSED element holding one.
-fn top_level_element(cursor: &mut Cursor<'_>) -> Result<Variable, String> {
+fn top_level_element(cursor: &mut Cursor<'_>, budget: &mut ValueBudget) -> Result<Variable, String> {
     // A compressed element is not padded (MATLAB starts the next element right after it).
     let padded = cursor.u32_at(cursor.pos) != Some(MI_COMPRESSED);
     let element = cursor.element(padded)?;
     match element.ty {
-        MI_MATRIX => variable(element.data, cursor.order),
+        MI_MATRIX => variable(element.data, cursor.order, budget),
         MI_COMPRESSED => {
-            let inflated = inflate(element.data, MAX_INFLATED_BYTES)?;
+            let inflated = inflate(element.data, budget.left)?;
             let mut inner = Cursor { bytes: &inflated, pos: 0, order: cursor.order };
             let content = inner.expect(MI_MATRIX, "the inflated element")?;
             // Byte positions from here on are those of the inflated data.
-            variable(content, cursor.order).map_err(|r| format!("compressed, in its inflated data: {r}"))
+            variable(content, cursor.order, budget).map_err(|r| format!("compressed, in its inflated data: {r}"))
         }
         ty => Err(format!("type {ty} at the top level: a MAT-file's variables are miMATRIX (14) or miCOMPRESSED (15)")),
     }
 }
 
-/// The zlib stream of an miCOMPRESSED element, inflated; refused beyond `limit` bytes ([`MAX_INFLATED_BYTES`]).
+/// The zlib stream of an miCOMPRESSED element, inflated; refused beyond `limit` bytes (what is left of
+/// [`MAX_MAT_VALUE_BYTES`]).
 /// The buffer grows with what the stream gives, from a first guess bounded by deflate's largest ratio.
 fn inflate(compressed: &[u8], limit: usize) -> Result<Vec<u8>, String> {
     let mut decoder = flate2::read::ZlibDecoder::new(compressed);
@@ -331,19 +365,24 @@ fn inflate(compressed: &[u8], limit: usize) -> Result<Vec<u8>, String> {
     // The inflated tag's size, either byte order (only a guess for the buffer, checked by the reading).
     let size = u32::from_le_bytes([head[4], head[5], head[6], head[7]])
         .min(u32::from_be_bytes([head[4], head[5], head[6], head[7]])) as usize;
-    let bound = compressed.len().saturating_mul(MAX_DEFLATE_RATIO).min(limit);
+    // At most the limit and one byte (what the refusal needs to see): never a doubling past the limit.
+    let bound = compressed.len().saturating_mul(MAX_DEFLATE_RATIO).min(limit.saturating_add(1));
     let mut out = Vec::with_capacity(size.saturating_add(8).min(bound));
     out.extend_from_slice(&head);
     let rest = limit.saturating_add(1).saturating_sub(head.len()) as u64;
     decoder.take(rest).read_to_end(&mut out).map_err(|e| format!("the zlib stream does not inflate: {e}"))?;
     if out.len() > limit {
-        return Err(format!("it inflates to more than {limit} bytes, the most sinscal reads from one element"));
+        return Err(format!(
+            "it inflates to more than {} MB, what is left of the {} MB sinscal reads from one MAT-file",
+            limit >> 20,
+            MAX_MAT_VALUE_BYTES >> 20
+        ));
     }
     Ok(out)
 }
 
 /// The contents of an miMATRIX element: a numeric 2-D real matrix, or a skipped variable described.
-fn variable(content: &[u8], order: ByteOrder) -> Result<Variable, String> {
+fn variable(content: &[u8], order: ByteOrder, budget: &mut ValueBudget) -> Result<Variable, String> {
     let mut c = Cursor { bytes: content, pos: 0, order };
     if content.is_empty() {
         return Ok(Variable::Skipped("an empty miMATRIX element".to_string()));
@@ -374,6 +413,7 @@ fn variable(content: &[u8], order: ByteOrder) -> Result<Variable, String> {
         return skip(&format!("{}-d {shape}", dims.len()));
     };
     let count = rows.checked_mul(cols).ok_or_else(|| format!("'{name}': the dimensions {shape} overflow"))?;
+    budget.take(count as u64).map_err(|r| format!("'{name}' ({shape}): {r}"))?;
     let at = c.pos;
     let real = c.element(true).map_err(|r| format!("'{name}': the real part at byte {at}: {r}"))?;
     let data = values(real.ty, real.data, order, count).map_err(|r| format!("'{name}' ({shape}): {r}"))?;

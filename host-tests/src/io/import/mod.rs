@@ -438,7 +438,7 @@ fn normalise_deg(angle_deg: f64) -> f64 {
 }
 
 fn read_text(path: &Path) -> Result<String, InputError> {
-    std::fs::read_to_string(path).map_err(|e| InputError::io(path, e))
+    crate::io::recording::read_text_capped(path)
 }
 
 fn parse_finite(cell: &str) -> Option<f64> {

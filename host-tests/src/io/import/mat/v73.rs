@@ -10,7 +10,7 @@
 
 use hdf5_pure::{AttrValue, DType, Dataset, FileBuilder};
 
-use super::{finite_or_refused, MatMatrix, NamedMatrix, Variable, MAX_DEFLATE_RATIO, MAX_INFLATED_BYTES};
+use super::{finite_or_refused, MatMatrix, NamedMatrix, ValueBudget, Variable, MAX_DEFLATE_RATIO, MAX_MAT_VALUE_BYTES};
 
 /// Bytes of MATLAB's user block before the HDF5 superblock.
 pub const USER_BLOCK_BYTES: usize = 512;
@@ -20,14 +20,14 @@ const NUMERIC_CLASSES: [&str; 11] =
 
 /// Every variable of the root group of a version 7.3 MAT-file (`bytes`: the whole file, user block included),
 /// in the order the root group lists them (by name in MATLAB's files).
-pub(super) fn read_variables(bytes: &[u8]) -> Result<Vec<Variable>, String> {
+pub(super) fn read_variables(bytes: &[u8], budget: &mut ValueBudget) -> Result<Vec<Variable>, String> {
     let file = hdf5_pure::File::from_bytes(bytes.to_vec()).map_err(|e| format!("the HDF5 data do not read: {e}"))?;
     let root = file.root();
     let names = root.datasets().map_err(|e| format!("the HDF5 root group does not read: {e}"))?;
     let mut variables = Vec::with_capacity(names.len());
     for name in names {
         let dataset = root.dataset(&name).map_err(|e| format!("'{name}': the dataset does not open: {e}"))?;
-        variables.push(dataset_variable(&name, &dataset, bytes.len())?);
+        variables.push(dataset_variable(&name, &dataset, bytes.len(), budget)?);
     }
     let groups = root.groups().map_err(|e| format!("the HDF5 root group does not read: {e}"))?;
     for name in groups {
@@ -60,7 +60,12 @@ fn flag_set(attrs: &std::collections::HashMap<String, AttrValue>, key: &str) -> 
 }
 
 /// One dataset of the root group: a numeric 2-D real matrix, or a skipped variable described.
-fn dataset_variable(name: &str, dataset: &Dataset, file_bytes: usize) -> Result<Variable, String> {
+fn dataset_variable(
+    name: &str,
+    dataset: &Dataset,
+    file_bytes: usize,
+    budget: &mut ValueBudget,
+) -> Result<Variable, String> {
     let attrs = dataset.attrs().map_err(|e| format!("'{name}': the attributes do not read: {e}"))?;
     let skip = |why: String| Ok(Variable::Skipped(format!("'{name}' ({why})")));
     let Some(class) = class_of(&attrs) else {
@@ -88,7 +93,7 @@ fn dataset_variable(name: &str, dataset: &Dataset, file_bytes: usize) -> Result<
         return skip(format!("{what} {class}, HDF5 type {dtype}"));
     }
     let shape = dataset.shape().map_err(|e| format!("'{name}': the dataspace does not read: {e}"))?;
-    check_size(name, dataset, &shape, file_bytes)?;
+    check_size(name, dataset, &shape, file_bytes, budget)?;
     let data = dataset.read_f64().map_err(|e| format!("'{name}': the values do not read: {e}"))?;
     if flag_set(&attrs, "MATLAB_empty") {
         return empty_matrix(name, &class, &data);
@@ -123,8 +128,15 @@ fn to_usize(name: &str, d: u64) -> Result<usize, String> {
 }
 
 /// Refuses a dataset whose values would take more bytes than the file can hold: the file's length for stored
-/// data, deflate's largest ratio times it (at most [`MAX_INFLATED_BYTES`]) for filtered (compressed) data.
-fn check_size(name: &str, dataset: &Dataset, shape: &[u64], file_bytes: usize) -> Result<(), String> {
+/// data, deflate's largest ratio times it (at most [`MAX_MAT_VALUE_BYTES`]) for filtered (compressed) data; and
+/// one whose values, as f64, pass what is left of the file's budget (taken from it).
+fn check_size(
+    name: &str,
+    dataset: &Dataset,
+    shape: &[u64],
+    file_bytes: usize,
+    budget: &mut ValueBudget,
+) -> Result<(), String> {
     let element_bytes = dataset.element_size().map_err(|e| format!("'{name}': the datatype does not read: {e}"))?;
     let count = shape.iter().try_fold(1u64, |n, &d| n.checked_mul(d));
     let stored = count.and_then(|n| n.checked_mul(element_bytes).map(|b| (n, b)));
@@ -134,16 +146,16 @@ fn check_size(name: &str, dataset: &Dataset, shape: &[u64], file_bytes: usize) -
     let limit = if dataset.filters().is_empty() {
         file_bytes as u64
     } else {
-        (file_bytes as u64).saturating_mul(MAX_DEFLATE_RATIO as u64).min(MAX_INFLATED_BYTES as u64)
+        (file_bytes as u64).saturating_mul(MAX_DEFLATE_RATIO as u64).min(MAX_MAT_VALUE_BYTES as u64)
     };
-    // The values are converted to f64: 8 bytes each, whatever their stored width.
-    if stored_bytes > limit || count.saturating_mul(8) > MAX_INFLATED_BYTES as u64 {
+    if stored_bytes > limit {
         return Err(format!(
             "'{name}': {count} values of {element_bytes} bytes, more than a file of {file_bytes} bytes can hold \
-             (at most {limit} bytes; {MAX_INFLATED_BYTES} bytes of f64 values)"
+             (at most {limit} bytes)"
         ));
     }
-    Ok(())
+    // The values are converted to f64: 8 bytes each, whatever their stored width.
+    budget.take(count).map_err(|r| format!("'{name}': {r}"))
 }
 
 /// MATLAB's 512-byte user block of a version 7.3 file: the text header (116 bytes), a zero subsystem offset,
