@@ -198,6 +198,13 @@ fn every_request_and_refusal_in_order_then_the_record_at_the_next_boot() {
     assert_eq!(erases, 1);
     let record = b.read_all(kind::READ_RECORD);
     assert_eq!(record.len(), bytes as usize);
+    // Past the end: refused as such (the detail is the length), not as a flash fault; at the end, an empty part.
+    let (k, past) = b.ask(kind::READ_RECORD, &(bytes + 1).to_le_bytes());
+    assert_eq!((k, ErrorCode::from_code(past[0])), (kind::ERROR, Some(ErrorCode::PastEnd)));
+    assert_eq!(u32::from_le_bytes(past[1..5].try_into().unwrap()), bytes);
+    assert_eq!(b.ok(kind::READ_RECORD, &bytes.to_le_bytes()).len(), 8);
+    let (k, past) = b.ask(kind::READ_RESULT, &u32::MAX.to_le_bytes());
+    assert_eq!((k, ErrorCode::from_code(past[0])), (kind::ERROR, Some(ErrorCode::PastEnd)));
     // A second calibration on the same device (the sequence started again in place): the same result.
     b.ok(kind::CONFIGURE, &config);
     assert_eq!(b.refused(kind::READ_RESULT, &0u32.to_le_bytes()), ErrorCode::NoResult, "configure drops the result");

@@ -340,6 +340,33 @@ fn angles_beyond_a_radian_are_refused() {
     sinscal().arg("analyze").arg(&good).assert().success();
     let bad = file(&dir, "angles.csv", format!("{head}{}", body("1e308")));
     refused(&[os("analyze"), bad.as_os_str()], 1, &["angles.csv:4:", "at most 1 rad"]);
+    // At a pole the heading angle has no horizontal Earth rate to rest on: refused at the header line, with the
+    // limit, not as "dependent columns" of the fit.
+    let polar = file(&dir, "angles.csv", format!("{}{}", head.replace("45.7796", "90"), body("1e-5")));
+    refused(&[os("analyze"), polar.as_os_str()], 1, &["angles.csv:2:", "latitude_deg 90 outside [-89.9, 89.9]"]);
+}
+
+/// A navigated sample beyond any IMU's range (a rate of 1e200 rad/s, a force of 1e30 m/s^2) once made every
+/// figure NaN with exit 0; refused now at its line, with the value and the range.
+#[test]
+fn navigate_refuses_a_sample_beyond_any_imu_range() {
+    let dir = tempfile::tempdir().unwrap();
+    let (rec, cal) = calibrated_example(&dir);
+    let text = std::fs::read_to_string(&rec).unwrap();
+    let (head, rows) = split_rows(&text);
+    // The middle row of the last dwell (the longest: all dwells have the same length, and ties go to the last).
+    let last_pos = rows.iter().filter_map(|r| r.split(',').nth(1)).filter(|p| *p != "0").last().unwrap().to_string();
+    let in_dwell: Vec<usize> = (0..rows.len()).filter(|&i| rows[i].split(',').nth(1) == Some(&last_pos)).collect();
+    let at = in_dwell[in_dwell.len() / 2];
+    for (column, value, shown) in [(5, "1e200", "|w| = 1e200 rad/s"), (8, "1e30", "|f| = 1e30 m/s^2")] {
+        let mut bad = rows.clone();
+        let mut cells: Vec<String> = bad[at].split(',').map(str::to_string).collect();
+        cells[column] = value.to_string();
+        bad[at] = cells.join(",");
+        let path = file(&dir, "spiked.csv", format!("{head}{}\n", bad.join("\n")));
+        let stderr = refused(&[os("navigate"), path.as_os_str(), os("--calibration"), cal.as_os_str()], 1, &[shown]);
+        assert!(stderr.contains("beyond any strapdown IMU's range") && !stderr.contains("NaN"), "{stderr}");
+    }
 }
 
 #[test]

@@ -471,6 +471,9 @@ impl<F: NorFlash> Device<F> {
         let (head, part) = out.split_at_mut(8);
         let part = &mut part[..MAX_CHUNK_BYTES];
         let total = encode_part(&outcome, offset, part);
+        if offset > total {
+            return Err((ErrorCode::PastEnd, total as u32));
+        }
         let n = total.saturating_sub(offset).min(MAX_CHUNK_BYTES);
         Writer::new(head).u32(total as u32).u32(offset as u32);
         Ok((8 + n, Action::None))
@@ -510,6 +513,9 @@ impl<F: NorFlash> Device<F> {
     fn read_record(&mut self, offset: usize, out: &mut [u8]) -> Reply {
         let info = self.stored.ok_or((ErrorCode::NothingStored, 0))?;
         let total = info.len;
+        if offset > total {
+            return Err((ErrorCode::PastEnd, total as u32));
+        }
         let n = total.saturating_sub(offset).min(MAX_CHUNK_BYTES);
         let (head, part) = out.split_at_mut(8);
         self.store.read(&info, offset, &mut part[..n]).map_err(|_| (ErrorCode::Flash, 0))?;

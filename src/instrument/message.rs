@@ -71,6 +71,8 @@ wire_codes! {
         NoteTooLong = 13,
         /// The solution gives no usable compensation (a term beyond what the compensation accepts); nothing stored.
         NoCompensation = 14,
+        /// A read (result or record) from an offset past its end (detail: its length in bytes).
+        PastEnd = 15,
     }
 }
 
@@ -91,6 +93,7 @@ impl core::fmt::Display for ErrorCode {
             ErrorCode::NothingStored => "no calibration record stored",
             ErrorCode::NoteTooLong => "note longer than the device keeps",
             ErrorCode::NoCompensation => "the solution gives no usable compensation: nothing stored",
+            ErrorCode::PastEnd => "read from an offset past the end (the detail is the length)",
         })
     }
 }

@@ -105,7 +105,22 @@ impl Parser<'_> {
         };
         match k.trim() {
             "sinscal-angles" => self.version = Some((n, v.to_string())),
-            "latitude_deg" => self.latitude = Some(num()?),
+            "latitude_deg" => {
+                let latitude_deg = num()?;
+                if !crate::io::recording::latitude_ok(latitude_deg) {
+                    let limit = crate::io::recording::MAX_LATITUDE_DEG;
+                    return Err(InputError::at(
+                        self.source,
+                        n,
+                        format!(
+                            "latitude_deg {} outside [-{limit}, {limit}]: nearer a pole the horizontal Earth rate \
+                             that the heading angle rests on vanishes",
+                            crate::io::recording::shown(latitude_deg)
+                        ),
+                    ));
+                }
+                self.latitude = Some(latitude_deg);
+            }
             "gravity_mps2" => self.gravity = Some(num()?),
             _ => {}
         }

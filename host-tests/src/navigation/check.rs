@@ -204,6 +204,7 @@ pub fn navigate(
             let mut lockstep = Lockstep::new(&setup, &mut runs, dwell.samples);
             recording.for_each_row(&mut |row| {
                 if row.pos == dwell.pos {
+                    plausible_sample(source, row)?;
                     lockstep.step(&mut runs, row.rate_b_radps, row.force_b_mps2, &mut progress);
                 }
                 Ok(())
@@ -227,6 +228,34 @@ pub fn navigate(
         predicted_from_std_errors: predicted,
         histories: runs.into_iter().map(|r| (r.name, r.history)).collect(),
     })
+}
+
+/// Largest angular rate a navigated sample may have, rad/s: beyond any strapdown IMU's range (2,000 deg/s, 35
+/// rad/s, is the largest of common parts) by a margin.
+pub const MAX_NAVIGATION_RATE_RADPS: f64 = 100.0;
+/// Largest specific force a navigated sample may have, m/s^2: beyond any strapdown IMU's range (40 g) by a
+/// margin.
+pub const MAX_NAVIGATION_FORCE_MPS2: f64 = 2000.0;
+
+/// Refuses a sample of the navigated dwell beyond any IMU's range (a rate of 1e200 rad/s would otherwise make
+/// every figure NaN), at its line.
+fn plausible_sample(source: &str, row: &crate::io::recording::Row) -> Result<(), InputError> {
+    let norm = |v: [f64; 3]| v[0].hypot(v[1]).hypot(v[2]);
+    let (rate, force) = (norm(row.rate_b_radps), norm(row.force_b_mps2));
+    let shown = crate::io::recording::shown;
+    if rate > MAX_NAVIGATION_RATE_RADPS || force > MAX_NAVIGATION_FORCE_MPS2 {
+        return Err(InputError::at(
+            source,
+            row.line,
+            format!(
+                "|w| = {} rad/s, |f| = {} m/s^2: beyond any strapdown IMU's range ({MAX_NAVIGATION_RATE_RADPS} \
+                 rad/s, {MAX_NAVIGATION_FORCE_MPS2} m/s^2), not a sample of a static dwell",
+                shown(rate),
+                shown(force)
+            ),
+        ));
+    }
+    Ok(())
 }
 
 /// The dwell to navigate: `--position`, else the first dwell for a simulated run, else the longest.
