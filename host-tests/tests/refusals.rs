@@ -355,7 +355,7 @@ fn navigate_refuses_a_sample_beyond_any_imu_range() {
     let text = std::fs::read_to_string(&rec).unwrap();
     let (head, rows) = split_rows(&text);
     // The middle row of the last dwell (the longest: all dwells have the same length, and ties go to the last).
-    let last_pos = rows.iter().filter_map(|r| r.split(',').nth(1)).filter(|p| *p != "0").last().unwrap().to_string();
+    let last_pos = rows.iter().filter_map(|r| r.split(',').nth(1)).rfind(|p| *p != "0").unwrap().to_string();
     let in_dwell: Vec<usize> = (0..rows.len()).filter(|&i| rows[i].split(',').nth(1) == Some(&last_pos)).collect();
     let at = in_dwell[in_dwell.len() / 2];
     for (column, value, shown) in [(5, "1e200", "|w| = 1e200 rad/s"), (8, "1e30", "|f| = 1e30 m/s^2")] {
