@@ -707,23 +707,33 @@ fn dwell_error(dwell: Option<&PositionResult>, text: String, source: &str) -> In
     }
 }
 
+/// One row of the first dwell into the six identifiers.
+fn update_identifiers(ids: &mut [CoefficientIdentifier; 6], row: &crate::io::recording::Row) {
+    let channels = [to_f32(row.rate_b_radps), to_f32(row.force_b_mps2)];
+    for (i, id) in ids.iter_mut().enumerate() {
+        id.update(channels[i / 3][i % 3]);
+    }
+}
+
 /// Identifies the prefilter coefficient `a` of the gyros and of the accelerometers from the recording's first
-/// dwell (every row of its label).
+/// dwell: its rows from the first to the first row of another label, as the device sees it (the rest of the
+/// recording is not read).
 pub fn identify_coefficients(recording: &impl RowSource) -> Result<[f32; 2], InputError> {
     let mut ids = [CoefficientIdentifier::new(); 6];
     let mut first: Option<(u32, usize)> = None;
-    recording.for_each_row(&mut |row| {
-        if row.pos == 0 {
-            return Ok(());
-        }
-        let (label, _) = *first.get_or_insert((row.pos, row.line));
-        if row.pos == label {
-            let channels = [to_f32(row.rate_b_radps), to_f32(row.force_b_mps2)];
-            for (i, id) in ids.iter_mut().enumerate() {
-                id.update(channels[i / 3][i % 3]);
+    recording.for_each_row_until(&mut |row| {
+        let Some(&(label, _)) = first.as_ref() else {
+            if row.pos != 0 {
+                first = Some((row.pos, row.line));
+                update_identifiers(&mut ids, row);
             }
+            return Ok(true);
+        };
+        if row.pos != label {
+            return Ok(false);
         }
-        Ok(())
+        update_identifiers(&mut ids, row);
+        Ok(true)
     })?;
     let Some((_, line)) = first else {
         return Err(InputError::file(recording.source(), NO_DWELL));

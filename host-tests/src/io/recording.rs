@@ -494,6 +494,18 @@ pub trait RowSource {
     /// Gives every row to `sink`, in file order; the first error (of the reader's or the sink's) stops the pass.
     fn for_each_row(&self, sink: &mut dyn FnMut(&Row) -> Result<(), InputError>) -> Result<(), InputError>;
 
+    /// Gives the rows to `sink`, in file order, until it returns `Ok(false)`: the pass then ends there, the rest of
+    /// the rows unread (and unchecked; a later whole pass checks them).
+    fn for_each_row_until(&self, sink: &mut dyn FnMut(&Row) -> Result<bool, InputError>) -> Result<(), InputError> {
+        // The stop travels as an error whose file name no file has (an empty name with a NUL reason), so that
+        // the reader's own way of ending a pass early (an error from the sink) ends it; it is never shown.
+        let stop = || InputError::file("", PASS_STOPPED);
+        match self.for_each_row(&mut |row| if sink(row)? { Ok(()) } else { Err(stop()) }) {
+            Err(InputError::File { file, reason }) if file.is_empty() && reason == PASS_STOPPED => Ok(()),
+            other => other,
+        }
+    }
+
     /// Refuses accelerometer-only data for a command that needs the gyros: `command` names it
     /// ("analyze", "navigate", ...). The message is `FILE: no gyro columns: COMMAND needs gyros`.
     fn require_gyro(&self, command: &str) -> Result<(), InputError> {
@@ -1045,6 +1057,9 @@ fn read_chunk(reader: &mut impl BufRead, chunk_bytes: u64, bytes: &mut Vec<u8>) 
     }
     Ok(())
 }
+
+/// The reason of the error that ends a pass of [`RowSource::for_each_row_until`] early (never shown).
+const PASS_STOPPED: &str = "\u{0}the pass was stopped by its sink";
 
 /// Longest line a recording (or any text file sinscal reads) may have, bytes: a row of eleven numbers is about
 /// 200.
