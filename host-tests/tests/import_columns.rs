@@ -507,3 +507,41 @@ fn skip_lines_past_the_end_says_so() {
     let err = import(&[&input], &layout, None, None).expect_err("no records").to_string();
     assert!(err.contains("no records: the file has 2 lines, skip_lines skips 5"), "{err}");
 }
+
+/// The declared gyro unit against the data (the Earth rate's vertical part, and no gyro's bias above 0.2 rad/s):
+/// rad/s declared as deg/s, rates declared as increments and gyro fields that hold the accelerometer's values
+/// are refused, naming the mistake; the right unit passes, and the import says what it found. SIMULATION: the
+/// example's navigation-grade gyros (0.1 deg/h of noise) resolve the Earth rate.
+#[test]
+fn gyro_units_that_contradict_the_earth_rate_are_refused_with_the_mistake() {
+    let rec = session();
+    let dir = tempfile::tempdir().unwrap();
+    let mut text = String::new();
+    for r in &rec.rows {
+        let (w, f) = (r.rate_b_radps, r.force_b_mps2);
+        text += &format!(
+            "{:?} {:?} {:?} {:?} {:?} {:?} {:?} {:?} {:?} {:?}\n",
+            r.t_s, w[0], w[1], w[2], f[0], f[1], f[2], f[0], f[1], f[2]
+        );
+    }
+    let input = write(dir.path(), "rates.txt", text.as_bytes());
+    let layout = |gyro: &str| {
+        format!(
+            "format = \"text\"\n[time]\nfield = 0\n[gyro]\n{gyro}\n[accel]\nfields = [4, 5, 6]\nunit = \"m/s^2\"\n{SITE}"
+        )
+    };
+    let labels = labels_of(&rec);
+    let right = import(&[&input], &layout("fields = [1, 2, 3]\nunit = \"rad/s\""), Some(&labels), None).unwrap();
+    let note = right.summary.lines().find(|n| n.contains("gyro unit checked")).expect("the check is reported");
+    println!("{note}");
+    let cases = [
+        ("fields = [1, 2, 3]\nunit = \"deg/s\"", "rad/s declared as deg/s"),
+        ("fields = [1, 2, 3]\nunit = \"rad\"\nincrements = true", "rates declared as increments"),
+        ("fields = [7, 8, 9]\nunit = \"rad/s\"", "the gyro fields read what the accelerometer fields read"),
+    ];
+    for (gyro, words) in cases {
+        let err = import(&[&input], &layout(gyro), Some(&labels), None).unwrap_err();
+        println!("{err}");
+        assert!(err.contains(words), "{gyro}: {err}");
+    }
+}

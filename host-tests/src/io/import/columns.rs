@@ -575,6 +575,8 @@ fn records_to_recording(
             (ATTITUDE_SOURCE_LEVELLED.to_string(), Some(rule))
         }
     };
+    let gyro_scale =
+        super::gyro_units::check_gyro_units(&rows, latitude_deg, rate_hz, layout.gyro.increments, &source)?;
     let mut comments = vec![
         format!("source: {source}"),
         format!("source_format: described layout {}: {}", import.layout_source, layout.describe()),
@@ -585,6 +587,14 @@ fn records_to_recording(
         format!("layout {}: {}", import.layout_source, layout.describe()),
         format!("latitude {latitude_deg} deg ({latitude_source}); positions from {attitude_source}"),
     ];
+    notes.push(match gyro_scale {
+        Some((s, std)) => format!(
+            "gyro unit checked against the Earth rate's vertical part: {} +- {} times it (1 for a right unit)",
+            crate::io::recording::shown(s),
+            crate::io::recording::shown(std)
+        ),
+        None => "gyro unit not checked against the Earth rate: the dwells do not resolve it".to_string(),
+    });
     if let Some(rule) = detection {
         comments.push(format!("static_detection: {rule}"));
         notes.push(format!("static intervals: {rule} (heading unknown; pitch and roll levelled from the mean force)"));

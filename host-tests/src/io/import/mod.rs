@@ -26,6 +26,7 @@ use crate::io::recording::{Header, Recording, Row};
 use crate::io::ARCSEC_PER_RAD;
 
 mod columns;
+pub mod gyro_units;
 mod imucal;
 mod imutk;
 pub mod layout;
