@@ -1,4 +1,4 @@
-//! Memory bounded by the input, and a documented limit refused before it is allocated (docs/formats.md#limits,
+//! Memory bounded by the input, and a documented limit refused before it is allocated (docs/formats.md#bad-input,
 //! docs/analysis.md#memory-limit): each reader or analysis that once grew without bound is run here as the
 //! command line, under an address-space limit (`ulimit -v`, RLIMIT_AS), on an input past the size that failed. A
 //! refusal must come with its reason and a short message (the old ones were killed, or asked for gigabytes, or
