@@ -545,3 +545,19 @@ fn gyro_units_that_contradict_the_earth_rate_are_refused_with_the_mistake() {
         assert!(err.contains(words), "{gyro}: {err}");
     }
 }
+
+/// REAL DATA (`SINSCAL_DATA`): the imucal Ferraris session's gyros (deg/s) declared as rad/s read 5.3 "rad/s"
+/// at rest and are refused naming deg/s; declared right, they pass, and the import says that these consumer
+/// gyros do not resolve the Earth rate (their unit is not checked against it).
+#[test]
+fn real_data_ferraris_gyros_in_deg_per_second_declared_as_rad_per_second_are_refused() {
+    let Some(data) = common::data_dir() else { return };
+    let csv = common::data_file(&data, "imucal-ferraris/example_ferraris_session.csv");
+    let right = layout_file("imucal.toml");
+    let wrong = right.replace("unit = \"deg/s\"", "unit = \"rad/s\"");
+    assert_ne!(wrong, right, "the imucal layout declares deg/s");
+    let err = import(&[&csv], &wrong, None, None).unwrap_err();
+    assert!(err.contains("rad/s at rest") && err.contains("deg/s declared as rad/s?"), "{err}");
+    let imported = import(&[&csv], &right, None, None).unwrap();
+    assert!(imported.summary.contains("gyro unit not checked against the Earth rate"), "{}", imported.summary);
+}
