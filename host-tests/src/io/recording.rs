@@ -1048,6 +1048,26 @@ fn parse_chunk(bytes: &[u8], first_line: usize, columns: &Columns, source: &str)
     ChunkRows { rows: parser.rows, first_t: parser.first_t, error }
 }
 
+/// The newlines of `bytes`: eight bytes at a time, as a word whose bytes equal to `\n` are found with bit
+/// operations (a byte is zero after the XOR exactly when it was a newline) and counted by their top bits. A
+/// filtered count does one byte at a time: a tenth of the reading's instructions went there, in the one thread
+/// that reads.
+fn count_newlines(bytes: &[u8]) -> usize {
+    const ONES: u64 = u64::from_ne_bytes([0x01; 8]);
+    const LOW7: u64 = u64::from_ne_bytes([0x7f; 8]);
+    const NEWLINES: u64 = u64::from_ne_bytes([b'\n'; 8]);
+    let mut words = bytes.chunks_exact(8);
+    let mut n = 0usize;
+    for word in words.by_ref() {
+        let x = u64::from_ne_bytes(word.try_into().unwrap_or([0; 8])) ^ NEWLINES;
+        // High bit of each byte set where the byte of x is non-zero (no carry crosses bytes: each byte is at most
+        // 0x7f + 0x7f before the OR).
+        let non_zero = ((x & LOW7) + LOW7) | x;
+        n += (!non_zero & (ONES << 7)).count_ones() as usize;
+    }
+    n + words.remainder().iter().filter(|&&b| b == b'\n').count()
+}
+
 /// Reads the next chunk of whole lines of `reader` into `bytes` (nothing at the end of the file); on an error,
 /// `bytes` holds what was read before it.
 fn read_chunk(reader: &mut impl BufRead, chunk_bytes: u64, bytes: &mut Vec<u8>) -> std::io::Result<()> {
@@ -1134,7 +1154,7 @@ fn read_rows(
             while !stop.load(Ordering::Relaxed) && ticket_rx.recv().is_ok() {
                 let mut bytes = Vec::with_capacity(chunk_bytes as usize + 4096);
                 let read = read_chunk(reader, chunk_bytes, &mut bytes);
-                let lines = bytes.iter().filter(|&&b| b == b'\n').count();
+                let lines = count_newlines(&bytes);
                 read.map_err(|e| (line + lines + 1, e))?;
                 if bytes.is_empty() {
                     break;
@@ -1307,11 +1327,16 @@ impl<'c> RowParser<'c> {
         let names = &self.columns.names;
         let mut cells = [""; SLOTS];
         let mut count = 0;
-        for cell in line.split(',') {
+        // The cells, cut at the commas in one scan of the bytes (a comma is ASCII, so every cut is a character
+        // boundary): `split(',')` searches anew for each of a dozen short cells, a quarter of a row's reading.
+        let mut start = 0;
+        for (end, _) in line.bytes().enumerate().filter(|&(_, b)| b == b',').chain(std::iter::once((line.len(), b',')))
+        {
             if let Some(&Some(slot)) = self.slot_of.get(count) {
-                cells[slot] = trim_cell(cell);
+                cells[slot] = trim_cell(&line[start..end]);
             }
             count += 1;
+            start = end + 1;
         }
         if count != names.len() {
             return Err(bad(format!("{count} cells, the column line has {}", names.len())));
@@ -1374,6 +1399,20 @@ impl<'c> RowParser<'c> {
             line: n,
         });
         Ok(())
+    }
+}
+
+#[cfg(test)]
+mod newline_tests {
+    #[test]
+    fn newlines_are_counted_in_blocks_and_the_rest() {
+        for len in [0, 1, 127, 128, 129, 1000, 4096 + 17] {
+            let bytes: Vec<u8> = (0..len).map(|i| if i % 7 == 3 || i % 128 == 127 { b'\n' } else { b'1' }).collect();
+            let expected = bytes.iter().filter(|&&b| b == b'\n').count();
+            assert_eq!(super::count_newlines(&bytes), expected, "{len} bytes");
+        }
+        // 128 newlines in one block: a lane holds 8 of them, far from its 255.
+        assert_eq!(super::count_newlines(&[b'\n'; 256]), 256);
     }
 }
 
