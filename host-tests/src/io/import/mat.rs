@@ -373,8 +373,7 @@ fn inflate(compressed: &[u8], limit: usize) -> Result<Vec<u8>, String> {
     decoder.take(rest).read_to_end(&mut out).map_err(|e| format!("the zlib stream does not inflate: {e}"))?;
     if out.len() > limit {
         return Err(format!(
-            "it inflates to more than {} MB, what is left of the {} MB sinscal reads from one MAT-file",
-            limit >> 20,
+            "it inflates to more than {limit} bytes, what is left of the {} MB sinscal reads from one MAT-file",
             MAX_MAT_VALUE_BYTES >> 20
         ));
     }
