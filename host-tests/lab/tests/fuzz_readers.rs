@@ -1,6 +1,8 @@
 //! Fuzzing of every reader on stable Rust: a seeded mutation fuzzer (docs/formats.md#bad-input). Each target
 //! starts from a valid input that sinscal writes itself (a recording, an angles file, a scenario, a
-//! calibration JSON, a replay file, an ADIS burst, two MAT-files), mutates it (bytes flipped, inserted, deleted or
+//! calibration JSON, a replay file, an ADIS burst, MAT-files, a layout, a labels file, the files of the four
+//! importers, the data files of `import columns`' text, binary and MAT layouts, the device link's frames and
+//! requests, a stored calibration record), mutates it (bytes flipped, inserted, deleted or
 //! repeated; lines repeated or dropped; numbers replaced by extreme ones; the end cut off), and feeds it to
 //! the reader. A reader must return a value or an error: a panic is a failure, and the input that caused it
 //! is written to `host-tests/fuzz-corpus/TARGET/` to be kept as a regression (every file there is replayed by

@@ -290,7 +290,7 @@ pub fn calibration_from_outcome(
         move_passes: 0,
         move_error_rad: 0.0,
     };
-    Ok(match result {
+    let calibration = match result {
         SequenceSolution::Angles(r) => {
             on_firmware(Estimates::from_angles(&r.solution), Some(r.solution), None, None, r.passes, r.converged)
         }
@@ -307,7 +307,14 @@ pub fn calibration_from_outcome(
             let estimates = Estimates::from_session(&estimator, c, 0);
             on_firmware(estimates, None, Some(c.clone()), None, c.iterations, c.converged)
         }
-    })
+    };
+    // An outcome read from a device or a record is not trusted: dwell statistics far beyond any sensor's (a
+    // corrupt record) scale the standard errors past f32's range.
+    let e = &calibration.estimates;
+    if !e.value_si.iter().chain(&e.std_si).flatten().all(|v| v.is_finite()) {
+        return Err(InputError::file(source, "the outcome's estimates or standard errors are not finite numbers"));
+    }
+    Ok(calibration)
 }
 
 /// `calibrate --on host`: the replay file through the firmware path on x86. The replay file is written to a

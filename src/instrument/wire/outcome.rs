@@ -351,6 +351,11 @@ fn decode_angles(r: &mut Reader<'_>) -> Option<CalibrationResult> {
     for row in covariance_si.iter_mut() {
         r.f32s(row)?;
     }
+    // The solution's numbers are finite as the estimator writes them: a stored NaN or infinity is corruption.
+    let estimates = est.iter().flatten().flat_map(|e| [e.value, e.std_error]);
+    if !estimates.chain(covariance_si.iter().flatten().copied()).chain([chi_square]).all(|v| v.is_finite()) {
+        return None;
+    }
     let solution = BiasSolution {
         gyro_bias_b_radps: [est[0], est[1], est[2]],
         accel_bias_b_mps2: [est[3], est[4], est[5]],
@@ -400,6 +405,10 @@ fn decode_general(r: &mut Reader<'_>) -> Option<Result<ChannelSolution, WireErro
     for row in covariance_si.iter_mut() {
         r.f32s(row)?;
     }
+    // The solution's numbers are finite as the estimator writes them: a stored NaN or infinity is corruption.
+    if !parameters_si.iter().chain(covariance_si.iter().flatten()).all(|v| v.is_finite()) {
+        return Some(Err(WireError));
+    }
     let dwells = r.u32()? as usize;
     if dwells > MAX_DWELLS {
         return Some(Err(WireError));
@@ -415,6 +424,9 @@ fn decode_general(r: &mut Reader<'_>) -> Option<Result<ChannelSolution, WireErro
     }
     r.f32s(&mut c.dwell_statistic[..dwells])?;
     (c.suspect, c.chi_square, c.degrees_of_freedom) = (r.u64()?, r.f32()?, r.u32()?);
+    if !c.chi_square.is_finite() {
+        return Some(Err(WireError));
+    }
     (c.iterations, c.converged) = (r.u32()?, r.u32()? != 0);
     c.attitude = match AttitudeCode::from_code(r.u32()?) {
         Some(AttitudeCode::Reference) => AttitudeKnowledge::Reference,

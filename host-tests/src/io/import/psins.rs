@@ -107,6 +107,18 @@ fn psins_header(
     let rate_hz = 1000.0 / interval_ms;
     let gyro_radps_per_count = [0, 1, 2].map(|i| scale[i] / ARCSEC_PER_RAD / dt_s);
     let accel_mps2_per_count = [3, 4, 5].map(|i| scale[i] * 1e-6 * gravity_mps2 / dt_s);
+    // A subnormal interval or a huge scale overflows the rate and the factors per count to infinity.
+    if !rate_hz.is_finite() || !gyro_radps_per_count.iter().chain(&accel_mps2_per_count).all(|f| f.is_finite()) {
+        let shown = crate::io::recording::shown;
+        return Err(InputError::at(
+            source,
+            site_line,
+            format!(
+                "sampling interval {} ms: the rate or a scale per second is not a finite number",
+                shown(interval_ms)
+            ),
+        ));
+    }
     Ok(PsinsHeader {
         attitude_line,
         pitch_deg,
@@ -148,14 +160,20 @@ fn psins_rows<'a>(
             *slot = cell.parse().map_err(|_| InputError::at(source, n, format!("'{cell}' is not an integer count")))?;
         }
         let k = rows.len() as f64;
+        let t_s = h.t0_s + k * h.dt_s;
+        let rate_b_radps = [0, 1, 2].map(|i| counts[i] as f64 * h.gyro_radps_per_count[i]);
+        let force_b_mps2 = [0, 1, 2].map(|i| counts[i + 3] as f64 * h.accel_mps2_per_count[i]);
+        if !rate_b_radps.iter().chain(&force_b_mps2).chain([&t_s]).all(|v| v.is_finite()) {
+            return Err(InputError::at(source, n, "a count times its scale, or the time, is not a finite number"));
+        }
         rows.push(Row {
-            t_s: h.t0_s + k * h.dt_s,
+            t_s,
             pos: 1,
             pitch_deg: h.pitch_deg,
             roll_deg: h.roll_deg,
             heading_deg: Some(h.heading_deg),
-            rate_b_radps: [0, 1, 2].map(|i| counts[i] as f64 * h.gyro_radps_per_count[i]),
-            force_b_mps2: [0, 1, 2].map(|i| counts[i + 3] as f64 * h.accel_mps2_per_count[i]),
+            rate_b_radps,
+            force_b_mps2,
             temp_c: None,
             turn_axis: None,
             line: n,

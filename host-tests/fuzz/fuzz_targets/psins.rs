@@ -1,0 +1,7 @@
+//! libFuzzer target: sinscal_lab::fuzz::read_psins, the PSINS importer (a panic, or an Err, is a finding).
+#![no_main]
+libfuzzer_sys::fuzz_target!(|data: &[u8]| {
+    if let Err(reason) = sinscal_lab::fuzz::read_psins(data) {
+        panic!("{reason}");
+    }
+});
