@@ -426,7 +426,8 @@ pub fn read_link_requests(bytes: &[u8]) -> Result<bool, String> {
 /// The workstation's reading of a calibration record from the device (`device::calibration_of_record`: the
 /// record's head, the configuration, the provenance note, the outcome): what it accepts has finite estimates.
 pub fn read_link_record(bytes: &[u8]) -> Result<bool, String> {
-    match sinscal_host::device::calibration_of_record(bytes) {
+    let record = sinscal_host::device::DeviceRecord { bytes: bytes.to_vec(), sequence: 1 };
+    match sinscal_host::device::calibration_of_record(&record, None) {
         Err(_) => Ok(false),
         Ok(c) => {
             let e = &c.estimates;
