@@ -117,8 +117,11 @@ where
             force_mean_b_mps2: force,
             rate_mean_var_b_radps2: [0, 1, 2].map(|i| variance(i).max(rate_floor)),
             force_mean_var_b_mps2sq: [0, 1, 2].map(|i| variance(3 + i).max(force_floor)),
-            // The dwell's span: the samples used and those left out as spikes.
-            window: d.first_sample.map(|first_sample| Window { first_sample, samples: s.samples + s.spikes }),
+            // The dwell's span: the samples used and those left out as spikes (saturating: a stored outcome read back
+            // may carry any counts).
+            window: d
+                .first_sample
+                .map(|first_sample| Window { first_sample, samples: s.samples.saturating_add(s.spikes) }),
         })?;
     }
     Ok(estimator)
