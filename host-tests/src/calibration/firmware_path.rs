@@ -221,6 +221,13 @@ pub fn calibration_from_outcome(
     let source = rec.source();
     let site = outcome.configuration.site;
     let ReplayPlan { dwells, attitudes } = plan;
+    // A record's plan comes from its note: it must have a dwell for every position of the outcome.
+    if outcome.positions.len() > dwells.len().min(attitudes.len()) {
+        return Err(InputError::file(
+            source,
+            format!("the outcome has {} positions, its plan {} dwells", outcome.positions.len(), dwells.len()),
+        ));
+    }
     let mut positions = Vec::new();
     for (k, p) in outcome.positions.iter().enumerate() {
         let angles =

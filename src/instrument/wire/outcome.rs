@@ -186,6 +186,8 @@ fn decode_dwell(r: &mut Reader<'_>) -> Option<DwellSummary> {
     for a in d.allan.iter_mut() {
         r.f32s(&mut a.avar)?;
     }
+    // The dwell's samples, those rejected and the spikes are counted in one 32-bit counter: their sum fits it.
+    d.samples.checked_add(d.rejected)?.checked_add(d.spikes)?;
     Some(d)
 }
 
