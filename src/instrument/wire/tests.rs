@@ -153,9 +153,10 @@ fn configurations_round_trip_and_every_truncation_or_unknown_code_is_refused() {
 
 fn dwell(rng: &mut Rng) -> DwellSummary {
     let mut d = DwellSummary {
-        samples: rng.next() as u32,
-        rejected: rng.next() as u32,
-        spikes: rng.next() as u32,
+        // A dwell's three counts share one 32-bit counter (the decoder refuses a sum past it).
+        samples: (rng.next() >> 34) as u32,
+        rejected: (rng.next() >> 34) as u32,
+        spikes: (rng.next() >> 34) as u32,
         rate_mean_b_radps: rng.vec3(),
         force_mean_b_mps2: rng.vec3(),
         rate_sample_std_b_radps: rng.vec3(),
