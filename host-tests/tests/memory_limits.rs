@@ -59,43 +59,46 @@ fn recording(path: &Path, dwells: usize, rows: usize) {
     }
 }
 
-/// analyze of 10,000 dwells (inside the 10,000 dwells a recording may have) once grew with the square of the
-/// dwells and was killed at 23 GB; now it is refused before any candidate column is built, with the estimate,
-/// well inside 1 GiB of address space.
+/// analyze of 10,000 dwells (the most a recording may have) once grew with the square of the dwells and was
+/// killed at 23 GB (then refused past about 600 dwells); its candidate columns are kept as their nonzero
+/// entries now, and it runs within 1 GiB of address space (measured: 0.35 GB peak resident, 17 s in a release
+/// build). The limit it still has is checked on the module's own numbers
+/// (`analysis::tests::columns_past_the_limit_are_refused_before_they_are_built`).
 #[test]
-fn analyze_of_ten_thousand_dwells_is_refused_before_its_columns_within_1_gib() {
+fn analyze_of_ten_thousand_dwells_runs_within_1_gib() {
     let dir = tempfile::tempdir().unwrap();
     let path = dir.path().join("many.csv");
     recording(&path, 10_000, 64);
     let out = limited(1024, &["analyze".as_ref(), path.as_os_str()]);
-    let stderr = refused(&out, "analyze: 10000 dwells give");
-    assert!(stderr.contains("beyond the 768 MB the analysis holds"), "{stderr}");
-}
-
-/// A 60-dwell session is analysed under the same limit: the limit leaves room for the analysis it allows.
-#[test]
-fn analyze_of_a_session_within_the_limit_runs_under_1_gib() {
-    let dir = tempfile::tempdir().unwrap();
-    let path = dir.path().join("session.csv");
-    recording(&path, 60, 64);
-    let out = limited(1024, &["analyze".as_ref(), path.as_os_str()]);
+    let stdout = String::from_utf8_lossy(&out.stdout);
     assert_eq!(out.status.code(), Some(0), "{}", String::from_utf8_lossy(&out.stderr));
+    // Four blocks of 16 rows per dwell, six channels.
+    assert!(stdout.contains("240000 observations"), "{stdout}");
+    // Every dwell's three position errors are among the candidates tested.
+    let m: usize =
+        stdout.split("Bonferroni over m = ").nth(1).and_then(|r| r.split(' ').next()).unwrap().parse().unwrap();
+    assert!(m > 30_000, "{stdout}");
 }
 
-/// An angles file of 20,000 rows once asked for more than 6 GB; refused now within 1 GiB.
+/// An angles file of 20,000 rows once asked for more than 6 GB (then was refused); analysed now within 1 GiB.
 #[test]
-fn analyze_of_an_angles_file_of_twenty_thousand_rows_is_refused_within_1_gib() {
+fn analyze_of_an_angles_file_of_twenty_thousand_rows_runs_within_1_gib() {
     let dir = tempfile::tempdir().unwrap();
     let path = dir.path().join("many.angles");
     let mut text = String::from(
         "# sinscal-angles: 1\n# latitude_deg: 45\npos,pitch_deg,roll_deg,heading_deg,phi_e_rad,phi_n_rad,phi_u_rad\n",
     );
     for i in 0..20_000 {
-        text.push_str(&format!("{},0,{},0,1e-5,-2e-5,3e-4\n", i + 1, [0, 180, 90, -90][i % 4]));
+        // The six faces up and down and two more headings (pitch, roll, heading), so that the six biases are
+        // seen through the angles.
+        let poses = [(0, 0, 0), (0, 180, 0), (90, 0, 0), (-90, 0, 0), (0, 90, 0), (0, -90, 0), (0, 0, 90), (0, 0, 180)];
+        let (pitch, roll, heading) = poses[i % poses.len()];
+        text.push_str(&format!("{},{pitch},{roll},{heading},1e-5,-2e-5,3e-4\n", i + 1));
     }
     std::fs::write(&path, text).unwrap();
     let out = limited(1024, &["analyze".as_ref(), path.as_os_str()]);
-    refused(&out, "analyze: 20000 positions give");
+    assert_eq!(out.status.code(), Some(0), "{}", String::from_utf8_lossy(&out.stderr));
+    assert!(String::from_utf8_lossy(&out.stdout).contains("60000 observations"));
 }
 
 /// A MAT-file of 200 KB whose compressed element holds 200 million int8 values (1.6 GB as f64): the total of a

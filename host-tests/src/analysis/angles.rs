@@ -14,6 +14,7 @@ use crate::model::synth::{c_b_n, earth_rate_n_radps};
 use crate::stats::linfit::Observations;
 
 use super::candidates::{in_body, sensor_terms, Candidate};
+use super::column::Column;
 use super::result::{assemble, effects_of, residuals_by_group, Findings, ANGLES};
 use super::selection::{select, Problem};
 use super::{Analysis, FigureData, ENU};
@@ -222,11 +223,11 @@ pub const MAX_ANGLE_RAD: f64 = 1.0;
 
 /// Analyses an angles file.
 pub fn analyze_angles(file: &AnglesFile) -> Result<Analysis, InputError> {
-    // Three angles per position; the sensor terms (at most 30), the reference offset and, with more than one
-    // position, a position error per position and axis.
+    // Three angles per position; over all of them the sensor terms (at most 30) and the reference offset; a
+    // position error per position and axis on one angle each.
     let positions = file.rows.len() as u64;
-    let columns = 6 + 30 + 3 + if positions > 1 { 3 * positions } else { 0 };
-    super::check_column_memory(&format!("{positions} positions"), 3 * file.rows.len(), columns, &file.source)?;
+    let entries = (30 + 3) * 3 * positions + 3 * positions;
+    super::check_column_memory(&format!("{positions} positions"), 3 * file.rows.len(), entries, &file.source)?;
     let obs = AngleObservations::new(file);
     let mut problem = obs.problem(file);
     let selection = select(&mut problem, 0).map_err(|e| InputError::file(&file.source, e))?;
@@ -348,17 +349,16 @@ impl AngleObservations {
         let nobs = self.y.len();
         let mut candidates = Vec::new();
         for t in sensor_terms(true) {
-            let col = (0..nobs)
-                .map(|i| self.design[i][t.channel] * t.per_unit(self.predicted[i].0, self.predicted[i].1))
-                .collect();
+            let col = Column::new(
+                (0..nobs)
+                    .map(|i| self.design[i][t.channel] * t.per_unit(self.predicted[i].0, self.predicted[i].1))
+                    .collect(),
+            );
             let sensor = t.sensor();
             candidates.push(Candidate::single(t.effect, sensor, t.axes, col, vec![0, 1]));
         }
-        let angle = |k: usize, pi: Option<usize>| -> Vec<f64> {
-            self.which.iter().map(|&(p, kk)| if kk == k && pi.is_none_or(|pi| pi == p) { 1.0 } else { 0.0 }).collect()
-        };
         for k in 0..3 {
-            let col = angle(k, None);
+            let col = Column::new(self.which.iter().map(|&(_, kk)| if kk == k { 1.0 } else { 0.0 }).collect());
             candidates.push(Candidate::single(
                 EffectKind::ReferenceOffset,
                 Sensor::Reference,
@@ -369,7 +369,8 @@ impl AngleObservations {
         }
         for (pi, r) in file.rows.iter().enumerate() {
             for k in 0..3 {
-                let col = angle(k, Some(pi));
+                // Position `pi`'s angle `k` is observation `3 pi + k` (`which`).
+                let col = Column::from_entries(nobs, [(3 * pi + k, 1.0)]);
                 candidates.push(Candidate {
                     pos: Some(r.pos),
                     ..Candidate::single(

@@ -6,6 +6,7 @@ use crate::model::catalogue::{EffectKind, Sensor};
 use crate::model::sensor::Term;
 use crate::model::synth::{cross, mul_t_vec, M3};
 
+use super::column::Column;
 use super::observations::{BlockObs, Blocks, Session};
 use super::{AXES, ENU};
 
@@ -24,7 +25,7 @@ pub(super) struct Candidate {
     /// Position (position errors).
     pub pos: Option<u32>,
     /// Per variant: the time constant it stands for (warm-up) and its column.
-    pub variants: Vec<(Option<f64>, Vec<f64>)>,
+    pub variants: Vec<(Option<f64>, Column)>,
     /// Observation groups (channels, angle groups) the effect acts on.
     pub groups: Vec<usize>,
     /// Largest plausible magnitude of the estimate, SI ([`EffectKind::plausible_limit`]).
@@ -33,7 +34,7 @@ pub(super) struct Candidate {
 
 impl Candidate {
     /// A candidate of one column, not tied to a position.
-    pub fn single(effect: EffectKind, sensor: Sensor, axes: String, col: Vec<f64>, groups: Vec<usize>) -> Candidate {
+    pub fn single(effect: EffectKind, sensor: Sensor, axes: String, col: Column, groups: Vec<usize>) -> Candidate {
         Candidate { effect, sensor, axes, pos: None, variants: vec![(None, col)], groups, limit: None }
     }
 
@@ -215,37 +216,36 @@ impl<'a> RecordingColumns<'a> {
         sensor_terms(self.session.all_heading())
             .into_iter()
             .map(|t| {
-                let col =
-                    self.blocks
-                        .column(|b| if b.channel == t.channel { t.per_unit(rate_b(b), force_b(b)) } else { 0.0 });
+                let col = Column::new(self.blocks.column(|b| {
+                    if b.channel == t.channel {
+                        t.per_unit(rate_b(b), force_b(b))
+                    } else {
+                        0.0
+                    }
+                }));
                 let sensor = t.sensor();
                 Candidate::single(t.effect, sensor, t.axes, col, vec![t.channel])
             })
             .collect()
     }
 
-    /// Table attitude errors: d(measurement)/d(err_k) = C^T (e_k x v), on every dwell (reference offset) or
-    /// on dwell `only` (position error).
-    fn attitude_column(&self, k: usize, only: Option<usize>) -> Vec<f64> {
-        let (w_n, f_n, dwells) = (self.session.w_n, self.session.f_n, &self.session.dwells);
-        self.blocks.column(|b| {
-            if only.is_some_and(|d| d != b.dwell) {
-                return 0.0;
-            }
-            let c = dwells[b.dwell].c_b_n.unwrap_or(dwells[b.dwell].c_tilt);
-            if b.channel < 3 {
-                in_body(&c, cross(unit(k), w_n))[b.channel]
-            } else {
-                in_body(&c, cross(unit(k), f_n))[b.channel - 3]
-            }
-        })
+    /// Table attitude error about navigation axis `k` at block `b`: d(measurement)/d(err_k) = C^T (e_k x v).
+    fn attitude_error(&self, k: usize, b: &BlockObs) -> f64 {
+        let d = &self.session.dwells[b.dwell];
+        let c = d.c_b_n.unwrap_or(d.c_tilt);
+        if b.channel < 3 {
+            in_body(&c, cross(unit(k), self.session.w_n))[b.channel]
+        } else {
+            in_body(&c, cross(unit(k), self.session.f_n))[b.channel - 3]
+        }
     }
 
-    /// The reference offset (e, n, u) and, with more than one dwell, a position error per dwell and axis.
+    /// The reference offset (e, n, u) and, with more than one dwell, a position error per dwell and axis (a
+    /// column over the dwell's own blocks, which are consecutive).
     fn table_errors(&self) -> Vec<Candidate> {
         let mut candidates = Vec::new();
         for k in 0..3 {
-            let col = self.attitude_column(k, None);
+            let col = Column::new(self.blocks.column(|b| self.attitude_error(k, b)));
             candidates.push(Candidate::single(
                 EffectKind::ReferenceOffset,
                 Sensor::Reference,
@@ -255,9 +255,13 @@ impl<'a> RecordingColumns<'a> {
             ));
         }
         if self.session.dwells.len() > 1 {
+            let list = &self.blocks.list;
+            let mut first = 0;
             for (di, d) in self.session.dwells.iter().enumerate() {
+                let end = first + list[first..].iter().take_while(|b| b.dwell == di).count();
                 for k in 0..3 {
-                    let col = self.attitude_column(k, Some(di));
+                    let entries = (first..end).map(|i| (i, self.attitude_error(k, &list[i])));
+                    let col = Column::from_entries(list.len(), entries);
                     candidates.push(Candidate {
                         pos: Some(d.pos),
                         ..Candidate::single(
@@ -269,6 +273,7 @@ impl<'a> RecordingColumns<'a> {
                         )
                     });
                 }
+                first = end;
             }
         }
         candidates
@@ -284,14 +289,14 @@ impl<'a> RecordingColumns<'a> {
     }
 
     /// The column of channel `c`: `f` of the block's times on its rows, zero elsewhere.
-    fn channel_column(&self, c: usize, f: impl Fn(&BlockObs, &[f64]) -> f64) -> Vec<f64> {
-        self.blocks.column(|b| {
+    fn channel_column(&self, c: usize, f: impl Fn(&BlockObs, &[f64]) -> f64) -> Column {
+        Column::new(self.blocks.column(|b| {
             if b.channel != c {
                 0.0
             } else {
                 f(b, &self.session.dwells[b.dwell].t[b.range.0..b.range.1])
             }
-        })
+        }))
     }
 
     /// Bias drift of channel `c`: block mean time minus the middle of the session.
@@ -308,7 +313,11 @@ impl<'a> RecordingColumns<'a> {
     /// Bias warm-up of channel `c`: the block mean of `exp(-(t - t0)/tau)` (`means`, per time constant and
     /// block), one variant per time constant.
     fn warmup(&self, c: usize, tau_grid: &[f64], means: &[Vec<f64>]) -> Candidate {
-        let variants = tau_grid.iter().zip(means).map(|(&tau, m)| (Some(tau), self.blocks.on_channel(c, m))).collect();
+        let variants = tau_grid
+            .iter()
+            .zip(means)
+            .map(|(&tau, m)| (Some(tau), Column::new(self.blocks.on_channel(c, m))))
+            .collect();
         Candidate {
             effect: EffectKind::BiasWarmup,
             sensor: Sensor::of_channel(c),

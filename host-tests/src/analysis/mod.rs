@@ -57,6 +57,7 @@
 
 mod angles;
 mod candidates;
+mod column;
 mod correlated_noise;
 pub mod noise_terms;
 mod observations;
@@ -334,28 +335,24 @@ pub struct FigureData {
     pub residual_names: Vec<String>,
 }
 
-/// The most memory the selection's candidate columns may take, bytes: a column and its remainder after the base
-/// model, f64, for every candidate variant over every observation (docs/analysis.md#memory-limit).
+/// The most memory the selection's candidate columns may take, bytes (docs/analysis.md#memory-limit).
 pub const MAX_COLUMN_BYTES: u64 = 768 << 20;
 
-/// Bytes the selection holds per candidate variant and observation: the column and its remainder, f64, and the
-/// fits' working copies (measured: peak resident memory over this estimate's 16 bytes was 1.5 at 150 and at 500
-/// dwells of 64 rows).
-const BYTES_PER_COLUMN_ENTRY: u64 = 24;
+/// Bytes the selection holds per entry of a candidate's column: the entry (a value and its index) and the
+/// scores' and exact fits' working copies.
+const BYTES_PER_COLUMN_ENTRY: u64 = 16;
 
-/// Refuses `what` (its `observations` and candidate `columns`) when the columns would pass [`MAX_COLUMN_BYTES`],
-/// before any is built: the observations grow with the dwells (or positions) and so do the candidates (a
-/// position error per dwell and axis), so the columns' memory grows with the square of the dwells.
-fn check_column_memory(what: &str, observations: usize, columns: u64, source: &str) -> Result<(), InputError> {
-    let bytes = observations as u64 * columns * BYTES_PER_COLUMN_ENTRY;
+/// Refuses `what` when its candidates' column `entries` would pass [`MAX_COLUMN_BYTES`], before any is built.
+fn check_column_memory(what: &str, observations: usize, entries: u64, source: &str) -> Result<(), InputError> {
+    let bytes = entries * BYTES_PER_COLUMN_ENTRY;
     if bytes <= MAX_COLUMN_BYTES {
         return Ok(());
     }
     Err(InputError::file(
         source,
         format!(
-            "analyze: {what} give {observations} observations and {columns} candidate columns, {} MB of columns, \
-             beyond the {} MB the analysis holds (docs/analysis.md#memory-limit): analyze fewer at a time",
+            "analyze: {what} give {observations} observations and {entries} candidate column entries, {} MB of \
+             columns, beyond the {} MB the analysis holds (docs/analysis.md#memory-limit): analyze fewer at a time",
             bytes >> 20,
             MAX_COLUMN_BYTES >> 20
         ),
@@ -376,5 +373,20 @@ pub fn analyze_path(path: &Path) -> Result<Analysis, InputError> {
         analyze_angles(&AnglesFile::parse(&text, &path.display().to_string())?)
     } else {
         recording::analyze_recording(&RecordingFile::open(path)?)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn columns_past_the_limit_are_refused_before_they_are_built() {
+        // 48 Mi entries of 16 bytes are the 768 MB; one more is refused, with the numbers.
+        let limit_entries = MAX_COLUMN_BYTES / BYTES_PER_COLUMN_ENTRY;
+        assert!(check_column_memory("10000 dwells", 2_000_000, limit_entries, "x.csv").is_ok());
+        let err = check_column_memory("10000 dwells", 2_000_000, limit_entries + 1, "x.csv").unwrap_err().to_string();
+        assert!(err.contains("10000 dwells give 2000000 observations and 50331649 candidate column entries"), "{err}");
+        assert!(err.contains("768 MB of columns, beyond the 768 MB"), "{err}");
     }
 }

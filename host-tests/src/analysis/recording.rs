@@ -92,12 +92,14 @@ fn relevel(session: &mut Session) -> [f64; 3] {
 /// ([`super::check_column_memory`]).
 fn check_column_memory(session: &Session, blocks: &Blocks, source: &str) -> Result<(), InputError> {
     let dwells = session.dwells.len() as u64;
-    let position_errors = if session.all_heading() && dwells > 1 { 3 * dwells } else { 0 };
-    // The base model and the sensor terms (at most 30), the reference offset, and per channel a drift, a
-    // temperature term and a warm-up per time constant of the grid.
-    let per_channel = 2 + super::candidates::TAU_GRID_POINTS as u64;
-    let columns = 30 + 3 + position_errors + 6 * per_channel;
-    super::check_column_memory(&format!("{dwells} dwells"), blocks.y.len(), columns, source)
+    let observations = blocks.y.len() as u64;
+    let largest_channel = (0..6).map(|c| blocks.group.iter().filter(|&&g| g == c).count()).max().unwrap_or(0) as u64;
+    // On one channel's observations: the sensor terms (at most 30) and per channel a drift, a temperature term
+    // and a warm-up per time constant of the grid. On all: the reference offsets and the position errors (each
+    // on its own dwell's blocks, three axes).
+    let per_channel = 30 + 6 * (2 + super::candidates::TAU_GRID_POINTS as u64);
+    let entries = per_channel * largest_channel + 3 * observations + 3 * observations;
+    super::check_column_memory(&format!("{dwells} dwells"), blocks.y.len(), entries, source)
 }
 
 /// The block means, the base model's bias columns and the catalogue's candidates. With attitudes levelled
@@ -181,7 +183,7 @@ fn along_gravity(mut p: Problem, session: &Session, blocks: &Blocks, bias: [f64;
     p.base = p.base.iter().map(|c| project(c)).collect();
     for cand in p.candidates.iter_mut() {
         for (_, col) in cand.variants.iter_mut() {
-            *col = project(col);
+            *col = col.map_dense(project);
         }
         for g in cand.groups.iter_mut().filter(|g| **g >= 3) {
             *g = 3;

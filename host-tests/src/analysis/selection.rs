@@ -5,7 +5,8 @@
 use crate::stats::linfit::{chi_square_quantile_upper, chi_square_upper, fit, solve_spd, LinearFit, Observations};
 
 use super::candidates::Candidate;
-use super::{Tested, ALIAS_CORRELATION, ALPHA, MAX_EFFECTS};
+use super::column::Column;
+use super::{Tested, ALIAS_CORRELATION, ALPHA, MAX_COLUMN_BYTES, MAX_EFFECTS};
 
 /// A linear problem: observations, the base columns, the candidates.
 pub(super) struct Problem {
@@ -106,8 +107,9 @@ pub(super) fn select(problem: &mut Problem, extra_tests: usize) -> Result<Select
     let base_cols: Vec<&[f64]> = problem.base.iter().map(|c| c.as_slice()).collect();
     let base_fit =
         fit(&problem.obs, &base_cols).ok_or("the base model's biases cannot be fitted (dependent columns)")?;
-    let weights = weights(&problem.obs, &base_fit);
-    let screen = Screen::new(&problem.candidates, &base_cols, &weights, &mut problem.unobservable);
+    let base = Projection::new(&problem.obs, base_cols, &base_fit)
+        .ok_or("the base model's biases cannot be fitted (dependent columns)")?;
+    let screen = Screen::new(&problem.candidates, &base, &mut problem.unobservable);
     let m = (screen.observable.len() + extra_tests).max(1) as f64;
     let forward = Forward::run(problem, &screen.observable, base_fit.clone(), m);
     let chosen: Vec<usize> = forward.chosen.iter().map(|c| c.candidate).collect();
@@ -116,7 +118,7 @@ pub(super) fn select(problem: &mut Problem, extra_tests: usize) -> Result<Select
         .iter()
         .zip(&forward.correlated)
         .map(|(c, correlated)| {
-            let mut names = screen.aliases(problem, &weights, c, &chosen);
+            let mut names = screen.aliases(problem, &base, c, &chosen);
             names.extend(correlated.iter().filter(|n| !names.contains(n)).cloned().collect::<Vec<_>>());
             names
         })
@@ -134,35 +136,184 @@ pub(super) fn select(problem: &mut Problem, extra_tests: usize) -> Result<Select
     })
 }
 
-/// Observation weights: the given standard deviations, else the base model's variance of the group.
-fn weights(obs: &Observations, base_fit: &LinearFit) -> Vec<f64> {
+/// Observation weights: the given standard deviations, else the fit's variance of the group.
+fn weights(obs: &Observations, fit: &LinearFit) -> Vec<f64> {
     (0..obs.y.len())
         .map(|i| match &obs.sigma {
             Some(s) => 1.0 / (s[i] * s[i]),
-            None => 1.0 / base_fit.variance[obs.group[i]],
+            None => 1.0 / fit.variance[obs.group[i]],
         })
         .collect()
+}
+
+/// A remainder whose weighted square norm is below this fraction of its column's is the model's columns
+/// (rounding), not a direction the data can see: (1e-6)^2, the column's remainder below 1e-6 of its norm.
+const EXPLAINED: f64 = 1e-12;
+
+/// A model's columns and weights (its fit's variances): what a candidate column adds to the model is its
+/// remainder after them, by weighted least squares, found from the column's products with the model's columns
+/// alone, so that a column costs its nonzero entries (a position error's touches one dwell's blocks), not the
+/// whole recording.
+struct Projection<'a> {
+    columns: Vec<&'a [f64]>,
+    weights: Vec<f64>,
+    /// `(X' W X)^-1`.
+    inverse: Vec<Vec<f64>>,
+    /// The model's residual, made orthogonal to its columns under the weights.
+    residual: Vec<f64>,
+    /// Variance group of each observation.
+    group: &'a [usize],
+    /// The observations' standard deviations are known (no variance is fitted).
+    known_sigma: bool,
+    /// Per group: its observations, the residual's square sum, `X' r` and `X' X` over its observations.
+    count: Vec<f64>,
+    rss: Vec<f64>,
+    xr: Vec<Vec<f64>>,
+    xx: Vec<Vec<Vec<f64>>>,
+}
+
+/// A candidate column against a model: its estimate, standard error and likelihood ratio.
+#[derive(Clone, Copy)]
+struct Score {
+    estimate: f64,
+    std_error: f64,
+    lr: f64,
+}
+
+/// `sum a_i b_i`.
+fn dot(a: &[f64], b: &[f64]) -> f64 {
+    a.iter().zip(b).map(|(a, b)| a * b).sum()
+}
+
+/// `M v`.
+fn mat_vec(m: &[Vec<f64>], v: &[f64]) -> Vec<f64> {
+    m.iter().map(|row| dot(row, v)).collect()
+}
+
+impl<'a> Projection<'a> {
+    /// The projection onto `columns` with the weights of `fit`; `None` when the columns are dependent.
+    fn new(obs: &'a Observations, columns: Vec<&'a [f64]>, fit: &LinearFit) -> Option<Projection<'a>> {
+        let (k, groups) = (columns.len(), obs.groups);
+        let weights = weights(obs, fit);
+        let (mut a, mut b) = (vec![vec![0.0; k]; k], vec![0.0; k]);
+        for (i, (&w, &r)) in weights.iter().zip(&fit.residual).enumerate() {
+            for p in 0..k {
+                let wx = w * columns[p][i];
+                b[p] += wx * r;
+                for q in p..k {
+                    a[p][q] += wx * columns[q][i];
+                }
+            }
+        }
+        for p in 0..k {
+            for q in 0..p {
+                a[p][q] = a[q][p];
+            }
+        }
+        let (h, inverse) = if k == 0 { (Vec::new(), Vec::new()) } else { solve_spd(&a, &b)? };
+        let residual: Vec<f64> = fit
+            .residual
+            .iter()
+            .enumerate()
+            .map(|(i, r)| r - (0..k).map(|p| columns[p][i] * h[p]).sum::<f64>())
+            .collect();
+        let (mut count, mut rss) = (vec![0.0; groups], vec![0.0; groups]);
+        let (mut xr, mut xx) = (vec![vec![0.0; k]; groups], vec![vec![vec![0.0; k]; k]; groups]);
+        for (i, &r) in residual.iter().enumerate() {
+            let g = obs.group[i];
+            count[g] += 1.0;
+            rss[g] += r * r;
+            for p in 0..k {
+                xr[g][p] += columns[p][i] * r;
+                for q in 0..k {
+                    xx[g][p][q] += columns[p][i] * columns[q][i];
+                }
+            }
+        }
+        let known_sigma = obs.sigma.is_some();
+        Some(Projection { columns, weights, inverse, residual, group: &obs.group, known_sigma, count, rss, xr, xx })
+    }
+
+    /// `g = X' W c`, and the weighted square norm of the remainder `c - X (X' W X)^-1 g`, `c' W c - g' (X' W
+    /// X)^-1 g`, or 0 when that is below [`EXPLAINED`] of `c' W c`.
+    fn remainder(&self, c: &Column) -> (Vec<f64>, f64) {
+        let g = c.weighted_products(&self.weights, &self.columns);
+        let full = c.weighted_dot_column(&self.weights, c);
+        let rest = full - self.quadratic(&g, &g);
+        (g, if rest > EXPLAINED * full { rest } else { 0.0 })
+    }
+
+    /// `a' (X' W X)^-1 b`.
+    fn quadratic(&self, a: &[f64], b: &[f64]) -> f64 {
+        dot(a, &mat_vec(&self.inverse, b))
+    }
+
+    /// Adding `c` to the model. Known standard deviations: the exact weighted least-squares estimate, its
+    /// standard error and likelihood ratio `(c~' W r)^2 / (c~' W c~)` (`c~` the column's remainder). Fitted
+    /// variances: the estimate with the weights held, each group's variance fitted again to the residual it
+    /// leaves, the estimate and its standard error again with those variances, and the likelihood ratio
+    /// `sum n_g ln(RSS_g / RSS_g')` of the group variances fitted again (the fit's own likelihood, the
+    /// columns not projected again: one step of its reweighting).
+    fn score(&self, c: &Column) -> Score {
+        let (g, rest) = self.remainder(c);
+        if rest <= 0.0 {
+            return Score { estimate: 0.0, std_error: f64::INFINITY, lr: 0.0 };
+        }
+        let s = c.weighted_dot(&self.weights, &self.residual);
+        if self.known_sigma {
+            return Score { estimate: s / rest, std_error: 1.0 / rest.sqrt(), lr: s * s / rest };
+        }
+        // Per group: the remainder's products with the residual and with itself.
+        let (groups, k) = (self.count.len(), self.columns.len());
+        let (mut cr, mut cc, mut xc) = (vec![0.0; groups], vec![0.0; groups], vec![vec![0.0; k]; groups]);
+        c.for_each_nonzero(|i, v| {
+            let gi = self.group[i];
+            cr[gi] += v * self.residual[i];
+            cc[gi] += v * v;
+            for (x, col) in xc[gi].iter_mut().zip(&self.columns) {
+                *x += v * col[i];
+            }
+        });
+        let a = mat_vec(&self.inverse, &g);
+        let rem_r: Vec<f64> = (0..groups).map(|j| cr[j] - dot(&a, &self.xr[j])).collect();
+        let rem_sq: Vec<f64> = (0..groups)
+            .map(|j| (cc[j] - 2.0 * dot(&a, &xc[j]) + dot(&a, &mat_vec(&self.xx[j], &a))).max(0.0))
+            .collect();
+        let rss_after = |beta: f64, j: usize| {
+            (self.rss[j] - 2.0 * beta * rem_r[j] + beta * beta * rem_sq[j]).max(self.rss[j] * 1e-24).max(1e-300)
+        };
+        let held = s / rest;
+        let variance: Vec<f64> = (0..groups).map(|j| rss_after(held, j) / self.count[j].max(1.0)).collect();
+        let info: f64 = (0..groups).filter(|&j| self.count[j] > 0.0).map(|j| rem_sq[j] / variance[j]).sum();
+        if info <= 0.0 {
+            return Score { estimate: 0.0, std_error: f64::INFINITY, lr: 0.0 };
+        }
+        let estimate = (0..groups).filter(|&j| self.count[j] > 0.0).map(|j| rem_r[j] / variance[j]).sum::<f64>() / info;
+        let lr = (0..groups)
+            .filter(|&j| self.count[j] > 0.0 && self.rss[j] > 0.0)
+            .map(|j| self.count[j] * (self.rss[j] / rss_after(estimate, j)).ln())
+            .sum::<f64>();
+        Score { estimate, std_error: 1.0 / info.sqrt(), lr: lr.max(0.0) }
+    }
 }
 
 /// What the base model leaves of every candidate's columns.
 struct Screen {
     /// Candidates with a variant the base model does not explain.
     observable: Vec<usize>,
-    /// Per candidate, per variant: the column minus its base-model fit.
-    remainders: Vec<Vec<Vec<f64>>>,
+    /// Per candidate, per variant: the column's products with the base columns and its remainder's weighted
+    /// square norm ([`Projection::remainder`]).
+    remainders: Vec<Vec<(Vec<f64>, f64)>>,
 }
 
 impl Screen {
     /// Observability: a candidate whose every variant the base model explains is unobservable (its name goes
     /// to `unobservable`).
-    fn new(candidates: &[Candidate], base_cols: &[&[f64]], weights: &[f64], unobservable: &mut Vec<String>) -> Screen {
+    fn new(candidates: &[Candidate], base: &Projection, unobservable: &mut Vec<String>) -> Screen {
         let mut screen = Screen { observable: Vec::new(), remainders: Vec::new() };
         for (ci, c) in candidates.iter().enumerate() {
-            let rems: Vec<Vec<f64>> = c.variants.iter().map(|(_, col)| remainder(base_cols, weights, col)).collect();
-            let seen = c.variants.iter().zip(&rems).any(|((_, col), rem)| {
-                let full = weighted_norm(weights, col);
-                full > 0.0 && weighted_norm(weights, rem) > 1e-6 * full
-            });
+            let rems: Vec<(Vec<f64>, f64)> = c.variants.iter().map(|(_, col)| base.remainder(col)).collect();
+            let seen = rems.iter().any(|(_, rest)| *rest > 0.0);
             if seen {
                 screen.observable.push(ci);
             } else {
@@ -173,16 +324,18 @@ impl Screen {
         screen
     }
 
-    /// Aliases of a chosen effect: other observable candidates with (nearly) the same base-free column.
-    fn aliases(&self, problem: &Problem, weights: &[f64], c: &Chosen, chosen: &[usize]) -> Vec<String> {
-        let own = &self.remainders[c.candidate][c.variant];
-        let own_norm = weighted_norm(weights, own);
+    /// Aliases of a chosen effect: other observable candidates with (nearly) the same base-free column (the
+    /// correlation of the two remainders, from the columns' own product and their products with the base).
+    fn aliases(&self, problem: &Problem, base: &Projection, c: &Chosen, chosen: &[usize]) -> Vec<String> {
+        let own = &problem.candidates[c.candidate].variants[c.variant].1;
+        let (own_g, own_rest) = &self.remainders[c.candidate][c.variant];
         let mut names = Vec::new();
         for &oi in self.observable.iter().filter(|&&oi| oi != c.candidate && !chosen.contains(&oi)) {
-            let similar = self.remainders[oi].iter().any(|rem| {
-                let nrm = weighted_norm(weights, rem);
-                nrm > 0.0 && (weighted_dot(weights, own, rem) / (own_norm * nrm)).abs() > ALIAS_CORRELATION
-            });
+            let similar =
+                problem.candidates[oi].variants.iter().zip(&self.remainders[oi]).any(|((_, col), (g, rest))| {
+                    let product = own.weighted_dot_column(&base.weights, col) - base.quadratic(own_g, g);
+                    *rest > 0.0 && (product / (own_rest * rest).sqrt()).abs() > ALIAS_CORRELATION
+                });
             if similar {
                 names.push(problem.candidates[oi].name());
             }
@@ -193,6 +346,16 @@ impl Screen {
 
 /// The best addition at one step: (candidate, variant, fit with it, likelihood ratio).
 type Addition = (usize, usize, LinearFit, f64);
+
+/// A candidate's best variant and its score's likelihood ratio (deflated by [`block_inflation`]).
+struct Scored {
+    candidate: usize,
+    variant: usize,
+    lr: f64,
+}
+
+/// Candidates fitted exactly at a time, best score first ([`Forward::add_best`]).
+const EXACT_FITS: usize = 16;
 
 /// The state of the forward selection.
 struct Forward<'a> {
@@ -313,11 +476,34 @@ impl<'a> Forward<'a> {
         f.inflation = block_inflation(problem, &f.current.residual);
         for step in 0..=MAX_EFFECTS {
             let ranked = f.ranked_additions(observable, step == 0);
-            if step == MAX_EFFECTS || !f.add_first_acceptable(ranked, m) {
+            if step == MAX_EFFECTS || !f.add_best(&ranked, m) {
                 break;
             }
         }
         f
+    }
+
+    /// Fits exactly (the variances fitted again) the candidates of `ranked` in turns of [`EXACT_FITS`], best
+    /// score first, and adds the first of a turn, by its exact gain, that passes the criterion and is not
+    /// vetoed. Stops when a turn's weakest score is below half the criterion of one parameter: the score and
+    /// the exact likelihood ratio differ only by the variances fitted again. False when none is added.
+    fn add_best(&mut self, ranked: &[Scored], m: f64) -> bool {
+        let half_criterion = 0.5 * chi_square_quantile_upper(ALPHA / m, 1.0);
+        for turn in ranked.chunks(EXACT_FITS) {
+            let mut exact: Vec<(f64, Addition)> = turn
+                .iter()
+                .filter_map(|s| self.exact(s.candidate, s.variant))
+                .map(|a| (a.3 - self.problem.candidates[a.0].parameters() as f64 * self.ln_n, a))
+                .collect();
+            exact.sort_by(|a, b| b.0.total_cmp(&a.0));
+            if self.add_first_acceptable(exact.into_iter().map(|(_, a)| a).collect(), m) {
+                return true;
+            }
+            if turn.last().is_none_or(|s| s.lr < half_criterion) {
+                break;
+            }
+        }
+        false
     }
 
     /// Adds the first of `ranked` that passes the criterion and is not vetoed; the vetoed ones are set
@@ -361,8 +547,7 @@ impl<'a> Forward<'a> {
         let j = f.beta.len() - 1;
         let estimate = f.beta[j];
         if let Some(limit) = candidate.limit.filter(|l| estimate.abs() > *l) {
-            let col = &candidate.variants[*vi].1;
-            let at = (0..col.len()).max_by(|&a, &b| col[a].abs().total_cmp(&col[b].abs())).unwrap_or(0);
+            let at = candidate.variants[*vi].1.argmax_abs();
             let misfit = Misfit {
                 candidate: *ci,
                 estimate,
@@ -394,7 +579,7 @@ impl<'a> Forward<'a> {
             return None;
         }
         let k = candidate.parameters() as f64;
-        let lr_within = self.lr_within_poses(&candidate.variants[*vi].1)?;
+        let lr_within = self.lr_within_poses(&candidate.variants[*vi].1.dense())?;
         (lr_within <= chi_square_quantile_upper(ALPHA / m, k)).then_some(Confounded {
             candidate: *ci,
             lr: *lr,
@@ -404,11 +589,16 @@ impl<'a> Forward<'a> {
 
     /// The likelihood ratio of `column` once every pose has its own offset per group (which absorbs the
     /// biases and every term that depends on the pose alone), with the time terms chosen so far. `None`
-    /// without poses or when the columns are dependent (then no veto).
+    /// without poses, when the columns are dependent, or when the pose columns would take more than a quarter
+    /// of [`MAX_COLUMN_BYTES`] (then no veto).
     fn lr_within_poses(&self, column: &[f64]) -> Option<f64> {
         let problem = self.problem;
         let poses = problem.obs_pose.as_ref()?;
         let n_poses = poses.iter().max().map_or(0, |m| m + 1);
+        let pose_column_bytes = (n_poses * problem.obs.groups * poses.len() * std::mem::size_of::<f64>()) as u64;
+        if pose_column_bytes > MAX_COLUMN_BYTES / 4 {
+            return None;
+        }
         let mut cols: Vec<Vec<f64>> = Vec::new();
         for g in 0..problem.obs.groups {
             for p in 0..n_poses {
@@ -431,47 +621,53 @@ impl<'a> Forward<'a> {
         Some(2.0 * (f1.log_likelihood - f0.log_likelihood))
     }
 
-    /// Every candidate not yet chosen nor set aside, fitted with the current model, best BIC gain first:
-    /// of two candidates that explain the data equally well, the one with fewer parameters (a temperature
-    /// coefficient rather than a warm-up of free time constant).
-    fn ranked_additions(&mut self, observable: &[usize], record: bool) -> Vec<Addition> {
+    /// Every candidate not yet chosen nor set aside, scored against the current model with its variances
+    /// held, at its best variant, best BIC gain first: of two candidates that explain the data equally well,
+    /// the one with fewer parameters (a temperature coefficient rather than a warm-up of free time
+    /// constant). With `record`, each candidate's score goes to `tested`.
+    fn ranked_additions(&mut self, observable: &[usize], record: bool) -> Vec<Scored> {
         let problem = self.problem;
-        let mut ranked: Vec<(f64, Addition)> = Vec::new();
+        let cols: Vec<&[f64]> = self.columns.iter().map(|c| c.as_slice()).collect();
+        let Some(model) = Projection::new(&problem.obs, cols, &self.current) else {
+            return Vec::new();
+        };
+        let mut ranked: Vec<(f64, Scored)> = Vec::new();
         let open = |ci: &usize| !self.chosen.iter().any(|c| c.candidate == *ci) && !self.set_aside.contains(ci);
         for &ci in observable.iter().filter(|ci| open(ci)) {
             let c = &problem.candidates[ci];
-            let Some((vi, f)) = self.best_variant(c) else { continue };
-            let inflation = c.groups.iter().map(|&g| self.inflation[g]).fold(1.0, f64::max);
-            let lr = 2.0 * (f.log_likelihood - self.current.log_likelihood) / inflation;
+            let scores = c.variants.iter().map(|(_, col)| model.score(col));
+            let Some((vi, score)) = scores.enumerate().max_by(|a, b| a.1.lr.total_cmp(&b.1.lr)) else { continue };
+            let lr = score.lr / self.inflation_of(c);
             if record {
-                let j = f.beta.len() - 1;
                 self.tested.push(Tested {
                     name: c.name(),
-                    estimate: f.beta[j],
-                    std_error: f.std_error(j),
+                    estimate: score.estimate,
+                    std_error: score.std_error,
                     likelihood_ratio: lr,
                 });
             }
             let gain = lr - c.parameters() as f64 * self.ln_n;
-            ranked.push((gain, (ci, vi, f, lr)));
+            ranked.push((gain, Scored { candidate: ci, variant: vi, lr }));
         }
         ranked.sort_by(|a, b| b.0.total_cmp(&a.0));
-        ranked.into_iter().map(|(_, a)| a).collect()
+        ranked.into_iter().map(|(_, s)| s).collect()
     }
 
-    /// The variant of `c` of the highest likelihood together with the current columns.
-    fn best_variant(&self, c: &Candidate) -> Option<(usize, LinearFit)> {
-        let mut best_variant: Option<(usize, LinearFit)> = None;
-        for (vi, (_, col)) in c.variants.iter().enumerate() {
-            let mut cols: Vec<&[f64]> = self.columns.iter().map(|c| c.as_slice()).collect();
-            cols.push(col);
-            if let Some(f) = fit(&self.problem.obs, &cols) {
-                if best_variant.as_ref().is_none_or(|(_, b)| f.log_likelihood > b.log_likelihood) {
-                    best_variant = Some((vi, f));
-                }
-            }
-        }
-        best_variant
+    /// The variance inflation of `c`'s groups ([`block_inflation`]).
+    fn inflation_of(&self, c: &Candidate) -> f64 {
+        c.groups.iter().map(|&g| self.inflation[g]).fold(1.0, f64::max)
+    }
+
+    /// Variant `vi` of candidate `ci` fitted with the current columns, its variances fitted again; `None` when
+    /// the columns are dependent.
+    fn exact(&self, ci: usize, vi: usize) -> Option<Addition> {
+        let c = &self.problem.candidates[ci];
+        let col = c.variants[vi].1.dense();
+        let mut cols: Vec<&[f64]> = self.columns.iter().map(|c| c.as_slice()).collect();
+        cols.push(&col);
+        let f = fit(&self.problem.obs, &cols)?;
+        let lr = 2.0 * (f.log_likelihood - self.current.log_likelihood) / self.inflation_of(c);
+        Some((ci, vi, f, lr))
     }
 
     /// Adds a candidate that passed the criterion and the vetoes.
@@ -490,7 +686,7 @@ impl<'a> Forward<'a> {
             rms_before: group_rms(&self.current, &candidate.groups),
             rms_after: group_rms(&f, &candidate.groups),
         });
-        self.columns.push(candidate.variants[vi].1.clone());
+        self.columns.push(candidate.variants[vi].1.dense().into_owned());
         self.current = f;
     }
 }
@@ -498,33 +694,4 @@ impl<'a> Forward<'a> {
 /// RMS residual over the observation groups `groups`.
 fn group_rms(fit: &LinearFit, groups: &[usize]) -> f64 {
     (groups.iter().map(|&g| fit.rms[g] * fit.rms[g]).sum::<f64>() / groups.len().max(1) as f64).sqrt()
-}
-
-/// Removes the base columns from `column` (weighted least squares with `weights`), for alias and
-/// observability checks; returns the remainder.
-fn remainder(base: &[&[f64]], weights: &[f64], column: &[f64]) -> Vec<f64> {
-    let k = base.len();
-    let mut a = vec![vec![0.0; k]; k];
-    let mut b = vec![0.0; k];
-    for i in 0..column.len() {
-        let w = weights[i];
-        for p in 0..k {
-            b[p] += w * base[p][i] * column[i];
-            for q in 0..k {
-                a[p][q] += w * base[p][i] * base[q][i];
-            }
-        }
-    }
-    let coef = solve_spd(&a, &b).map(|(x, _)| x).unwrap_or_else(|| vec![0.0; k]);
-    (0..column.len()).map(|i| column[i] - (0..k).map(|p| coef[p] * base[p][i]).sum::<f64>()).collect()
-}
-
-/// `sqrt(sum w v^2)`.
-fn weighted_norm(weights: &[f64], v: &[f64]) -> f64 {
-    v.iter().zip(weights).map(|(v, w)| w * v * v).sum::<f64>().sqrt()
-}
-
-/// `sum w a b`.
-fn weighted_dot(weights: &[f64], a: &[f64], b: &[f64]) -> f64 {
-    a.iter().zip(b).zip(weights).map(|((a, b), w)| w * a * b).sum()
 }
