@@ -9,6 +9,8 @@ pub mod moves;
 pub mod qemu;
 pub mod result;
 
+use std::ops::ControlFlow;
+
 use sinscal::calib::align::{position_angles, DwellValue, PositionAngles};
 use sinscal::calib::angles::{
     calibrate_positions, BiasSolution, CalibrationError, CalibrationResult, CalibrationSettings, PositionInput,
@@ -721,19 +723,19 @@ fn update_identifiers(ids: &mut [CoefficientIdentifier; 6], row: &crate::io::rec
 pub fn identify_coefficients(recording: &impl RowSource) -> Result<[f32; 2], InputError> {
     let mut ids = [CoefficientIdentifier::new(); 6];
     let mut first: Option<(u32, usize)> = None;
-    recording.for_each_row_until(&mut |row| {
+    recording.for_each_row_while(&mut |row| {
         let Some(&(label, _)) = first.as_ref() else {
             if row.pos != 0 {
                 first = Some((row.pos, row.line));
                 update_identifiers(&mut ids, row);
             }
-            return Ok(true);
+            return Ok(ControlFlow::Continue(()));
         };
         if row.pos != label {
-            return Ok(false);
+            return Ok(ControlFlow::Break(()));
         }
         update_identifiers(&mut ids, row);
-        Ok(true)
+        Ok(ControlFlow::Continue(()))
     })?;
     let Some((_, line)) = first else {
         return Err(InputError::file(recording.source(), NO_DWELL));

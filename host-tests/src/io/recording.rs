@@ -4,6 +4,7 @@
 use std::fmt::Write as _;
 use std::fs::File;
 use std::io::{BufRead, BufReader, Read};
+use std::ops::ControlFlow;
 use std::path::Path;
 use std::sync::atomic::{AtomicBool, Ordering};
 use std::sync::{mpsc, Mutex};
@@ -491,19 +492,14 @@ pub trait RowSource {
     fn extra_columns(&self) -> ExtraColumns {
         ExtraColumns { temp: self.has_temp(), turn: self.has_turns() }
     }
-    /// Gives every row to `sink`, in file order; the first error (of the reader's or the sink's) stops the pass.
-    fn for_each_row(&self, sink: &mut dyn FnMut(&Row) -> Result<(), InputError>) -> Result<(), InputError>;
+    /// Gives the rows to `sink`, in file order, while it returns `Continue`: at `Break` the pass ends there, the
+    /// rest of the rows unread (and unchecked; a later whole pass checks them). The first error (of the
+    /// reader's or the sink's) stops the pass.
+    fn for_each_row_while(&self, sink: RowSink<'_>) -> Result<(), InputError>;
 
-    /// Gives the rows to `sink`, in file order, until it returns `Ok(false)`: the pass then ends there, the rest of
-    /// the rows unread (and unchecked; a later whole pass checks them).
-    fn for_each_row_until(&self, sink: &mut dyn FnMut(&Row) -> Result<bool, InputError>) -> Result<(), InputError> {
-        // The stop travels as an error whose file name no file has (an empty name with a NUL reason), so that
-        // the reader's own way of ending a pass early (an error from the sink) ends it; it is never shown.
-        let stop = || InputError::file("", PASS_STOPPED);
-        match self.for_each_row(&mut |row| if sink(row)? { Ok(()) } else { Err(stop()) }) {
-            Err(InputError::File { file, reason }) if file.is_empty() && reason == PASS_STOPPED => Ok(()),
-            other => other,
-        }
+    /// Gives every row to `sink`, in file order; the first error (of the reader's or the sink's) stops the pass.
+    fn for_each_row(&self, sink: &mut dyn FnMut(&Row) -> Result<(), InputError>) -> Result<(), InputError> {
+        self.for_each_row_while(&mut |row| sink(row).map(ControlFlow::Continue))
     }
 
     /// Refuses accelerometer-only data for a command that needs the gyros: `command` names it
@@ -533,8 +529,13 @@ impl RowSource for Recording {
     fn has_turns(&self) -> bool {
         self.rows.iter().any(|r| r.turn_axis.is_some())
     }
-    fn for_each_row(&self, sink: &mut dyn FnMut(&Row) -> Result<(), InputError>) -> Result<(), InputError> {
-        self.rows.iter().try_for_each(sink)
+    fn for_each_row_while(&self, sink: RowSink<'_>) -> Result<(), InputError> {
+        for row in &self.rows {
+            if sink(row)?.is_break() {
+                break;
+            }
+        }
+        Ok(())
     }
 }
 
@@ -610,8 +611,9 @@ impl RecordingFile {
         Ok(Recording { source, header, rows, has_gyro })
     }
 
-    /// A pass over the rows in chunks of `chunk_bytes` (then to the end of a line).
-    fn pass(&self, chunk_bytes: u64, sink: &mut dyn FnMut(&Row) -> Result<(), InputError>) -> Result<(), InputError> {
+    /// A pass over the rows in chunks of `chunk_bytes` (then to the end of a line); the file's end and rate are
+    /// checked only by a pass that reads every row.
+    fn pass(&self, chunk_bytes: u64, sink: RowSink<'_>) -> Result<(), InputError> {
         let (path, source) = (self.path.as_path(), self.source.as_str());
         let mut reader = BufReader::with_capacity(1 << 20, File::open(path).map_err(|e| InputError::io(path, e))?);
         for line in 1..=self.head_lines {
@@ -620,11 +622,14 @@ impl RecordingFile {
         let columns = parse_columns(&self.column_line, self.header_line, source)?;
         let mut steps = TimeSteps::default();
         let mut last_line = None;
-        read_rows(&mut reader, (self.head_lines, chunk_bytes), &columns, source, path, &mut |row| {
+        let flow = read_rows(&mut reader, (self.head_lines, chunk_bytes), &columns, source, path, &mut |row| {
             steps.push(row.t_s);
             last_line = Some(row.line);
             sink(row)
         })?;
+        if flow.is_break() {
+            return Ok(());
+        }
         let Some(last_line) = last_line else {
             return Err(InputError::at(source, self.header_line, "no data rows"));
         };
@@ -652,7 +657,7 @@ impl RowSource for RecordingFile {
     fn has_turns(&self) -> bool {
         self.has_turns
     }
-    fn for_each_row(&self, sink: &mut dyn FnMut(&Row) -> Result<(), InputError>) -> Result<(), InputError> {
+    fn for_each_row_while(&self, sink: RowSink<'_>) -> Result<(), InputError> {
         self.pass(CHUNK_BYTES, sink)
     }
 }
@@ -1078,8 +1083,8 @@ fn read_chunk(reader: &mut impl BufRead, chunk_bytes: u64, bytes: &mut Vec<u8>) 
     Ok(())
 }
 
-/// The reason of the error that ends a pass of [`RowSource::for_each_row_until`] early (never shown).
-const PASS_STOPPED: &str = "\u{0}the pass was stopped by its sink";
+/// What a pass gives each row to: `Break` ends the pass early ([`RowSource::for_each_row_while`]).
+pub type RowSink<'s> = &'s mut dyn FnMut(&Row) -> Result<ControlFlow<()>, InputError>;
 
 /// Longest line a recording (or any text file sinscal reads) may have, bytes: a row of eleven numbers is about
 /// 200.
@@ -1134,8 +1139,8 @@ fn read_rows(
     columns: &Columns,
     source: &str,
     path: &Path,
-    sink: &mut dyn FnMut(&Row) -> Result<(), InputError>,
-) -> Result<(), InputError> {
+    sink: RowSink<'_>,
+) -> Result<ControlFlow<()>, InputError> {
     let workers = std::thread::available_parallelism().map_or(1, |n| n.get()).clamp(1, 4);
     let (work_tx, work_rx) = mpsc::sync_channel::<(usize, usize, Vec<u8>)>(CHUNKS_IN_FLIGHT);
     let work_rx = Mutex::new(work_rx);
@@ -1180,14 +1185,16 @@ fn read_rows(
         }
         drop(done_tx);
         let joined = join_chunks(done_rx, ticket_tx, source, sink);
-        if joined.is_err() {
+        if !matches!(joined, Ok(ControlFlow::Continue(()))) {
             stop.store(true, Ordering::Relaxed);
         }
         (joined, producer.join())
     });
-    joined?;
+    if joined?.is_break() {
+        return Ok(ControlFlow::Break(()));
+    }
     match read {
-        Ok(Ok(())) => Ok(()),
+        Ok(Ok(())) => Ok(ControlFlow::Continue(())),
         Ok(Err((line, e))) if e.kind() == std::io::ErrorKind::InvalidData => {
             Err(InputError::at(source, line, e.to_string()))
         }
@@ -1200,13 +1207,14 @@ fn read_rows(
 const CHUNKS_IN_FLIGHT: usize = 6;
 
 /// Gives the chunks' rows to `sink` in file order, with the time check across chunks, and returns each
-/// chunk's ticket; the first error in file order. Dropping `tickets` on return stops the reading.
+/// chunk's ticket; the first error in file order, or the sink's `Break`. Dropping `tickets` on return stops
+/// the reading.
 fn join_chunks(
     done: mpsc::Receiver<(usize, ChunkRows)>,
     tickets: mpsc::SyncSender<()>,
     source: &str,
-    sink: &mut dyn FnMut(&Row) -> Result<(), InputError>,
-) -> Result<(), InputError> {
+    sink: RowSink<'_>,
+) -> Result<ControlFlow<()>, InputError> {
     let mut pending = std::collections::BTreeMap::new();
     let (mut next, mut previous_t) = (0, None);
     for (index, chunk) in done {
@@ -1218,7 +1226,11 @@ fn join_chunks(
                     return Err(time_does_not_increase(source, n, t_s, prev));
                 }
             }
-            chunk.rows.iter().try_for_each(&mut *sink)?;
+            for row in &chunk.rows {
+                if sink(row)?.is_break() {
+                    return Ok(ControlFlow::Break(()));
+                }
+            }
             if let Some(e) = chunk.error {
                 return Err(e);
             }
@@ -1226,7 +1238,7 @@ fn join_chunks(
             let _ = tickets.send(());
         }
     }
-    Ok(())
+    Ok(ControlFlow::Continue(()))
 }
 
 /// `bytes` (line `line` of `source`) as text; an error naming the line when it is not UTF-8.
@@ -1432,7 +1444,7 @@ mod tests {
         let mut rows = Vec::new();
         file.pass(chunk_bytes, &mut |row| {
             rows.push(row.clone());
-            Ok(())
+            Ok(ControlFlow::Continue(()))
         })?;
         Ok(Recording { source: file.source.clone(), header: file.header.clone(), rows, has_gyro: file.has_gyro })
     }
@@ -1482,6 +1494,43 @@ mod tests {
                 assert_eq!(read, parsed, "chunks of {chunk_bytes} bytes");
             }
         }
+    }
+
+    #[test]
+    fn a_pass_that_breaks_reads_no_further_and_a_whole_pass_still_checks_everything() {
+        // 40 rows, then a bad time at row 20 and a bad cell at row 39: a pass that stops after row 10 gives ten
+        // rows and no error, in chunks of any size; a whole pass is refused at the first bad line.
+        let mut text = GOOD.to_string();
+        for k in 2..40 {
+            text.push_str(&format!("{},1,0,0,0,{k}e-6,0,0,0,0,9.8\n", 0.01 * k as f64));
+        }
+        let text = text.replace("0.2,1,", "0.001,1,").replace("0.39,1,0,0,0,39e-6", "0.39,1,0,0,0,x");
+        let dir = tempfile::tempdir().unwrap();
+        let path = dir.path().join("r.csv");
+        std::fs::write(&path, &text).unwrap();
+        let file = RecordingFile::open(&path).unwrap();
+        for chunk_bytes in [1, 40, 333, 1 << 20] {
+            let mut seen = 0;
+            let stopped = file.pass(chunk_bytes, &mut |_| {
+                seen += 1;
+                Ok(if seen == 10 { ControlFlow::Break(()) } else { ControlFlow::Continue(()) })
+            });
+            assert_eq!((stopped.map_err(|e| e.to_string()), seen), (Ok(()), 10), "chunks of {chunk_bytes} bytes");
+        }
+        let whole = file.for_each_row(&mut |_| Ok(())).unwrap_err().to_string();
+        assert!(whole.contains(":24: time") || whole.contains("does not increase"), "{whole}");
+        let refused = Recording::parse(&text.replace("0.001,1,", "0.2,1,"), "r.csv").unwrap_err();
+        assert!(refused.to_string().contains("'x' is not a finite number"), "{refused}");
+        // The same in memory: the pass ends at the break.
+        let in_memory = Recording::parse(&text.replace("0.001,1,", "0.2,1,").replace(",x", ",0"), "r.csv").unwrap();
+        let mut seen = 0;
+        in_memory
+            .for_each_row_while(&mut |_| {
+                seen += 1;
+                Ok(if seen == 3 { ControlFlow::Break(()) } else { ControlFlow::Continue(()) })
+            })
+            .unwrap();
+        assert_eq!((seen, in_memory.rows.len()), (3, 40));
     }
 
     #[test]
