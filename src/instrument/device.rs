@@ -16,6 +16,7 @@ use super::wire::codes::{ConfigurationRefusal, ImuCode};
 use super::wire::configuration::{DeviceConfiguration, MAX_DEVICE_BYTES, THRESHOLD_BYTES};
 use super::wire::outcome::{encode_part, OutcomeView};
 use super::wire::record::{max_record_bytes, Record, RecordHead, RECORD_HEAD_BYTES, RECORD_VERSION};
+use super::wire::status::Status;
 use super::wire::{Reader, Writer};
 use crate::calib::angles::MAX_POSITIONS;
 use crate::calib::compensation::{self, Compensation};
@@ -444,25 +445,24 @@ impl<F: NorFlash> Device<F> {
 
     #[inline(never)]
     fn status(&self, sampling: &SamplingStats, out: &mut [u8]) -> Reply {
-        let mut w = Writer::new(out);
-        w.u8(self.state as u8);
         let (position, positions) = match (&self.sequence, &self.configured) {
             (Some(s), Some(c)) => (s.position() as u16, c.configuration.schedule.len() as u16),
             (None, Some(c)) => (0, c.configuration.schedule.len() as u16),
             _ => (0, 0),
         };
-        w.u16(position).u16(positions);
-        for v in sampling.counters() {
-            w.u32(v);
-        }
         let l = &self.link;
-        for v in [l.requests, l.crc_errors, l.frame_errors, l.version_errors, l.refused, l.rx_overruns] {
-            w.u32(v);
-        }
-        w.u8(self.stored.is_some() as u8).u32(self.stored.map_or(0, |s| s.sequence));
-        w.u8(self.compensation_from_record as u8).u8(self.streaming as u8);
-        w.u8(self.damaged.is_some() as u8).u32(self.damaged.map_or(0, |d| d.sequence));
-        body_of(w.written())
+        let status = Status {
+            state: self.state,
+            position,
+            positions,
+            sampling: sampling.counters(),
+            link: [l.requests, l.crc_errors, l.frame_errors, l.version_errors, l.refused, l.rx_overruns],
+            stored: self.stored.map(|s| s.sequence),
+            compensating: self.compensation_from_record,
+            streaming: self.streaming,
+            damaged_newer: self.damaged.map(|d| d.sequence),
+        };
+        body_of(status.encode(out))
     }
 
     #[inline(never)]

@@ -5,7 +5,7 @@ use std::io::{Read, Write};
 use std::time::{Duration, Instant};
 
 use sinscal::instrument::link::{encode_frame, FrameReceiver, MAX_WIRE_BYTES};
-use sinscal::instrument::message::{kind, DeviceState, ErrorCode, MAX_CHUNK_BYTES, MAX_NOTE_BYTES};
+use sinscal::instrument::message::{kind, ErrorCode, MAX_CHUNK_BYTES, MAX_NOTE_BYTES};
 use sinscal::instrument::wire::Reader;
 
 /// A failure of the link or a refusal of the device.
@@ -79,28 +79,8 @@ pub struct Identity {
     pub max_record_bytes: u32,
 }
 
-/// The device's status.
-#[derive(Clone, Debug, PartialEq, Eq)]
-pub struct Status {
-    /// State.
-    pub state: DeviceState,
-    /// Position being worked on (0-based) and positions of the schedule.
-    pub position: u16,
-    /// Positions of the schedule.
-    pub positions: u16,
-    /// The sampling counters, in the order of `sinscal::run::sampling::SamplingStats::COUNTER_NAMES`.
-    pub sampling: Vec<u32>,
-    /// Link counters: requests, CRC errors, frame errors, version errors, refused, receive overruns.
-    pub link: [u32; 6],
-    /// Whether a record is stored, and its sequence number.
-    pub stored: Option<u32>,
-    /// Whether the stored calibration compensates the samples.
-    pub compensating: bool,
-    /// Whether the sample stream is on.
-    pub streaming: bool,
-    /// The sequence number of a damaged record newer than the stored one in use (the device fell back).
-    pub damaged_newer: Option<u32>,
-}
+/// What the device reports of itself (the core's typed status reply).
+pub use sinscal::instrument::wire::status::Status;
 
 /// What a store did.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -238,39 +218,7 @@ impl<T: Read + Write> Client<T> {
     /// Status.
     pub fn status(&mut self) -> Result<Status, LinkError> {
         let body = self.request("status", kind::STATUS, &[])?;
-        // state, position, positions; the sampling counters; 6 link counters; stored, sequence,
-        // compensating, streaming; damaged, its sequence.
-        let fixed = 5 + 6 * 4 + 1 + 4 + 1 + 1 + 1 + 4;
-        if body.len() < fixed || (body.len() - fixed) % 4 != 0 {
-            return Err(LinkError::Malformed("status"));
-        }
-        let counters = (body.len() - fixed) / 4;
-        let mut r = Reader::new(&body);
-        let parse = |r: &mut Reader<'_>| -> Option<Status> {
-            let state = DeviceState::from_code(r.u8()?)?;
-            let (position, positions) = (r.u16()?, r.u16()?);
-            let sampling = (0..counters).map(|_| r.u32()).collect::<Option<Vec<u32>>>()?;
-            let mut link = [0u32; 6];
-            for v in link.iter_mut() {
-                *v = r.u32()?;
-            }
-            let (has, sequence) = (r.u8()?, r.u32()?);
-            Some(Status {
-                state,
-                position,
-                positions,
-                sampling,
-                link,
-                stored: (has != 0).then_some(sequence),
-                compensating: r.u8()? != 0,
-                streaming: r.u8()? != 0,
-                damaged_newer: {
-                    let (damaged, sequence) = (r.u8()?, r.u32()?);
-                    (damaged != 0).then_some(sequence)
-                },
-            })
-        };
-        parse(&mut r).ok_or(LinkError::Malformed("status"))
+        Status::decode(&body).map_err(|_| LinkError::Malformed("status"))
     }
 
     /// Configure with a configuration body.

@@ -8,6 +8,7 @@
 //! - [`outcome`]: what a calibration produced (counters, every dwell's statistics, the failure or the
 //!   solution with its covariance); a link reply, an outcome file and a record carry it.
 //! - [`record`]: the calibration record kept in flash (compensation, configuration, note, outcome).
+//! - [`status`]: the device's status reply (state, counters, the record in use and a damaged newer one).
 //!
 //! Layouts, in order (docs/device.md and docs/formats.md#replay-file describe the same):
 //! ```text
@@ -33,6 +34,7 @@ pub mod codes;
 pub mod configuration;
 pub mod outcome;
 pub mod record;
+pub mod status;
 
 /// A wire format could not be decoded (too short, an unknown code, a value out of range) or an encoding did
 /// not fit its buffer.

@@ -277,3 +277,38 @@ fn a_record_reads_back_as_its_parts() {
     assert_eq!((&bytes[k..k + kl], &bytes[n..n + nl]), (&configuration[..], &note[..]));
     assert_eq!(Outcome::decode(&o.configuration, &bytes[oo..oo + ol]), Ok(o));
 }
+
+#[test]
+fn status_replies_round_trip_and_truncations_and_unknown_states_are_refused() {
+    use super::status::{Status, BYTES};
+    use crate::instrument::message::DeviceState;
+    let mut rng = Rng(0x5eed_57a7);
+    for (i, state) in
+        [DeviceState::Idle, DeviceState::Configured, DeviceState::Running, DeviceState::Solved, DeviceState::Failed]
+            .into_iter()
+            .enumerate()
+    {
+        let status = Status {
+            state,
+            position: rng.next() as u16,
+            positions: rng.next() as u16,
+            sampling: core::array::from_fn(|_| rng.next() as u32),
+            link: core::array::from_fn(|_| rng.next() as u32),
+            stored: (i % 2 == 0).then_some(rng.next() as u32),
+            compensating: i % 3 == 0,
+            streaming: i % 2 == 1,
+            damaged_newer: (i > 2).then_some(rng.next() as u32),
+        };
+        let mut out = [0u8; BYTES + 8];
+        let n = status.encode(&mut out).expect("fits");
+        assert_eq!(n, BYTES);
+        assert_eq!(Status::decode(&out[..n]), Ok(status.clone()));
+        for cut in 0..n {
+            assert!(Status::decode(&out[..cut]).is_err(), "{cut} bytes");
+        }
+        assert!(Status::decode(&out[..n + 1]).is_err(), "a byte more");
+        assert!(status.encode(&mut out[..n - 1]).is_none(), "a buffer a byte short");
+        out[0] = 5;
+        assert!(Status::decode(&out[..n]).is_err(), "an unknown state");
+    }
+}
