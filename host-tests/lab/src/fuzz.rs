@@ -518,6 +518,58 @@ fn imutk_seed() -> Vec<u8> {
     [acc.as_bytes(), &[0], gyro.as_bytes()].concat()
 }
 
+/// The importers' seeds: small files of each format (docs/data.md), as the importers' tests write them (PSINS,
+/// imucal's Ferraris session and labels, imucal's raw session).
+fn importer_seeds() -> (Vec<u8>, Vec<u8>, Vec<u8>) {
+    let psins = "% PSINS-format SIMU log file.\n% pitch roll yaw VE VN VU\n\n0.5 -1.0 -90.6 0 0 0\n\
+                 34.0 108.0 380.0 0.0 10.0 9.780327\n0.1 0.2 0.1 125 125 100\n2 -3 0 80 0 -80\n0 0 7 0 1 80\n\
+                 -5 9 3 0 0 80\n";
+    let mut ferraris = String::from("n_samples,gyr_x,gyr_y,gyr_z,acc_x,acc_y,acc_z\n");
+    for n in 0..30 {
+        let accel = match n {
+            2..=3 => "9.8,0,0",
+            5..=6 => "-9.8,0,0",
+            8..=9 => "0,9.8,0",
+            11..=12 => "0,-9.8,0",
+            14..=15 => "0,0,9.8",
+            17..=18 => "0,0,-9.8",
+            _ => "0.1,0.2,0.3",
+        };
+        ferraris += &format!("{n},1,-2,0.5,{accel}\n");
+    }
+    let ferraris_labels = "{\"x_p\": {\"start\": 2, \"end\": 4}, \"x_a\": {\"start\": 5, \"end\": 7},\n\
+                           \"y_p\": {\"start\": 8, \"end\": 10}, \"y_a\": [11, 13],\n\
+                           \"z_p\": {\"start\": 14, \"end\": 16}, \"z_a\": {\"start\": 17, \"end\": 19},\n\
+                           \"x_rot\": {\"start\": 20, \"end\": 25}}\n";
+    let imucal = [ferraris.as_bytes(), &[0], ferraris_labels.as_bytes()].concat();
+    let imucal_raw = "part,samples,acc_x,acc_y,acc_z,gyr_x,gyr_y,gyr_z\nx_a,3,-2048.0,0,0,16.4,-32.8,0\n\
+                      x_a,4,-2048.0,0,0,16.4,-32.8,0\nx_p,0,2048.0,0,0,0,0,8.2\nx_p,1,2048,0,0,0,0,8.2\n\
+                      x_rot,2,0,1024,0,1640,0,0\ny_a,5,0,-2048,0,0,0,0\ny_p,6,0,2048,0,0,0,0\n\
+                      z_a,7,0,0,-2048,0,0,0\nz_p,8,0,0,2048,0,0,0\n";
+    (psins.as_bytes().to_vec(), imucal, imucal_raw.as_bytes().to_vec())
+}
+
+/// The `import columns` seeds: one session as text (gyro in deg/s, front-right-down axes), as big-endian f32
+/// records after an 8-byte header, and as a MAT-file matrix.
+fn columns_seeds() -> (Vec<u8>, Vec<u8>, Vec<u8>) {
+    let rows = columns_rows();
+    let mut columns_text = String::from("t,gx,gy,gz,ax,ay,az\n# a comment line\n");
+    for r in &rows {
+        let (w, f) = (r[1..4].iter().map(|v| v.to_degrees()), [r[5], r[4], -r[6]]);
+        let cells: Vec<String> = std::iter::once(r[0]).chain(w).chain(f).map(|v| format!("{v:?}")).collect();
+        columns_text += &(cells.join(",") + "\n");
+    }
+    let mut columns_binary = b"IMU\0\0\0\0\x07".to_vec();
+    for v in rows.iter().flatten() {
+        columns_binary.extend_from_slice(&(*v as f32).to_be_bytes());
+    }
+    let n = rows.len();
+    let by_column: Vec<f64> = (0..7 * n).map(|i| rows[i % n][i / n]).collect();
+    let columns_mat = sinscal_host::io::import::mat::write_mat_v5(&[("note", 1, 1, &[1.0]), ("imu", n, 7, &by_column)])
+        .expect("the seed MAT-file is written");
+    (columns_text.into_bytes(), columns_binary, columns_mat)
+}
+
 /// The valid inputs the fuzzing starts from, per target: its name, its reader and a valid input that sinscal
 /// writes itself.
 pub fn seeds() -> Vec<(&'static str, Reader, Vec<u8>)> {
@@ -547,49 +599,8 @@ pub fn seeds() -> Vec<(&'static str, Reader, Vec<u8>)> {
         link_requests.extend_from_slice(&(body.len() as u16).to_le_bytes());
         link_requests.extend_from_slice(body);
     }
-    // The importers' seeds: small files of each format (docs/data.md), as the importers' tests write them.
-    let psins = "% PSINS-format SIMU log file.\n% pitch roll yaw VE VN VU\n\n0.5 -1.0 -90.6 0 0 0\n\
-                 34.0 108.0 380.0 0.0 10.0 9.780327\n0.1 0.2 0.1 125 125 100\n2 -3 0 80 0 -80\n0 0 7 0 1 80\n\
-                 -5 9 3 0 0 80\n";
-    let mut ferraris = String::from("n_samples,gyr_x,gyr_y,gyr_z,acc_x,acc_y,acc_z\n");
-    for n in 0..30 {
-        let accel = match n {
-            2..=3 => "9.8,0,0",
-            5..=6 => "-9.8,0,0",
-            8..=9 => "0,9.8,0",
-            11..=12 => "0,-9.8,0",
-            14..=15 => "0,0,9.8",
-            17..=18 => "0,0,-9.8",
-            _ => "0.1,0.2,0.3",
-        };
-        ferraris += &format!("{n},1,-2,0.5,{accel}\n");
-    }
-    let ferraris_labels = "{\"x_p\": {\"start\": 2, \"end\": 4}, \"x_a\": {\"start\": 5, \"end\": 7},\n\
-                           \"y_p\": {\"start\": 8, \"end\": 10}, \"y_a\": [11, 13],\n\
-                           \"z_p\": {\"start\": 14, \"end\": 16}, \"z_a\": {\"start\": 17, \"end\": 19},\n\
-                           \"x_rot\": {\"start\": 20, \"end\": 25}}\n";
-    let imucal = [ferraris.as_bytes(), &[0], ferraris_labels.as_bytes()].concat();
-    let imucal_raw = "part,samples,acc_x,acc_y,acc_z,gyr_x,gyr_y,gyr_z\nx_a,3,-2048.0,0,0,16.4,-32.8,0\n\
-                      x_a,4,-2048.0,0,0,16.4,-32.8,0\nx_p,0,2048.0,0,0,0,0,8.2\nx_p,1,2048,0,0,0,0,8.2\n\
-                      x_rot,2,0,1024,0,1640,0,0\ny_a,5,0,-2048,0,0,0,0\ny_p,6,0,2048,0,0,0,0\n\
-                      z_a,7,0,0,-2048,0,0,0\nz_p,8,0,0,2048,0,0,0\n";
-    // The `import columns` seeds: the same session as text (gyro in deg/s, front-right-down axes), as
-    // big-endian f32 records after an 8-byte header, and as a MAT-file matrix.
-    let rows = columns_rows();
-    let mut columns_text = String::from("t,gx,gy,gz,ax,ay,az\n# a comment line\n");
-    for r in &rows {
-        let (w, f) = (r[1..4].iter().map(|v| v.to_degrees()), [r[5], r[4], -r[6]]);
-        let cells: Vec<String> = std::iter::once(r[0]).chain(w).chain(f).map(|v| format!("{v:?}")).collect();
-        columns_text += &(cells.join(",") + "\n");
-    }
-    let mut columns_binary = b"IMU\0\0\0\0\x07".to_vec();
-    for v in rows.iter().flatten() {
-        columns_binary.extend_from_slice(&(*v as f32).to_be_bytes());
-    }
-    let n = rows.len();
-    let by_column: Vec<f64> = (0..7 * n).map(|i| rows[i % n][i / n]).collect();
-    let columns_mat = sinscal_host::io::import::mat::write_mat_v5(&[("note", 1, 1, &[1.0]), ("imu", n, 7, &by_column)])
-        .expect("the seed MAT-file is written");
+    let (psins, imucal, imucal_raw) = importer_seeds();
+    let (columns_text, columns_binary, columns_mat) = columns_seeds();
     let mut burst = vec![0u8; Model::Adis16505_2.burst_len()];
     let lsb = |x: f64| I16F16::from_num(x);
     let b = Burst {
@@ -627,11 +638,11 @@ pub fn seeds() -> Vec<(&'static str, Reader, Vec<u8>)> {
             b"pos,start_s,end_s,pitch_deg,roll_deg,heading_deg\n1,0,4.5,0,-90,?\n2,5,9,90,0,12.5\n".to_vec(),
         ),
         ("mat-v73", read_mat as Reader, mat_v73),
-        ("psins", read_psins as Reader, psins.as_bytes().to_vec()),
+        ("psins", read_psins as Reader, psins),
         ("imucal", read_imucal as Reader, imucal),
-        ("imucal-raw", read_imucal_raw as Reader, imucal_raw.as_bytes().to_vec()),
+        ("imucal-raw", read_imucal_raw as Reader, imucal_raw),
         ("imutk", read_imutk as Reader, imutk_seed()),
-        ("columns-text", read_columns_text as Reader, columns_text.into_bytes()),
+        ("columns-text", read_columns_text as Reader, columns_text),
         ("columns-binary", read_columns_binary as Reader, columns_binary),
         ("columns-mat", read_columns_mat as Reader, columns_mat),
         ("link-frames", read_link_frames as Reader, link_frames),

@@ -209,16 +209,14 @@ fn write_frames(rec: &impl RowSource, out: &mut dyn std::io::Write) -> Result<(V
     Ok((tallies.at_least_one(source)?, rows))
 }
 
-/// The calibration of a replay outcome, in the host's report types (angles per position recomputed with
-/// the core from the replayed dwell statistics where the heading is known). A refusal of the core comes back
-/// with the dwell's label and line, as on the direct path.
-pub fn calibration_from_outcome(
-    rec: &impl RowSource,
+/// The positions of a device's outcome with the dwells of its plan, each with its alignment angles when its
+/// heading is known.
+fn positions_of_outcome(
+    source: &str,
     options: &Options,
     plan: &ReplayPlan,
     outcome: &Outcome,
-) -> Result<Calibration, InputError> {
-    let source = rec.source();
+) -> Result<Vec<PositionResult>, InputError> {
     let site = outcome.configuration.site;
     let ReplayPlan { dwells, attitudes } = plan;
     // A record's plan comes from its note: it must have a dwell for every position of the outcome.
@@ -245,6 +243,22 @@ pub fn calibration_from_outcome(
             angles,
         });
     }
+    Ok(positions)
+}
+
+/// The calibration of a replay outcome, in the host's report types (angles per position recomputed with
+/// the core from the replayed dwell statistics where the heading is known). A refusal of the core comes back
+/// with the dwell's label and line, as on the direct path.
+pub fn calibration_from_outcome(
+    rec: &impl RowSource,
+    options: &Options,
+    plan: &ReplayPlan,
+    outcome: &Outcome,
+) -> Result<Calibration, InputError> {
+    let source = rec.source();
+    let site = outcome.configuration.site;
+    let dwells = &plan.dwells;
+    let positions = positions_of_outcome(source, options, plan, outcome)?;
     if let Some(f) = &outcome.failure {
         return Err(match *f {
             SequenceFailure::PositionAborted { index, reason } => InputError::at(
