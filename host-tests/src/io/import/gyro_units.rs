@@ -173,7 +173,40 @@ fn earth_rate_scale(dwells: &[RestDwell], latitude_deg: f64) -> Option<(f64, f64
             }
         }
     }
-    let (x, inverse) = crate::stats::solve::solve_spd(&a.map(Vec::from), &y)?;
-    let (s, std) = (x[0], inverse[0][0].max(0.0).sqrt());
+    let inverse = invert4(a)?;
+    let s = (0..4).map(|j| inverse[0][j] * y[j]).sum::<f64>();
+    let std = inverse[0][0].max(0.0).sqrt();
     (s.is_finite() && std.is_finite()).then_some((s, std))
+}
+
+/// The inverse of a symmetric 4x4 matrix by Gauss-Jordan elimination with partial pivoting; `None` if singular.
+fn invert4(mut a: [[f64; 4]; 4]) -> Option<[[f64; 4]; 4]> {
+    let mut inv = [[0.0; 4]; 4];
+    for (i, row) in inv.iter_mut().enumerate() {
+        row[i] = 1.0;
+    }
+    let scale = a.iter().flatten().fold(0.0f64, |m, v| m.max(v.abs()));
+    for col in 0..4 {
+        let pivot = (col..4).max_by(|&p, &q| a[p][col].abs().total_cmp(&a[q][col].abs()))?;
+        if a[pivot][col].abs() <= 1e-12 * scale {
+            return None;
+        }
+        a.swap(col, pivot);
+        inv.swap(col, pivot);
+        let p = a[col][col];
+        for j in 0..4 {
+            a[col][j] /= p;
+            inv[col][j] /= p;
+        }
+        for r in 0..4 {
+            if r != col {
+                let factor = a[r][col];
+                for j in 0..4 {
+                    a[r][j] -= factor * a[col][j];
+                    inv[r][j] -= factor * inv[col][j];
+                }
+            }
+        }
+    }
+    Some(inv)
 }
