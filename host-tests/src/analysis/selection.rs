@@ -635,8 +635,10 @@ impl<'a> Forward<'a> {
         let open = |ci: &usize| !self.chosen.iter().any(|c| c.candidate == *ci) && !self.set_aside.contains(ci);
         for &ci in observable.iter().filter(|ci| open(ci)) {
             let c = &problem.candidates[ci];
-            let scores = c.variants.iter().map(|(_, col)| model.score(col));
-            let Some((vi, score)) = scores.enumerate().max_by(|a, b| a.1.lr.total_cmp(&b.1.lr)) else { continue };
+            // Of the variants the model does not explain (a finite standard error), the one of the largest score.
+            let scores = c.variants.iter().map(|(_, col)| model.score(col)).enumerate();
+            let seen = scores.filter(|(_, s)| s.std_error.is_finite());
+            let Some((vi, score)) = seen.max_by(|a, b| a.1.lr.total_cmp(&b.1.lr)) else { continue };
             let lr = score.lr / self.inflation_of(c);
             if record {
                 self.tested.push(Tested {
