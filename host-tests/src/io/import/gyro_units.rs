@@ -22,15 +22,17 @@ pub const MAX_REST_RATE_RADPS: f64 = 0.2;
 pub const MAX_SCALE_STD: f64 = 0.1;
 /// Standard errors by which the fitted scale must miss 1 to be refused.
 pub const SCALE_SIGMAS: f64 = 5.0;
+/// Degrees per radian: the factor of a deg/s and rad/s mix-up.
+const DEG_PER_RAD: f64 = 180.0 / std::f64::consts::PI;
 /// How near (relative) the fitted scale must be to a unit mistake's factor for the mistake to be named.
 pub const ALTERNATIVE_TOLERANCE: f64 = 0.25;
 
-/// One static dwell: its rows, mean rate and force, and the rate's sample variance per axis.
+/// One static dwell: its rows, mean rate and force (body axes), and the rate's sample variance per axis.
 struct RestDwell {
     rows: usize,
-    rate: [f64; 3],
-    force: [f64; 3],
-    rate_var: [f64; 3],
+    rate_b_radps: [f64; 3],
+    force_b_mps2: [f64; 3],
+    rate_var_radps2: [f64; 3],
 }
 
 /// A dwell's rows, and its sums of rate, force and squared rate.
@@ -59,7 +61,7 @@ fn rest_dwells(rows: &[Row]) -> Vec<RestDwell> {
             let m = n as f64;
             let mean = rate.map(|s| s / m);
             let rate_var = [0, 1, 2].map(|i| ((square[i] / m - mean[i] * mean[i]) * m / (m - 1.0).max(1.0)).max(0.0));
-            RestDwell { rows: n, rate: mean, force: force.map(|s| s / m), rate_var }
+            RestDwell { rows: n, rate_b_radps: mean, force_b_mps2: force.map(|s| s / m), rate_var_radps2: rate_var }
         })
         .collect()
 }
@@ -82,12 +84,12 @@ pub fn check_gyro_units(
         return Ok(None);
     }
     let norm = |v: [f64; 3]| v[0].hypot(v[1]).hypot(v[2]);
-    let mut rates: Vec<f64> = dwells.iter().map(|d| norm(d.rate)).collect();
+    let mut rates: Vec<f64> = dwells.iter().map(|d| norm(d.rate_b_radps)).collect();
     rates.sort_by(f64::total_cmp);
     let median = rates[rates.len() / 2];
     if median > MAX_REST_RATE_RADPS {
-        let forces: Vec<f64> = dwells.iter().map(|d| norm(d.force)).collect();
-        let like_force = dwells.iter().zip(&forces).all(|(d, f)| (norm(d.rate) / f - 1.0).abs() < 0.05);
+        let forces: Vec<f64> = dwells.iter().map(|d| norm(d.force_b_mps2)).collect();
+        let like_force = dwells.iter().zip(&forces).all(|(d, f)| (norm(d.rate_b_radps) / f - 1.0).abs() < 0.05);
         let hint = if like_force {
             "the gyro fields read what the accelerometer fields read: fields of the wrong sensor?".to_string()
         } else {
@@ -122,8 +124,8 @@ pub fn check_gyro_units(
         (1.0 / rate_hz, "increments declared as rates (set increments = true)?")
     };
     let alternatives = [
-        (1.0 / 57.29578, "rad/s declared as deg/s (or a scale 57.3 times too small)?"),
-        (57.29578, "deg/s declared as rad/s?"),
+        (1.0 / DEG_PER_RAD, "rad/s declared as deg/s (or a scale 57.3 times too small)?"),
+        (DEG_PER_RAD, "deg/s declared as rad/s?"),
         (1.0 / 3600.0, "deg/s declared as deg/h?"),
         (3600.0, "deg/h declared as deg/s?"),
         increment_mistake,
@@ -153,19 +155,19 @@ fn earth_rate_scale(dwells: &[RestDwell], latitude_deg: f64) -> Option<(f64, f64
     if dwells.len() < 5 {
         return None;
     }
-    let w_up = sinscal::nav::earth::EARTH_RATE_RADPS as f64 * latitude_deg.to_radians().sin();
+    let w_up_radps = sinscal::nav::earth::EARTH_RATE_RADPS as f64 * latitude_deg.to_radians().sin();
     let mut a = [[0.0f64; 4]; 4];
     let mut y = [0.0f64; 4];
     for d in dwells {
-        let f = d.force[0].hypot(d.force[1]).hypot(d.force[2]);
+        let f = d.force_b_mps2[0].hypot(d.force_b_mps2[1]).hypot(d.force_b_mps2[2]);
         if f == 0.0 || d.rows < 2 {
             continue;
         }
-        let u = d.force.map(|v| v / f);
-        let var = (0..3).map(|i| u[i] * u[i] * d.rate_var[i]).sum::<f64>() / d.rows as f64;
+        let u = d.force_b_mps2.map(|v| v / f);
+        let var = (0..3).map(|i| u[i] * u[i] * d.rate_var_radps2[i]).sum::<f64>() / d.rows as f64;
         let weight = 1.0 / var.max(1e-30);
-        let row = [w_up, u[0], u[1], u[2]];
-        let obs = (0..3).map(|i| d.rate[i] * u[i]).sum::<f64>();
+        let row = [w_up_radps, u[0], u[1], u[2]];
+        let obs = (0..3).map(|i| d.rate_b_radps[i] * u[i]).sum::<f64>();
         for i in 0..4 {
             y[i] += weight * row[i] * obs;
             for j in 0..4 {
