@@ -126,32 +126,44 @@ pub fn align(rec: &impl RowSource) -> Result<AlignmentReport, InputError> {
     })
 }
 
-/// The running mean and sum of squared deviations of a dwell's specific force and rate (Welford's update).
+/// The running means and sums of squared deviations of a dwell's specific force and rate (Welford's update).
 #[derive(Clone, Debug, Default)]
 struct Moments {
     n: usize,
-    mean: [[f64; 3]; 2],
-    m2: [[f64; 3]; 2],
+    force_b_mps2: Running3,
+    rate_b_radps: Running3,
+}
+
+/// The running mean of a three-axis quantity and its sum of squared deviations per axis.
+#[derive(Clone, Copy, Debug, Default)]
+struct Running3 {
+    mean: [f64; 3],
+    m2: [f64; 3],
+}
+
+impl Running3 {
+    /// Adds the `n`-th value.
+    fn push(&mut self, v: [f64; 3], n: f64) {
+        for i in 0..3 {
+            let delta = v[i] - self.mean[i];
+            self.mean[i] += delta / n;
+            self.m2[i] += delta * (v[i] - self.mean[i]);
+        }
+    }
+
+    /// Mean and variance of the mean (sample variance / N) of `n` values.
+    fn mean_and_variance(&self, n: usize) -> ([f64; 3], [f64; 3]) {
+        let n = n as f64;
+        (self.mean, self.m2.map(|m2| m2 / (n - 1.0) / n))
+    }
 }
 
 impl Moments {
     /// Adds one row's specific force and rate.
-    fn push(&mut self, force: [f64; 3], rate: [f64; 3]) {
+    fn push(&mut self, force_b_mps2: [f64; 3], rate_b_radps: [f64; 3]) {
         self.n += 1;
-        let n = self.n as f64;
-        for (k, v) in [force, rate].iter().enumerate() {
-            for i in 0..3 {
-                let delta = v[i] - self.mean[k][i];
-                self.mean[k][i] += delta / n;
-                self.m2[k][i] += delta * (v[i] - self.mean[k][i]);
-            }
-        }
-    }
-
-    /// Mean and variance of the mean (sample variance / N) of the specific force (`k` = 0) or the rate (1).
-    fn mean_and_variance(&self, k: usize) -> ([f64; 3], [f64; 3]) {
-        let n = self.n as f64;
-        (self.mean[k], self.m2[k].map(|m2| m2 / (n - 1.0) / n))
+        self.force_b_mps2.push(force_b_mps2, self.n as f64);
+        self.rate_b_radps.push(rate_b_radps, self.n as f64);
     }
 }
 
@@ -180,7 +192,7 @@ fn align_dwell(
         ));
     }
     let reference = dwell.attitude(source)?;
-    let (force, force_var) = moments.mean_and_variance(0);
+    let (force, force_var) = moments.force_b_mps2.mean_and_variance(moments.n);
     // Readings that are not gravity (zeros, accelerometers in g) define no attitude: refused, not aligned.
     let norm = (force[0] * force[0] + force[1] * force[1] + force[2] * force[2]).sqrt();
     let limit = f64::from(sinscal::calib::limits::FORCE_MAGNITUDE_ERROR_MAX_RELATIVE);
@@ -201,7 +213,7 @@ fn align_dwell(
     }
     let mut note = None;
     let angles = if has_gyro {
-        let (rate, rate_var) = moments.mean_and_variance(1);
+        let (rate, rate_var) = moments.rate_b_radps.mean_and_variance(moments.n);
         match coarse_align(force.map(|x| x as f32), rate.map(|x| x as f32), site) {
             Ok(c) => gyro_angles(&c.0.map(|row| row.map(f64::from)), force_var, rate_var, site),
             Err(AlignError::Degenerate) => {
