@@ -1415,20 +1415,6 @@ impl<'c> RowParser<'c> {
 }
 
 #[cfg(test)]
-mod newline_tests {
-    #[test]
-    fn newlines_are_counted_in_blocks_and_the_rest() {
-        for len in [0, 1, 127, 128, 129, 1000, 4096 + 17] {
-            let bytes: Vec<u8> = (0..len).map(|i| if i % 7 == 3 || i % 128 == 127 { b'\n' } else { b'1' }).collect();
-            let expected = bytes.iter().filter(|&&b| b == b'\n').count();
-            assert_eq!(super::count_newlines(&bytes), expected, "{len} bytes");
-        }
-        // 128 newlines in one block: a lane holds 8 of them, far from its 255.
-        assert_eq!(super::count_newlines(&[b'\n'; 256]), 256);
-    }
-}
-
-#[cfg(test)]
 mod tests {
     use super::*;
 
@@ -1494,6 +1480,17 @@ mod tests {
                 assert_eq!(read, parsed, "chunks of {chunk_bytes} bytes");
             }
         }
+    }
+
+    #[test]
+    fn newlines_are_counted_in_blocks_and_the_rest() {
+        for len in [0, 1, 127, 128, 129, 1000, 4096 + 17] {
+            let bytes: Vec<u8> = (0..len).map(|i| if i % 7 == 3 || i % 128 == 127 { b'\n' } else { b'1' }).collect();
+            let expected = bytes.iter().filter(|&&b| b == b'\n').count();
+            assert_eq!(count_newlines(&bytes), expected, "{len} bytes");
+        }
+        // Every byte a newline: eight in each word.
+        assert_eq!(count_newlines(&[b'\n'; 256]), 256);
     }
 
     #[test]
