@@ -29,11 +29,17 @@ fn refused(out: &Output, words: &str) -> String {
     stderr
 }
 
-/// A recording of `dwells` dwells of `rows` rows each, cycling over six level poses (latitude 45 deg).
-fn recording(path: &Path, dwells: usize, rows: usize) {
+/// A recording file at `path` with its header (latitude 45 deg, 100 Hz) and column line written, for its rows.
+fn recording_file(path: &Path) -> std::io::BufWriter<std::fs::File> {
     let mut f = std::io::BufWriter::new(std::fs::File::create(path).unwrap());
     writeln!(f, "# sinscal-recording: 1\n# latitude_deg: 45\n# height_m: 0\n# rate_hz: 100").unwrap();
     writeln!(f, "t_s,pos,pitch_deg,roll_deg,heading_deg,gx_radps,gy_radps,gz_radps,ax_mps2,ay_mps2,az_mps2").unwrap();
+    f
+}
+
+/// A recording of `dwells` dwells of `rows` rows each, cycling over six level poses (latitude 45 deg).
+fn recording(path: &Path, dwells: usize, rows: usize) {
+    let mut f = recording_file(path);
     let g = 9.80665;
     let w = 7.292115e-5 * 45f64.to_radians().sin();
     // (roll, force, rate): z up, z down, x up, x down, y up, y down.
@@ -46,7 +52,7 @@ fn recording(path: &Path, dwells: usize, rows: usize) {
     let mut k = 0u64;
     for d in 0..dwells {
         let (roll, f_b, w_b) = poses[d % poses.len()];
-        for r in 0..rows {
+        for _ in 0..rows {
             // A deterministic wobble of a few counts, so that every statistic is defined.
             let e = ((k * 2_654_435_761) % 1000) as f64 * 1e-6 - 5e-4;
             let t = k as f64 / 100.0;
@@ -54,7 +60,6 @@ fn recording(path: &Path, dwells: usize, rows: usize) {
             let pos = d + 1;
             writeln!(f, "{t},{pos},0,{roll},0,{},{},{},{},{},{}", b[0], b[1], b[2], a[0], a[1], a[2]).unwrap();
             k += 1;
-            let _ = r;
         }
     }
 }
@@ -198,9 +203,7 @@ fn a_text_line_of_one_hundred_megabytes_is_refused_at_its_line_within_256_mib() 
 fn align_of_two_million_dwells_streams_and_is_refused_at_the_limit_within_256_mib() {
     let dir = tempfile::tempdir().unwrap();
     let path = dir.path().join("dwells.csv");
-    let mut f = std::io::BufWriter::new(std::fs::File::create(&path).unwrap());
-    writeln!(f, "# sinscal-recording: 1\n# latitude_deg: 45\n# height_m: 0\n# rate_hz: 100").unwrap();
-    writeln!(f, "t_s,pos,pitch_deg,roll_deg,heading_deg,gx_radps,gy_radps,gz_radps,ax_mps2,ay_mps2,az_mps2").unwrap();
+    let mut f = recording_file(&path);
     for k in 0..2_000_000u64 {
         writeln!(f, "{},{},0,0,0,0,0,5e-5,0,0,9.8", k as f64 / 100.0, k + 1).unwrap();
     }
