@@ -332,7 +332,7 @@ fn navigate_runs_both_ways_and_writes_json_and_a_figure() {
 }
 
 #[test]
-fn accelerometer_only_recordings_are_refused_where_gyros_are_needed() {
+fn accelerometer_only_recordings_are_analysed_and_refused_where_gyros_are_needed() {
     let dir = tempfile::tempdir().unwrap();
     let rec = example_file(&dir, 1.0);
     let mut recording = sinscal_host::io::recording::Recording::read(&rec).unwrap();
@@ -346,14 +346,23 @@ fn accelerometer_only_recordings_are_refused_where_gyros_are_needed() {
             "accel_bias_mps2": [0, 0, 0], "accel_bias_std_mps2": [0, 0, 0]}"#,
     )
     .unwrap();
-    for (command, extra) in
-        [("analyze", vec![]), ("navigate", vec!["--calibration".to_string(), cal.display().to_string()])]
-    {
-        let out = sinscal().arg(command).arg(&accel).args(&extra).assert().code(1);
-        let stderr = String::from_utf8(out.get_output().stderr.clone()).unwrap();
-        let line = stderr.lines().find(|l| l.starts_with("sinscal:")).unwrap_or_default();
-        assert_eq!(line, format!("sinscal: {}: no gyro columns: {command} needs gyros", accel.display()), "{stderr}");
-    }
+    let out = sinscal().arg("navigate").arg(&accel).arg("--calibration").arg(&cal).assert().code(1);
+    let stderr = String::from_utf8(out.get_output().stderr.clone()).unwrap();
+    let line = stderr.lines().find(|l| l.starts_with("sinscal:")).unwrap_or_default();
+    assert_eq!(line, format!("sinscal: {}: no gyro columns: navigate needs gyros", accel.display()), "{stderr}");
+    // analyze reads the accelerometers alone: the gyros are absent (no diagnostics, no noise model, no
+    // effect, their terms named "no gyro columns"), not zeros measured.
+    let json = dir.path().join("accel.json");
+    sinscal().arg("analyze").arg(&accel).arg("--json").arg(&json).assert().success();
+    let a: serde_json::Value = serde_json::from_str(&std::fs::read_to_string(&json).unwrap()).unwrap();
+    let channels = |key: &str| -> Vec<String> {
+        a[key].as_array().unwrap().iter().map(|d| d["channel"].as_str().unwrap().to_string()).collect()
+    };
+    assert_eq!(channels("diagnostics"), ["ax_mps2", "ay_mps2", "az_mps2"]);
+    assert_eq!(channels("noise_model"), ["ax_mps2", "ay_mps2", "az_mps2"]);
+    assert!(a["effects"].as_array().unwrap().iter().all(|e| e["sensor"] != "gyro"), "{}", a["effects"]);
+    let unobservable = a["unobservable"].to_string();
+    assert!(unobservable.contains("gyro_scale_factor: no gyro columns"), "{unobservable}");
 }
 
 #[test]

@@ -337,6 +337,7 @@ impl AngleObservations {
             group_units: vec!["rad", "rad"],
             obs_pos: self.obs_pos,
             obs_pose: None,
+            obs_block: None,
             candidates,
             unobservable: Vec::new(),
             residual_of: "angles",

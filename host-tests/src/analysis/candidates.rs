@@ -7,7 +7,7 @@ use crate::model::sensor::Term;
 use crate::model::synth::{cross, mul_t_vec, M3};
 
 use super::column::Column;
-use super::observations::{BlockObs, Blocks, Session};
+use super::observations::{BlockObs, Blocks, DwellData, Session};
 use super::{AXES, ENU};
 
 /// Time constants of the warm-up's grid, from 5 s to the session's span.
@@ -24,6 +24,8 @@ pub(super) struct Candidate {
     pub axes: String,
     /// Position (position errors).
     pub pos: Option<u32>,
+    /// The other face of an up/down pair that shares the position error's tilt (heading unknown).
+    pub pair_pos: Option<u32>,
     /// Per variant: the time constant it stands for (warm-up) and its column.
     pub variants: Vec<(Option<f64>, Column)>,
     /// Observation groups (channels, angle groups) the effect acts on.
@@ -35,7 +37,7 @@ pub(super) struct Candidate {
 impl Candidate {
     /// A candidate of one column, not tied to a position.
     pub fn single(effect: EffectKind, sensor: Sensor, axes: String, col: Column, groups: Vec<usize>) -> Candidate {
-        Candidate { effect, sensor, axes, pos: None, variants: vec![(None, col)], groups, limit: None }
+        Candidate { effect, sensor, axes, pos: None, pair_pos: None, variants: vec![(None, col)], groups, limit: None }
     }
 
     /// Sets the plausible limit of every candidate, for a session of `span_s` seconds whose temperature
@@ -49,10 +51,11 @@ impl Candidate {
     /// "effect:axes", with the position of a position error ("position_error:e:pos3") and the sensor of
     /// the effects both sensors have ("bias_drift:x (gyro)").
     pub fn name(&self) -> String {
-        match self.pos {
-            Some(p) => format!("{}:{}:pos{}", self.effect, self.axes, p),
-            None if self.effect.sensor().is_none() => format!("{}:{} ({})", self.effect, self.axes, self.sensor),
-            None => format!("{}:{}", self.effect, self.axes),
+        match (self.pos, self.pair_pos) {
+            (Some(p), Some(q)) => format!("{}:{}:pos{}+pos{}", self.effect, self.axes, p, q),
+            (Some(p), None) => format!("{}:{}:pos{}", self.effect, self.axes, p),
+            (None, _) if self.effect.sensor().is_none() => format!("{}:{} ({})", self.effect, self.axes, self.sensor),
+            (None, _) => format!("{}:{}", self.effect, self.axes),
         }
     }
 
@@ -153,17 +156,16 @@ impl<'a> RecordingColumns<'a> {
     }
 
     /// Every candidate the recording can show, in the catalogue's test order; what it cannot show goes to
-    /// `unobservable` ("gyro_scale_factor: heading unknown", "temperature_bias:x (gyro)").
+    /// `unobservable` ("gyro_misalignment:xy: heading unknown", "temperature_bias:x (gyro)").
     pub fn candidates(&self, unobservable: &mut Vec<String>) -> Vec<Candidate> {
-        let mut candidates = self.sensor_term_candidates();
-        if self.session.all_heading() {
-            candidates.extend(self.table_errors());
-        } else {
+        let mut candidates = self.sensor_term_candidates(unobservable);
+        if !self.session.has_gyro {
             use EffectKind::*;
-            for effect in [GyroScaleFactor, GyroMisalignment, GyroGSensitivity, ReferenceOffset, PositionError] {
-                unobservable.push(format!("{effect}: heading unknown"));
+            for effect in [GyroScaleFactor, GyroMisalignment, GyroGSensitivity] {
+                unobservable.push(format!("{effect}: no gyro columns"));
             }
         }
+        candidates.extend(self.table_errors(unobservable));
         let tau_grid = self.tau_grid();
         let t0 = self.session.t0;
         let shapes: Vec<_> = tau_grid.iter().map(|&tau| move |t: f64| (-(t - t0) / tau).exp()).collect();
@@ -198,68 +200,88 @@ impl<'a> RecordingColumns<'a> {
         }
     }
 
-    /// The true body rate (`v_n` = Earth rate, needs the heading) or force (tilt suffices) at a block.
-    fn body(&self, b: &BlockObs, v_n: [f64; 3], gyro_needs_heading: bool) -> Option<[f64; 3]> {
+    /// The true body force at a block (the tilt suffices).
+    fn force_b(&self, b: &BlockObs) -> [f64; 3] {
         let d = &self.session.dwells[b.dwell];
-        match d.c_b_n {
-            Some(c) => Some(in_body(&c, v_n)),
-            None if !gyro_needs_heading => Some(in_body(&d.c_tilt, v_n)),
-            None => None,
+        in_body(d.c_b_n.as_ref().unwrap_or(&d.c_tilt), self.session.f_n)
+    }
+
+    /// The true body rate at a block: the Earth rate; with the heading unknown only along a vertical axis
+    /// (the other components NaN, [`super::observations::DwellData::rate_b_radps`]).
+    fn rate_b(&self, b: &BlockObs) -> [f64; 3] {
+        let d = &self.session.dwells[b.dwell];
+        match &d.c_b_n {
+            Some(c) => in_body(c, self.session.w_n),
+            None => d.rate_b_radps(self.session.w_n),
         }
     }
 
-    /// Scale factors, misalignments, g-sensitivity: the predicted rate or force on the sensed axis.
-    fn sensor_term_candidates(&self) -> Vec<Candidate> {
-        let (w_n, f_n) = (self.session.w_n, self.session.f_n);
-        let force_b = |b: &BlockObs| self.body(b, f_n, false).unwrap_or([0.0; 3]);
-        let rate_b = |b: &BlockObs| self.body(b, w_n, true).unwrap_or([0.0; 3]);
-        sensor_terms(self.session.all_heading())
-            .into_iter()
-            .map(|t| {
-                let col = Column::new(self.blocks.column(|b| {
-                    if b.channel == t.channel {
-                        t.per_unit(rate_b(b), force_b(b))
-                    } else {
-                        0.0
-                    }
-                }));
-                let sensor = t.sensor();
-                Candidate::single(t.effect, sensor, t.axes, col, vec![t.channel])
-            })
-            .collect()
+    /// Scale factors, misalignments, g-sensitivity: the predicted rate or force on the sensed axis. A term
+    /// that needs a rate the recording does not know on one of its channel's blocks (the heading unknown and
+    /// the axis not vertical) goes to `unobservable`.
+    fn sensor_term_candidates(&self, unobservable: &mut Vec<String>) -> Vec<Candidate> {
+        let mut candidates = Vec::new();
+        for t in sensor_terms(self.session.has_gyro) {
+            let values = self.blocks.column(|b| {
+                if b.channel == t.channel {
+                    t.per_unit(self.rate_b(b), self.force_b(b))
+                } else {
+                    0.0
+                }
+            });
+            if values.iter().any(|v| !v.is_finite()) {
+                unobservable.push(format!("{}:{}: heading unknown", t.effect, t.axes));
+                continue;
+            }
+            let sensor = t.sensor();
+            candidates.push(Candidate::single(t.effect, sensor, t.axes, Column::new(values), vec![t.channel]));
+        }
+        candidates
     }
 
     /// Table attitude error about navigation axis `k` at block `b`: d(measurement)/d(err_k) = C^T (e_k x v).
+    /// With the heading unknown, the level errors (`k` = 0, 1) are about the axes of the pose's heading-0
+    /// frame, and their Earth-rate term (at most `W cos L` per radian on a vertical gyro, 7.3e-5 rad/s) is
+    /// left out: it needs the heading.
     fn attitude_error(&self, k: usize, b: &BlockObs) -> f64 {
         let d = &self.session.dwells[b.dwell];
-        let c = d.c_b_n.unwrap_or(d.c_tilt);
-        if b.channel < 3 {
-            in_body(&c, cross(unit(k), self.session.w_n))[b.channel]
-        } else {
-            in_body(&c, cross(unit(k), self.session.f_n))[b.channel - 3]
+        match (&d.c_b_n, b.channel < 3) {
+            (Some(c), true) => in_body(c, cross(unit(k), self.session.w_n))[b.channel],
+            (None, true) => 0.0,
+            (c, false) => in_body(c.as_ref().unwrap_or(&d.c_tilt), cross(unit(k), self.session.f_n))[b.channel - 3],
         }
     }
 
     /// The reference offset (e, n, u) and, with more than one dwell, a position error per dwell and axis (a
-    /// column over the dwell's own blocks, which are consecutive).
-    fn table_errors(&self) -> Vec<Candidate> {
+    /// column over the dwell's own blocks, which are consecutive). With a heading unknown, the level position
+    /// errors (e, n of each pose's heading-0 frame: the pose's tilt off its label) and nothing that needs the
+    /// heading: the reference offset (a common table error reaches each pose through its own heading) and the
+    /// heading errors go to `unobservable`.
+    fn table_errors(&self, unobservable: &mut Vec<String>) -> Vec<Candidate> {
         let mut candidates = Vec::new();
-        for k in 0..3 {
-            let col = Column::new(self.blocks.column(|b| self.attitude_error(k, b)));
-            candidates.push(Candidate::single(
-                EffectKind::ReferenceOffset,
-                Sensor::Reference,
-                ENU[k].into(),
-                col,
-                attitude_groups(k),
-            ));
+        let heading = self.session.all_heading();
+        if heading {
+            for k in 0..3 {
+                let col = Column::new(self.blocks.column(|b| self.attitude_error(k, b)));
+                candidates.push(Candidate::single(
+                    EffectKind::ReferenceOffset,
+                    Sensor::Reference,
+                    ENU[k].into(),
+                    col,
+                    attitude_groups(k),
+                ));
+            }
+        } else {
+            unobservable.push(format!("{}: heading unknown", EffectKind::ReferenceOffset));
+            unobservable.push(format!("{}:u: heading unknown", EffectKind::PositionError));
         }
         if self.session.dwells.len() > 1 {
+            let axes = if heading { 0..3 } else { 0..2 };
             let list = &self.blocks.list;
             let mut first = 0;
             for (di, d) in self.session.dwells.iter().enumerate() {
                 let end = first + list[first..].iter().take_while(|b| b.dwell == di).count();
-                for k in 0..3 {
+                for k in axes.clone() {
                     let entries = (first..end).map(|i| (i, self.attitude_error(k, &list[i])));
                     let col = Column::from_entries(list.len(), entries);
                     candidates.push(Candidate {
@@ -274,6 +296,50 @@ impl<'a> RecordingColumns<'a> {
                     });
                 }
                 first = end;
+            }
+        }
+        if !heading {
+            candidates.extend(self.pair_tilts());
+        }
+        candidates
+    }
+
+    /// With the headings unknown, a tilt shared by the two faces of an up/down pair (the same body axis
+    /// vertical, up in one and down in the other): on each horizontal accelerometer of the pair, the same
+    /// offset in both faces. A face's own tilt and a misalignment are the same thing in a six-face schedule
+    /// (each moves one face's horizontal force); a tilt the pair shares is not a misalignment, which changes
+    /// sign between the faces (docs/analysis.md#tilts). Reported as the position error of the first face
+    /// (about the axis of its heading-0 frame that moves gravity onto that accelerometer), with the second
+    /// face as `pair_pos`.
+    fn pair_tilts(&self) -> Vec<Candidate> {
+        let list = &self.blocks.list;
+        let vertical = |d: &DwellData| -> Option<(usize, f64)> {
+            let c = &d.c_tilt;
+            (0..3).find(|&a| c[0][a].abs() <= ROUNDING && c[1][a].abs() <= ROUNDING).map(|a| (a, c[2][a].signum()))
+        };
+        let mut candidates = Vec::new();
+        let dwells = &self.session.dwells;
+        for (i, a) in dwells.iter().enumerate() {
+            let Some((axis, up)) = vertical(a) else { continue };
+            // The first later dwell that is this face's opposite (one pair per face, in order).
+            let Some(j) = (i + 1..dwells.len()).find(|&j| vertical(&dwells[j]) == Some((axis, -up))) else { continue };
+            let b = &dwells[j];
+            if (0..i).any(|k| vertical(&dwells[k]) == Some((axis, -up))) {
+                continue; // this face was already paired
+            }
+            for h in (0..3).filter(|&h| h != axis) {
+                // The axis k of face a's heading-0 frame whose tilt moves gravity onto body axis h.
+                let tilt = |k: usize| in_body(&a.c_tilt, cross(unit(k), self.session.f_n))[h];
+                let Some(k) = (0..2).find(|&k| tilt(k) != 0.0) else { continue };
+                let value = tilt(k);
+                let entries =
+                    (0..list.len()).filter(|&n| list[n].channel == 3 + h && (list[n].dwell == i || list[n].dwell == j));
+                let col = Column::from_entries(list.len(), entries.map(|n| (n, value)));
+                candidates.push(Candidate {
+                    pos: Some(a.pos),
+                    pair_pos: Some(b.pos),
+                    ..Candidate::single(EffectKind::PositionError, Sensor::Reference, ENU[k].into(), col, vec![3 + h])
+                });
             }
         }
         candidates
@@ -323,6 +389,7 @@ impl<'a> RecordingColumns<'a> {
             sensor: Sensor::of_channel(c),
             axes: axis_of(c).into(),
             pos: None,
+            pair_pos: None,
             variants,
             groups: vec![c],
             limit: None,

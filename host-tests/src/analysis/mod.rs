@@ -59,6 +59,7 @@ mod angles;
 mod candidates;
 mod column;
 mod correlated_noise;
+mod model_fit;
 pub mod noise_terms;
 mod observations;
 mod parallel;
@@ -79,6 +80,7 @@ use crate::io::error::InputError;
 use crate::io::recording::RecordingFile;
 
 pub use angles::{analyze_angles, AnglesFile, AnglesRow};
+pub use model_fit::{DwellFit, GroupFit, ModelFit};
 pub use recording::analyze_recording;
 pub use summary::summary;
 
@@ -116,6 +118,9 @@ pub struct Effect {
     /// Position label (position errors only).
     #[serde(skip_serializing_if = "Option::is_none")]
     pub pos: Option<u32>,
+    /// The other face of an up/down pair whose tilt the position error shares (docs/analysis.md#tilts).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub pair_pos: Option<u32>,
     /// Estimate, SI.
     pub estimate: f64,
     /// Its standard error, SI.
@@ -187,7 +192,8 @@ pub struct Misfit {
 }
 
 /// A time term (drift, warm-up, temperature) that the criterion admits but that a pose-by-pose offset
-/// explains as well: time and pose order are confounded in this data (docs/analysis.md#confounding).
+/// explains as well: time and pose order are confounded in this data (docs/analysis.md#confounding). When
+/// the dwells themselves contradict it (`contradicted`), it is not an effect.
 #[derive(Clone, Debug, Serialize)]
 pub struct Confounded {
     /// The candidate ("bias_drift:x (accel)").
@@ -196,6 +202,18 @@ pub struct Confounded {
     pub likelihood_ratio: f64,
     /// Its likelihood ratio once every pose has its own offsets.
     pub likelihood_ratio_within_poses: f64,
+    /// Its estimate across the session, SI (the candidate's unit).
+    pub estimate: f64,
+    /// Its estimate once every pose has its own offsets (what the dwells show within themselves), SI.
+    pub estimate_within_poses: f64,
+    /// The standard error of `estimate_within_poses`, SI.
+    pub std_error_within_poses: f64,
+    /// The SI unit of the three.
+    pub unit: String,
+    /// The within-pose estimate contradicts the session's (beyond 3 of its standard errors): the term is not
+    /// an effect (the poses' differences, such as tilts off their labels, are); otherwise it is one, marked
+    /// with the alias "pose order".
+    pub contradicted: bool,
 }
 
 impl Effect {
@@ -212,8 +230,10 @@ impl Effect {
     /// The extra fields in words: "pos 3", "tau 1.234 s", "f 7.3000 Hz" (comma-separated, empty if none).
     pub fn extras(&self) -> String {
         let mut parts = Vec::new();
-        if let Some(p) = self.pos {
-            parts.push(format!("pos {p}"));
+        match (self.pos, self.pair_pos) {
+            (Some(p), Some(q)) => parts.push(format!("pos {p} and {q} (shared)")),
+            (Some(p), None) => parts.push(format!("pos {p}")),
+            _ => {}
         }
         if let Some(t) = self.tau_s {
             parts.push(format!("tau {t:.3} s"));
@@ -308,6 +328,10 @@ pub struct Analysis {
     /// Per channel: the noise terms named from the Allan variance of the longest dwell (recordings).
     #[serde(skip_serializing_if = "Vec::is_empty")]
     pub noise_model: Vec<noise_terms::NoiseModel>,
+    /// The verdict on the final model: its block-mean residuals against the noise model, and what is still
+    /// unexplained (recordings; docs/analysis.md#model-fit).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub model_fit: Option<ModelFit>,
     /// Data for the report's figures (not written to JSON).
     #[serde(skip)]
     pub figures: FigureData,
@@ -333,6 +357,27 @@ pub struct FigureData {
     pub residuals: Vec<Vec<(u32, f64, f64)>>,
     /// Group names of `residuals`, with units.
     pub residual_names: Vec<String>,
+}
+
+/// One line on a time term confounded with pose order: its likelihood ratios and estimates across the
+/// session and within the poses, and whether it stays an effect.
+fn confounded_text(c: &Confounded) -> String {
+    let (what, verdict) = if c.contradicted {
+        ("not an effect", "the dwells contradict it: the differences between the poses (tilts off their labels, for one) are not a time term")
+    } else {
+        ("an uncertain effect", "a pose-dependent term explains it as well")
+    };
+    format!(
+        "confounded with pose order, {what}: {} (likelihood ratio {:.1}; {:.1} once every pose has its own offset; \
+         estimate {:+.3e} {u} across the session, {:+.3e} +- {:.2e} {u} within the poses: {verdict})",
+        c.candidate,
+        c.likelihood_ratio,
+        c.likelihood_ratio_within_poses,
+        c.estimate,
+        c.estimate_within_poses,
+        c.std_error_within_poses,
+        u = c.unit,
+    )
 }
 
 /// The most memory the selection's candidate columns may take, bytes (docs/analysis.md#memory-limit).

@@ -78,12 +78,31 @@ impl DwellData {
     }
 
     /// What the reference attitude predicts for `channel` (the Earth rate or gravity in the body); `None`
-    /// for a gyro when the heading is unknown.
+    /// for a gyro when the heading is unknown, unless the gyro's axis is vertical ([`Self::rate_b_radps`]).
     fn predicted(&self, channel: usize, w_n: [f64; 3], f_n: [f64; 3]) -> Option<f64> {
         if channel < 3 {
-            self.c_b_n.map(|c| mul_t_vec(&c, w_n)[channel])
+            let rate = self.rate_b_radps(w_n)[channel];
+            rate.is_finite().then_some(rate)
         } else {
             Some(mul_t_vec(&self.c_tilt, f_n)[channel - 3])
+        }
+    }
+
+    /// The Earth rate `w_n` (e, n, u) in the body, rad/s. With the heading unknown, only the component along a
+    /// vertical body axis is known (`+-W sin L`, whatever the heading: the axis has no east or north
+    /// component); the others are NaN.
+    pub fn rate_b_radps(&self, w_n: [f64; 3]) -> [f64; 3] {
+        match &self.c_b_n {
+            Some(c) => mul_t_vec(c, w_n),
+            None => std::array::from_fn(|axis| {
+                let c = &self.c_tilt;
+                let level = |k: usize| c[k][axis].abs() <= super::candidates::ROUNDING;
+                if level(0) && level(1) {
+                    c[2][axis] * w_n[2]
+                } else {
+                    f64::NAN
+                }
+            }),
         }
     }
 }
@@ -102,6 +121,9 @@ pub(super) struct Session {
     pub dt: f64,
     /// The dwells, in order of first appearance.
     pub dwells: Vec<DwellData>,
+    /// The recording has gyro columns (an accelerometer-only recording has none: its gyros are absent, not
+    /// zero).
+    pub has_gyro: bool,
 }
 
 impl Session {
@@ -141,7 +163,8 @@ impl Session {
             .zip(columns)
             .map(|(d, c)| DwellData::new(d, c, source))
             .collect::<Result<Vec<_>, _>>()?;
-        Ok(Session { w_n: earth_rate_n_radps(lat), f_n: [0.0, 0.0, g], t0, rate_hz, dt: 1.0 / rate_hz, dwells })
+        let w_n = earth_rate_n_radps(lat);
+        Ok(Session { w_n, f_n: [0.0, 0.0, g], t0, rate_hz, dt: 1.0 / rate_hz, dwells, has_gyro: recording.has_gyro() })
     }
 
     /// Every dwell has a temperature.
@@ -152,6 +175,15 @@ impl Session {
     /// Every dwell has a heading (the Earth rate in the body is known).
     pub fn all_heading(&self) -> bool {
         self.dwells.iter().all(|d| d.c_b_n.is_some())
+    }
+
+    /// The channels the recording has (gx..az = 0..5): all six, or the accelerometers' 3..5.
+    pub fn channels(&self) -> std::ops::Range<usize> {
+        if self.has_gyro {
+            0..6
+        } else {
+            3..6
+        }
     }
 
     /// Index of the longest dwell.
@@ -190,8 +222,8 @@ impl Blocks {
         let mut blocks =
             Blocks { list: Vec::new(), y: Vec::new(), group: Vec::new(), obs_pos: Vec::new(), present: [false; 6] };
         for (di, d) in session.dwells.iter().enumerate() {
-            for channel in 0..6 {
-                // Heading unknown: the Earth rate in the body is unknown.
+            for channel in session.channels() {
+                // Heading unknown: the Earth rate in the body is unknown (but along a vertical axis).
                 let Some(predicted) = d.predicted(channel, session.w_n, session.f_n) else { continue };
                 for range in block_ranges(d.t.len()) {
                     let s = &d.y[channel][range.0..range.1];

@@ -6,20 +6,21 @@ use std::collections::BTreeMap;
 use crate::calibration::attitude_knowledge;
 use crate::io::error::InputError;
 use crate::io::recording::RowSource;
+use crate::model::catalogue::EffectKind;
 use crate::stats::linfit::Observations;
 use sinscal::calib::general::AttitudeKnowledge;
 
 use super::candidates::RecordingColumns;
+use super::model_fit::{model_fit, FitResiduals};
 use super::observations::{Blocks, Session};
 use super::result::{assemble, effects_of, residuals_by_group, Findings, RECORDING};
-use super::sample_tests::{measure_samples, test_samples, SampleFindings, SAMPLE_TESTS};
+use super::sample_tests::{measure_samples, sample_tests, test_samples, SampleFindings};
 use super::selection::{select, Problem, Selection};
 use super::{Analysis, ChannelDiagnostics, CHANNELS, CHANNEL_UNITS};
 
 /// Analyses a recording: in one pass over its rows, of which the dwells' columns are kept
 /// (docs/analysis.md#speed-and-memory).
 pub fn analyze_recording(recording: &impl RowSource) -> Result<Analysis, InputError> {
-    recording.require_gyro("analyze")?;
     let levelled = attitude_knowledge(recording.header()) == AttitudeKnowledge::Unknown;
     analyze_session(Session::read(recording)?, levelled, recording.source())
 }
@@ -35,12 +36,12 @@ fn analyze_session(mut session: Session, levelled: bool, source: &str) -> Result
     let (problem, selection, measures) = std::thread::scope(|scope| {
         let measuring = scope.spawn(|| measure_samples(session));
         let mut problem = problem(session, &blocks, levelled.then_some(accel_bias_mps2));
-        let selection = select(&mut problem, SAMPLE_TESTS);
+        let selection = select(&mut problem, sample_tests(session));
         let measures = measuring.join().unwrap_or_else(|e| std::panic::resume_unwind(e));
         (problem, selection, measures)
     });
     let selection = selection.map_err(|e| InputError::file(source, e))?;
-    let m = (selection.observable + SAMPLE_TESTS) as f64;
+    let m = (selection.observable + sample_tests(session)) as f64;
     let mut effects = effects_of(&problem, &selection);
     let SampleFindings { effects: sample_effects, diagnostics, mut figures } = test_samples(session, &measures, m);
     effects.extend(sample_effects);
@@ -48,13 +49,43 @@ fn analyze_session(mut session: Session, levelled: bool, source: &str) -> Result
     figures.residual_names = problem.group_names.clone();
     figures.residuals = residuals_by_group(&problem, &selection);
     let findings = Findings { effects, residual_rms, block_residual_rms, m, diagnostics, figures };
+    let fit = fit_residuals(&problem, &selection, session.rate_hz);
     let mut analysis = assemble(problem, selection, findings, RECORDING, source);
+    analysis.model_fit = model_fit(&fit, &analysis.noise_model);
     for (k, axis) in ["x", "y", "z"].iter().enumerate() {
         if let Some(b) = analysis.base_model.biases.get_mut(&format!("accel_bias_{axis}")) {
             *b += accel_bias_mps2[k];
         }
     }
     Ok(analysis)
+}
+
+/// The final model's block-mean residuals with what the verdict on the model needs
+/// ([`super::model_fit`]): each block's dwell and length, and the parameters acting on each group (a
+/// column counted in every group where it has an entry).
+fn fit_residuals(problem: &Problem, selection: &Selection, rate_hz: f64) -> FitResiduals {
+    let groups = problem.obs.groups;
+    let mut parameters = vec![0; groups];
+    let chosen = selection.chosen.iter().map(|c| problem.candidates[c.candidate].variants[c.variant].1.dense());
+    for column in problem.base.iter().map(|c| std::borrow::Cow::Borrowed(c.as_slice())).chain(chosen) {
+        let mut on = vec![false; groups];
+        for (v, &g) in column.iter().zip(&problem.obs.group) {
+            on[g] |= *v != 0.0;
+        }
+        for (p, on) in parameters.iter_mut().zip(on) {
+            *p += usize::from(on);
+        }
+    }
+    FitResiduals {
+        residual: selection.final_fit.residual.clone(),
+        group: problem.obs.group.clone(),
+        block: problem.obs_block.clone().unwrap_or_default(),
+        pos: problem.obs_pos.clone(),
+        group_names: problem.group_names.clone(),
+        group_units: problem.group_units.clone(),
+        parameters,
+        rate_hz,
+    }
 }
 
 /// Levels every dwell again from its accelerometer mean less the accelerometer biases, and returns the
@@ -125,6 +156,7 @@ fn problem_with(session: &Session, blocks: &Blocks, levelled: Option<[f64; 3]>, 
         group_units: CHANNEL_UNITS.to_vec(),
         obs_pos: blocks.obs_pos.clone(),
         obs_pose: Some(poses(session, blocks)),
+        obs_block: Some(blocks.list.iter().map(|b| (b.dwell, b.range.1 - b.range.0)).collect()),
         candidates,
         unobservable,
         residual_of: "block means",
@@ -178,9 +210,21 @@ fn along_gravity(mut p: Problem, session: &Session, blocks: &Blocks, bias: [f64;
     }
     p.obs.group = project_idx(&p.obs.group, 3);
     p.obs_pose = p.obs_pose.as_ref().map(|poses| project_idx(poses, usize::MAX));
+    p.obs_block = p.obs_block.as_ref().map(|b| {
+        let mut out: Vec<(usize, usize)> = keep.iter().map(|&i| b[i]).collect();
+        out.extend(rows.iter().map(|(_, r)| b[r[0]]));
+        out
+    });
     let pos: Vec<usize> = p.obs_pos.iter().map(|&x| x as usize).collect();
     p.obs_pos = project_idx(&pos, usize::MAX).into_iter().map(|x| x as u32).collect();
     p.base = p.base.iter().map(|c| project(c)).collect();
+    // A level error of a pose moves gravity across the measured direction, which the levelling took: no
+    // trace along it.
+    if p.candidates.iter().any(|c| c.effect == EffectKind::PositionError) {
+        p.candidates.retain(|c| c.effect != EffectKind::PositionError);
+        p.unobservable
+            .push(format!("{}: the attitudes are levelled from the accelerometers", EffectKind::PositionError));
+    }
     for cand in p.candidates.iter_mut() {
         for (_, col) in cand.variants.iter_mut() {
             *col = col.map_dense(project);
@@ -227,11 +271,9 @@ fn residual_rms(
         // detrended part (diagnostics; along gravity, the accelerometers' mean square).
         let block = selection.base_fit.rms[c];
         let name = problem.group_names[c].clone();
-        let detrended_sq = if name == ALONG_GRAVITY {
-            diagnostics[3..6].iter().map(|d| d.detrended_rms * d.detrended_rms).sum::<f64>() / 3.0
-        } else {
-            diagnostics[c].detrended_rms * diagnostics[c].detrended_rms
-        };
+        let of = |c: usize| diagnostics.iter().find(|d| d.channel == CHANNELS[c]).map_or(f64::NAN, |d| d.detrended_rms);
+        let detrended_sq =
+            if name == ALONG_GRAVITY { (3..6).map(|c| of(c) * of(c)).sum::<f64>() / 3.0 } else { of(c) * of(c) };
         block_rms.insert(name.clone(), block);
         residual_rms.insert(name, (detrended_sq + block * block).sqrt());
     }

@@ -32,6 +32,7 @@ pub fn write_report(a: &Analysis, dir: &Path) -> anyhow::Result<Vec<String>> {
     let mut md = String::new();
     base_model_md(&mut md, a);
     effects_md(&mut md, a);
+    model_fit_md(&mut md, a);
     diagnostics_md(&mut md, a);
     noise_md(&mut md, a);
     figures_md(&mut md, a, files.len() > 2);
@@ -111,16 +112,57 @@ fn effects_md(md: &mut String, a: &Analysis) {
     if !a.confounded.is_empty() {
         let _ = writeln!(md, "\n## Time terms confounded with pose order\n");
         for c in &a.confounded {
-            let _ = writeln!(
-                md,
-                "- {}: likelihood ratio {:.1}, {:.1} once every pose has its own offset",
-                c.candidate, c.likelihood_ratio, c.likelihood_ratio_within_poses
-            );
+            let _ = writeln!(md, "- {}", super::confounded_text(c));
         }
     }
 }
 
 /// `summary.md`: the per-channel diagnostics (recordings).
+/// `summary.md`: the verdict on the final model (docs/analysis.md#model-fit).
+fn model_fit_md(md: &mut String, a: &Analysis) {
+    let Some(fit) = &a.model_fit else { return };
+    let _ = writeln!(md, "\n## Model fit: {}\n", fit.verdict);
+    let _ = writeln!(
+        md,
+        "The final model's block-mean residuals against each channel's named noise at the block's length \
+         (chi-square per degree of freedom; between the dwells: what wanders from dwell to dwell; within: \
+         seconds to a dwell's length).\n"
+    );
+    let _ = writeln!(
+        md,
+        "| channel | residual RMS | noise RMS | chi2/dof | p | between dwells | within dwells | |\n|---|---|---|---|---|---|---|---|"
+    );
+    for g in &fit.groups {
+        let _ = writeln!(
+            md,
+            "| {} | {:.3e} {u} | {:.3e} {u} | {:.2} | {:.1e} | {:.2} | {:.2} | {} |",
+            g.channel,
+            g.residual_rms,
+            g.noise_rms,
+            g.chi_square / g.dof,
+            g.p_value,
+            g.chi_square_between_dwells / g.dof_between_dwells,
+            g.chi_square_within_dwells / g.dof_within_dwells,
+            if g.explained { "" } else { "unexplained" },
+            u = g.unit
+        );
+    }
+    if !fit.dwells.is_empty() {
+        let _ = writeln!(md);
+    }
+    for d in &fit.dwells {
+        let _ = writeln!(
+            md,
+            "- unexplained in pos {} {}: {} blocks, mean residual {:+.3e}, chi2/blocks {:.1}",
+            d.pos,
+            d.channel,
+            d.blocks,
+            d.mean_residual,
+            d.chi_square / d.blocks as f64
+        );
+    }
+}
+
 fn diagnostics_md(md: &mut String, a: &Analysis) {
     if a.diagnostics.is_empty() {
         return;

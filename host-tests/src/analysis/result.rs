@@ -46,6 +46,7 @@ fn effect_of(problem: &Problem, selection: &Selection, index: usize) -> Effect {
         sensor: cand.sensor.name().to_string(),
         axes: cand.axes.clone(),
         pos: cand.pos,
+        pair_pos: cand.pair_pos,
         estimate: selection.final_fit.beta[j],
         // The fit's standard error assumes independent block means; correlated ones widen it.
         std_error: selection.final_fit.std_error(j)
@@ -110,6 +111,11 @@ fn misfits_and_confounded(problem: &Problem, selection: &Selection) -> (Vec<Misf
             candidate: problem.candidates[c.candidate].name(),
             likelihood_ratio: c.lr,
             likelihood_ratio_within_poses: c.lr_within,
+            estimate: c.estimate,
+            estimate_within_poses: c.estimate_within,
+            std_error_within_poses: c.std_error_within,
+            unit: problem.candidates[c.candidate].unit().to_string(),
+            contradicted: c.contradicted,
         })
         .collect();
     (misfits, confounded)
@@ -203,6 +209,7 @@ pub(super) fn assemble(
         tested: selection.tested,
         diagnostics: findings.diagnostics,
         noise_model: super::noise_terms::noise_models(&findings.figures),
+        model_fit: None,
         figures: findings.figures,
     }
 }

@@ -22,8 +22,10 @@ use super::vibration::{remove_line, sinc, vibration_test, VibrationResult};
 use super::{ChannelDiagnostics, Effect, FigureData, ALPHA, CHANNELS, CHANNEL_UNITS};
 
 /// Tests on the samples, counted in the Bonferroni `m`: quantisation, vibration, correlated noise on every
-/// channel.
-pub(super) const SAMPLE_TESTS: usize = 3 * 6;
+/// channel the recording has.
+pub(super) fn sample_tests(session: &Session) -> usize {
+    3 * session.channels().len()
+}
 
 /// What the sample tests found.
 pub(super) struct SampleFindings {
@@ -65,16 +67,29 @@ pub(super) struct SampleMeasures {
 /// Measures every channel of `session`, the channels in parallel on the available cores.
 pub(super) fn measure_samples(session: &Session) -> SampleMeasures {
     let longest = session.longest();
-    SampleMeasures { channels: on_cores(6, |c| ChannelMeasures::measure(session, c, longest)) }
+    let first = session.channels().start;
+    SampleMeasures {
+        channels: on_cores(session.channels().len(), |i| ChannelMeasures::measure(session, first + i, longest)),
+    }
 }
 
-/// Decides the sample tests of `measures` (of `session`), each against `alpha / m`.
+/// Decides the sample tests of `measures` (of `session`), each against `alpha / m`. The figure data are per
+/// channel of the six, empty (no samples, NaN) for a channel the recording does not have; the diagnostics
+/// only for those it has.
 pub(super) fn test_samples(session: &Session, measures: &SampleMeasures, m: f64) -> SampleFindings {
     let mut out = SampleFindings {
         effects: Vec::new(),
         diagnostics: Vec::new(),
         figures: FigureData { rate_hz: session.rate_hz, ..FigureData::default() },
     };
+    for _ in 0..session.channels().start {
+        let figures = &mut out.figures;
+        figures.base_sigma.push(f64::NAN);
+        figures.longest_dwell.push(Vec::new());
+        figures.correlated.push(None);
+        figures.quantization.push(None);
+        figures.vibration.push(None);
+    }
     let channels = &measures.channels;
     for outcome in on_cores(channels.len(), |c| channels[c].judge(session, m)) {
         out.effects.extend(outcome.effects);
@@ -139,7 +154,7 @@ impl ChannelMeasures {
         // The line can be accepted only if it passes at the smallest m (no block candidate observable).
         let line_removed = vibration
             .as_ref()
-            .is_some_and(|v| vibration_criterion(v, series.len(), n_all, SAMPLE_TESTS as f64).accepted);
+            .is_some_and(|v| vibration_criterion(v, series.len(), n_all, sample_tests(session) as f64).accepted);
         if let (true, Some(v)) = (line_removed, &vibration) {
             remove_line(&mut series, v, session.dt);
         }
@@ -193,6 +208,7 @@ impl ChannelMeasures {
             sensor: sensor.name().into(),
             axes: axis_of(self.c).into(),
             pos: None,
+            pair_pos: None,
             estimate: 0.0,
             std_error: 0.0,
             unit: effect.unit(sensor).into(),

@@ -25,6 +25,8 @@ pub(super) struct Problem {
     /// Pose of each observation (dwells of one reference attitude share a pose), for the time terms'
     /// confounding test; `None` when the observations have no time (angles).
     pub obs_pose: Option<Vec<usize>>,
+    /// Dwell index and samples of each observation's block; `None` for angles.
+    pub obs_block: Option<Vec<(usize, usize)>>,
     /// The candidates, in test order.
     pub candidates: Vec<Candidate>,
     /// What this data cannot see (the selection adds the candidates the base model explains).
@@ -99,7 +101,20 @@ pub(super) struct Confounded {
     /// Its likelihood ratio once every pose has its own offsets (what the dwells show within themselves
     /// and across repeated poses).
     pub lr_within: f64,
+    /// Its estimate across the session, SI.
+    pub estimate: f64,
+    /// Its estimate once every pose has its own offsets, and that estimate's standard error, SI.
+    pub estimate_within: f64,
+    /// See `estimate_within`.
+    pub std_error_within: f64,
+    /// The within-pose estimate contradicts the session's (beyond [`CONTRADICTED`] of its standard errors):
+    /// the term is not an effect, the differences between the poses are.
+    pub contradicted: bool,
 }
+
+/// Standard errors of the within-pose estimate beyond which it contradicts a time term's estimate across
+/// the session ([`Confounded::contradicted`]).
+pub(super) const CONTRADICTED: f64 = 3.0;
 
 /// Forward selection over the problem's candidates; the Bonferroni `m` counts the observable candidates and
 /// `extra_tests` more (the sample tests). Adds the unobservable candidates to `problem.unobservable`.
@@ -452,6 +467,13 @@ enum Vetoed {
     Alias(usize),
 }
 
+/// A column fitted once every pose has its own offsets ([`Forward::within_poses`]).
+struct WithinPoses {
+    lr: f64,
+    estimate: f64,
+    std_error: f64,
+}
+
 /// The alias of a time term that only the differences between poses support.
 pub(super) const POSE_ORDER: &str = "pose order (the poses are not revisited)";
 
@@ -518,6 +540,12 @@ impl<'a> Forward<'a> {
             match self.veto(&addition) {
                 None => {
                     let confounded = self.pose_order(&addition, m);
+                    if let Some(c) = confounded.as_ref().filter(|c| c.contradicted) {
+                        // The dwells contradict the term: the differences between the poses are not it.
+                        self.set_aside.push(c.candidate);
+                        self.confounded.extend(confounded);
+                        continue;
+                    }
                     self.add(addition);
                     if let Some(c) = confounded {
                         let q = self.chosen.len() - 1;
@@ -570,28 +598,39 @@ impl<'a> Forward<'a> {
     }
 
     /// A time term that passes the criterion only through the differences between poses: once every pose
-    /// has its own offsets its likelihood ratio fails the criterion. It is added (in a schedule that visits
-    /// each pose once, a drift and a pose-dependent term are equally possible), with [`POSE_ORDER`] as
-    /// its alias.
-    fn pose_order(&self, (ci, vi, _, lr): &Addition, m: f64) -> Option<Confounded> {
+    /// has its own offsets its likelihood ratio fails the criterion. When the within-pose estimate agrees
+    /// with the session's (within [`CONTRADICTED`] standard errors), the term is added, with [`POSE_ORDER`] as
+    /// its alias: in a schedule that visits each pose once, a drift and a pose-dependent term are equally
+    /// possible. When it contradicts it (a drift whose within-dwell slopes the data deny: tilts of the poses
+    /// off their labels), it is not added.
+    fn pose_order(&self, (ci, vi, f, lr): &Addition, m: f64) -> Option<Confounded> {
         let candidate = &self.problem.candidates[*ci];
         if !candidate.effect.is_time_term() {
             return None;
         }
         let k = candidate.parameters() as f64;
-        let lr_within = self.lr_within_poses(&candidate.variants[*vi].1.dense())?;
-        (lr_within <= chi_square_quantile_upper(ALPHA / m, k)).then_some(Confounded {
+        let within = self.within_poses(&candidate.variants[*vi].1.dense())?;
+        if within.lr > chi_square_quantile_upper(ALPHA / m, k) {
+            return None;
+        }
+        let estimate = f.beta[f.beta.len() - 1];
+        let contradicted = (within.estimate - estimate).abs() > CONTRADICTED * within.std_error;
+        Some(Confounded {
             candidate: *ci,
             lr: *lr,
-            lr_within,
+            lr_within: within.lr,
+            estimate,
+            estimate_within: within.estimate,
+            std_error_within: within.std_error,
+            contradicted,
         })
     }
 
-    /// The likelihood ratio of `column` once every pose has its own offset per group (which absorbs the
-    /// biases and every term that depends on the pose alone), with the time terms chosen so far. `None`
-    /// without poses, when the columns are dependent, or when the pose columns would take more than a quarter
-    /// of [`MAX_COLUMN_BYTES`] (then no veto).
-    fn lr_within_poses(&self, column: &[f64]) -> Option<f64> {
+    /// The likelihood ratio, estimate and standard error of `column` once every pose has its own offset per
+    /// group (which absorbs the biases and every term that depends on the pose alone), with the time terms
+    /// chosen so far. `None` without poses, when the columns are dependent, or when the pose columns would
+    /// take more than a quarter of [`MAX_COLUMN_BYTES`] (then no veto).
+    fn within_poses(&self, column: &[f64]) -> Option<WithinPoses> {
         let problem = self.problem;
         let poses = problem.obs_pose.as_ref()?;
         let n_poses = poses.iter().max().map_or(0, |m| m + 1);
@@ -618,7 +657,12 @@ impl<'a> Forward<'a> {
         let mut with = without.clone();
         with.push(column);
         let (f0, f1) = (fit(&problem.obs, &without)?, fit(&problem.obs, &with)?);
-        Some(2.0 * (f1.log_likelihood - f0.log_likelihood))
+        let j = f1.beta.len() - 1;
+        Some(WithinPoses {
+            lr: 2.0 * (f1.log_likelihood - f0.log_likelihood),
+            estimate: f1.beta[j],
+            std_error: f1.std_error(j),
+        })
     }
 
     /// Every candidate not yet chosen nor set aside, scored against the current model with its variances

@@ -40,12 +40,10 @@ pub fn summary(a: &Analysis) -> String {
         );
     }
     for c in &a.confounded {
-        let _ = writeln!(
-            s,
-            "  confounded with pose order: {} (likelihood ratio {:.1}; {:.1} once every pose has its own offset: \
-             a pose-dependent term explains it as well)",
-            c.candidate, c.likelihood_ratio, c.likelihood_ratio_within_poses
-        );
+        let _ = writeln!(s, "  {}", super::confounded_text(c));
+    }
+    for line in a.model_fit.iter().flat_map(|f| f.lines()) {
+        let _ = writeln!(s, "{line}");
     }
     if !a.noise_model.is_empty() {
         let _ = writeln!(s, "noise (terms named from the Allan variance of the longest dwell):");

@@ -503,7 +503,7 @@ pub trait RowSource {
     }
 
     /// Refuses accelerometer-only data for a command that needs the gyros: `command` names it
-    /// ("analyze", "navigate", ...). The message is `FILE: no gyro columns: COMMAND needs gyros`.
+    /// ("navigate", "study"). The message is `FILE: no gyro columns: COMMAND needs gyros`.
     fn require_gyro(&self, command: &str) -> Result<(), InputError> {
         if self.has_gyro() {
             Ok(())
@@ -1610,8 +1610,8 @@ mod tests {
             [[-9.81, 1e-3, 2.5e-4], [-9.8100001, -1e-3, 0.1]]
         );
         assert_eq!(again.header, r.header);
-        assert_eq!(r.require_gyro("analyze").unwrap_err().to_string(), "a.csv: no gyro columns: analyze needs gyros");
-        assert!(Recording::parse(GOOD, "r.csv").unwrap().require_gyro("analyze").is_ok());
+        assert_eq!(r.require_gyro("navigate").unwrap_err().to_string(), "a.csv: no gyro columns: navigate needs gyros");
+        assert!(Recording::parse(GOOD, "r.csv").unwrap().require_gyro("navigate").is_ok());
     }
 
     #[test]

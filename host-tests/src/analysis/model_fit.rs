@@ -1,0 +1,304 @@
+//! The verdict on the final model (docs/analysis.md#model-fit): after the selection, the block-mean residuals
+//! the final model leaves are set against what the channel's noise model (named from the Allan variance of
+//! the longest dwell) says a block mean scatters by. Where they scatter more, something is still unexplained:
+//! the verdict says on which channels, at which time scale (between the dwells: the dwell means wander; or
+//! within them: over seconds to a dwell's length) and in which dwells.
+
+use serde::Serialize;
+
+use crate::stats::linfit::chi_square_upper;
+
+use super::noise_terms::NoiseModel;
+use super::{ALPHA, CHANNELS};
+
+/// Most dwells the verdict names.
+const MAX_DWELLS_NAMED: usize = 6;
+
+/// How the final model fits the block means, against the noise model.
+#[derive(Clone, Debug, Serialize)]
+pub struct ModelFit {
+    /// "explained" (every group's chi-square within the noise model's, at `alpha` over the groups) or
+    /// "unexplained".
+    pub verdict: String,
+    /// Per observation group (channel, or the force along gravity).
+    pub groups: Vec<GroupFit>,
+    /// The dwells of a group whose own chi-square is beyond the noise model's (at `alpha` over every dwell
+    /// and group), the largest first, at most six.
+    pub dwells: Vec<DwellFit>,
+}
+
+/// One group's chi-square against the noise model, split into between and within the dwells.
+#[derive(Clone, Debug, Serialize)]
+pub struct GroupFit {
+    /// Group name ("az_mps2").
+    pub channel: String,
+    /// Unit of the residuals.
+    pub unit: String,
+    /// Block means.
+    pub observations: usize,
+    /// RMS of the final model's block-mean residuals, `unit`.
+    pub residual_rms: f64,
+    /// RMS the noise model gives a block mean (its Allan deviation at each block's length), `unit`.
+    pub noise_rms: f64,
+    /// Sum of the squared residuals over the noise model's variances.
+    pub chi_square: f64,
+    /// Observations less the parameters acting on the group (each bias and effect counted whole).
+    pub dof: f64,
+    /// Upper-tail probability of `chi_square` at `dof`.
+    pub p_value: f64,
+    /// The part of `chi_square` in the dwells' weighted mean residuals: what wanders from dwell to dwell.
+    pub chi_square_between_dwells: f64,
+    /// Its degrees of freedom (dwells less the parameters, at least 1).
+    pub dof_between_dwells: f64,
+    /// The rest: the scatter of the blocks about their dwell's mean (seconds to a dwell's length).
+    pub chi_square_within_dwells: f64,
+    /// Its degrees of freedom (observations less dwells).
+    pub dof_within_dwells: f64,
+    /// `p_value` passes `alpha` over the groups.
+    pub explained: bool,
+}
+
+/// One dwell of one group beyond the noise model.
+#[derive(Clone, Debug, Serialize)]
+pub struct DwellFit {
+    /// Position label of the dwell.
+    pub pos: u32,
+    /// Group name.
+    pub channel: String,
+    /// Its block means.
+    pub blocks: usize,
+    /// Their weighted mean residual, in the group's unit.
+    pub mean_residual: f64,
+    /// Their chi-square against the noise model.
+    pub chi_square: f64,
+}
+
+/// The block means of a recording's final fit, as the verdict reads them.
+pub(super) struct FitResiduals {
+    /// Final residual of each observation.
+    pub residual: Vec<f64>,
+    /// Group of each observation.
+    pub group: Vec<usize>,
+    /// Dwell index and samples of each observation's block.
+    pub block: Vec<(usize, usize)>,
+    /// Position label of each observation.
+    pub pos: Vec<u32>,
+    /// Group names and units.
+    pub group_names: Vec<String>,
+    /// See `group_names`.
+    pub group_units: Vec<&'static str>,
+    /// Per group: the parameters of the final model acting on it.
+    pub parameters: Vec<usize>,
+    /// Sample rate, Hz.
+    pub rate_hz: f64,
+}
+
+/// The channels whose noise models give the group's block-mean variance: the group's own, or (the force
+/// along gravity) the three accelerometers', averaged.
+fn noise_variance(group_name: &str, models: &[NoiseModel], tau_s: f64) -> Option<f64> {
+    let of = |name: &str| models.iter().find(|m| m.channel == name).map(|m| m.allan_deviation(tau_s).powi(2));
+    if CHANNELS.contains(&group_name) {
+        return of(group_name);
+    }
+    let accels: Vec<f64> = CHANNELS[3..].iter().filter_map(|c| of(c)).collect();
+    (accels.len() == 3).then(|| accels.iter().sum::<f64>() / 3.0)
+}
+
+/// The verdict on `fit` against `models`; `None` when no group has a noise model.
+pub(super) fn model_fit(fit: &FitResiduals, models: &[NoiseModel]) -> Option<ModelFit> {
+    model_fit_with(fit, |name, tau_s| noise_variance(name, models, tau_s))
+}
+
+/// The verdict on `fit`, `variance(group name, block length s)` giving the noise variance of a block mean.
+fn model_fit_with(fit: &FitResiduals, variance_of: impl Fn(&str, f64) -> Option<f64>) -> Option<ModelFit> {
+    let groups_present: Vec<usize> = (0..fit.group_names.len()).filter(|g| fit.group.contains(g)).collect();
+    let mut groups = Vec::new();
+    let mut dwells = Vec::new();
+    let dwell_cells = dwell_count(fit);
+    for &g in &groups_present {
+        let name = &fit.group_names[g];
+        let rows: Vec<usize> = (0..fit.residual.len()).filter(|&i| fit.group[i] == g).collect();
+        let variance: Option<Vec<f64>> =
+            rows.iter().map(|&i| variance_of(name, fit.block[i].1 as f64 / fit.rate_hz).filter(|v| *v > 0.0)).collect();
+        let Some(variance) = variance else { continue };
+        let (group, named) = group_fit(fit, g, &rows, &variance, dwell_cells);
+        groups.push(group);
+        dwells.extend(named);
+    }
+    if groups.is_empty() {
+        return None;
+    }
+    let level = ALPHA / groups.len() as f64;
+    for group in groups.iter_mut() {
+        group.explained = group.p_value > level;
+    }
+    dwells.sort_by(|a, b| b.chi_square.total_cmp(&a.chi_square));
+    dwells.truncate(MAX_DWELLS_NAMED);
+    let verdict = if groups.iter().all(|g| g.explained) { "explained" } else { "unexplained" };
+    Some(ModelFit { verdict: verdict.into(), groups, dwells })
+}
+
+/// Dwell-group cells with observations: the Bonferroni count of the dwell test.
+fn dwell_count(fit: &FitResiduals) -> usize {
+    let mut cells: Vec<(usize, usize)> = (0..fit.residual.len()).map(|i| (fit.block[i].0, fit.group[i])).collect();
+    cells.sort_unstable();
+    cells.dedup();
+    cells.len().max(1)
+}
+
+/// Group `g`'s fit (its observations `rows`, their noise variances `variance`) and its dwells beyond the
+/// noise model at `alpha` over `dwell_cells`.
+fn group_fit(
+    fit: &FitResiduals,
+    g: usize,
+    rows: &[usize],
+    variance: &[f64],
+    dwell_cells: usize,
+) -> (GroupFit, Vec<DwellFit>) {
+    let name = fit.group_names[g].clone();
+    let chi_square: f64 = rows.iter().zip(variance).map(|(&i, v)| fit.residual[i].powi(2) / v).sum();
+    // Per dwell: the weighted sums of the residual and of the weights, the chi-square, the blocks, its label.
+    let mut per_dwell: std::collections::BTreeMap<usize, (f64, f64, f64, usize, u32)> = Default::default();
+    for (&i, v) in rows.iter().zip(variance) {
+        let d = per_dwell.entry(fit.block[i].0).or_insert((0.0, 0.0, 0.0, 0, fit.pos[i]));
+        d.0 += fit.residual[i] / v;
+        d.1 += 1.0 / v;
+        d.2 += fit.residual[i].powi(2) / v;
+        d.3 += 1;
+    }
+    let between: f64 = per_dwell.values().map(|d| d.0 * d.0 / d.1).sum();
+    let n = rows.len() as f64;
+    let p = fit.parameters[g] as f64;
+    let dwells = per_dwell.len() as f64;
+    let dof = (n - p).max(1.0);
+    let level = ALPHA / dwell_cells as f64;
+    let named = per_dwell
+        .values()
+        .filter(|d| chi_square_upper(d.2, d.3 as f64) < level)
+        .map(|d| DwellFit { pos: d.4, channel: name.clone(), blocks: d.3, mean_residual: d.0 / d.1, chi_square: d.2 })
+        .collect();
+    let rms = |v: &mut dyn Iterator<Item = f64>| (v.sum::<f64>() / n).sqrt();
+    let group = GroupFit {
+        channel: name,
+        unit: fit.group_units[g].into(),
+        observations: rows.len(),
+        residual_rms: rms(&mut rows.iter().map(|&i| fit.residual[i].powi(2))),
+        noise_rms: rms(&mut variance.iter().copied()),
+        chi_square,
+        dof,
+        p_value: chi_square_upper(chi_square, dof),
+        chi_square_between_dwells: between,
+        dof_between_dwells: (dwells - p).max(1.0),
+        chi_square_within_dwells: chi_square - between,
+        dof_within_dwells: (n - dwells).max(1.0),
+        explained: true,
+    };
+    (group, named)
+}
+
+impl ModelFit {
+    /// Lines of text: the verdict, each group's chi-square per degree of freedom between and within the
+    /// dwells, and the dwells beyond the noise model.
+    pub fn lines(&self) -> Vec<String> {
+        let mut out = vec![format!(
+            "model fit: {} by the noise model (block means against each channel's named noise at the block's \
+             length; chi2/dof, alpha {ALPHA} over the groups)",
+            self.verdict
+        )];
+        for g in &self.groups {
+            let ratio = |chi2: f64, dof: f64| chi2 / dof;
+            out.push(format!(
+                "  {}: residual RMS {:.3e} {u} against noise {:.3e} {u}; chi2/dof {:.2} (p {:.1e}): between dwells \
+                 {:.2}, within dwells {:.2}{}",
+                g.channel,
+                g.residual_rms,
+                g.noise_rms,
+                ratio(g.chi_square, g.dof),
+                g.p_value,
+                ratio(g.chi_square_between_dwells, g.dof_between_dwells),
+                ratio(g.chi_square_within_dwells, g.dof_within_dwells),
+                if g.explained { "" } else { ": unexplained" },
+                u = g.unit,
+            ));
+        }
+        for d in &self.dwells {
+            out.push(format!(
+                "  unexplained in pos {} {}: {} blocks, mean residual {:+.3e}, chi2/blocks {:.1}",
+                d.pos,
+                d.channel,
+                d.blocks,
+                d.mean_residual,
+                d.chi_square / d.blocks as f64
+            ));
+        }
+        out
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use rand::SeedableRng;
+    use rand_distr::{Distribution, StandardNormal};
+
+    /// Six dwells of ten 600-sample blocks on one channel (ax), residuals white with the standard deviation
+    /// `sigma`, plus `offset(dwell)`.
+    fn residuals(sigma: f64, offset: impl Fn(usize) -> f64) -> FitResiduals {
+        let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(3);
+        let (mut residual, mut block, mut pos) = (Vec::new(), Vec::new(), Vec::new());
+        for d in 0..6 {
+            for _ in 0..10 {
+                let z: f64 = StandardNormal.sample(&mut rng);
+                residual.push(sigma * z + offset(d));
+                block.push((d, 600));
+                pos.push(d as u32 + 1);
+            }
+        }
+        FitResiduals {
+            group: vec![3; residual.len()],
+            residual,
+            block,
+            pos,
+            group_names: CHANNELS.iter().map(|c| c.to_string()).collect(),
+            group_units: vec!["m/s^2"; 6],
+            parameters: vec![1; 6],
+            rate_hz: 100.0,
+        }
+    }
+
+    #[test]
+    fn residuals_as_large_as_the_noise_are_explained() {
+        let sigma = 1e-3;
+        let fit = model_fit_with(&residuals(sigma, |_| 0.0), |name, tau| {
+            assert_eq!((name, tau), ("ax_mps2", 6.0));
+            Some(sigma * sigma)
+        })
+        .unwrap();
+        assert_eq!(fit.verdict, "explained");
+        let g = &fit.groups[0];
+        assert!((g.chi_square / g.dof - 1.0).abs() < 0.4, "{g:?}");
+        assert!((g.chi_square_between_dwells + g.chi_square_within_dwells - g.chi_square).abs() < 1e-9);
+        assert!(fit.dwells.is_empty(), "{:?}", fit.dwells);
+    }
+
+    #[test]
+    fn a_dwell_off_by_more_than_the_noise_is_named_between_the_dwells() {
+        // Dwell 3 (pos 4) sits 3 sigma off: its ten blocks give a chi-square of about 90 on 10.
+        let sigma = 1e-3;
+        let fit =
+            model_fit_with(&residuals(sigma, |d| if d == 3 { 3.0 * sigma } else { 0.0 }), |_, _| Some(sigma * sigma))
+                .unwrap();
+        assert_eq!(fit.verdict, "unexplained");
+        let g = &fit.groups[0];
+        assert!(!g.explained);
+        assert!(g.chi_square_between_dwells / g.dof_between_dwells > 10.0, "{g:?}");
+        assert!(g.chi_square_within_dwells / g.dof_within_dwells < 1.5, "{g:?}");
+        assert_eq!(fit.dwells.first().map(|d| (d.pos, d.channel.as_str())), Some((4, "ax_mps2")), "{:?}", fit.dwells);
+        assert!((fit.dwells[0].mean_residual / sigma - 3.0).abs() < 1.0);
+    }
+
+    #[test]
+    fn without_a_noise_model_there_is_no_verdict() {
+        assert!(model_fit_with(&residuals(1e-3, |_| 0.0), |_, _| None).is_none());
+    }
+}
