@@ -326,6 +326,27 @@ fn real_data_misfits_name_the_alternative_that_fits() {
     sinscal().arg("calibrate").arg(&xsens).assert().success();
 }
 
+/// REAL DATA (`SINSCAL_DATA`; skipped, and says so, without it): consumer gyros that do not resolve the Earth
+/// rate, written in deg/s. The imucal Ferraris session's gyros read 0.01 rad/s at rest (a 0.6 deg/s bias);
+/// in deg/s taken as rad/s they read 0.7 "rad/s", beyond any gyro's bias: the physics check fails with the
+/// hint (it passed before: the Earth-rate comparison skips gyros that do not resolve it). The session as
+/// imported passes.
+#[test]
+fn real_consumer_gyros_in_deg_per_s_fail_the_physics_check() {
+    let Some(dir) = common::data_dir() else { return };
+    let tmp = tempfile::tempdir().unwrap();
+    let mut session = common::ferraris_session(&dir);
+    let ferraris = tmp.path().join("ferraris.csv");
+    session.write(&ferraris).unwrap();
+    sinscal().arg("calibrate").arg(&ferraris).assert().success();
+    for row in session.rows.iter_mut() {
+        row.rate_b_radps = row.rate_b_radps.map(f64::to_degrees);
+    }
+    let degrees = tmp.path().join("ferraris-degs.csv");
+    session.write(&degrees).unwrap();
+    fails_physics_of(tmp.path(), &degrees, "gyros in deg/s? the gyros read 0.70");
+}
+
 /// One pose: a constant bias absorbs any constant rate, so the hypotheses cannot be compared across dwells;
 /// gyros in deg/s still show as a mean rate 57.3 times the Earth rate along it. SIMULATION (one 60-s level
 /// pose of the example's sensor) and REAL DATA (the PSINS one-pose record): as recorded, exit 0; with the gyros
