@@ -6,7 +6,7 @@ use std::collections::BTreeMap;
 
 use crate::model::catalogue::EffectKind;
 
-use super::selection::{Problem, Selection, POSE_ORDER};
+use super::selection::{Problem, Selection, HALVES, POSE_ORDER};
 use super::{Analysis, BaseModel, ChannelDiagnostics, Confounded, Consequence, Effect, FigureData, Misfit, ALPHA};
 
 /// The input kinds (the `input` field).
@@ -127,7 +127,7 @@ fn misfits_and_confounded(problem: &Problem, selection: &Selection) -> (Vec<Misf
 /// of a strong effect can move a bias more than the effect itself: docs/analysis.md#verdict).
 fn rank(effects: &mut [Effect]) {
     let class = |e: &Effect| {
-        if e.aliases.iter().any(|a| a == POSE_ORDER) {
+        if e.aliases.iter().any(|a| a == POSE_ORDER || a == HALVES) {
             2
         } else if e.consequence.is_none() {
             1

@@ -474,6 +474,13 @@ struct WithinPoses {
     std_error: f64,
 }
 
+/// The alias of a time term whose estimates in the two halves of the session disagree
+/// ([`Forward::halves_disagree`]): an uncertain effect.
+pub(super) const HALVES: &str = "the session's halves (it differs between them: slow wander, not a term)";
+
+/// Standard errors of their difference beyond which the two halves' estimates of a time term disagree.
+const HALVES_DISAGREE: f64 = 3.0;
+
 /// The alias of a time term that only the differences between poses support.
 pub(super) const POSE_ORDER: &str = "pose order (the poses are not revisited)";
 
@@ -546,11 +553,15 @@ impl<'a> Forward<'a> {
                         self.confounded.extend(confounded);
                         continue;
                     }
+                    let halves_disagree = self.halves_disagree(&addition);
                     self.add(addition);
+                    let q = self.chosen.len() - 1;
                     if let Some(c) = confounded {
-                        let q = self.chosen.len() - 1;
                         self.correlated[q].push(POSE_ORDER.to_string());
                         self.confounded.push(c);
+                    }
+                    if halves_disagree {
+                        self.correlated[q].push(HALVES.to_string());
                     }
                     return true;
                 }
@@ -624,6 +635,39 @@ impl<'a> Forward<'a> {
             std_error_within: within.std_error,
             contradicted,
         })
+    }
+
+    /// A time term's column split in two, on the first and the second half of each of its groups'
+    /// observations (dwells and blocks are in time order within a group), fitted with the current model: the
+    /// two estimates differ by more than [`HALVES_DISAGREE`] standard errors of their difference. A drift or
+    /// warm-up that a wander of the bias makes (a random walk over one long dwell) changes between the halves;
+    /// a term does not. False for other effects, or when the split columns are dependent.
+    fn halves_disagree(&self, (ci, vi, _, _): &Addition) -> bool {
+        let problem = self.problem;
+        let candidate = &problem.candidates[*ci];
+        if !candidate.effect.is_time_term() {
+            return false;
+        }
+        let column = candidate.variants[*vi].1.dense();
+        let groups = &problem.obs.group;
+        let mut seen = vec![0usize; problem.obs.groups];
+        let totals: Vec<usize> = (0..problem.obs.groups).map(|g| groups.iter().filter(|&&x| x == g).count()).collect();
+        let (mut first, mut second) = (vec![0.0; column.len()], vec![0.0; column.len()]);
+        for (i, &g) in groups.iter().enumerate() {
+            if 2 * seen[g] < totals[g] {
+                first[i] = column[i];
+            } else {
+                second[i] = column[i];
+            }
+            seen[g] += 1;
+        }
+        let mut cols: Vec<&[f64]> = self.columns.iter().map(|c| c.as_slice()).collect();
+        cols.push(&first);
+        cols.push(&second);
+        let Some(f) = fit(&problem.obs, &cols) else { return false };
+        let (a, b) = (f.beta.len() - 2, f.beta.len() - 1);
+        let variance = f.covariance[a][a] + f.covariance[b][b] - 2.0 * f.covariance[a][b];
+        (f.beta[a] - f.beta[b]).abs() > HALVES_DISAGREE * variance.max(0.0).sqrt() * self.inflation_of(candidate).sqrt()
     }
 
     /// The likelihood ratio, estimate and standard error of `column` once every pose has its own offset per
