@@ -221,17 +221,22 @@ impl ModelFit {
                 u = g.unit,
             ));
         }
-        for d in &self.dwells {
-            out.push(format!(
-                "  unexplained in pos {} {}: {} blocks, mean residual {:+.3e}, chi2/blocks {:.1}",
-                d.pos,
-                d.channel,
-                d.blocks,
-                d.mean_residual,
-                d.chi_square / d.blocks as f64
-            ));
-        }
+        out.extend(self.dwells.iter().map(|d| format!("  {}", d.text())));
         out
+    }
+}
+
+impl DwellFit {
+    /// "unexplained in pos 3 ay_mps2: 4 blocks, mean residual +8.673e-3, chi2/blocks 66.5".
+    pub fn text(&self) -> String {
+        format!(
+            "unexplained in pos {} {}: {} blocks, mean residual {:+.3e}, chi2/blocks {:.1}",
+            self.pos,
+            self.channel,
+            self.blocks,
+            self.mean_residual,
+            self.chi_square / self.blocks as f64
+        )
     }
 }
 

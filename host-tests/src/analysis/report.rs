@@ -151,15 +151,7 @@ fn model_fit_md(md: &mut String, a: &Analysis) {
         let _ = writeln!(md);
     }
     for d in &fit.dwells {
-        let _ = writeln!(
-            md,
-            "- unexplained in pos {} {}: {} blocks, mean residual {:+.3e}, chi2/blocks {:.1}",
-            d.pos,
-            d.channel,
-            d.blocks,
-            d.mean_residual,
-            d.chi_square / d.blocks as f64
-        );
+        let _ = writeln!(md, "- {}", d.text());
     }
 }
 
