@@ -240,8 +240,15 @@ pub fn analyze_angles(file: &AnglesFile) -> Result<Analysis, InputError> {
         ..FigureData::default()
     };
     let m = selection.observable as f64;
-    let findings =
-        Findings { effects, residual_rms, block_residual_rms: BTreeMap::new(), m, diagnostics: Vec::new(), figures };
+    let findings = Findings {
+        effects,
+        residual_rms,
+        block_residual_rms: BTreeMap::new(),
+        m,
+        diagnostics: Vec::new(),
+        noise_model: Vec::new(),
+        figures,
+    };
     Ok(assemble(problem, selection, findings, ANGLES, &file.source))
 }
 
@@ -338,6 +345,7 @@ impl AngleObservations {
             obs_pos: self.obs_pos,
             obs_pose: None,
             obs_block: None,
+            obs_time_s: None,
             candidates,
             unobservable: Vec::new(),
             residual_of: "angles",

@@ -70,6 +70,7 @@ mod sample_tests;
 mod selection;
 mod summary;
 mod vibration;
+mod wander;
 
 use std::collections::BTreeMap;
 use std::path::Path;

@@ -12,10 +12,12 @@ use sinscal::calib::general::AttitudeKnowledge;
 
 use super::candidates::RecordingColumns;
 use super::model_fit::{model_fit, FitResiduals};
+use super::noise_terms::noise_models;
 use super::observations::{Blocks, Session};
 use super::result::{assemble, effects_of, residuals_by_group, Findings, RECORDING};
 use super::sample_tests::{measure_samples, sample_tests, test_samples, SampleFindings};
 use super::selection::{select, Problem, Selection};
+use super::wander::mark_wander;
 use super::{Analysis, ChannelDiagnostics, CHANNELS, CHANNEL_UNITS};
 
 /// Analyses a recording: in one pass over its rows, of which the dwells' columns are kept
@@ -40,15 +42,17 @@ fn analyze_session(mut session: Session, levelled: bool, source: &str) -> Result
         let measures = measuring.join().unwrap_or_else(|e| std::panic::resume_unwind(e));
         (problem, selection, measures)
     });
-    let selection = selection.map_err(|e| InputError::file(source, e))?;
+    let mut selection = selection.map_err(|e| InputError::file(source, e))?;
     let m = (selection.observable + sample_tests(session)) as f64;
-    let mut effects = effects_of(&problem, &selection);
     let SampleFindings { effects: sample_effects, diagnostics, mut figures } = test_samples(session, &measures, m);
+    let noise_model = noise_models(&figures);
+    mark_wander(&problem, &mut selection, &noise_model, session.rate_hz, m);
+    let mut effects = effects_of(&problem, &selection);
     effects.extend(sample_effects);
     let (residual_rms, block_residual_rms) = residual_rms(&problem, &selection, &diagnostics);
     figures.residual_names = problem.group_names.clone();
     figures.residuals = residuals_by_group(&problem, &selection);
-    let findings = Findings { effects, residual_rms, block_residual_rms, m, diagnostics, figures };
+    let findings = Findings { effects, residual_rms, block_residual_rms, m, diagnostics, noise_model, figures };
     let fit = fit_residuals(&problem, &selection, session.rate_hz);
     let mut analysis = assemble(problem, selection, findings, RECORDING, source);
     analysis.model_fit = model_fit(&fit, &analysis.noise_model);
@@ -157,6 +161,13 @@ fn problem_with(session: &Session, blocks: &Blocks, levelled: Option<[f64; 3]>, 
         obs_pos: blocks.obs_pos.clone(),
         obs_pose: Some(poses(session, blocks)),
         obs_block: Some(blocks.list.iter().map(|b| (b.dwell, b.range.1 - b.range.0)).collect()),
+        obs_time_s: Some(
+            blocks
+                .list
+                .iter()
+                .map(|b| 0.5 * (session.dwells[b.dwell].t[b.range.0] + session.dwells[b.dwell].t[b.range.1 - 1]))
+                .collect(),
+        ),
         candidates,
         unobservable,
         residual_of: "block means",
@@ -213,6 +224,11 @@ fn along_gravity(mut p: Problem, session: &Session, blocks: &Blocks, bias: [f64;
     p.obs_block = p.obs_block.as_ref().map(|b| {
         let mut out: Vec<(usize, usize)> = keep.iter().map(|&i| b[i]).collect();
         out.extend(rows.iter().map(|(_, r)| b[r[0]]));
+        out
+    });
+    p.obs_time_s = p.obs_time_s.as_ref().map(|t| {
+        let mut out: Vec<f64> = keep.iter().map(|&i| t[i]).collect();
+        out.extend(rows.iter().map(|(_, r)| t[r[0]]));
         out
     });
     let pos: Vec<usize> = p.obs_pos.iter().map(|&x| x as usize).collect();

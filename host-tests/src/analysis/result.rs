@@ -26,6 +26,8 @@ pub(super) struct Findings {
     pub m: f64,
     /// Per-channel diagnostics (recordings).
     pub diagnostics: Vec<ChannelDiagnostics>,
+    /// The noise model named per channel (recordings; [`super::noise_terms::noise_models`] of `figures`).
+    pub noise_model: Vec<super::noise_terms::NoiseModel>,
     /// Figure data.
     pub figures: FigureData,
 }
@@ -122,12 +124,15 @@ fn misfits_and_confounded(problem: &Problem, selection: &Selection) -> (Vec<Misf
 }
 
 /// Effects ranked: the column effects (what a calibration must model) in the order the forward selection
-/// chose them; then the noise effects, which move no estimate, by their BIC gain; the time terms confounded with pose order after all of
-/// them. Each column effect carries its consequence; the ranking does not sort by it (a small partial alias
+/// chose them; then the noise effects, which move no estimate, by their BIC gain; the uncertain time terms
+/// (confounded with pose order, a random walk of the bias or the session's halves, or a time constant at its
+/// grid's end) after all of them. Each column effect carries its consequence; the ranking does not sort by it (a small partial alias
 /// of a strong effect can move a bias more than the effect itself: docs/analysis.md#verdict).
 fn rank(effects: &mut [Effect]) {
     let class = |e: &Effect| {
-        if e.aliases.iter().any(|a| a == POSE_ORDER || a == HALVES) {
+        let uncertain = e.aliases.iter().any(|a| a == POSE_ORDER || a == HALVES || a == super::wander::WANDER);
+        // A column effect whose time constant is an end of its grid is not determined either.
+        if uncertain || (e.at_grid_edge && e.consequence.is_some()) {
             2
         } else if e.consequence.is_none() {
             1
@@ -208,7 +213,7 @@ pub(super) fn assemble(
         candidates_tested: m as usize,
         tested: selection.tested,
         diagnostics: findings.diagnostics,
-        noise_model: super::noise_terms::noise_models(&findings.figures),
+        noise_model: findings.noise_model,
         model_fit: None,
         figures: findings.figures,
     }

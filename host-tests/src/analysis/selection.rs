@@ -27,6 +27,8 @@ pub(super) struct Problem {
     pub obs_pose: Option<Vec<usize>>,
     /// Dwell index and samples of each observation's block; `None` for angles.
     pub obs_block: Option<Vec<(usize, usize)>>,
+    /// Middle time of each observation's block, s; `None` for angles.
+    pub obs_time_s: Option<Vec<f64>>,
     /// The candidates, in test order.
     pub candidates: Vec<Candidate>,
     /// What this data cannot see (the selection adds the candidates the base model explains).

@@ -20,8 +20,8 @@ pub fn summary(a: &Analysis) -> String {
     let _ = writeln!(
         s,
         "ranking: the column effects in the order chosen, each with its consequence (how many standard errors \
-         leaving it out moves a bias); then the noise effects by BIC gain; time terms confounded with pose order \
-         last"
+         leaving it out moves a bias); then the noise effects by BIC gain; uncertain time terms (pose order, \
+         slow wander, halves, time constant at its grid's end) last"
     );
     if a.effects.is_empty() {
         let _ = writeln!(s, "verdict: none (the base model is adequate)");
