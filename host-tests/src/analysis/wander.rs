@@ -18,9 +18,9 @@ pub(super) const WANDER: &str = "the bias's slow wander (a random walk explains 
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub(super) struct Wander {
     /// White noise density `N` (channel unit times sqrt(s)): a block mean of `T` s has the variance `N^2 / T`.
-    pub white: f64,
+    pub white_per_sqrt_hz: f64,
     /// Rate random walk `K` (channel unit per sqrt(s)): the bias changes by `K^2 dt` in variance over `dt`.
-    pub random_walk: f64,
+    pub random_walk_per_sqrt_s: f64,
 }
 
 /// Random-walk densities tried per test, from 1e-4 of the largest to it (and none).
@@ -36,9 +36,10 @@ impl Wander {
         let (mut r, mut p, mut log_det) = (0.0, 0.0, 0.0);
         let mut out = Vec::with_capacity(v.len());
         for i in 0..v.len() {
-            let dt = if i == 0 { 0.0 } else { (t_s[i] - t_s[i - 1]).max(0.0) };
-            p += self.random_walk * self.random_walk * dt;
-            let noise = (self.white * self.white / block_s[i].max(f64::MIN_POSITIVE)).max(f64::MIN_POSITIVE);
+            let dt_s = if i == 0 { 0.0 } else { (t_s[i] - t_s[i - 1]).max(0.0) };
+            p += self.random_walk_per_sqrt_s * self.random_walk_per_sqrt_s * dt_s;
+            let noise = (self.white_per_sqrt_hz * self.white_per_sqrt_hz / block_s[i].max(f64::MIN_POSITIVE))
+                .max(f64::MIN_POSITIVE);
             let s = p + noise;
             let e = v[i] - r;
             out.push(e / s.sqrt());
@@ -66,14 +67,17 @@ fn log_likelihood(wander: Wander, t_s: &[f64], block_s: &[f64], y: &[f64], colum
 
 /// The log-likelihood of [`log_likelihood`] at its best random walk: `K` from none up to ten times the
 /// observations' spread per square root of their span, on a logarithmic grid.
-fn profiled(white: f64, t_s: &[f64], block_s: &[f64], y: &[f64], columns: &[&[f64]]) -> Option<f64> {
+fn profiled(white_per_sqrt_hz: f64, t_s: &[f64], block_s: &[f64], y: &[f64], columns: &[&[f64]]) -> Option<f64> {
     let span_s = (t_s.last()? - t_s.first()?).max(f64::MIN_POSITIVE);
-    let spread = (y.iter().map(|v| v * v).sum::<f64>() / y.len() as f64).sqrt();
-    let largest = 10.0 * spread / span_s.sqrt();
-    let grid = (0..RANDOM_WALK_GRID).map(|i| largest * 1e-4f64.powf(i as f64 / (RANDOM_WALK_GRID - 1) as f64));
+    let rms = (y.iter().map(|v| v * v).sum::<f64>() / y.len() as f64).sqrt();
+    let largest_per_sqrt_s = 10.0 * rms / span_s.sqrt();
+    let grid =
+        (0..RANDOM_WALK_GRID).map(|i| largest_per_sqrt_s * 1e-4f64.powf(i as f64 / (RANDOM_WALK_GRID - 1) as f64));
     std::iter::once(0.0)
         .chain(grid)
-        .filter_map(|k| log_likelihood(Wander { white, random_walk: k }, t_s, block_s, y, columns))
+        .filter_map(|k| {
+            log_likelihood(Wander { white_per_sqrt_hz, random_walk_per_sqrt_s: k }, t_s, block_s, y, columns)
+        })
         .max_by(f64::total_cmp)
 }
 
@@ -98,7 +102,8 @@ pub(super) fn mark_wander(problem: &Problem, selection: &mut Selection, models: 
         if !candidate.effect.is_time_term() {
             continue;
         }
-        let white = model.terms.iter().find(|t| t.term == Term::White).unwrap_or(&model.white_only).value_si;
+        let white_per_sqrt_hz =
+            model.terms.iter().find(|t| t.term == Term::White).unwrap_or(&model.white_only).value_si;
         let rows: Vec<usize> = (0..problem.obs.y.len()).filter(|&i| problem.obs.group[i] == g).collect();
         let on_rows = |v: &[f64]| rows.iter().map(|&i| v[i]).collect::<Vec<f64>>();
         let block_s: Vec<f64> = rows.iter().map(|&i| blocks[i].1 as f64 / rate_hz).collect();
@@ -115,9 +120,10 @@ pub(super) fn mark_wander(problem: &Problem, selection: &mut Selection, models: 
         let without: Vec<&[f64]> = others.iter().map(|c| c.as_slice()).collect();
         let mut with = without.clone();
         with.push(&own);
-        let (Some(l0), Some(l1)) =
-            (profiled(white, &t, &block_s, &y, &without), profiled(white, &t, &block_s, &y, &with))
-        else {
+        let (Some(l0), Some(l1)) = (
+            profiled(white_per_sqrt_hz, &t, &block_s, &y, &without),
+            profiled(white_per_sqrt_hz, &t, &block_s, &y, &with),
+        ) else {
             continue;
         };
         if 2.0 * (l1 - l0) <= chi_square_quantile_upper(ALPHA / m, candidate.parameters() as f64) {
@@ -133,7 +139,7 @@ mod tests {
     #[test]
     fn white_noise_alone_is_only_scaled() {
         // No wander: each value over the block mean's standard deviation N / sqrt(T).
-        let w = Wander { white: 2.0, random_walk: 0.0 };
+        let w = Wander { white_per_sqrt_hz: 2.0, random_walk_per_sqrt_s: 0.0 };
         let (out, log_det) = w.whiten(&[0.0, 10.0, 20.0], &[4.0, 4.0, 4.0], &[1.0, -2.0, 3.0]);
         for (o, v) in out.iter().zip([1.0, -2.0, 3.0]) {
             assert!((o - v).abs() < 1e-12, "{out:?}");
@@ -145,7 +151,7 @@ mod tests {
     fn a_random_walk_is_whitened_to_its_steps() {
         // A pure random walk (no white noise to speak of), sampled every 1 s: the innovations are the steps
         // over K sqrt(dt), and a straight line becomes a constant (a drift is a bias on the steps).
-        let w = Wander { white: 1e-9, random_walk: 0.5 };
+        let w = Wander { white_per_sqrt_hz: 1e-9, random_walk_per_sqrt_s: 0.5 };
         let t: Vec<f64> = (0..6).map(f64::from).collect();
         let walk = [0.0, 0.5, 0.0, 1.0, 1.5, 1.0];
         let (out, _) = w.whiten(&t, &[1.0; 6], &walk);
