@@ -345,7 +345,6 @@ impl AngleObservations {
             obs_pos: self.obs_pos,
             obs_pose: None,
             obs_block: None,
-            obs_time_s: None,
             candidates,
             unobservable: Vec::new(),
             residual_of: "angles",

@@ -9,6 +9,7 @@ use serde::Serialize;
 use crate::stats::linfit::chi_square_upper;
 
 use super::noise_terms::NoiseModel;
+use super::selection::BlockOf;
 use super::{ALPHA, CHANNELS};
 
 /// Most dwells the verdict names.
@@ -74,23 +75,21 @@ pub struct DwellFit {
 }
 
 /// The block means of a recording's final fit, as the verdict reads them.
-pub(super) struct FitResiduals {
+pub(super) struct FitResiduals<'a> {
     /// Final residual of each observation.
-    pub residual: Vec<f64>,
+    pub residual: &'a [f64],
     /// Group of each observation.
-    pub group: Vec<usize>,
-    /// Dwell index and samples of each observation's block.
-    pub block: Vec<(usize, usize)>,
+    pub group: &'a [usize],
+    /// Where and when each observation's block lies.
+    pub block: &'a [BlockOf],
     /// Position label of each observation.
-    pub pos: Vec<u32>,
+    pub pos: &'a [u32],
     /// Group names and units.
-    pub group_names: Vec<String>,
+    pub group_names: &'a [String],
     /// See `group_names`.
-    pub group_units: Vec<&'static str>,
+    pub group_units: &'a [&'static str],
     /// Per group: the parameters of the final model acting on it.
     pub parameters: Vec<usize>,
-    /// Sample rate, Hz.
-    pub rate_hz: f64,
 }
 
 /// The channels whose noise models give the group's block-mean variance: the group's own, or (the force
@@ -119,7 +118,7 @@ fn model_fit_with(fit: &FitResiduals, variance_of: impl Fn(&str, f64) -> Option<
         let name = &fit.group_names[g];
         let rows: Vec<usize> = (0..fit.residual.len()).filter(|&i| fit.group[i] == g).collect();
         let variance: Option<Vec<f64>> =
-            rows.iter().map(|&i| variance_of(name, fit.block[i].1 as f64 / fit.rate_hz).filter(|v| *v > 0.0)).collect();
+            rows.iter().map(|&i| variance_of(name, fit.block[i].duration_s).filter(|v| *v > 0.0)).collect();
         let Some(variance) = variance else { continue };
         let (group, named) = group_fit(fit, g, &rows, &variance, dwell_cells);
         groups.push(group);
@@ -140,7 +139,7 @@ fn model_fit_with(fit: &FitResiduals, variance_of: impl Fn(&str, f64) -> Option<
 
 /// Dwell-group cells with observations: the Bonferroni count of the dwell test.
 fn dwell_count(fit: &FitResiduals) -> usize {
-    let mut cells: Vec<(usize, usize)> = (0..fit.residual.len()).map(|i| (fit.block[i].0, fit.group[i])).collect();
+    let mut cells: Vec<(usize, usize)> = (0..fit.residual.len()).map(|i| (fit.block[i].dwell, fit.group[i])).collect();
     cells.sort_unstable();
     cells.dedup();
     cells.len().max(1)
@@ -160,7 +159,7 @@ fn group_fit(
     // Per dwell: the weighted sums of the residual and of the weights, the chi-square, the blocks, its label.
     let mut per_dwell: std::collections::BTreeMap<usize, (f64, f64, f64, usize, u32)> = Default::default();
     for (&i, v) in rows.iter().zip(variance) {
-        let d = per_dwell.entry(fit.block[i].0).or_insert((0.0, 0.0, 0.0, 0, fit.pos[i]));
+        let d = per_dwell.entry(fit.block[i].dwell).or_insert((0.0, 0.0, 0.0, 0, fit.pos[i]));
         d.0 += fit.residual[i] / v;
         d.1 += 1.0 / v;
         d.2 += fit.residual[i].powi(2) / v;
@@ -246,35 +245,50 @@ mod tests {
     use rand::SeedableRng;
     use rand_distr::{Distribution, StandardNormal};
 
-    /// Six dwells of ten 600-sample blocks on one channel (ax), residuals white with the standard deviation
-    /// `sigma`, plus `offset(dwell)`.
-    fn residuals(sigma: f64, offset: impl Fn(usize) -> f64) -> FitResiduals {
+    /// The block means of a test: their residuals, places and position labels.
+    struct Means {
+        residual: Vec<f64>,
+        group: Vec<usize>,
+        block: Vec<BlockOf>,
+        pos: Vec<u32>,
+        group_names: Vec<String>,
+    }
+
+    impl Means {
+        fn fit(&self) -> FitResiduals<'_> {
+            FitResiduals {
+                residual: &self.residual,
+                group: &self.group,
+                block: &self.block,
+                pos: &self.pos,
+                group_names: &self.group_names,
+                group_units: &["m/s^2"; 6],
+                parameters: vec![1; 6],
+            }
+        }
+    }
+
+    /// Six dwells of ten 6-s blocks on one channel (ax), residuals white with the standard deviation `sigma`,
+    /// plus `offset(dwell)`.
+    fn residuals(sigma: f64, offset: impl Fn(usize) -> f64) -> Means {
         let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(3);
         let (mut residual, mut block, mut pos) = (Vec::new(), Vec::new(), Vec::new());
         for d in 0..6 {
-            for _ in 0..10 {
+            for k in 0..10 {
                 let z: f64 = StandardNormal.sample(&mut rng);
                 residual.push(sigma * z + offset(d));
-                block.push((d, 600));
+                block.push(BlockOf { dwell: d, duration_s: 6.0, t_mid_s: 100.0 * d as f64 + 6.0 * k as f64 });
                 pos.push(d as u32 + 1);
             }
         }
-        FitResiduals {
-            group: vec![3; residual.len()],
-            residual,
-            block,
-            pos,
-            group_names: CHANNELS.iter().map(|c| c.to_string()).collect(),
-            group_units: vec!["m/s^2"; 6],
-            parameters: vec![1; 6],
-            rate_hz: 100.0,
-        }
+        let group_names = CHANNELS.iter().map(|c| c.to_string()).collect();
+        Means { group: vec![3; residual.len()], residual, block, pos, group_names }
     }
 
     #[test]
     fn residuals_as_large_as_the_noise_are_explained() {
         let sigma = 1e-3;
-        let fit = model_fit_with(&residuals(sigma, |_| 0.0), |name, tau| {
+        let fit = model_fit_with(&residuals(sigma, |_| 0.0).fit(), |name, tau| {
             assert_eq!((name, tau), ("ax_mps2", 6.0));
             Some(sigma * sigma)
         })
@@ -290,9 +304,10 @@ mod tests {
     fn a_dwell_off_by_more_than_the_noise_is_named_between_the_dwells() {
         // Dwell 3 (pos 4) sits 3 sigma off: its ten blocks give a chi-square of about 90 on 10.
         let sigma = 1e-3;
-        let fit =
-            model_fit_with(&residuals(sigma, |d| if d == 3 { 3.0 * sigma } else { 0.0 }), |_, _| Some(sigma * sigma))
-                .unwrap();
+        let fit = model_fit_with(&residuals(sigma, |d| if d == 3 { 3.0 * sigma } else { 0.0 }).fit(), |_, _| {
+            Some(sigma * sigma)
+        })
+        .unwrap();
         assert_eq!(fit.verdict, "unexplained");
         let g = &fit.groups[0];
         assert!(!g.explained);
@@ -304,6 +319,6 @@ mod tests {
 
     #[test]
     fn without_a_noise_model_there_is_no_verdict() {
-        assert!(model_fit_with(&residuals(1e-3, |_| 0.0), |_, _| None).is_none());
+        assert!(model_fit_with(&residuals(1e-3, |_| 0.0).fit(), |_, _| None).is_none());
     }
 }

@@ -13,10 +13,10 @@ use sinscal::calib::general::AttitudeKnowledge;
 use super::candidates::RecordingColumns;
 use super::model_fit::{model_fit, FitResiduals};
 use super::noise_terms::noise_models;
-use super::observations::{Blocks, Session};
+use super::observations::{BlockObs, Blocks, Session};
 use super::result::{assemble, effects_of, residuals_by_group, Findings, RECORDING};
 use super::sample_tests::{measure_samples, sample_tests, test_samples, SampleFindings};
-use super::selection::{select, Problem, Selection};
+use super::selection::{final_columns, select, BlockOf, Problem, Selection};
 use super::wander::mark_wander;
 use super::{Analysis, ChannelDiagnostics, CHANNELS, CHANNEL_UNITS};
 
@@ -46,16 +46,16 @@ fn analyze_session(mut session: Session, levelled: bool, source: &str) -> Result
     let m = (selection.observable + sample_tests(session)) as f64;
     let SampleFindings { effects: sample_effects, diagnostics, mut figures } = test_samples(session, &measures, m);
     let noise_model = noise_models(&figures);
-    mark_wander(&problem, &mut selection, &noise_model, session.rate_hz, m);
+    mark_wander(&problem, &mut selection, &noise_model, m);
     let mut effects = effects_of(&problem, &selection);
     effects.extend(sample_effects);
     let (residual_rms, block_residual_rms) = residual_rms(&problem, &selection, &diagnostics);
     figures.residual_names = problem.group_names.clone();
     figures.residuals = residuals_by_group(&problem, &selection);
+    let model_fit = model_fit(&fit_residuals(&problem, &selection), &noise_model);
     let findings = Findings { effects, residual_rms, block_residual_rms, m, diagnostics, noise_model, figures };
-    let fit = fit_residuals(&problem, &selection, session.rate_hz);
     let mut analysis = assemble(problem, selection, findings, RECORDING, source);
-    analysis.model_fit = model_fit(&fit, &analysis.noise_model);
+    analysis.model_fit = model_fit;
     for (k, axis) in ["x", "y", "z"].iter().enumerate() {
         if let Some(b) = analysis.base_model.biases.get_mut(&format!("accel_bias_{axis}")) {
             *b += accel_bias_mps2[k];
@@ -65,13 +65,12 @@ fn analyze_session(mut session: Session, levelled: bool, source: &str) -> Result
 }
 
 /// The final model's block-mean residuals with what the verdict on the model needs
-/// ([`super::model_fit`]): each block's dwell and length, and the parameters acting on each group (a
-/// column counted in every group where it has an entry).
-fn fit_residuals(problem: &Problem, selection: &Selection, rate_hz: f64) -> FitResiduals {
+/// ([`super::model_fit`]): each block's place, and the parameters acting on each group (a column counted in
+/// every group where it has an entry).
+fn fit_residuals<'p>(problem: &'p Problem, selection: &'p Selection) -> FitResiduals<'p> {
     let groups = problem.obs.groups;
     let mut parameters = vec![0; groups];
-    let chosen = selection.chosen.iter().map(|c| problem.candidates[c.candidate].variants[c.variant].1.dense());
-    for column in problem.base.iter().map(|c| std::borrow::Cow::Borrowed(c.as_slice())).chain(chosen) {
+    for column in final_columns(problem, selection) {
         let mut on = vec![false; groups];
         for (v, &g) in column.iter().zip(&problem.obs.group) {
             on[g] |= *v != 0.0;
@@ -81,14 +80,13 @@ fn fit_residuals(problem: &Problem, selection: &Selection, rate_hz: f64) -> FitR
         }
     }
     FitResiduals {
-        residual: selection.final_fit.residual.clone(),
-        group: problem.obs.group.clone(),
-        block: problem.obs_block.clone().unwrap_or_default(),
-        pos: problem.obs_pos.clone(),
-        group_names: problem.group_names.clone(),
-        group_units: problem.group_units.clone(),
+        residual: &selection.final_fit.residual,
+        group: &problem.obs.group,
+        block: problem.obs_block.as_deref().unwrap_or_default(),
+        pos: &problem.obs_pos,
+        group_names: &problem.group_names,
+        group_units: &problem.group_units,
         parameters,
-        rate_hz,
     }
 }
 
@@ -160,14 +158,7 @@ fn problem_with(session: &Session, blocks: &Blocks, levelled: Option<[f64; 3]>, 
         group_units: CHANNEL_UNITS.to_vec(),
         obs_pos: blocks.obs_pos.clone(),
         obs_pose: Some(poses(session, blocks)),
-        obs_block: Some(blocks.list.iter().map(|b| (b.dwell, b.range.1 - b.range.0)).collect()),
-        obs_time_s: Some(
-            blocks
-                .list
-                .iter()
-                .map(|b| 0.5 * (session.dwells[b.dwell].t[b.range.0] + session.dwells[b.dwell].t[b.range.1 - 1]))
-                .collect(),
-        ),
+        obs_block: Some(block_places(session, blocks)),
         candidates,
         unobservable,
         residual_of: "block means",
@@ -222,13 +213,8 @@ fn along_gravity(mut p: Problem, session: &Session, blocks: &Blocks, bias: [f64;
     p.obs.group = project_idx(&p.obs.group, 3);
     p.obs_pose = p.obs_pose.as_ref().map(|poses| project_idx(poses, usize::MAX));
     p.obs_block = p.obs_block.as_ref().map(|b| {
-        let mut out: Vec<(usize, usize)> = keep.iter().map(|&i| b[i]).collect();
+        let mut out: Vec<BlockOf> = keep.iter().map(|&i| b[i]).collect();
         out.extend(rows.iter().map(|(_, r)| b[r[0]]));
-        out
-    });
-    p.obs_time_s = p.obs_time_s.as_ref().map(|t| {
-        let mut out: Vec<f64> = keep.iter().map(|&i| t[i]).collect();
-        out.extend(rows.iter().map(|(_, r)| t[r[0]]));
         out
     });
     let pos: Vec<usize> = p.obs_pos.iter().map(|&x| x as usize).collect();
@@ -254,6 +240,16 @@ fn along_gravity(mut p: Problem, session: &Session, blocks: &Blocks, bias: [f64;
     p.unobservable
         .push("accelerometer terms across gravity: the attitudes are levelled from the accelerometers".into());
     p
+}
+
+/// Where and when each block of `blocks` lies: its dwell, its length and its middle time.
+fn block_places(session: &Session, blocks: &Blocks) -> Vec<BlockOf> {
+    let place = |b: &BlockObs| {
+        let t = &session.dwells[b.dwell].t;
+        let duration_s = (b.range.1 - b.range.0) as f64 / session.rate_hz;
+        BlockOf { dwell: b.dwell, duration_s, t_mid_s: 0.5 * (t[b.range.0] + t[b.range.1 - 1]) }
+    };
+    blocks.list.iter().map(place).collect()
 }
 
 /// The pose of every observation: dwells whose reference attitudes agree (to 1e-9) share a pose.

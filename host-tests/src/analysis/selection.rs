@@ -2,6 +2,8 @@
 //! by likelihood ratio and BIC: which candidates the data can see at all (the others are `unobservable`),
 //! which ones are added, and which others the data cannot tell from them (`aliases`).
 
+use std::borrow::Cow;
+
 use crate::stats::linfit::{chi_square_quantile_upper, chi_square_upper, fit, solve_spd, LinearFit, Observations};
 
 use super::candidates::Candidate;
@@ -25,16 +27,32 @@ pub(super) struct Problem {
     /// Pose of each observation (dwells of one reference attitude share a pose), for the time terms'
     /// confounding test; `None` when the observations have no time (angles).
     pub obs_pose: Option<Vec<usize>>,
-    /// Dwell index and samples of each observation's block; `None` for angles.
-    pub obs_block: Option<Vec<(usize, usize)>>,
-    /// Middle time of each observation's block, s; `None` for angles.
-    pub obs_time_s: Option<Vec<f64>>,
+    /// Where and when each observation's block lies; `None` for angles.
+    pub obs_block: Option<Vec<BlockOf>>,
     /// The candidates, in test order.
     pub candidates: Vec<Candidate>,
     /// What this data cannot see (the selection adds the candidates the base model explains).
     pub unobservable: Vec<String>,
     /// What the observations are ("block means", "angles").
     pub residual_of: &'static str,
+}
+
+/// Where and when an observation's block lies (recordings).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub(super) struct BlockOf {
+    /// Index of its dwell.
+    pub dwell: usize,
+    /// Its length, s.
+    pub duration_s: f64,
+    /// The middle of its first and last sample times, s.
+    pub t_mid_s: f64,
+}
+
+/// The final model's columns: the base model's, then the chosen candidates' (dense), in the order of
+/// `selection.final_fit.beta`.
+pub(super) fn final_columns<'p>(problem: &'p Problem, selection: &Selection) -> Vec<Cow<'p, [f64]>> {
+    let base = problem.base.iter().map(|c| Cow::Borrowed(c.as_slice()));
+    base.chain(selection.chosen.iter().map(|c| problem.candidates[c.candidate].variants[c.variant].1.dense())).collect()
 }
 
 /// A candidate the selection added.

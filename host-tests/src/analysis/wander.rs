@@ -8,7 +8,7 @@
 use crate::stats::linfit::{chi_square_quantile_upper, fit, Observations};
 
 use super::noise_terms::{NoiseModel, Term};
-use super::selection::{Problem, Selection};
+use super::selection::{final_columns, Problem, Selection};
 use super::ALPHA;
 
 /// The alias of a time term that the noise model's wander explains.
@@ -52,49 +52,63 @@ impl Wander {
     }
 }
 
-/// The exact log-likelihood (up to a constant) of `y` with the regression `columns` fitted by generalised least
-/// squares under `wander`, at block times `t_s` and lengths `block_s`; `None` when the columns are dependent.
-fn log_likelihood(wander: Wander, t_s: &[f64], block_s: &[f64], y: &[f64], columns: &[&[f64]]) -> Option<f64> {
+/// The exact log-likelihoods (up to a constant) of `y` under `wander`, at block times `t_s` and lengths
+/// `block_s`, with the regression `without` fitted by generalised least squares and with `without` and `own`:
+/// the observations and the columns are whitened once for both fits. `None` when the columns are dependent.
+fn log_likelihoods(
+    wander: Wander,
+    (t_s, block_s): (&[f64], &[f64]),
+    y: &[f64],
+    without: &[Vec<f64>],
+    own: &[f64],
+) -> Option<(f64, f64)> {
     let (yw, log_det) = wander.whiten(t_s, block_s, y);
-    let cols: Vec<Vec<f64>> = columns.iter().map(|c| wander.whiten(t_s, block_s, c).0).collect();
-    let refs: Vec<&[f64]> = cols.iter().map(|c| c.as_slice()).collect();
+    let mut cols: Vec<Vec<f64>> = without.iter().map(|c| wander.whiten(t_s, block_s, c).0).collect();
+    cols.push(wander.whiten(t_s, block_s, own).0);
     let n = yw.len();
     let obs = Observations { y: yw, group: vec![0; n], groups: 1, sigma: Some(vec![1.0; n]) };
-    let f = fit(&obs, &refs)?;
-    let rss: f64 = f.residual.iter().map(|r| r * r).sum();
-    Some(-0.5 * (rss + log_det))
+    let refs: Vec<&[f64]> = cols.iter().map(|c| c.as_slice()).collect();
+    let log_likelihood = |columns: &[&[f64]]| {
+        let f = fit(&obs, columns)?;
+        Some(-0.5 * (f.residual.iter().map(|r| r * r).sum::<f64>() + log_det))
+    };
+    Some((log_likelihood(&refs[..refs.len() - 1])?, log_likelihood(&refs)?))
 }
 
-/// The log-likelihood of [`log_likelihood`] at its best random walk: `K` from none up to ten times the
-/// observations' spread per square root of their span, on a logarithmic grid.
-fn profiled(white_per_sqrt_hz: f64, t_s: &[f64], block_s: &[f64], y: &[f64], columns: &[&[f64]]) -> Option<f64> {
+/// The likelihood ratio of `own` added to `without` ([`log_likelihoods`]), each side at its best random walk:
+/// `K` from none up to ten times the observations' RMS per square root of their span, on a logarithmic grid.
+fn profiled_ratio(
+    white_per_sqrt_hz: f64,
+    times: (&[f64], &[f64]),
+    y: &[f64],
+    without: &[Vec<f64>],
+    own: &[f64],
+) -> Option<f64> {
+    let (t_s, _) = times;
     let span_s = (t_s.last()? - t_s.first()?).max(f64::MIN_POSITIVE);
     let rms = (y.iter().map(|v| v * v).sum::<f64>() / y.len() as f64).sqrt();
     let largest_per_sqrt_s = 10.0 * rms / span_s.sqrt();
     let grid =
         (0..RANDOM_WALK_GRID).map(|i| largest_per_sqrt_s * 1e-4f64.powf(i as f64 / (RANDOM_WALK_GRID - 1) as f64));
-    std::iter::once(0.0)
-        .chain(grid)
-        .filter_map(|k| {
-            log_likelihood(Wander { white_per_sqrt_hz, random_walk_per_sqrt_s: k }, t_s, block_s, y, columns)
-        })
-        .max_by(f64::total_cmp)
+    let (mut best_without, mut best_with) = (f64::NEG_INFINITY, f64::NEG_INFINITY);
+    for random_walk_per_sqrt_s in std::iter::once(0.0).chain(grid) {
+        let wander = Wander { white_per_sqrt_hz, random_walk_per_sqrt_s };
+        if let Some((l0, l1)) = log_likelihoods(wander, times, y, without, own) {
+            best_without = best_without.max(l0);
+            best_with = best_with.max(l1);
+        }
+    }
+    best_with.is_finite().then_some(2.0 * (best_with - best_without))
 }
 
 /// Marks every time term of `selection` that a random walk of its channel's bias explains as well: with
 /// the block means' white noise from the channel's noise model (its `N`, else its white-only fit) and a
 /// random walk of free size (profiled), the term's likelihood ratio fails the criterion at `alpha / m`. A
 /// group without a noise model (the force along gravity, angles) is not tested.
-pub(super) fn mark_wander(problem: &Problem, selection: &mut Selection, models: &[NoiseModel], rate_hz: f64, m: f64) {
-    let (Some(times), Some(blocks)) = (&problem.obs_time_s, &problem.obs_block) else { return };
-    let columns: Vec<Vec<f64>> = problem
-        .base
-        .iter()
-        .cloned()
-        .chain(
-            selection.chosen.iter().map(|c| problem.candidates[c.candidate].variants[c.variant].1.dense().into_owned()),
-        )
-        .collect();
+pub(super) fn mark_wander(problem: &Problem, selection: &mut Selection, models: &[NoiseModel], m: f64) {
+    let Some(blocks) = &problem.obs_block else { return };
+    let columns = final_columns(problem, selection);
+    let mut marked = Vec::new();
     for (q, chosen) in selection.chosen.iter().enumerate() {
         let candidate = &problem.candidates[chosen.candidate];
         let [g] = candidate.groups[..] else { continue };
@@ -106,29 +120,26 @@ pub(super) fn mark_wander(problem: &Problem, selection: &mut Selection, models: 
             model.terms.iter().find(|t| t.term == Term::White).unwrap_or(&model.white_only).value_si;
         let rows: Vec<usize> = (0..problem.obs.y.len()).filter(|&i| problem.obs.group[i] == g).collect();
         let on_rows = |v: &[f64]| rows.iter().map(|&i| v[i]).collect::<Vec<f64>>();
-        let block_s: Vec<f64> = rows.iter().map(|&i| blocks[i].1 as f64 / rate_hz).collect();
-        let t = on_rows(times);
+        let t_s: Vec<f64> = rows.iter().map(|&i| blocks[i].t_mid_s).collect();
+        let block_s: Vec<f64> = rows.iter().map(|&i| blocks[i].duration_s).collect();
         let term = problem.base.len() + q;
-        let others: Vec<Vec<f64>> = columns
+        let without: Vec<Vec<f64>> = columns
             .iter()
             .enumerate()
             .filter(|(j, c)| *j != term && rows.iter().any(|&i| c[i] != 0.0))
             .map(|(_, c)| on_rows(c))
             .collect();
-        let own = on_rows(&columns[term]);
         let y = on_rows(&problem.obs.y);
-        let without: Vec<&[f64]> = others.iter().map(|c| c.as_slice()).collect();
-        let mut with = without.clone();
-        with.push(&own);
-        let (Some(l0), Some(l1)) = (
-            profiled(white_per_sqrt_hz, &t, &block_s, &y, &without),
-            profiled(white_per_sqrt_hz, &t, &block_s, &y, &with),
-        ) else {
+        let Some(ratio) = profiled_ratio(white_per_sqrt_hz, (&t_s, &block_s), &y, &without, &on_rows(&columns[term]))
+        else {
             continue;
         };
-        if 2.0 * (l1 - l0) <= chi_square_quantile_upper(ALPHA / m, candidate.parameters() as f64) {
-            selection.aliases[q].push(WANDER.to_string());
+        if ratio <= chi_square_quantile_upper(ALPHA / m, candidate.parameters() as f64) {
+            marked.push(q);
         }
+    }
+    for q in marked {
+        selection.aliases[q].push(WANDER.to_string());
     }
 }
 
