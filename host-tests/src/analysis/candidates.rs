@@ -313,10 +313,7 @@ impl<'a> RecordingColumns<'a> {
     /// face as `pair_pos`.
     fn pair_tilts(&self) -> Vec<Candidate> {
         let list = &self.blocks.list;
-        let vertical = |d: &DwellData| -> Option<(usize, f64)> {
-            let c = &d.c_tilt;
-            (0..3).find(|&a| c[0][a].abs() <= ROUNDING && c[1][a].abs() <= ROUNDING).map(|a| (a, c[2][a].signum()))
-        };
+        let vertical = DwellData::vertical_axis;
         let mut candidates = Vec::new();
         let dwells = &self.session.dwells;
         for (i, a) in dwells.iter().enumerate() {

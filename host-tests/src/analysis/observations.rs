@@ -94,16 +94,20 @@ impl DwellData {
     pub fn rate_b_radps(&self, w_n: [f64; 3]) -> [f64; 3] {
         match &self.c_b_n {
             Some(c) => mul_t_vec(c, w_n),
-            None => std::array::from_fn(|axis| {
-                let c = &self.c_tilt;
-                let level = |k: usize| c[k][axis].abs() <= super::candidates::ROUNDING;
-                if level(0) && level(1) {
-                    c[2][axis] * w_n[2]
-                } else {
-                    f64::NAN
-                }
+            None => std::array::from_fn(|axis| match self.vertical_axis() {
+                Some((vertical, _)) if vertical == axis => self.c_tilt[2][axis] * w_n[2],
+                _ => f64::NAN,
             }),
         }
+    }
+
+    /// The body axis (0 = x, 1 = y, 2 = z) that the label puts vertical, and +1 when it points up, -1 down:
+    /// the axis whose east and north components are rounding ([`super::candidates::ROUNDING`]). `None` for a
+    /// tilted pose.
+    pub fn vertical_axis(&self) -> Option<(usize, f64)> {
+        let c = &self.c_tilt;
+        let level = |axis: usize| (0..2).all(|k| c[k][axis].abs() <= super::candidates::ROUNDING);
+        (0..3).find(|&axis| level(axis)).map(|axis| (axis, c[2][axis].signum()))
     }
 }
 
