@@ -13,7 +13,7 @@ use sinscal::nav::earth::Site;
 use sinscal::nav::frames::Attitude;
 
 use crate::calibration::{gyros_resolve_earth_rate, Calibration, Estimates};
-use crate::io::import::gyro_units::MAX_REST_RATE_RADPS;
+use crate::io::import::gyro_units::{median_rest_rate_radps, MAX_REST_RATE_RADPS};
 use crate::io::recording::shown;
 use crate::io::recording::DwellAttitude;
 
@@ -340,10 +340,10 @@ pub fn physics_of(dwells: &[PhysicsDwell], site: &Site, has_gyro: bool) -> Check
     let mut passed = Vec::new();
     let noise = pool_mean_noise(dwells.iter().map(|d| d.1)).map(|m| m.white_equivalent_var);
     let gyros_checked = has_gyro && gyros_resolve_earth_rate(&noise, dwells.iter().map(|d| d.1.samples));
-    // Gyros in deg/s make them look noisy 57.3-fold too: checked whether or not they resolve the Earth rate.
     if let Some(detail) = has_gyro.then(|| rest_rate(dwells)).flatten() {
         failed.push(detail);
     }
+    // Gyros in deg/s make them look noisy 57.3-fold too: checked whether or not they resolve the Earth rate.
     let one_pose = has_gyro && misfit(Sensor::Gyro, dwells, site, Hypothesis::Stated).is_none();
     if let Some(detail) = one_pose.then(|| gyros_in_degrees(dwells, site)).flatten() {
         failed.push(detail);
@@ -371,12 +371,7 @@ pub fn physics_of(dwells: &[PhysicsDwell], site: &Site, has_gyro: bool) -> Check
 /// [`MAX_REST_RATE_RADPS`] (0.2 rad/s, 11.5 deg/s), as a detail. It needs no resolution of the Earth rate:
 /// a consumer gyro's 0.6 deg/s bias written in deg/s reads 0.6 "rad/s".
 fn rest_rate(dwells: &[PhysicsDwell]) -> Option<String> {
-    let mut rates_radps: Vec<f64> = dwells
-        .iter()
-        .map(|(_, s)| s.rate_mean_b_radps.iter().map(|x| (*x as f64).powi(2)).sum::<f64>().sqrt())
-        .collect();
-    rates_radps.sort_by(f64::total_cmp);
-    let median_radps = *rates_radps.get(rates_radps.len() / 2)?;
+    let median_radps = median_rest_rate_radps(dwells.iter().map(|(_, s)| s.rate_mean_b_radps.map(f64::from)))?;
     (median_radps > MAX_REST_RATE_RADPS).then(|| {
         format!(
             "gyros in deg/s? the gyros read {} rad/s at rest (the median over {} dwells), more than any gyro's \

@@ -66,6 +66,14 @@ fn rest_dwells(rows: &[Row]) -> Vec<RestDwell> {
         .collect()
 }
 
+/// The median over dwells of the magnitude of each dwell's mean rate `rates_b_radps` (body axes), rad/s;
+/// `None` without a dwell. Beyond [`MAX_REST_RATE_RADPS`] the gyros read more at rest than any gyro's bias.
+pub fn median_rest_rate_radps(rates_b_radps: impl Iterator<Item = [f64; 3]>) -> Option<f64> {
+    let mut rates: Vec<f64> = rates_b_radps.map(|v| v[0].hypot(v[1]).hypot(v[2])).collect();
+    rates.sort_by(f64::total_cmp);
+    rates.get(rates.len() / 2).copied()
+}
+
 /// What the check found: `None` when the gyros do not resolve the Earth rate (not checked), else the fitted
 /// scale and its standard error.
 pub type ScaleFound = Option<(f64, f64)>;
@@ -84,9 +92,7 @@ pub fn check_gyro_units(
         return Ok(None);
     }
     let norm = |v: [f64; 3]| v[0].hypot(v[1]).hypot(v[2]);
-    let mut rates: Vec<f64> = dwells.iter().map(|d| norm(d.rate_b_radps)).collect();
-    rates.sort_by(f64::total_cmp);
-    let median = rates[rates.len() / 2];
+    let Some(median) = median_rest_rate_radps(dwells.iter().map(|d| d.rate_b_radps)) else { return Ok(None) };
     if median > MAX_REST_RATE_RADPS {
         let forces: Vec<f64> = dwells.iter().map(|d| norm(d.force_b_mps2)).collect();
         let like_force = dwells.iter().zip(&forces).all(|(d, f)| (norm(d.rate_b_radps) / f - 1.0).abs() < 0.05);
