@@ -276,3 +276,56 @@ fn a_random_walk_of_the_bias_is_not_a_certain_drift() {
     let terms = time_terms_of_one_pose(0.0, [2e-7, 0.0, 0.0], 1);
     assert_eq!(terms, [("bias_drift:x".to_string(), false)]);
 }
+
+/// `path`'s sensor columns (`*_radps`, `*_mps2`) printed again with `decimals` decimals, into `out`.
+fn printed_with(path: &std::path::Path, decimals: usize, out: &std::path::Path) {
+    let text = std::fs::read_to_string(path).unwrap();
+    let mut sensor = Vec::new();
+    let mut lines = Vec::new();
+    for line in text.lines() {
+        if line.starts_with('#') {
+            lines.push(line.to_string());
+        } else if line.starts_with("t_s") {
+            sensor = line.split(',').map(|c| c.ends_with("_radps") || c.ends_with("_mps2")).collect();
+            lines.push(line.to_string());
+        } else {
+            let fields: Vec<String> = line
+                .split(',')
+                .zip(&sensor)
+                .map(|(f, &s)| if s { format!("{:.*}", decimals, f.parse::<f64>().unwrap()) } else { f.to_string() })
+                .collect();
+            lines.push(fields.join(","));
+        }
+    }
+    std::fs::write(out, lines.join("\n") + "\n").unwrap();
+}
+
+/// SIMULATION: quantisation is the sensor's step, not the file's digits (docs/analysis.md#quantisation). The
+/// clean session's continuous noise written with six decimals lies on a 1e-6 lattice (the gyros' noise is
+/// 4.8e-7 rad/s, so the lattice is plain in them): no quantisation effect, and the diagnostics name the
+/// print step. Its gyros quantised at 2.5e-6 rad/s and written with ten decimals: that step is found.
+#[test]
+fn quantisation_is_the_sensors_step_not_the_files_digits() {
+    let dir = tempfile::tempdir().unwrap();
+    let gyro_steps = |scenario: &ScenarioFile, decimals: usize| {
+        let full = dir.path().join("full.csv");
+        simulate(scenario, 5, "q").write(&full).unwrap();
+        let printed = dir.path().join("printed.csv");
+        printed_with(&full, decimals, &printed);
+        let a = analyze_recording(&sinscal_host::io::recording::Recording::read(&printed).unwrap()).unwrap();
+        let found: Vec<f64> =
+            a.effects.iter().filter(|e| e.effect == "quantization" && e.sensor == "gyro").map(|e| e.estimate).collect();
+        let printed_steps: Vec<Option<f64>> = a.diagnostics.iter().take(3).map(|d| d.print_step).collect();
+        (found, printed_steps)
+    };
+    let (found, printed) = gyro_steps(&clean_scenario(), 6);
+    assert!(found.is_empty(), "the file's digits named as the sensor's step: {found:?}");
+    assert!(printed.iter().all(|p| p.is_some_and(|p| (p / 1e-6 - 1.0).abs() < 1e-9)), "{printed:?}");
+    let mut quantised = clean_scenario();
+    quantised.gyro.quantization_radps = [2.5e-6; 3];
+    let (found, printed) = gyro_steps(&quantised, 10);
+    assert_eq!(found.len(), 3, "{found:?}");
+    assert!(found.iter().all(|q| (q / 2.5e-6 - 1.0).abs() < 1e-3), "{found:?}");
+    // Multiples of 2.5e-6 have seven decimals: the print step, 25 times finer than the sensor's.
+    assert!(printed.iter().all(|p| p.is_some_and(|p| p <= 1.0001e-7)), "{printed:?}");
+}

@@ -71,6 +71,7 @@ mod selection;
 mod summary;
 mod vibration;
 mod wander;
+mod windows;
 
 use std::collections::BTreeMap;
 use std::path::Path;
@@ -84,6 +85,7 @@ pub use angles::{analyze_angles, AnglesFile, AnglesRow};
 pub use model_fit::{DwellFit, GroupFit, ModelFit};
 pub use recording::analyze_recording;
 pub use summary::summary;
+pub use windows::{WindowCheck, WindowParameter};
 
 /// Family-wise significance level of the effect search.
 pub const ALPHA: f64 = 0.01;
@@ -290,8 +292,11 @@ pub struct ChannelDiagnostics {
     pub whiteness_p_value: f64,
     /// Largest within-dwell slope over its standard error (white-noise), across dwells.
     pub max_trend_z: f64,
-    /// Quantisation step if the samples lie on a lattice.
+    /// Quantisation step if the samples lie on a lattice (not the one of their printed digits).
     pub quantization_step: Option<f64>,
+    /// The step of the decimal digits the samples were printed with (`10^-d`), if every sample is a whole
+    /// multiple of one: a lattice at this step is the file's, not the sensor's quantisation.
+    pub print_step: Option<f64>,
 }
 
 /// The result of `sinscal analyze` (docs/formats.md#analysis-json, with extra fields).
@@ -333,6 +338,10 @@ pub struct Analysis {
     /// unexplained (recordings; docs/analysis.md#model-fit).
     #[serde(skip_serializing_if = "Option::is_none")]
     pub model_fit: Option<ModelFit>,
+    /// The final model fitted again on each third of every dwell: do its standard errors hold across them
+    /// (recordings; docs/analysis.md#windows)?
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub windows: Option<WindowCheck>,
     /// Data for the report's figures (not written to JSON).
     #[serde(skip)]
     pub figures: FigureData,

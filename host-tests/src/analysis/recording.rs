@@ -17,7 +17,8 @@ use super::observations::{BlockObs, Blocks, Session};
 use super::result::{assemble, effects_of, residuals_by_group, Findings, RECORDING};
 use super::sample_tests::{measure_samples, sample_tests, test_samples, SampleFindings};
 use super::selection::{final_columns, select, BlockOf, Problem, Selection};
-use super::wander::mark_wander;
+use super::wander::{mark_wander, wander_std_errors};
+use super::windows::window_check;
 use super::{Analysis, ChannelDiagnostics, CHANNELS, CHANNEL_UNITS};
 
 /// Analyses a recording: in one pass over its rows, of which the dwells' columns are kept
@@ -47,7 +48,12 @@ fn analyze_session(mut session: Session, levelled: bool, source: &str) -> Result
     let SampleFindings { effects: sample_effects, diagnostics, mut figures } = test_samples(session, &measures, m);
     let noise_model = noise_models(&figures);
     mark_wander(&problem, &mut selection, &noise_model, m);
+    selection.wander_std_errors = wander_std_errors(&problem, &selection, &noise_model);
+    let windows = window_check(&problem, &selection, &noise_model);
     let mut effects = effects_of(&problem, &selection);
+    for e in &mut effects {
+        e.std_error *= windows.as_ref().map_or(1.0, |w| w.widened_by);
+    }
     effects.extend(sample_effects);
     let (residual_rms, block_residual_rms) = residual_rms(&problem, &selection, &diagnostics);
     figures.residual_names = problem.group_names.clone();
@@ -56,6 +62,7 @@ fn analyze_session(mut session: Session, levelled: bool, source: &str) -> Result
     let findings = Findings { effects, residual_rms, block_residual_rms, m, diagnostics, noise_model, figures };
     let mut analysis = assemble(problem, selection, findings, RECORDING, source);
     analysis.model_fit = model_fit;
+    analysis.windows = windows;
     for (k, axis) in ["x", "y", "z"].iter().enumerate() {
         if let Some(b) = analysis.base_model.biases.get_mut(&format!("accel_bias_{axis}")) {
             *b += accel_bias_mps2[k];

@@ -117,8 +117,8 @@ fn effects_md(md: &mut String, a: &Analysis) {
     }
 }
 
-/// `summary.md`: the per-channel diagnostics (recordings).
-/// `summary.md`: the verdict on the final model (docs/analysis.md#model-fit).
+/// `summary.md`: the verdict on the final model (docs/analysis.md#model-fit) and its standard errors across
+/// the thirds of every dwell (docs/analysis.md#windows).
 fn model_fit_md(md: &mut String, a: &Analysis) {
     let Some(fit) = &a.model_fit else { return };
     let _ = writeln!(md, "\n## Model fit: {}\n", fit.verdict);
@@ -153,8 +153,12 @@ fn model_fit_md(md: &mut String, a: &Analysis) {
     for d in &fit.dwells {
         let _ = writeln!(md, "- {}", d.text());
     }
+    if let Some(w) = &a.windows {
+        let _ = writeln!(md, "\n{}.", w.text());
+    }
 }
 
+/// `summary.md`: the per-channel diagnostics (recordings).
 fn diagnostics_md(md: &mut String, a: &Analysis) {
     if a.diagnostics.is_empty() {
         return;
@@ -162,17 +166,18 @@ fn diagnostics_md(md: &mut String, a: &Analysis) {
     let _ = writeln!(md, "\n## Diagnostics per channel\n");
     let _ = writeln!(
         md,
-        "| channel | detrended RMS | Ljung-Box p (20 lags, longest dwell) | largest within-dwell trend (z) | quantisation step |\n|---|---|---|---|---|"
+        "| channel | detrended RMS | Ljung-Box p (20 lags, longest dwell) | largest within-dwell trend (z) | quantisation step | print step (file's digits) |\n|---|---|---|---|---|---|"
     );
     for d in &a.diagnostics {
         let _ = writeln!(
             md,
-            "| {} | {:.4e} | {:.3} | {:.1} | {} |",
+            "| {} | {:.4e} | {:.3} | {:.1} | {} | {} |",
             d.channel,
             d.detrended_rms,
             d.whiteness_p_value,
             d.max_trend_z,
-            d.quantization_step.map_or("-".to_string(), |q| format!("{q:.4e}"))
+            d.quantization_step.map_or("-".to_string(), |q| format!("{q:.4e}")),
+            d.print_step.map_or("-".to_string(), |q| format!("{q:.0e}"))
         );
     }
 }

@@ -7,6 +7,7 @@ use std::collections::BTreeMap;
 use crate::model::catalogue::EffectKind;
 
 use super::selection::{Problem, Selection, HALVES, POSE_ORDER};
+use super::windows::NOT_STATIONARY;
 use super::{Analysis, BaseModel, ChannelDiagnostics, Confounded, Consequence, Effect, FigureData, Misfit, ALPHA};
 
 /// The input kinds (the `input` field).
@@ -50,9 +51,11 @@ fn effect_of(problem: &Problem, selection: &Selection, index: usize) -> Effect {
         pos: cand.pos,
         pair_pos: cand.pair_pos,
         estimate: selection.final_fit.beta[j],
-        // The fit's standard error assumes independent block means; correlated ones widen it.
-        std_error: selection.final_fit.std_error(j)
-            * cand.groups.iter().map(|&g| selection.inflation[g]).fold(1.0, f64::max).sqrt(),
+        // The fit's standard error assumes independent block means; correlated ones widen it, and so does a
+        // bias that wanders (the larger of the two).
+        std_error: (selection.final_fit.std_error(j)
+            * cand.groups.iter().map(|&g| selection.inflation[g]).fold(1.0, f64::max).sqrt())
+        .max(selection.wander_std_errors.get(j).copied().unwrap_or(0.0)),
         unit: cand.unit().to_string(),
         delta_bic: c.delta_bic,
         residual_rms_before: c.rms_before,
@@ -126,11 +129,14 @@ fn misfits_and_confounded(problem: &Problem, selection: &Selection) -> (Vec<Misf
 /// Effects ranked: the column effects (what a calibration must model) in the order the forward selection
 /// chose them; then the noise effects, which move no estimate, by their BIC gain; the uncertain time terms
 /// (confounded with pose order, a random walk of the bias or the session's halves, or a time constant at its
-/// grid's end) after all of them. Each column effect carries its consequence; the ranking does not sort by it (a small partial alias
+/// grid's end) and the noise terms that differ between the thirds of the dwells after all of them. Each column effect carries its consequence; the ranking does not sort by it (a small partial alias
 /// of a strong effect can move a bias more than the effect itself: docs/analysis.md#verdict).
 fn rank(effects: &mut [Effect]) {
     let class = |e: &Effect| {
-        let uncertain = e.aliases.iter().any(|a| a == POSE_ORDER || a == HALVES || a == super::wander::WANDER);
+        let uncertain = e
+            .aliases
+            .iter()
+            .any(|a| a == POSE_ORDER || a == HALVES || a == super::wander::WANDER || a == NOT_STATIONARY);
         // A column effect whose time constant is an end of its grid is not determined either.
         if uncertain || (e.at_grid_edge && e.consequence.is_some()) {
             2
@@ -215,6 +221,7 @@ pub(super) fn assemble(
         diagnostics: findings.diagnostics,
         noise_model: findings.noise_model,
         model_fit: None,
+        windows: None,
         figures: findings.figures,
     }
 }

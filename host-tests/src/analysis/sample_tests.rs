@@ -12,13 +12,16 @@
 
 use crate::model::catalogue::{EffectKind, Sensor};
 use crate::stats::linfit::{chi_square_quantile_upper, chi_square_upper};
-use crate::stats::noise::{detect_quantization_joined, joined_pairs, ljung_box, Quantization, GRID_TOLERANCE};
+use crate::stats::noise::{
+    detect_quantization_joined, is_print_step, joined_pairs, ljung_box, print_step, Quantization, GRID_TOLERANCE,
+};
 
 use super::candidates::axis_of;
 use super::correlated_noise::{gauss_markov_test, GaussMarkovResult};
 use super::observations::Session;
 use super::parallel::on_cores;
-use super::vibration::{remove_line, sinc, vibration_test, VibrationResult};
+use super::vibration::{line_in, remove_line, sinc, vibration_test, VibrationResult};
+use super::windows::{in_windows, not_stationary, widening, NOT_STATIONARY};
 use super::{ChannelDiagnostics, Effect, FigureData, ALPHA, CHANNELS, CHANNEL_UNITS};
 
 /// Tests on the samples, counted in the Bonferroni `m`: quantisation, vibration, correlated noise on every
@@ -35,6 +38,16 @@ pub(super) struct SampleFindings {
     pub diagnostics: Vec<ChannelDiagnostics>,
     /// The rate and the per-channel figure data (longest dwell, noise found).
     pub figures: FigureData,
+}
+
+/// The aliases of a noise term from its estimates in the thirds of every dwell: [`NOT_STATIONARY`] when
+/// they differ beyond their standard errors.
+fn stationarity(windows: &[(f64, f64)]) -> Vec<String> {
+    if not_stationary(windows) {
+        vec![NOT_STATIONARY.to_string()]
+    } else {
+        Vec::new()
+    }
 }
 
 /// A dwell's straight-line fit `y = a + b (t - t_mean)`.
@@ -130,10 +143,17 @@ struct ChannelMeasures {
     long: Vec<f64>,
     /// The lattice of the raw samples' differences, with the step's standard error.
     quantization: Option<(Quantization, f64)>,
+    /// The step of the decimal digits the samples were printed with, if any.
+    print_step: Option<f64>,
     /// The strongest spectral line.
     vibration: Option<VibrationResult>,
+    /// Its amplitude seen and standard error in each third of every dwell (docs/analysis.md#windows); empty
+    /// without a line.
+    vibration_windows: Vec<(f64, f64)>,
     /// The correlated-noise fit, on the series with the line of `vibration` removed when `line_removed`.
     correlated: Option<GaussMarkovResult>,
+    /// Its sigma and standard error in each third of every dwell; empty when a third is too short.
+    correlated_windows: Vec<(f64, f64)>,
     line_removed: bool,
 }
 
@@ -146,11 +166,16 @@ impl ChannelMeasures {
         let rms = (series.iter().flatten().map(|v| v * v).sum::<f64>() / n_all as f64).sqrt();
         let long = series.get(longest).cloned().unwrap_or_default();
         let raw: Vec<&[f64]> = session.dwells.iter().map(|d| &d.y[c][..]).collect();
+        let print_step = print_step(&raw);
         let quantization = detect_quantization_joined(&raw).ok().map(|q| {
             let std_error = if q.quantized { quantization_std_error(&raw, q.step) } else { f64::NAN };
             (q, std_error)
         });
         let vibration = vibration_test(&series, session.dt);
+        let vibration_windows = match &vibration {
+            Some(v) => in_windows(&series, |w| Some(line_in(w, v, session.dt))),
+            None => Vec::new(),
+        };
         // The line can be accepted only if it passes at the smallest m (no block candidate observable).
         let line_removed = vibration
             .as_ref()
@@ -158,9 +183,25 @@ impl ChannelMeasures {
         if let (true, Some(v)) = (line_removed, &vibration) {
             remove_line(&mut series, v, session.dt);
         }
+        let correlated_windows =
+            in_windows(&series, |w| gauss_markov_test(w.to_vec(), session.dt).map(|gm| (gm.sigma, gm.sigma_std)));
         let correlated = gauss_markov_test(series, session.dt);
         let dwells = session.dwells.len();
-        ChannelMeasures { c, n_all, dwells, rms, max_trend_z, long, quantization, vibration, correlated, line_removed }
+        ChannelMeasures {
+            c,
+            n_all,
+            dwells,
+            rms,
+            max_trend_z,
+            long,
+            quantization,
+            print_step,
+            vibration,
+            vibration_windows,
+            correlated,
+            correlated_windows,
+            line_removed,
+        }
     }
 
     /// Quantisation, vibration, correlated noise, in that order, against `alpha / m`; the diagnostics and
@@ -192,6 +233,7 @@ impl ChannelMeasures {
                 whiteness_p_value: ljung_box(&long, 20).map(|l| l.p_value).unwrap_or(f64::NAN),
                 max_trend_z: self.max_trend_z,
                 quantization_step: q_step,
+                print_step: self.print_step,
             },
             longest_dwell: long,
             correlated: corr_found,
@@ -232,6 +274,10 @@ impl ChannelMeasures {
     /// (binomial likelihood ratio); the step if found.
     fn quantization(&self, m: f64, effects: &mut Vec<Effect>) -> Option<f64> {
         let (q, std_error) = self.quantization?;
+        // A lattice at the file's printed digits is the file's, not the sensor's (diagnostics: `print_step`).
+        if is_print_step(q.step, self.print_step) {
+            return None;
+        }
         let n = q.nonzero_differences as f64;
         let k = (q.fraction_on_grid * n).round();
         let p0 = 2.0 * GRID_TOLERANCE;
@@ -270,13 +316,14 @@ impl ChannelMeasures {
         let rms = self.rms;
         effects.push(Effect {
             estimate: v.amplitude_seen / corr,
-            std_error: v.amplitude_std / corr,
+            std_error: v.amplitude_std / corr * widening(&self.vibration_windows),
             delta_bic: criterion.delta_bic,
             residual_rms_after: (rms * rms - 0.5 * v.amplitude_seen * v.amplitude_seen).max(0.0).sqrt(),
             frequency_hz: Some(v.frequency_hz),
             likelihood_ratio: v.lr,
             parameters: criterion.dof as usize + 1,
             p_value: chi_square_upper(v.lr, criterion.dof),
+            aliases: stationarity(&self.vibration_windows),
             ..self.effect(EffectKind::Vibration, "samples")
         });
         Some((v.amplitude_seen, v.frequency_hz))
@@ -296,7 +343,7 @@ impl ChannelMeasures {
         }
         effects.push(Effect {
             estimate: gm.sigma,
-            std_error: gm.sigma_std,
+            std_error: gm.sigma_std * widening(&self.correlated_windows),
             delta_bic,
             residual_rms_before: gm.rms_white,
             residual_rms_after: gm.rms_innovation,
@@ -305,6 +352,7 @@ impl ChannelMeasures {
             parameters: 2,
             p_value: chi_square_upper(gm.lr, 2.0),
             at_grid_edge: gm.tau_at_edge,
+            aliases: stationarity(&self.correlated_windows),
             ..self.effect(EffectKind::CorrelatedNoise, "innovations")
         });
         Some((gm.sigma, gm.tau_s))

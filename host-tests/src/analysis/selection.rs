@@ -93,6 +93,9 @@ pub(super) struct Selection {
     pub confounded: Vec<Confounded>,
     /// Per group: the variance inflation of correlated block residuals ([`block_inflation`]).
     pub inflation: Vec<f64>,
+    /// Per column of the final model: its standard error with each channel's random walk of the bias
+    /// (`wander::wander_std_errors`); empty until it is computed, and for angles.
+    pub wander_std_errors: Vec<f64>,
 }
 
 /// A candidate that passes the criterion at an implausible value: the model misses something there.
@@ -168,6 +171,7 @@ pub(super) fn select(problem: &mut Problem, extra_tests: usize) -> Result<Select
         misfits: forward.misfits,
         confounded: forward.confounded,
         inflation: forward.inflation,
+        wander_std_errors: Vec::new(),
     })
 }
 

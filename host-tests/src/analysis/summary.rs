@@ -45,6 +45,9 @@ pub fn summary(a: &Analysis) -> String {
     for line in a.model_fit.iter().flat_map(|f| f.lines()) {
         let _ = writeln!(s, "{line}");
     }
+    if let Some(w) = &a.windows {
+        let _ = writeln!(s, "{}", w.text());
+    }
     if !a.noise_model.is_empty() {
         let _ = writeln!(s, "noise (terms named from the Allan variance of the longest dwell):");
         for m in &a.noise_model {

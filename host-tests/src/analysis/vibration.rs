@@ -20,6 +20,8 @@ pub(super) struct VibrationResult {
     pub independent_frequencies: f64,
     /// Per dwell: complex amplitude (re, im) of the line, `x_i ~ re cos(w i) - im sin(w i)`.
     pub per_dwell: Vec<(f64, f64)>,
+    /// The background variance about the line (the samples' unit squared).
+    pub background: f64,
 }
 
 /// `sin(pi x) / (pi x)`: the response of an integrating sensor's interval average at `x = f dt`.
@@ -226,7 +228,16 @@ fn fit_line(dwells: &[Vec<f64>], f: f64, background: f64, n_min: usize, dt: f64)
         lr,
         independent_frequencies: (n_min as f64 / 2.0).max(1.0),
         per_dwell,
+        background,
     }
+}
+
+/// The line `v` fitted again on other samples (a window of the dwells it was found in), at its frequency
+/// and against its background: the amplitude seen and its standard error.
+pub(super) fn line_in(dwells: &[Vec<f64>], v: &VibrationResult, dt: f64) -> (f64, f64) {
+    let n_min = dwells.iter().map(Vec::len).min().unwrap_or(0);
+    let refit = fit_line(dwells, v.frequency_hz * dt, v.background, n_min, dt);
+    (refit.amplitude_seen, refit.amplitude_std)
 }
 
 /// Removes the line of `v` from every dwell of `series` (sample interval `dt`).

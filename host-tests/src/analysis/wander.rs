@@ -5,10 +5,10 @@
 //! filter whose normalised innovations whiten the means and the columns): a term that then fails the criterion
 //! a random walk explains as well, and is marked uncertain with [`WANDER`] as its alias.
 
-use crate::stats::linfit::{chi_square_quantile_upper, fit, Observations};
+use crate::stats::linfit::{chi_square_quantile_upper, fit, LinearFit, Observations};
 
 use super::noise_terms::{NoiseModel, Term};
-use super::selection::{final_columns, Problem, Selection};
+use super::selection::{final_columns, BlockOf, Problem, Selection};
 use super::ALPHA;
 
 /// The alias of a time term that the noise model's wander explains.
@@ -52,6 +52,20 @@ impl Wander {
     }
 }
 
+/// The random-walk densities the profiles try: none, then from ten times the observations' RMS per square
+/// root of their span down to 1e-4 of that, on a logarithmic grid.
+fn random_walk_grid(t_s: &[f64], y: &[f64]) -> impl Iterator<Item = f64> {
+    let span_s = match (t_s.first(), t_s.last()) {
+        (Some(a), Some(b)) => (b - a).max(f64::MIN_POSITIVE),
+        _ => f64::MIN_POSITIVE,
+    };
+    let rms = (y.iter().map(|v| v * v).sum::<f64>() / y.len().max(1) as f64).sqrt();
+    let largest_per_sqrt_s = 10.0 * rms / span_s.sqrt();
+    std::iter::once(0.0).chain(
+        (0..RANDOM_WALK_GRID).map(move |i| largest_per_sqrt_s * 1e-4f64.powf(i as f64 / (RANDOM_WALK_GRID - 1) as f64)),
+    )
+}
+
 /// The exact log-likelihoods (up to a constant) of `y` under `wander`, at block times `t_s` and lengths
 /// `block_s`, with the regression `without` fitted by generalised least squares and with `without` and `own`:
 /// the observations and the columns are whitened once for both fits. `None` when the columns are dependent.
@@ -75,8 +89,8 @@ fn log_likelihoods(
     Some((log_likelihood(&refs[..refs.len() - 1])?, log_likelihood(&refs)?))
 }
 
-/// The likelihood ratio of `own` added to `without` ([`log_likelihoods`]), each side at its best random walk:
-/// `K` from none up to ten times the observations' RMS per square root of their span, on a logarithmic grid.
+/// The likelihood ratio of `own` added to `without` ([`log_likelihoods`]), each side at its best random walk
+/// ([`random_walk_grid`]).
 fn profiled_ratio(
     white_per_sqrt_hz: f64,
     times: (&[f64], &[f64]),
@@ -84,14 +98,8 @@ fn profiled_ratio(
     without: &[Vec<f64>],
     own: &[f64],
 ) -> Option<f64> {
-    let (t_s, _) = times;
-    let span_s = (t_s.last()? - t_s.first()?).max(f64::MIN_POSITIVE);
-    let rms = (y.iter().map(|v| v * v).sum::<f64>() / y.len() as f64).sqrt();
-    let largest_per_sqrt_s = 10.0 * rms / span_s.sqrt();
-    let grid =
-        (0..RANDOM_WALK_GRID).map(|i| largest_per_sqrt_s * 1e-4f64.powf(i as f64 / (RANDOM_WALK_GRID - 1) as f64));
     let (mut best_without, mut best_with) = (f64::NEG_INFINITY, f64::NEG_INFINITY);
-    for random_walk_per_sqrt_s in std::iter::once(0.0).chain(grid) {
+    for random_walk_per_sqrt_s in random_walk_grid(times.0, y) {
         let wander = Wander { white_per_sqrt_hz, random_walk_per_sqrt_s };
         if let Some((l0, l1)) = log_likelihoods(wander, times, y, without, own) {
             best_without = best_without.max(l0);
@@ -99,6 +107,138 @@ fn profiled_ratio(
         }
     }
     best_with.is_finite().then_some(2.0 * (best_with - best_without))
+}
+
+/// The white noise density `N` of a channel's block means: its noise model's white term, else its white-only
+/// fit (channel unit times sqrt(s)).
+fn white_density(model: &NoiseModel) -> f64 {
+    model.terms.iter().find(|t| t.term == Term::White).unwrap_or(&model.white_only).value_si
+}
+
+/// The wander of one channel's block means (in time order) that the likelihood prefers, with `columns`
+/// fitted by generalised least squares: its white density `white_per_sqrt_hz` and the random walk of
+/// [`random_walk_grid`] of the largest likelihood (none if white noise alone is as likely).
+fn likeliest_wander(white_per_sqrt_hz: f64, times: (&[f64], &[f64]), y: &[f64], columns: &[Vec<f64>]) -> Wander {
+    let none = Wander { white_per_sqrt_hz, random_walk_per_sqrt_s: 0.0 };
+    let Some((own, without)) = columns.split_last() else { return none };
+    let mut best = (f64::NEG_INFINITY, none);
+    for random_walk_per_sqrt_s in random_walk_grid(times.0, y) {
+        let wander = Wander { white_per_sqrt_hz, random_walk_per_sqrt_s };
+        if let Some((_, full)) = log_likelihoods(wander, times, y, without, own) {
+            if full > best.0 {
+                best = (full, wander);
+            }
+        }
+    }
+    best.1
+}
+
+/// `C z` for the covariance of a random walk of unit density sampled at `t_s` (ascending), from zero at the
+/// first time: `C_ij = min(t_i, t_j) - t_0`, in one pass each way.
+fn random_walk_times(t_s: &[f64], z: &[f64]) -> Vec<f64> {
+    let t0 = t_s.first().copied().unwrap_or(0.0);
+    let mut after: Vec<f64> = vec![0.0; z.len()];
+    for i in (0..z.len().saturating_sub(1)).rev() {
+        after[i] = after[i + 1] + z[i + 1];
+    }
+    let mut before = 0.0;
+    (0..z.len())
+        .map(|i| {
+            before += (t_s[i] - t0) * z[i];
+            before + (t_s[i] - t0) * after[i]
+        })
+        .collect()
+}
+
+/// A fitted linear model of block means (a recording's, or one window's of it), as
+/// [`sandwich_std_errors`] reads it.
+pub(super) struct BlockModel<'a> {
+    /// The observations.
+    pub obs: &'a Observations,
+    /// Where and when each observation's block lies.
+    pub blocks: &'a [BlockOf],
+    /// The model's columns, in the order of `fit.beta`.
+    pub columns: &'a [&'a [f64]],
+    /// Their weighted least-squares fit.
+    pub fit: &'a LinearFit,
+}
+
+/// Per column of the final model ([`final_columns`]): [`sandwich_std_errors`]. Empty when the observations
+/// have no time (angles).
+pub(super) fn wander_std_errors(problem: &Problem, selection: &Selection, models: &[NoiseModel]) -> Vec<f64> {
+    let Some(blocks) = &problem.obs_block else { return Vec::new() };
+    let columns = final_columns(problem, selection);
+    let columns: Vec<&[f64]> = columns.iter().map(|c| c.as_ref()).collect();
+    let model = BlockModel { obs: &problem.obs, blocks, columns: &columns, fit: &selection.final_fit };
+    sandwich_std_errors(&model, &white_densities(problem, models))
+}
+
+/// Per observation group: the white density of its channel's noise model ([`white_density`]); `None` for a
+/// group without one (the force along gravity).
+pub(super) fn white_densities(problem: &Problem, models: &[NoiseModel]) -> Vec<Option<f64>> {
+    let of = |name: &String| models.iter().find(|m| &m.channel == name).map(white_density);
+    problem.group_names.iter().map(of).collect()
+}
+
+/// Per column of `model`: the standard error of its estimate (the weighted least squares of `model.fit`)
+/// when each channel's block means carry, besides their white noise, the random walk of the bias that their
+/// likelihood prefers ([`likeliest_wander`]; none when white noise alone is as likely). It is the sandwich
+/// `A (X' W S W X) A`, with `A` the fit's covariance, `W` its weights and `S` the block means' covariance:
+/// `N^2 / T` on the diagonal plus `K^2 (min(t_i, t_j) - t_0)`. A group without a noise model (the force along
+/// gravity: `None` in `white_per_sqrt_hz`, one per group) keeps the fit's own variance.
+pub(super) fn sandwich_std_errors(model: &BlockModel, white_per_sqrt_hz: &[Option<f64>]) -> Vec<f64> {
+    let BlockModel { obs, blocks, columns, fit } = *model;
+    let p = columns.len();
+    let mut meat = vec![vec![0.0; p]; p];
+    for g in 0..obs.groups {
+        let mut rows: Vec<usize> = (0..obs.y.len()).filter(|&i| obs.group[i] == g).collect();
+        rows.sort_by(|&a, &b| blocks[a].t_mid_s.total_cmp(&blocks[b].t_mid_s));
+        let weight = |i: usize| match &obs.sigma {
+            Some(s) => 1.0 / (s[i] * s[i]),
+            None => 1.0 / fit.variance[g],
+        };
+        let on_rows = |v: &[f64]| rows.iter().map(|&i| v[i]).collect::<Vec<f64>>();
+        let local: Vec<usize> = (0..p).filter(|&j| rows.iter().any(|&i| columns[j][i] != 0.0)).collect();
+        let weighted: Vec<Vec<f64>> =
+            local.iter().map(|&j| rows.iter().map(|&i| weight(i) * columns[j][i]).collect()).collect();
+        let t_s: Vec<f64> = rows.iter().map(|&i| blocks[i].t_mid_s).collect();
+        let block_s: Vec<f64> = rows.iter().map(|&i| blocks[i].duration_s).collect();
+        let wander = white_per_sqrt_hz[g].map(|white| {
+            let own: Vec<Vec<f64>> = local.iter().map(|&j| on_rows(columns[j])).collect();
+            likeliest_wander(white, (&t_s, &block_s), &on_rows(&obs.y), &own)
+        });
+        // `S z` for each weighted column: the white part, then the walk's.
+        let covaried: Vec<Vec<f64>> = weighted
+            .iter()
+            .map(|z| {
+                let white: Vec<f64> = (0..rows.len())
+                    .map(|r| match wander {
+                        Some(w) => w.white_per_sqrt_hz.powi(2) / block_s[r].max(f64::MIN_POSITIVE) * z[r],
+                        None => z[r] / weight(rows[r]),
+                    })
+                    .collect();
+                match wander {
+                    Some(w) if w.random_walk_per_sqrt_s > 0.0 => {
+                        let k2 = w.random_walk_per_sqrt_s.powi(2);
+                        white.iter().zip(random_walk_times(&t_s, z)).map(|(a, b)| a + k2 * b).collect()
+                    }
+                    _ => white,
+                }
+            })
+            .collect();
+        for (a, &ja) in local.iter().enumerate() {
+            for (b, &jb) in local.iter().enumerate() {
+                meat[ja][jb] += weighted[a].iter().zip(&covaried[b]).map(|(x, y)| x * y).sum::<f64>();
+            }
+        }
+    }
+    let a = &fit.covariance;
+    (0..p)
+        .map(|j| {
+            let row: Vec<f64> = (0..p).map(|k| (0..p).map(|l| a[j][l] * meat[l][k]).sum()).collect();
+            (0..p).map(|k| row[k] * a[k][j]).sum::<f64>().max(0.0).sqrt()
+        })
+        .collect()
 }
 
 /// Marks every time term of `selection` that a random walk of its channel's bias explains as well: with
@@ -116,8 +256,7 @@ pub(super) fn mark_wander(problem: &Problem, selection: &mut Selection, models: 
         if !candidate.effect.is_time_term() {
             continue;
         }
-        let white_per_sqrt_hz =
-            model.terms.iter().find(|t| t.term == Term::White).unwrap_or(&model.white_only).value_si;
+        let white_per_sqrt_hz = white_density(model);
         let rows: Vec<usize> = (0..problem.obs.y.len()).filter(|&i| problem.obs.group[i] == g).collect();
         let on_rows = |v: &[f64]| rows.iter().map(|&i| v[i]).collect::<Vec<f64>>();
         let t_s: Vec<f64> = rows.iter().map(|&i| blocks[i].t_mid_s).collect();
@@ -146,6 +285,45 @@ pub(super) fn mark_wander(problem: &Problem, selection: &mut Selection, models: 
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn the_walk_covariance_product_is_the_matrix_product() {
+        // C_ij = min(t_i, t_j) - t_0, written out, against the two-pass product.
+        let t = [2.0, 2.5, 4.0, 7.0, 7.5];
+        let z = [1.0, -2.0, 0.5, 3.0, -1.5];
+        let fast = random_walk_times(&t, &z);
+        for i in 0..t.len() {
+            let direct: f64 = (0..t.len()).map(|j| (t[i].min(t[j]) - t[0]) * z[j]).sum();
+            assert!((fast[i] - direct).abs() < 1e-12, "{i}: {} against {direct}", fast[i]);
+        }
+    }
+
+    #[test]
+    fn the_sandwich_of_a_mean_is_its_variance_under_white_noise_and_a_walk() {
+        // One channel, one bias column: the estimate is the mean of the block means, whose variance is
+        // (1/n^2) (sum N^2 / T_i + K^2 sum_ij (min(t_i, t_j) - t_0)). The walk's K is the one the likelihood
+        // prefers: a sawtooth far above the white noise makes it nonzero, and the sandwich uses it.
+        let n = 40;
+        let t_s: Vec<f64> = (0..n).map(|i| 10.0 * i as f64).collect();
+        let y: Vec<f64> =
+            (0..n).map(|i| if (i / 5) % 2 == 0 { (i % 5) as f64 } else { 5.0 - (i % 5) as f64 }).collect();
+        let obs = Observations { y: y.clone(), group: vec![0; n], groups: 1, sigma: None };
+        let ones = vec![1.0; n];
+        let columns: Vec<&[f64]> = vec![&ones];
+        let f = fit(&obs, &columns).unwrap();
+        let blocks: Vec<BlockOf> = t_s.iter().map(|&t| BlockOf { dwell: 0, duration_s: 10.0, t_mid_s: t }).collect();
+        let white_per_sqrt_hz = 0.01;
+        let wander = likeliest_wander(white_per_sqrt_hz, (&t_s, &[10.0; 40]), &y, std::slice::from_ref(&ones));
+        assert!(wander.random_walk_per_sqrt_s > 0.0, "{wander:?}");
+        let k2 = wander.random_walk_per_sqrt_s.powi(2);
+        let walk: f64 = (0..n).flat_map(|i| (0..n).map(move |j| (i, j))).map(|(i, j)| t_s[i].min(t_s[j])).sum();
+        let expected = ((n as f64 * white_per_sqrt_hz.powi(2) / 10.0 + k2 * walk) / (n * n) as f64).sqrt();
+        let model = BlockModel { obs: &obs, blocks: &blocks, columns: &columns, fit: &f };
+        let se = sandwich_std_errors(&model, &[Some(white_per_sqrt_hz)]);
+        assert!((se[0] / expected - 1.0).abs() < 1e-9, "{} against {expected}", se[0]);
+        // Far larger than the white standard error of the mean, N / sqrt(T n).
+        assert!(se[0] > 10.0 * white_per_sqrt_hz / (10.0 * n as f64).sqrt());
+    }
 
     #[test]
     fn white_noise_alone_is_only_scaled() {

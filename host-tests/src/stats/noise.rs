@@ -949,6 +949,32 @@ pub const QUANTIZED_FRACTION: f64 = 0.9;
 /// and 3q only give q).
 const MAX_DIVISOR: usize = 8;
 
+/// Most decimals [`print_step`] tries.
+const MAX_PRINTED_DECIMALS: i32 = 15;
+
+/// The step of the decimal digits `parts` were printed with: the largest `10^-d` (`d` from 0 to 15) of
+/// which every finite sample is a whole multiple, up to the rounding of its parse (1e-6 of the step, or four
+/// units in the last place), within 15 significant digits. `None` when there is no such step: binary data,
+/// or text printed to full precision.
+pub fn print_step(parts: &[&[f64]]) -> Option<f64> {
+    let mut samples = parts.iter().flat_map(|p| p.iter()).filter(|v| v.is_finite()).peekable();
+    samples.peek()?;
+    let on = |v: f64, scale: f64| {
+        let s = v * scale;
+        s.abs() < 1e15 && (s - s.round()).abs() <= 1e-6f64.max(s.abs() * 4.0 * f64::EPSILON)
+    };
+    (0..=MAX_PRINTED_DECIMALS)
+        .map(|d| 10f64.powi(d))
+        .find(|&scale| samples.clone().all(|&v| on(v, scale)))
+        .map(|s| 1.0 / s)
+}
+
+/// A lattice step that is the samples' print step (within 1 %, [`print_step`]): the file's digits, not the
+/// sensor's quantisation. A sensor whose own step is that power of ten cannot be told from it.
+pub fn is_print_step(step: f64, print_step: Option<f64>) -> bool {
+    print_step.is_some_and(|p| (step / p - 1.0).abs() < 0.01)
+}
+
 /// Estimates the output step of `samples` (any unit) and whether they look quantized.
 ///
 /// Method: a floating-point greatest common divisor of the sample differences. The non-zero absolute
@@ -1022,6 +1048,24 @@ pub fn detect_quantization_joined(parts: &[&[f64]]) -> Result<Quantization, Nois
 
 #[cfg(test)]
 mod tests {
+
+    #[test]
+    fn the_print_step_is_the_largest_power_of_ten_of_which_every_sample_is_a_multiple() {
+        use super::{is_print_step, print_step};
+        // Printed with three decimals (one sample has fewer): 1e-3, whatever the spacing of the values.
+        let printed: Vec<f64> = ["0.125", "-3.5", "12.007", "0.001"].iter().map(|s| s.parse().unwrap()).collect();
+        assert_eq!(print_step(&[&printed]), Some(1e-3));
+        // Large values with ten decimals (the parse's rounding is well below the step).
+        let fine: Vec<f64> = ["9.8031477330", "-9.7999999999"].iter().map(|s| s.parse().unwrap()).collect();
+        assert_eq!(print_step(&[&fine]), Some(1e-10));
+        // Full precision (a thirds' digits go on forever): no print step.
+        assert_eq!(print_step(&[&[1.0 / 3.0, 2.0 / 3.0]]), None);
+        assert_eq!(print_step(&[&[]]), None);
+        // A lattice at the print step is the file's; a coarser one is the sensor's.
+        assert!(is_print_step(1.0004e-6, Some(1e-6)));
+        assert!(!is_print_step(2.5e-6, Some(1e-6)));
+        assert!(!is_print_step(1e-6, None));
+    }
 
     #[test]
     fn f_distribution_matches_closed_forms_and_tables() {

@@ -6,7 +6,9 @@
 use super::generate::white;
 use super::noise_extension::held_out_noise_extension;
 use super::{rms, ChannelNoise, Curve};
-use crate::stats::noise::{detect_quantization, log_spaced_clusters, overlapping_allan_deviation};
+use crate::stats::noise::{
+    detect_quantization, is_print_step, log_spaced_clusters, overlapping_allan_deviation, print_step,
+};
 
 /// RMS of first differences / sqrt 2 of several segments pooled, SI: the ADEV at one sample.
 pub(crate) fn white_std(segments: &[&[f64]]) -> f64 {
@@ -58,7 +60,10 @@ pub fn channel_noise(channel: &'static str, samples: &[f64], rate_hz: f64, seed:
     let li = long_index(n, &m).min(data.adev.len().saturating_sub(1));
     let ratio = data.adev.get(li).copied().unwrap_or(f64::NAN) / base_sim.adev.get(li).copied().unwrap_or(f64::NAN);
     let extended = (n / 2 >= 1000).then(|| held_out_noise_extension(samples, rate_hz, &m, seed, stream));
-    let quantization_step = detect_quantization(samples).ok().filter(|q| q.quantized).map(|q| q.step);
+    // A lattice at the file's printed digits is not the sensor's step.
+    let printed = print_step(&[samples]);
+    let quantization_step =
+        detect_quantization(samples).ok().filter(|q| q.quantized && !is_print_step(q.step, printed)).map(|q| q.step);
     ChannelNoise {
         channel,
         white_std: sigma,

@@ -74,6 +74,12 @@ pub fn imutk_session(dir: &Path) -> sinscal_host::io::recording::Recording {
     sinscal_host::io::import::import_imutk(&acc, &gyro, None, &detection).expect("import").recording
 }
 
+/// The PSINS laser-gyro record of the data directory (one static pose, 1847 s at 100 Hz).
+pub fn psins_session(dir: &Path) -> sinscal_host::io::recording::Recording {
+    let imu = data_file(dir, "psins-lasergyro/lasergyro.imu");
+    sinscal_host::io::import::import_psins(&imu, None).expect("import").recording
+}
+
 /// Whether qemu-system-arm runs here. Where prerequisites are required (CI) a missing QEMU is a failure; elsewhere
 /// the caller's test is reported as skipped (`what` says what of it is skipped, e.g. " (--on qemu only)"; empty for
 /// all of it).
