@@ -248,6 +248,8 @@ pub fn analyze_angles(file: &AnglesFile) -> Result<Analysis, InputError> {
         diagnostics: Vec::new(),
         noise_model: Vec::new(),
         figures,
+        model_fit: None,
+        windows: None,
     };
     Ok(assemble(problem, selection, findings, ANGLES, &file.source))
 }

@@ -57,6 +57,7 @@
 
 mod angles;
 mod candidates;
+mod checks;
 mod column;
 mod correlated_noise;
 mod model_fit;
@@ -143,9 +144,12 @@ pub struct Effect {
     /// Time constant, s (warm-up, correlated noise).
     #[serde(skip_serializing_if = "Option::is_none")]
     pub tau_s: Option<f64>,
-    /// Frequency, Hz (vibration).
+    /// Frequency, Hz (vibration: of its strongest component).
     #[serde(skip_serializing_if = "Option::is_none")]
     pub frequency_hz: Option<f64>,
+    /// A line whose frequency wanders (docs/analysis.md#lines): the span of its components' frequencies, Hz.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub frequency_spread_hz: Option<f64>,
     /// Likelihood-ratio statistic.
     pub likelihood_ratio: f64,
     /// Parameters the effect adds.
@@ -243,6 +247,9 @@ impl Effect {
         }
         if let Some(f) = self.frequency_hz {
             parts.push(format!("f {f:.4} Hz"));
+        }
+        if let Some(s) = self.frequency_spread_hz {
+            parts.push(format!("its frequency wanders over {s:.4} Hz"));
         }
         parts.join(", ")
     }
@@ -342,6 +349,9 @@ pub struct Analysis {
     /// (recordings; docs/analysis.md#windows)?
     #[serde(skip_serializing_if = "Option::is_none")]
     pub windows: Option<WindowCheck>,
+    /// The checks of the analysis (docs/cli.md#checks): `fit` (recordings) and `plausibility`, passed or
+    /// failed; a failed one makes `analyze` exit with status 3.
+    pub checks: Vec<crate::calibration::checks::Check>,
     /// Data for the report's figures (not written to JSON).
     #[serde(skip)]
     pub figures: FigureData,
@@ -360,8 +370,8 @@ pub struct FigureData {
     pub correlated: Vec<Option<(f64, f64)>>,
     /// Per channel: quantisation step found, if any.
     pub quantization: Vec<Option<f64>>,
-    /// Per channel: vibration (amplitude as seen, frequency) found, if any.
-    pub vibration: Vec<Option<(f64, f64)>>,
+    /// Per channel: the spectral lines found (amplitude as seen, frequency), strongest first.
+    pub vibration: Vec<Vec<(f64, f64)>>,
     /// Per observation group (channel or angle): (position label, base residual, final residual) of each
     /// observation.
     pub residuals: Vec<Vec<(u32, f64, f64)>>,

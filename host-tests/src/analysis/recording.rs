@@ -59,10 +59,18 @@ fn analyze_session(mut session: Session, levelled: bool, source: &str) -> Result
     figures.residual_names = problem.group_names.clone();
     figures.residuals = residuals_by_group(&problem, &selection);
     let model_fit = model_fit(&fit_residuals(&problem, &selection), &noise_model);
-    let findings = Findings { effects, residual_rms, block_residual_rms, m, diagnostics, noise_model, figures };
+    let findings = Findings {
+        effects,
+        residual_rms,
+        block_residual_rms,
+        m,
+        diagnostics,
+        noise_model,
+        figures,
+        model_fit,
+        windows,
+    };
     let mut analysis = assemble(problem, selection, findings, RECORDING, source);
-    analysis.model_fit = model_fit;
-    analysis.windows = windows;
     for (k, axis) in ["x", "y", "z"].iter().enumerate() {
         if let Some(b) = analysis.base_model.biases.get_mut(&format!("accel_bias_{axis}")) {
             *b += accel_bias_mps2[k];

@@ -574,7 +574,7 @@ fn psd_panel(area: &Area, a: &Analysis, c: usize, samples: &[f64]) -> anyhow::Re
         .map_err(|x| e(&x))?
         .label(format!("white level of the base model (N = {} {n_unit})", sig(n_white / n_per)))
         .legend(legend_line(RED, 2));
-    if let Some((amp, f)) = a.figures.vibration[c] {
+    for &(amp, f) in &a.figures.vibration[c] {
         chart
             .draw_series(LineSeries::new([(f, lo), (f, hi)], BLUE.stroke_width(2)))
             .map_err(|x| e(&x))?

@@ -31,6 +31,10 @@ pub(super) struct Findings {
     pub noise_model: Vec<super::noise_terms::NoiseModel>,
     /// Figure data.
     pub figures: FigureData,
+    /// The verdict on the final model (recordings).
+    pub model_fit: Option<super::ModelFit>,
+    /// The final model across the thirds of every dwell (recordings).
+    pub windows: Option<super::WindowCheck>,
 }
 
 /// The effects the selection chose, in the order it chose them.
@@ -64,6 +68,7 @@ fn effect_of(problem: &Problem, selection: &Selection, index: usize) -> Effect {
         residual_of: problem.residual_of.to_string(),
         tau_s: cand.variants[c.variant].0,
         frequency_hz: None,
+        frequency_spread_hz: None,
         likelihood_ratio: c.lr,
         parameters: cand.parameters(),
         p_value: c.p_value,
@@ -199,7 +204,7 @@ pub(super) fn assemble(
         unobservable.extend(not_in_angles.map(|e| format!("{e}: angles only")));
     }
     let m = findings.m;
-    Analysis {
+    let mut analysis = Analysis {
         schema: "sinscal-analysis/1".into(),
         source: source.into(),
         input: input.into(),
@@ -220,10 +225,13 @@ pub(super) fn assemble(
         tested: selection.tested,
         diagnostics: findings.diagnostics,
         noise_model: findings.noise_model,
-        model_fit: None,
-        windows: None,
+        model_fit: findings.model_fit,
+        windows: findings.windows,
+        checks: Vec::new(),
         figures: findings.figures,
-    }
+    };
+    analysis.checks = super::checks::checks(&analysis);
+    analysis
 }
 
 /// The base model's likelihood, BIC (biases and one variance per group) and biases.

@@ -20,7 +20,7 @@ use super::candidates::axis_of;
 use super::correlated_noise::{gauss_markov_test, GaussMarkovResult};
 use super::observations::Session;
 use super::parallel::on_cores;
-use super::vibration::{line_in, remove_line, sinc, vibration_test, VibrationResult};
+use super::vibration::{line_in, remove_line, sinc, LineSearch, VibrationResult, MAX_COMPONENTS, MAX_LINES};
 use super::windows::{in_windows, not_stationary, widening, NOT_STATIONARY};
 use super::{ChannelDiagnostics, Effect, FigureData, ALPHA, CHANNELS, CHANNEL_UNITS};
 
@@ -101,7 +101,7 @@ pub(super) fn test_samples(session: &Session, measures: &SampleMeasures, m: f64)
         figures.longest_dwell.push(Vec::new());
         figures.correlated.push(None);
         figures.quantization.push(None);
-        figures.vibration.push(None);
+        figures.vibration.push(Vec::new());
     }
     let channels = &measures.channels;
     for outcome in on_cores(channels.len(), |c| channels[c].judge(session, m)) {
@@ -125,7 +125,7 @@ struct ChannelOutcome {
     longest_dwell: Vec<f64>,
     correlated: Option<(f64, f64)>,
     quantization: Option<f64>,
-    vibration: Option<(f64, f64)>,
+    vibration: Vec<(f64, f64)>,
 }
 
 /// One channel's statistics.
@@ -145,16 +145,39 @@ struct ChannelMeasures {
     quantization: Option<(Quantization, f64)>,
     /// The step of the decimal digits the samples were printed with, if any.
     print_step: Option<f64>,
-    /// The strongest spectral line.
-    vibration: Option<VibrationResult>,
-    /// Its amplitude seen and standard error in each third of every dwell (docs/analysis.md#windows); empty
-    /// without a line.
-    vibration_windows: Vec<(f64, f64)>,
-    /// The correlated-noise fit, on the series with the line of `vibration` removed when `line_removed`.
+    /// The spectral lines that pass at the smallest `m`, strongest first.
+    lines: Vec<Line>,
+    /// The correlated-noise fit, on the series with every line of `lines` removed.
     correlated: Option<GaussMarkovResult>,
     /// Its sigma and standard error in each third of every dwell; empty when a third is too short.
     correlated_windows: Vec<(f64, f64)>,
-    line_removed: bool,
+}
+
+/// Lines closer than this are the components of one line whose frequency wanders (mains at 50 or 60 Hz
+/// wander by a few hundredths of a hertz), Hz.
+const WANDER_HZ: f64 = 0.05;
+
+/// `lines` (strongest first) grouped into the lines they are: each joins the group of the first stronger
+/// line within [`WANDER_HZ`] of one of its components, else starts its own. Indices into `lines`.
+fn wandering(lines: &[Line]) -> Vec<Vec<usize>> {
+    let mut groups: Vec<Vec<usize>> = Vec::new();
+    for (i, l) in lines.iter().enumerate() {
+        let near = |g: &&mut Vec<usize>| {
+            g.iter().any(|&j| (lines[j].line.frequency_hz - l.line.frequency_hz).abs() <= WANDER_HZ)
+        };
+        match groups.iter_mut().find(near) {
+            Some(g) => g.push(i),
+            None => groups.push(vec![i]),
+        }
+    }
+    groups
+}
+
+/// A spectral line found, with its amplitude seen and standard error in each third of every dwell
+/// (docs/analysis.md#windows).
+struct Line {
+    line: VibrationResult,
+    windows: Vec<(f64, f64)>,
 }
 
 impl ChannelMeasures {
@@ -171,17 +194,18 @@ impl ChannelMeasures {
             let std_error = if q.quantized { quantization_std_error(&raw, q.step) } else { f64::NAN };
             (q, std_error)
         });
-        let vibration = vibration_test(&series, session.dt);
-        let vibration_windows = match &vibration {
-            Some(v) => in_windows(&series, |w| Some(line_in(w, v, session.dt))),
-            None => Vec::new(),
-        };
-        // The line can be accepted only if it passes at the smallest m (no block candidate observable).
-        let line_removed = vibration
-            .as_ref()
-            .is_some_and(|v| vibration_criterion(v, series.len(), n_all, sample_tests(session) as f64).accepted);
-        if let (true, Some(v)) = (line_removed, &vibration) {
-            remove_line(&mut series, v, session.dt);
+        // A line can be accepted only if it passes at the smallest m (no block candidate observable): the lines
+        // that do, strongest first, each removed before the next is searched.
+        let mut lines: Vec<Line> = Vec::new();
+        let mut search = LineSearch::new(&series);
+        let room = |lines: &[Line]| lines.len() < MAX_COMPONENTS && wandering(lines).len() < MAX_LINES;
+        while let Some(v) = search.as_mut().filter(|_| room(&lines)).and_then(|s| s.next(&series, session.dt)) {
+            if !vibration_criterion(&v, series.len(), n_all, sample_tests(session) as f64).accepted {
+                break;
+            }
+            let windows = in_windows(&series, |w| Some(line_in(w, &v, session.dt)));
+            remove_line(&mut series, &v, session.dt);
+            lines.push(Line { line: v, windows });
         }
         let correlated_windows =
             in_windows(&series, |w| gauss_markov_test(w.to_vec(), session.dt).map(|gm| (gm.sigma, gm.sigma_std)));
@@ -196,11 +220,9 @@ impl ChannelMeasures {
             long,
             quantization,
             print_step,
-            vibration,
-            vibration_windows,
+            lines,
             correlated,
             correlated_windows,
-            line_removed,
         }
     }
 
@@ -209,16 +231,16 @@ impl ChannelMeasures {
     fn judge(&self, session: &Session, m: f64) -> ChannelOutcome {
         let mut effects = Vec::new();
         let q_step = self.quantization(m, &mut effects);
-        let vib = self.vibration(m, session.dt, &mut effects);
+        let (passing, vib) = self.vibration(m, session.dt, &mut effects);
         let refitted;
-        let correlated = if vib.is_some() == self.line_removed {
+        let correlated = if passing == self.lines.len() {
             self.correlated.as_ref()
         } else {
-            // The decision at this m differs from the one at the smallest m: fit the other series.
+            // Fewer lines pass at this m than at the smallest m: fit the series with those removed.
             let mut series: Vec<Vec<f64>> =
                 session.dwells.iter().map(|d| detrend(&d.t, &d.y[self.c]).residual).collect();
-            if let (Some(_), Some(v)) = (vib, &self.vibration) {
-                remove_line(&mut series, v, session.dt);
+            for l in &self.lines[..passing] {
+                remove_line(&mut series, &l.line, session.dt);
             }
             refitted = gauss_markov_test(series, session.dt);
             refitted.as_ref()
@@ -261,6 +283,7 @@ impl ChannelMeasures {
             residual_of: residual_of.into(),
             tau_s: None,
             frequency_hz: None,
+            frequency_spread_hz: None,
             likelihood_ratio: 0.0,
             parameters: 0,
             p_value: 0.0,
@@ -305,28 +328,51 @@ impl ChannelMeasures {
         Some(q.step)
     }
 
-    /// The strongest spectral line, if it passes. Returns (amplitude seen, frequency).
-    fn vibration(&self, m: f64, dt: f64, effects: &mut Vec<Effect>) -> Option<(f64, f64)> {
-        let v = self.vibration.as_ref()?;
-        let criterion = vibration_criterion(v, self.dwells, self.n_all, m);
-        if !criterion.accepted {
-            return None;
+    /// The spectral lines that pass at `m`: the first lines of `lines` up to one that fails (the search is
+    /// sequential), the components of a line whose frequency wanders merged into one effect ([`wandering`]).
+    /// Returns the number of lines that pass, and the (amplitude seen, frequency) of each effect.
+    fn vibration(&self, m: f64, dt: f64, effects: &mut Vec<Effect>) -> (usize, Vec<(f64, f64)>) {
+        let passing =
+            self.lines.iter().take_while(|l| vibration_criterion(&l.line, self.dwells, self.n_all, m).accepted).count();
+        let mut found = Vec::new();
+        let mut rms = self.rms;
+        for group in wandering(&self.lines[..passing]) {
+            let components: Vec<&Line> = group.iter().map(|&i| &self.lines[i]).collect();
+            let (mut power_seen, mut power, mut variance, mut lr, mut dof, mut not_stationary) =
+                (0.0, 0.0, 0.0, 0.0, 0.0, false);
+            for Line { line: v, windows } in &components {
+                let corr = sinc(v.frequency_hz * dt);
+                let (a, se) = (v.amplitude_seen / corr, v.amplitude_std / corr * widening(windows));
+                power_seen += v.amplitude_seen * v.amplitude_seen;
+                power += a * a;
+                variance += (a * se).powi(2);
+                lr += v.lr;
+                dof += vibration_criterion(v, self.dwells, self.n_all, m).dof;
+                not_stationary |= !stationarity(windows).is_empty();
+            }
+            let strongest = &components[0].line;
+            let frequencies = components.iter().map(|l| l.line.frequency_hz);
+            let spread_hz = frequencies.clone().fold(f64::MIN, f64::max) - frequencies.fold(f64::MAX, f64::min);
+            let after = (rms * rms - 0.5 * power_seen).max(0.0).sqrt();
+            effects.push(Effect {
+                estimate: power.sqrt(),
+                // The delta method: d sqrt(sum a^2) = sum a da / sqrt(sum a^2).
+                std_error: variance.sqrt() / power.sqrt().max(f64::MIN_POSITIVE),
+                delta_bic: -lr + (dof + components.len() as f64) * (self.n_all as f64).ln(),
+                residual_rms_before: rms,
+                residual_rms_after: after,
+                frequency_hz: Some(strongest.frequency_hz),
+                frequency_spread_hz: (components.len() > 1).then_some(spread_hz),
+                likelihood_ratio: lr,
+                parameters: dof as usize + components.len(),
+                p_value: chi_square_upper(lr, dof),
+                aliases: if not_stationary { vec![NOT_STATIONARY.to_string()] } else { Vec::new() },
+                ..self.effect(EffectKind::Vibration, "samples")
+            });
+            rms = after;
+            found.push((power_seen.sqrt(), strongest.frequency_hz));
         }
-        let corr = sinc(v.frequency_hz * dt);
-        let rms = self.rms;
-        effects.push(Effect {
-            estimate: v.amplitude_seen / corr,
-            std_error: v.amplitude_std / corr * widening(&self.vibration_windows),
-            delta_bic: criterion.delta_bic,
-            residual_rms_after: (rms * rms - 0.5 * v.amplitude_seen * v.amplitude_seen).max(0.0).sqrt(),
-            frequency_hz: Some(v.frequency_hz),
-            likelihood_ratio: v.lr,
-            parameters: criterion.dof as usize + 1,
-            p_value: chi_square_upper(v.lr, criterion.dof),
-            aliases: stationarity(&self.vibration_windows),
-            ..self.effect(EffectKind::Vibration, "samples")
-        });
-        Some((v.amplitude_seen, v.frequency_hz))
+        (passing, found)
     }
 
     /// Gauss-Markov plus white noise (the fit `gm`) against white noise alone; returns (sigma, tau) if found.
@@ -364,7 +410,6 @@ struct VibrationCriterion {
     accepted: bool,
     /// Degrees of freedom of the statistic.
     dof: f64,
-    delta_bic: f64,
 }
 
 /// Parameters: amplitude, frequency, a phase per dwell (`dwells`). The statistic is tested as chi-square with
@@ -373,7 +418,7 @@ fn vibration_criterion(v: &VibrationResult, dwells: usize, n_all: usize, m: f64)
     let dof = dwells as f64 + 1.0;
     let threshold = chi_square_quantile_upper(ALPHA / (m * v.independent_frequencies), dof);
     let delta_bic = -v.lr + (dof + 1.0) * (n_all as f64).ln();
-    VibrationCriterion { accepted: v.lr > threshold && delta_bic < 0.0, dof, delta_bic }
+    VibrationCriterion { accepted: v.lr > threshold && delta_bic < 0.0, dof }
 }
 
 /// Below this fraction of the step, the standard error of a quantisation step is the rounding of f64 and is

@@ -48,6 +48,9 @@ pub fn summary(a: &Analysis) -> String {
     if let Some(w) = &a.windows {
         let _ = writeln!(s, "{}", w.text());
     }
+    for c in &a.checks {
+        let _ = writeln!(s, "check {}: {}: {}", c.check, if c.passed { "passed" } else { "FAILED" }, c.detail);
+    }
     if !a.noise_model.is_empty() {
         let _ = writeln!(s, "noise (terms named from the Allan variance of the longest dwell):");
         for m in &a.noise_model {

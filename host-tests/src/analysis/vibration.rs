@@ -86,18 +86,54 @@ fn dft_at(x: &[f64], cycles_per_sample: f64) -> (f64, f64) {
     (re.iter().sum::<f64>() + tr, im.iter().sum::<f64>() + ti)
 }
 
-/// The strongest spectral line of the dwells' detrended samples against the local background.
-pub(super) fn vibration_test(dwells: &[Vec<f64>], dt: f64) -> Option<VibrationResult> {
-    let n_max = dwells.iter().map(|d| d.len()).max()?;
-    let n_min = dwells.iter().map(|d| d.len()).min()?;
-    if n_min < MIN_DWELL_SAMPLES {
-        return None;
+/// Most spectral lines found per channel (a line whose frequency wanders counted once).
+pub(super) const MAX_LINES: usize = 8;
+
+/// Most components of lines found per channel: a mains line that wanders by +-0.02 Hz over 300 s shows as
+/// 15 sidebands 1/300 Hz apart, each found and removed in turn.
+pub(super) const MAX_COMPONENTS: usize = 48;
+
+/// Bins of a line found whose power is above this many times its background are its band, not searched
+/// again: the skirt of a line whose frequency wanders (a mains line), and the rest of a line removed.
+const BAND_OVER_BACKGROUND: f64 = 10.0;
+
+/// Bins on either side of a line found that are its band whatever their power: those its background leaves
+/// out.
+const MIN_HALF_BAND: usize = LINE_HALF_WIDTH;
+
+/// The search for the spectral lines of the dwells' detrended samples, strongest first: each call of
+/// [`LineSearch::next`] finds the strongest line outside the bands of the lines found before (the caller
+/// removes each line from the samples before the next call).
+pub(super) struct LineSearch {
+    /// Transform length (zero-padded, a power of two).
+    len: usize,
+    /// Bin ranges of the lines found.
+    bands: Vec<(usize, usize)>,
+}
+
+impl LineSearch {
+    /// A search over `dwells`; `None` when a dwell is too short for one.
+    pub fn new(dwells: &[Vec<f64>]) -> Option<LineSearch> {
+        let n_max = dwells.iter().map(|d| d.len()).max()?;
+        let n_min = dwells.iter().map(|d| d.len()).min()?;
+        (n_min >= MIN_DWELL_SAMPLES)
+            .then(|| LineSearch { len: (n_max.next_power_of_two() * 4).min(1 << 20), bands: Vec::new() })
     }
-    let len = (n_max.next_power_of_two() * 4).min(1 << 20);
-    let power = summed_periodogram(dwells, len)?;
-    let (k_hat, background) = strongest_line(&power, len, n_min, dwells.len() as f64)?;
-    let f = refine_frequency(dwells, k_hat, len);
-    Some(fit_line(dwells, f, background, n_min, dt))
+
+    /// The strongest line of `dwells` against the local background, outside the bands of the lines found
+    /// before; its band is excluded from the next calls.
+    pub fn next(&mut self, dwells: &[Vec<f64>], dt: f64) -> Option<VibrationResult> {
+        let n_min = dwells.iter().map(|d| d.len()).min()?;
+        let len = self.len;
+        let power = summed_periodogram(dwells, len)?;
+        let (k_hat, background) = strongest_line(&power, len, n_min, dwells.len() as f64, &self.bands)?;
+        let above = |k: &usize| power[*k] > BAND_OVER_BACKGROUND * background * dwells.len() as f64;
+        let low = (0..k_hat).rev().find(|k| !above(k)).unwrap_or(0).min(k_hat.saturating_sub(MIN_HALF_BAND));
+        let high = (k_hat..len / 2).find(|k| !above(k)).unwrap_or(len / 2).max(k_hat + MIN_HALF_BAND);
+        self.bands.push((low, high));
+        let f = refine_frequency(dwells, k_hat, len);
+        Some(fit_line(dwells, f, background, n_min, dt))
+    }
 }
 
 /// The periodograms of the dwells (zero-padded to `len`, each over its length), summed; bins 0..len/2. Two
@@ -142,23 +178,35 @@ fn summed_periodogram(dwells: &[Vec<f64>], len: usize) -> Option<Vec<f64>> {
     Some(power)
 }
 
-/// The largest bin (above three cycles per shortest dwell) and the background level at it: the median of
-/// its neighbourhood, scaled to the mean of `p` dwells' periodograms.
-fn strongest_line(power: &[f64], len: usize, n_min: usize, p: f64) -> Option<(usize, f64)> {
+/// Bins on either side of a candidate bin that its background leaves out (the line's own leakage).
+const LINE_HALF_WIDTH: usize = 12;
+
+/// Most bins on either side of a candidate bin that its background takes.
+const BACKGROUND_HALF_WIDTH: usize = 150;
+
+/// Fewest bins on either side of a candidate bin that its background takes.
+const MIN_BACKGROUND_SIDE: usize = 10;
+
+/// The largest bin (above three cycles per shortest dwell, outside `bands`) and the background level at it:
+/// the median of its neighbourhood, scaled to the mean of `p` dwells' periodograms. The neighbourhood is
+/// symmetric (as many bins below as above, up to [`BACKGROUND_HALF_WIDTH`]): the median of a spectrum that
+/// slopes across it is then its level at the bin. A one-sided neighbourhood at the low end, where coloured
+/// noise rises, put the background below the bin's own level, and its random peaks passed for lines.
+fn strongest_line(power: &[f64], len: usize, n_min: usize, p: f64, bands: &[(usize, usize)]) -> Option<(usize, f64)> {
     // Lines below three cycles per shortest dwell are too close to the removed trend.
     let k_min = ((3.0 * len as f64 / n_min as f64).ceil() as usize).max(2);
-    if k_min + 20 >= len / 2 {
+    let side = LINE_HALF_WIDTH + MIN_BACKGROUND_SIDE;
+    let (low, high) = (k_min + side, (len / 2).checked_sub(1 + side)?);
+    if low >= high {
         return None;
     }
-    let k_hat = (k_min..len / 2 - 1).max_by(|&a, &b| power[a].total_cmp(&power[b]))?;
-    let half_window = 150.min(len / 4);
-    let mut neighbours: Vec<f64> = (k_hat.saturating_sub(half_window).max(k_min)..(k_hat + half_window).min(len / 2))
-        .filter(|&k| k.abs_diff(k_hat) > 12)
+    let outside = |k: &usize| !bands.iter().any(|&(a, b)| (a..b).contains(k));
+    let k_hat = (low..high).filter(outside).max_by(|&a, &b| power[a].total_cmp(&power[b]))?;
+    let half_window = BACKGROUND_HALF_WIDTH.min(k_hat - k_min).min(len / 2 - 1 - k_hat);
+    let mut neighbours: Vec<f64> = (k_hat - half_window..=k_hat + half_window)
+        .filter(|&k| k.abs_diff(k_hat) > LINE_HALF_WIDTH)
         .map(|k| power[k])
         .collect();
-    if neighbours.len() < 20 {
-        return None;
-    }
     neighbours.sort_by(f64::total_cmp);
     // Median of Gamma(P, 1): P (1 - 1/(9P))^3 (Wilson-Hilferty).
     Some((k_hat, neighbours[neighbours.len() / 2] / (p * (1.0 - 1.0 / (9.0 * p)).powi(3))))

@@ -40,7 +40,8 @@ const DEG_PER_RAD: f64 = 57.29578;
 /// One check: its name, whether it passed, and a one-line detail.
 #[derive(Clone, Debug, PartialEq, Serialize)]
 pub struct Check {
-    /// `physics`, `fit`, `convergence`, `plausibility`, `spikes`, or for a device's record `stored_record`.
+    /// `physics`, `fit`, `convergence`, `plausibility`, `spikes`, or for a device's record `stored_record`
+    /// (an analysis: `fit`, `plausibility`).
     pub check: &'static str,
     /// Whether the result passed it.
     pub passed: bool,
@@ -49,7 +50,8 @@ pub struct Check {
 }
 
 impl Check {
-    fn new(check: &'static str, passed: bool, detail: impl Into<String>) -> Check {
+    /// A check named `check`.
+    pub fn new(check: &'static str, passed: bool, detail: impl Into<String>) -> Check {
         Check { check, passed, detail: detail.into() }
     }
 }

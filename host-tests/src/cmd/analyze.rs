@@ -1,9 +1,12 @@
 //! `sinscal analyze RECORDING|ANGLES`: what the base model (biases and white noise) gets wrong, which
-//! effect of the catalogue explains it, with estimates, standard errors and the BIC gain.
+//! effect of the catalogue explains it, with estimates, standard errors and the BIC gain; exit status 3 when
+//! the analysis fails one of its checks (the final model leaves a channel unexplained, a candidate needs an
+//! impossible value).
 
 use std::path::PathBuf;
 
-use crate::cmd::{json_to_stdout, write_json};
+use crate::calibration::checks::failed_lines;
+use crate::cmd::{json_to_stdout, write_json, ChecksFailed};
 
 /// Arguments of `sinscal analyze`.
 #[derive(clap::Args)]
@@ -36,5 +39,10 @@ pub fn run(args: Args) -> anyhow::Result<()> {
     if let Some(path) = json {
         write_json(&path, &analysis)?;
     }
-    Ok(())
+    let failed = failed_lines(&analysis.checks);
+    if failed.is_empty() {
+        Ok(())
+    } else {
+        Err(ChecksFailed(failed).into())
+    }
 }
