@@ -282,10 +282,14 @@ pub struct Tested {
     pub name: String,
     /// Estimate, SI, fitted with the base model alone.
     pub estimate: f64,
-    /// Its standard error.
+    /// Its standard error: the larger of the fit's and the one with each channel's random walk of the bias
+    /// (docs/analysis.md#windows).
     pub std_error: f64,
     /// Likelihood-ratio statistic against the base model.
     pub likelihood_ratio: f64,
+    /// The candidate and its variant tested (indices into the analysis's candidates).
+    #[serde(skip)]
+    pub(crate) column: (usize, usize),
 }
 
 /// Per-channel diagnostics of a recording.

@@ -17,7 +17,7 @@ use super::observations::{BlockObs, Blocks, Session};
 use super::result::{assemble, effects_of, residuals_by_group, Findings, RECORDING};
 use super::sample_tests::{measure_samples, sample_tests, test_samples, SampleFindings};
 use super::selection::{final_columns, select, BlockOf, Problem, Selection};
-use super::wander::{mark_wander, wander_std_errors};
+use super::wander::{mark_wander, wander_std_errors, widen_tested};
 use super::windows::window_check;
 use super::{Analysis, ChannelDiagnostics, CHANNELS, CHANNEL_UNITS};
 
@@ -49,6 +49,7 @@ fn analyze_session(mut session: Session, levelled: bool, source: &str) -> Result
     let noise_model = noise_models(&figures);
     mark_wander(&problem, &mut selection, &noise_model, m);
     selection.wander_std_errors = wander_std_errors(&problem, &selection, &noise_model);
+    widen_tested(&problem, &mut selection, &noise_model);
     let windows = window_check(&problem, &selection, &noise_model);
     let mut effects = effects_of(&problem, &selection);
     for e in &mut effects {

@@ -758,6 +758,7 @@ impl<'a> Forward<'a> {
                     estimate: score.estimate,
                     std_error: score.std_error,
                     likelihood_ratio: lr,
+                    column: (ci, vi),
                 });
             }
             let gain = lr - c.parameters() as f64 * self.ln_n;

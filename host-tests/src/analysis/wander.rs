@@ -173,6 +173,27 @@ pub(super) fn wander_std_errors(problem: &Problem, selection: &Selection, models
     sandwich_std_errors(&model, &white_densities(problem, models))
 }
 
+/// Widens the standard error of every candidate of `selection.tested` (each fitted with the base model
+/// alone) to its sandwich with each channel's random walk of the bias, the walk being the one the base
+/// model's residuals prefer (profiled once per channel, not per candidate). Angles: unchanged.
+pub(super) fn widen_tested(problem: &Problem, selection: &mut Selection, models: &[NoiseModel]) {
+    let Some(blocks) = &problem.obs_block else { return };
+    let base: Vec<&[f64]> = problem.base.iter().map(|c| c.as_slice()).collect();
+    let base_model = BlockModel { obs: &problem.obs, blocks, columns: &base, fit: &selection.base_fit };
+    let wanders = group_wanders(&base_model, &white_densities(problem, models));
+    for t in &mut selection.tested {
+        let (ci, vi) = t.column;
+        let own = problem.candidates[ci].variants[vi].1.dense();
+        let mut columns = base.clone();
+        columns.push(&own);
+        let Some(f) = fit(&problem.obs, &columns) else { continue };
+        let model = BlockModel { obs: &problem.obs, blocks, columns: &columns, fit: &f };
+        if let Some(&se) = sandwich(&model, &wanders).last() {
+            t.std_error = t.std_error.max(se);
+        }
+    }
+}
+
 /// Per observation group: the white density of its channel's noise model ([`white_density`]); `None` for a
 /// group without one (the force along gravity).
 pub(super) fn white_densities(problem: &Problem, models: &[NoiseModel]) -> Vec<Option<f64>> {
@@ -187,26 +208,50 @@ pub(super) fn white_densities(problem: &Problem, models: &[NoiseModel]) -> Vec<O
 /// `N^2 / T` on the diagonal plus `K^2 (min(t_i, t_j) - t_0)`. A group without a noise model (the force along
 /// gravity: `None` in `white_per_sqrt_hz`, one per group) keeps the fit's own variance.
 pub(super) fn sandwich_std_errors(model: &BlockModel, white_per_sqrt_hz: &[Option<f64>]) -> Vec<f64> {
+    sandwich(model, &group_wanders(model, white_per_sqrt_hz))
+}
+
+/// A group's rows in time order.
+fn rows_in_time(obs: &Observations, blocks: &[BlockOf], g: usize) -> Vec<usize> {
+    let mut rows: Vec<usize> = (0..obs.y.len()).filter(|&i| obs.group[i] == g).collect();
+    rows.sort_by(|&a, &b| blocks[a].t_mid_s.total_cmp(&blocks[b].t_mid_s));
+    rows
+}
+
+/// Per group of `model`: the wander its block means prefer with the model's columns
+/// ([`likeliest_wander`]); `None` for a group without a white density.
+fn group_wanders(model: &BlockModel, white_per_sqrt_hz: &[Option<f64>]) -> Vec<Option<Wander>> {
+    let BlockModel { obs, blocks, columns, .. } = *model;
+    (0..obs.groups)
+        .map(|g| {
+            let white = white_per_sqrt_hz[g]?;
+            let rows = rows_in_time(obs, blocks, g);
+            let on_rows = |v: &[f64]| rows.iter().map(|&i| v[i]).collect::<Vec<f64>>();
+            let own: Vec<Vec<f64>> =
+                columns.iter().filter(|c| rows.iter().any(|&i| c[i] != 0.0)).map(|c| on_rows(c)).collect();
+            let t_s: Vec<f64> = rows.iter().map(|&i| blocks[i].t_mid_s).collect();
+            let block_s: Vec<f64> = rows.iter().map(|&i| blocks[i].duration_s).collect();
+            Some(likeliest_wander(white, (&t_s, &block_s), &on_rows(&obs.y), &own))
+        })
+        .collect()
+}
+
+/// [`sandwich_std_errors`] with each group's wander given.
+fn sandwich(model: &BlockModel, wanders: &[Option<Wander>]) -> Vec<f64> {
     let BlockModel { obs, blocks, columns, fit } = *model;
     let p = columns.len();
     let mut meat = vec![vec![0.0; p]; p];
-    for g in 0..obs.groups {
-        let mut rows: Vec<usize> = (0..obs.y.len()).filter(|&i| obs.group[i] == g).collect();
-        rows.sort_by(|&a, &b| blocks[a].t_mid_s.total_cmp(&blocks[b].t_mid_s));
+    for (g, &wander) in wanders.iter().enumerate() {
+        let rows = rows_in_time(obs, blocks, g);
         let weight = |i: usize| match &obs.sigma {
             Some(s) => 1.0 / (s[i] * s[i]),
             None => 1.0 / fit.variance[g],
         };
-        let on_rows = |v: &[f64]| rows.iter().map(|&i| v[i]).collect::<Vec<f64>>();
         let local: Vec<usize> = (0..p).filter(|&j| rows.iter().any(|&i| columns[j][i] != 0.0)).collect();
         let weighted: Vec<Vec<f64>> =
             local.iter().map(|&j| rows.iter().map(|&i| weight(i) * columns[j][i]).collect()).collect();
         let t_s: Vec<f64> = rows.iter().map(|&i| blocks[i].t_mid_s).collect();
         let block_s: Vec<f64> = rows.iter().map(|&i| blocks[i].duration_s).collect();
-        let wander = white_per_sqrt_hz[g].map(|white| {
-            let own: Vec<Vec<f64>> = local.iter().map(|&j| on_rows(columns[j])).collect();
-            likeliest_wander(white, (&t_s, &block_s), &on_rows(&obs.y), &own)
-        });
         // `S z` for each weighted column: the white part, then the walk's.
         let covaried: Vec<Vec<f64>> = weighted
             .iter()
