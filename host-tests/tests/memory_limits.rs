@@ -66,7 +66,7 @@ fn recording(path: &Path, dwells: usize, rows: usize) {
 
 /// analyze of 10,000 dwells (the most a recording may have) once grew with the square of the dwells and was
 /// killed at 23 GB (then refused past about 600 dwells); its candidate columns are kept as their nonzero
-/// entries now, and it runs within 1 GiB of address space (measured: 0.35 GB peak resident, 17 s in a release
+/// entries now, and it runs within 1 GiB of address space (measured: 0.35 GB peak resident, 10 s in a release
 /// build). The limit it still has is checked on the module's own numbers
 /// (`analysis::tests::columns_past_the_limit_are_refused_before_they_are_built`).
 #[test]

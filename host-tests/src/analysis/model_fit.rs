@@ -8,8 +8,9 @@ use serde::Serialize;
 
 use crate::stats::linfit::chi_square_upper;
 
-use super::noise_terms::NoiseModel;
+use super::noise_terms::{NoiseModel, Term};
 use super::selection::BlockOf;
+use super::wander::whiten_walk;
 use super::{ALPHA, CHANNELS};
 
 /// Most dwells the verdict names.
@@ -103,13 +104,31 @@ fn noise_variance(group_name: &str, models: &[NoiseModel], tau_s: f64) -> Option
     (accels.len() == 3).then(|| accels.iter().sum::<f64>() / 3.0)
 }
 
-/// The verdict on `fit` against `models`; `None` when no group has a noise model.
-pub(super) fn model_fit(fit: &FitResiduals, models: &[NoiseModel]) -> Option<ModelFit> {
-    model_fit_with(fit, |name, tau_s| noise_variance(name, models, tau_s))
+/// The rate random walk `K` the group's noise model names (the channel unit per sqrt(s); 0 when none): the
+/// group's own, or (the force along gravity) the root mean square of the three accelerometers'.
+fn noise_walk(group_name: &str, models: &[NoiseModel]) -> f64 {
+    let of = |name: &str| {
+        let model = models.iter().find(|m| m.channel == name);
+        model.and_then(|m| m.terms.iter().find(|t| t.term == Term::RateRandomWalk)).map_or(0.0, |t| t.value_si)
+    };
+    if CHANNELS.contains(&group_name) {
+        return of(group_name);
+    }
+    (CHANNELS[3..].iter().map(|c| of(c).powi(2)).sum::<f64>() / 3.0).sqrt()
 }
 
-/// The verdict on `fit`, `variance(group name, block length s)` giving the noise variance of a block mean.
-fn model_fit_with(fit: &FitResiduals, variance_of: impl Fn(&str, f64) -> Option<f64>) -> Option<ModelFit> {
+/// The verdict on `fit` against `models`; `None` when no group has a noise model.
+pub(super) fn model_fit(fit: &FitResiduals, models: &[NoiseModel]) -> Option<ModelFit> {
+    model_fit_with(fit, |name, tau_s| noise_variance(name, models, tau_s), |name| noise_walk(name, models))
+}
+
+/// The verdict on `fit`, `variance(group name, block length s)` giving the noise variance of a block mean and
+/// `walk_of(group name)` the rate random walk of its bias (`K`, the unit per sqrt(s)).
+fn model_fit_with(
+    fit: &FitResiduals,
+    variance_of: impl Fn(&str, f64) -> Option<f64>,
+    walk_of: impl Fn(&str) -> f64,
+) -> Option<ModelFit> {
     let groups_present: Vec<usize> = (0..fit.group_names.len()).filter(|g| fit.group.contains(g)).collect();
     let mut groups = Vec::new();
     let mut dwells = Vec::new();
@@ -120,7 +139,7 @@ fn model_fit_with(fit: &FitResiduals, variance_of: impl Fn(&str, f64) -> Option<
         let variance: Option<Vec<f64>> =
             rows.iter().map(|&i| variance_of(name, fit.block[i].duration_s).filter(|v| *v > 0.0)).collect();
         let Some(variance) = variance else { continue };
-        let (group, named) = group_fit(fit, g, &rows, &variance, dwell_cells);
+        let (group, named) = group_fit(fit, g, (&rows, &variance), walk_of(name), dwell_cells);
         groups.push(group);
         dwells.extend(named);
     }
@@ -146,26 +165,37 @@ fn dwell_count(fit: &FitResiduals) -> usize {
 }
 
 /// Group `g`'s fit (its observations `rows`, their noise variances `variance`) and its dwells beyond the
-/// noise model at `alpha` over `dwell_cells`.
+/// noise model at `alpha` over `dwell_cells`. Between the dwells, the dwells' mean residuals are whitened with
+/// the bias's rate random walk `walk_per_sqrt_s` (the noise model's `K`): a bias that wanders by what the
+/// noise model says moves the dwell means by that much, and is not unexplained.
 fn group_fit(
     fit: &FitResiduals,
     g: usize,
-    rows: &[usize],
-    variance: &[f64],
+    (rows, variance): (&[usize], &[f64]),
+    walk_per_sqrt_s: f64,
     dwell_cells: usize,
 ) -> (GroupFit, Vec<DwellFit>) {
     let name = fit.group_names[g].clone();
-    let chi_square: f64 = rows.iter().zip(variance).map(|(&i, v)| fit.residual[i].powi(2) / v).sum();
-    // Per dwell: the weighted sums of the residual and of the weights, the chi-square, the blocks, its label.
-    let mut per_dwell: std::collections::BTreeMap<usize, (f64, f64, f64, usize, u32)> = Default::default();
+    let within_and_means: f64 = rows.iter().zip(variance).map(|(&i, v)| fit.residual[i].powi(2) / v).sum();
+    // Per dwell: the weighted sums of the residual and of the weights, the chi-square, the blocks, its label,
+    // and the sum of its blocks' middle times.
+    let mut per_dwell: std::collections::BTreeMap<usize, (f64, f64, f64, usize, u32, f64)> = Default::default();
     for (&i, v) in rows.iter().zip(variance) {
-        let d = per_dwell.entry(fit.block[i].dwell).or_insert((0.0, 0.0, 0.0, 0, fit.pos[i]));
+        let d = per_dwell.entry(fit.block[i].dwell).or_insert((0.0, 0.0, 0.0, 0, fit.pos[i], 0.0));
         d.0 += fit.residual[i] / v;
         d.1 += 1.0 / v;
         d.2 += fit.residual[i].powi(2) / v;
         d.3 += 1;
+        d.5 += fit.block[i].t_mid_s;
     }
-    let between: f64 = per_dwell.values().map(|d| d.0 * d.0 / d.1).sum();
+    let mut means: Vec<(f64, f64, f64)> =
+        per_dwell.values().map(|d| (d.5 / d.3 as f64, d.0 / d.1, 1.0 / d.1)).collect();
+    means.sort_by(|a, b| a.0.total_cmp(&b.0));
+    let unwhitened: f64 = per_dwell.values().map(|d| d.0 * d.0 / d.1).sum();
+    let (t_s, mean, mean_variance): (Vec<f64>, Vec<f64>, Vec<f64>) =
+        (means.iter().map(|m| m.0).collect(), means.iter().map(|m| m.1).collect(), means.iter().map(|m| m.2).collect());
+    let between: f64 = whiten_walk(walk_per_sqrt_s, &t_s, &mean_variance, &mean).0.iter().map(|e| e * e).sum();
+    let chi_square = within_and_means - unwhitened + between;
     let n = rows.len() as f64;
     let p = fit.parameters[g] as f64;
     let dwells = per_dwell.len() as f64;
@@ -288,11 +318,11 @@ mod tests {
     #[test]
     fn residuals_as_large_as_the_noise_are_explained() {
         let sigma = 1e-3;
-        let fit = model_fit_with(&residuals(sigma, |_| 0.0).fit(), |name, tau| {
+        let variance = |name: &str, tau: f64| {
             assert_eq!((name, tau), ("ax_mps2", 6.0));
             Some(sigma * sigma)
-        })
-        .unwrap();
+        };
+        let fit = model_fit_with(&residuals(sigma, |_| 0.0).fit(), variance, |_| 0.0).unwrap();
         assert_eq!(fit.verdict, "explained");
         let g = &fit.groups[0];
         assert!((g.chi_square / g.dof - 1.0).abs() < 0.4, "{g:?}");
@@ -304,10 +334,8 @@ mod tests {
     fn a_dwell_off_by_more_than_the_noise_is_named_between_the_dwells() {
         // Dwell 3 (pos 4) sits 3 sigma off: its ten blocks give a chi-square of about 90 on 10.
         let sigma = 1e-3;
-        let fit = model_fit_with(&residuals(sigma, |d| if d == 3 { 3.0 * sigma } else { 0.0 }).fit(), |_, _| {
-            Some(sigma * sigma)
-        })
-        .unwrap();
+        let offset = |d: usize| if d == 3 { 3.0 * sigma } else { 0.0 };
+        let fit = model_fit_with(&residuals(sigma, offset).fit(), |_, _| Some(sigma * sigma), |_| 0.0).unwrap();
         assert_eq!(fit.verdict, "unexplained");
         let g = &fit.groups[0];
         assert!(!g.explained);
@@ -318,7 +346,26 @@ mod tests {
     }
 
     #[test]
+    fn dwell_means_that_wander_by_the_noise_models_walk_are_explained() {
+        // The dwell means (100 s apart) follow a random walk of K = 1e-3 per sqrt(s): steps of 1e-2, ten
+        // times the blocks' noise. Without the walk the dwells are unexplained; with the noise model's K the
+        // walk's innovations are its steps over their standard deviations, and the fit is explained.
+        let (sigma, k) = (1e-4, 1e-3);
+        let steps = [0.0, 1.2, -0.4, 0.9, -1.5, 0.3];
+        let walk = |d: usize| steps[..=d].iter().sum::<f64>() * k * 100f64.sqrt();
+        let fit_of = |walk_per_sqrt_s: f64| {
+            model_fit_with(&residuals(sigma, walk).fit(), |_, _| Some(sigma * sigma), |_| walk_per_sqrt_s).unwrap()
+        };
+        let without = fit_of(0.0);
+        assert_eq!(without.verdict, "unexplained", "{without:?}");
+        let with = fit_of(k);
+        assert_eq!(with.verdict, "explained", "{with:?}");
+        let g = &with.groups[0];
+        assert!(g.chi_square_between_dwells / g.dof_between_dwells < 3.0, "{g:?}");
+    }
+
+    #[test]
     fn without_a_noise_model_there_is_no_verdict() {
-        assert!(model_fit_with(&residuals(1e-3, |_| 0.0).fit(), |_, _| None).is_none());
+        assert!(model_fit_with(&residuals(1e-3, |_| 0.0).fit(), |_, _| None, |_| 0.0).is_none());
     }
 }

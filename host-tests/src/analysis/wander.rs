@@ -33,23 +33,30 @@ impl Wander {
     /// innovations' variances (the likelihood's determinant). Linear in `v`: applied to the observations and to
     /// every column alike.
     pub fn whiten(&self, t_s: &[f64], block_s: &[f64], v: &[f64]) -> (Vec<f64>, f64) {
-        let (mut r, mut p, mut log_det) = (0.0, 0.0, 0.0);
-        let mut out = Vec::with_capacity(v.len());
-        for i in 0..v.len() {
-            let dt_s = if i == 0 { 0.0 } else { (t_s[i] - t_s[i - 1]).max(0.0) };
-            p += self.random_walk_per_sqrt_s * self.random_walk_per_sqrt_s * dt_s;
-            let noise = (self.white_per_sqrt_hz * self.white_per_sqrt_hz / block_s[i].max(f64::MIN_POSITIVE))
-                .max(f64::MIN_POSITIVE);
-            let s = p + noise;
-            let e = v[i] - r;
-            out.push(e / s.sqrt());
-            log_det += s.ln();
-            let gain = p / s;
-            r += gain * e;
-            p -= gain * p;
-        }
-        (out, log_det)
+        let white = |b: &f64| {
+            (self.white_per_sqrt_hz * self.white_per_sqrt_hz / b.max(f64::MIN_POSITIVE)).max(f64::MIN_POSITIVE)
+        };
+        let variances: Vec<f64> = block_s.iter().map(white).collect();
+        whiten_walk(self.random_walk_per_sqrt_s, t_s, &variances, v)
     }
+}
+
+/// [`Wander::whiten`] with each value's own white variance given (`variances`, in the values' unit squared).
+pub(super) fn whiten_walk(random_walk_per_sqrt_s: f64, t_s: &[f64], variances: &[f64], v: &[f64]) -> (Vec<f64>, f64) {
+    let (mut r, mut p, mut log_det) = (0.0, 0.0, 0.0);
+    let mut out = Vec::with_capacity(v.len());
+    for i in 0..v.len() {
+        let dt_s = if i == 0 { 0.0 } else { (t_s[i] - t_s[i - 1]).max(0.0) };
+        p += random_walk_per_sqrt_s * random_walk_per_sqrt_s * dt_s;
+        let s = p + variances[i];
+        let e = v[i] - r;
+        out.push(e / s.sqrt());
+        log_det += s.ln();
+        let gain = p / s;
+        r += gain * e;
+        p -= gain * p;
+    }
+    (out, log_det)
 }
 
 /// The random-walk densities the profiles try: none, then from ten times the observations' RMS per square
@@ -173,11 +180,19 @@ pub(super) fn wander_std_errors(problem: &Problem, selection: &Selection, models
     sandwich_std_errors(&model, &white_densities(problem, models))
 }
 
+/// Most candidates times observations [`widen_tested`] refits (each candidate costs a fit of the whole
+/// recording): 10,000 dwells have some 20,000 position-error candidates on 240,000 block means.
+pub(super) const MAX_TESTED_REFITS: usize = 50_000_000;
+
 /// Widens the standard error of every candidate of `selection.tested` (each fitted with the base model
 /// alone) to its sandwich with each channel's random walk of the bias, the walk being the one the base
-/// model's residuals prefer (profiled once per channel, not per candidate). Angles: unchanged.
+/// model's residuals prefer (profiled once per channel, not per candidate). Angles, and recordings past
+/// [`MAX_TESTED_REFITS`]: unchanged (the effects always get theirs, [`wander_std_errors`]).
 pub(super) fn widen_tested(problem: &Problem, selection: &mut Selection, models: &[NoiseModel]) {
     let Some(blocks) = &problem.obs_block else { return };
+    if selection.tested.len().saturating_mul(problem.obs.y.len()) > MAX_TESTED_REFITS {
+        return;
+    }
     let base: Vec<&[f64]> = problem.base.iter().map(|c| c.as_slice()).collect();
     let base_model = BlockModel { obs: &problem.obs, blocks, columns: &base, fit: &selection.base_fit };
     let wanders = group_wanders(&base_model, &white_densities(problem, models));
