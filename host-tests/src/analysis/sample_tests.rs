@@ -1,14 +1,15 @@
 //! The tests on the samples of a recording, per channel, after each dwell's mean and trend are removed:
-//! quantisation (a binomial likelihood ratio on the lattice of the sample differences), vibration
-//! (`vibration`) and correlated noise (`correlated_noise`); and the channel diagnostics (detrended RMS,
-//! whiteness, trends) with the data of the report's noise figures.
+//! quantisation (a binomial likelihood ratio on the lattice of the sample differences, not at the file's
+//! printed digits), every spectral line (`vibration`, one after another) and correlated noise
+//! (`correlated_noise`), each line and the correlated noise estimated again on the thirds of every dwell
+//! (`windows`); and the channel diagnostics (detrended RMS, whiteness, trends) with the data of the report's
+//! noise figures.
 //!
 //! The tests run in two steps, so that the costly one can run while the block selection gives the
 //! Bonferroni `m` (docs/analysis.md#speed-and-memory): [`measure_samples`] computes every statistic, and
-//! [`test_samples`] decides against `alpha / m`. The correlated-noise test runs on the samples after a
-//! vibration found is removed; [`measure_samples`] fits it on the series that the smallest possible `m`
-//! leaves, and [`test_samples`] fits it again on the other series in the rare case the decision at the true
-//! `m` differs.
+//! [`test_samples`] decides against `alpha / m`. The correlated-noise test runs on the samples after the lines
+//! found are removed; [`measure_samples`] fits it on the series that the smallest possible `m` leaves, and
+//! [`test_samples`] fits it again with fewer lines removed in the rare case that fewer pass at the true `m`.
 
 use crate::model::catalogue::{EffectKind, Sensor};
 use crate::stats::linfit::{chi_square_quantile_upper, chi_square_upper};

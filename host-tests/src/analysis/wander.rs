@@ -4,6 +4,11 @@
 //! channel's block means under white block noise plus a random walk of the bias whose size is fitted (a Kalman
 //! filter whose normalised innovations whiten the means and the columns): a term that then fails the criterion
 //! a random walk explains as well, and is marked uncertain with [`WANDER`] as its alias.
+//!
+//! The same wander gives the standard errors that hold on measured noise (docs/analysis.md#windows): the
+//! sandwich of the selection's weighted least squares under white block noise plus the random walk each
+//! channel's block means prefer ([`sandwich_std_errors`]), for the final model's effects and for every
+//! candidate tested against the base model.
 
 use crate::stats::linfit::{chi_square_quantile_upper, fit, LinearFit, Observations};
 
@@ -182,7 +187,7 @@ pub(super) fn wander_std_errors(problem: &Problem, selection: &Selection, models
 
 /// Most candidates times observations [`widen_tested`] refits (each candidate costs a fit of the whole
 /// recording): 10,000 dwells have some 20,000 position-error candidates on 240,000 block means.
-pub(super) const MAX_TESTED_REFITS: usize = 50_000_000;
+const MAX_TESTED_REFITS: usize = 50_000_000;
 
 /// Widens the standard error of every candidate of `selection.tested` (each fitted with the base model
 /// alone) to its sandwich with each channel's random walk of the bias, the walk being the one the base
