@@ -190,17 +190,20 @@ pub(super) fn wander_std_errors(problem: &Problem, selection: &Selection, models
 const MAX_TESTED_REFITS: usize = 50_000_000;
 
 /// Widens the standard error of every candidate of `selection.tested` (each fitted with the base model
-/// alone) to its sandwich with each channel's random walk of the bias, the walk being the one the base
-/// model's residuals prefer (profiled once per channel, not per candidate). Angles, and recordings past
+/// alone) to its sandwich with each channel's random walk of the bias, the walk being the one the final
+/// model's residuals prefer (profiled once per channel, not per candidate: the base model's residuals hold
+/// the effects found, which a walk profiled on them would take for wander). Angles, and recordings past
 /// [`MAX_TESTED_REFITS`]: unchanged (the effects always get theirs, [`wander_std_errors`]).
 pub(super) fn widen_tested(problem: &Problem, selection: &mut Selection, models: &[NoiseModel]) {
     let Some(blocks) = &problem.obs_block else { return };
     if selection.tested.len().saturating_mul(problem.obs.y.len()) > MAX_TESTED_REFITS {
         return;
     }
+    let final_columns = final_columns(problem, selection);
+    let final_refs: Vec<&[f64]> = final_columns.iter().map(|c| c.as_ref()).collect();
+    let final_model = BlockModel { obs: &problem.obs, blocks, columns: &final_refs, fit: &selection.final_fit };
+    let wanders = group_wanders(&final_model, &white_densities(problem, models));
     let base: Vec<&[f64]> = problem.base.iter().map(|c| c.as_slice()).collect();
-    let base_model = BlockModel { obs: &problem.obs, blocks, columns: &base, fit: &selection.base_fit };
-    let wanders = group_wanders(&base_model, &white_densities(problem, models));
     for t in &mut selection.tested {
         let (ci, vi) = t.column;
         let own = problem.candidates[ci].variants[vi].1.dense();
