@@ -82,22 +82,23 @@ pub(super) const NOT_STATIONARY: &str =
 /// The windows' estimates of one term differ beyond their standard errors: their [`scatter`] is beyond the
 /// upper `ALPHA` quantile of chi-square at `WINDOWS - 1` degrees of freedom.
 pub(super) fn not_stationary(windows: &[(f64, f64)]) -> bool {
-    if windows.len() < 2 {
-        return false;
-    }
-    let (estimates, std_errors): (Vec<f64>, Vec<f64>) = windows.iter().copied().unzip();
-    scatter(&estimates, &std_errors) > chi_square_quantile_upper(ALPHA, (windows.len() - 1) as f64)
+    pairs_scatter(windows).is_some_and(|(chi2, dof)| chi2 > chi_square_quantile_upper(ALPHA, dof))
 }
 
 /// The factor a standard error is widened by when its estimates in the windows scatter beyond their own
 /// standard errors: `sqrt(max(1, chi2 / dof))` of [`scatter`] (the Birge ratio); 1 for fewer than two
 /// windows.
 pub(super) fn widening(windows: &[(f64, f64)]) -> f64 {
+    pairs_scatter(windows).map_or(1.0, |(chi2, dof)| (chi2 / dof).max(1.0).sqrt())
+}
+
+/// [`scatter`] of (estimate, standard error) pairs and its degrees of freedom; `None` for fewer than two.
+fn pairs_scatter(windows: &[(f64, f64)]) -> Option<(f64, f64)> {
     if windows.len() < 2 {
-        return 1.0;
+        return None;
     }
     let (estimates, std_errors): (Vec<f64>, Vec<f64>) = windows.iter().copied().unzip();
-    (scatter(&estimates, &std_errors) / (windows.len() - 1) as f64).max(1.0).sqrt()
+    Some((scatter(&estimates, &std_errors), (windows.len() - 1) as f64))
 }
 
 /// The `k`-th of [`WINDOWS`] thirds of every dwell's samples (`k < WINDOWS`).
