@@ -1,6 +1,8 @@
-//! Vibration on the samples: the strongest line of the periodogram summed over dwells (each dwell's mean and
-//! trend removed), against the median of its neighbourhood (a line, not a coloured background), its
-//! frequency refined within a bin, one amplitude and a phase per dwell.
+//! Vibration on the samples: the lines of the periodogram summed over dwells (each dwell's mean and trend
+//! removed), strongest first, each against the median of its neighbourhood (a line, not a coloured
+//! background), its frequency refined within a bin, one amplitude and a phase per dwell. A dwell longer than
+//! the longest transform is searched in consecutive pieces, every sample in one; the frequency and the line
+//! are then fitted on the whole dwells.
 
 use crate::stats::noise::FftPlan;
 
@@ -114,10 +116,10 @@ pub(super) struct LineSearch {
 impl LineSearch {
     /// A search over `dwells`; `None` when a dwell is too short for one.
     pub fn new(dwells: &[Vec<f64>]) -> Option<LineSearch> {
-        let n_max = dwells.iter().map(|d| d.len()).max()?;
         let n_min = dwells.iter().map(|d| d.len()).min()?;
+        let piece_max = pieces(dwells).iter().map(|d| d.len()).max()?;
         (n_min >= MIN_DWELL_SAMPLES)
-            .then(|| LineSearch { len: (n_max.next_power_of_two() * 4).min(1 << 20), bands: Vec::new() })
+            .then(|| LineSearch { len: (piece_max.next_power_of_two() * 4).min(MAX_PIECE), bands: Vec::new() })
     }
 
     /// The strongest line of `dwells` against the local background, outside the bands of the lines found
@@ -125,9 +127,11 @@ impl LineSearch {
     pub fn next(&mut self, dwells: &[Vec<f64>], dt: f64) -> Option<VibrationResult> {
         let n_min = dwells.iter().map(|d| d.len()).min()?;
         let len = self.len;
-        let power = summed_periodogram(dwells, len)?;
-        let (k_hat, background) = strongest_line(&power, len, n_min, dwells.len() as f64, &self.bands)?;
-        let above = |k: &usize| power[*k] > BAND_OVER_BACKGROUND * background * dwells.len() as f64;
+        let pieces = pieces(dwells);
+        let piece_min = pieces.iter().map(|d| d.len()).min()?;
+        let power = summed_periodogram(&pieces, len)?;
+        let (k_hat, background) = strongest_line(&power, len, piece_min, pieces.len() as f64, &self.bands)?;
+        let above = |k: &usize| power[*k] > BAND_OVER_BACKGROUND * background * pieces.len() as f64;
         let low = (0..k_hat).rev().find(|k| !above(k)).unwrap_or(0).min(k_hat.saturating_sub(MIN_HALF_BAND));
         let high = (k_hat..len / 2).find(|k| !above(k)).unwrap_or(len / 2).max(k_hat + MIN_HALF_BAND);
         self.bands.push((low, high));
@@ -136,21 +140,36 @@ impl LineSearch {
     }
 }
 
-/// The periodograms of the dwells (zero-padded to `len`, each over its length), summed; bins 0..len/2. Two
-/// real dwells share one complex transform (`a + i b`), separated by the symmetry of real transforms.
-fn summed_periodogram(dwells: &[Vec<f64>], len: usize) -> Option<Vec<f64>> {
+/// Longest piece of a dwell that one periodogram takes, samples, and the longest transform (a shorter dwell
+/// is zero-padded to four times its length, up to this). A longer dwell's periodogram (for the search only)
+/// is the sum of those of its consecutive pieces of equal length, every sample in one of them: the transform
+/// stays at most this long (8 MiB per buffer), and nothing is thinned. The frequency is then refined, and the
+/// line fitted, on the whole dwells.
+const MAX_PIECE: usize = 1 << 20;
+
+/// The dwells cut into consecutive pieces of at most [`MAX_PIECE`] samples (a shorter dwell is one piece).
+fn pieces(dwells: &[Vec<f64>]) -> Vec<&[f64]> {
+    dwells
+        .iter()
+        .flat_map(|d| {
+            let size = d.len().div_ceil(d.len().div_ceil(MAX_PIECE).max(1)).max(1);
+            d.chunks(size)
+        })
+        .collect()
+}
+
+/// The periodograms of the pieces (zero-padded to `len`, each over its length), summed; bins 0..len/2. Two
+/// real pieces share one complex transform (`a + i b`), separated by the symmetry of real transforms.
+fn summed_periodogram(dwells: &[&[f64]], len: usize) -> Option<Vec<f64>> {
     let plan = FftPlan::new(len).ok()?;
     let mut power = vec![0.0; len / 2];
     let (mut re, mut im) = (vec![0.0; len], vec![0.0; len]);
     let fill = |out: &mut [f64], d: &[f64]| {
         out.fill(0.0);
-        let step = if d.len() > len { d.len() / len + 1 } else { 1 };
-        for (o, v) in out.iter_mut().zip(d.iter().step_by(step)) {
-            *o = *v;
-        }
+        out[..d.len()].copy_from_slice(d);
     };
     for pair in dwells.chunks(2) {
-        fill(&mut re, &pair[0]);
+        fill(&mut re, pair[0]);
         let n_a = pair[0].len() as f64;
         match pair.get(1) {
             None => {
@@ -212,8 +231,12 @@ fn strongest_line(power: &[f64], len: usize, n_min: usize, p: f64, bands: &[(usi
     Some((k_hat, neighbours[neighbours.len() / 2] / (p * (1.0 - 1.0 / (9.0 * p)).powi(3))))
 }
 
-/// Refines the frequency (cycles per sample) by golden section on the summed periodogram, within one bin of
-/// `k_hat`.
+/// Refines the frequency (cycles per sample) within one bin of `k_hat` (bins of `len`) on the summed
+/// periodogram of the whole dwells. When no dwell is longer than the transform, a bin is at most half the
+/// main lobe and a golden section over the two bins finds its peak. A dwell searched in pieces has a narrower
+/// lobe than a bin: the two bins are first scanned at a quarter of the lobe's half-width (the best point is
+/// then on the main lobe, whose power there is at least 0.95 of its peak, above every side lobe), and the
+/// golden section runs between that point's neighbours.
 fn refine_frequency(dwells: &[Vec<f64>], k_hat: usize, len: usize) -> f64 {
     let score = |f: f64| -> f64 {
         dwells
@@ -224,7 +247,23 @@ fn refine_frequency(dwells: &[Vec<f64>], k_hat: usize, len: usize) -> f64 {
             })
             .sum()
     };
-    let (mut a, mut b) = ((k_hat as f64 - 1.0) / len as f64, (k_hat as f64 + 1.0) / len as f64);
+    let (a, b) = ((k_hat as f64 - 1.0) / len as f64, (k_hat as f64 + 1.0) / len as f64);
+    let n_max = dwells.iter().map(Vec::len).max().unwrap_or(0);
+    if len >= n_max {
+        return golden_section_max(a, b, score);
+    }
+    let step = 0.25 / n_max as f64;
+    let points = ((b - a) / step).ceil() as usize;
+    let best = (0..=points)
+        .map(|i| a + (b - a) * i as f64 / points as f64)
+        .map(|f| (f, score(f)))
+        .max_by(|x, y| x.1.total_cmp(&y.1))
+        .map_or(0.5 * (a + b), |(f, _)| f);
+    golden_section_max(best - step, best + step, score)
+}
+
+/// The maximum of `score` on `[a, b]` by 40 steps of golden section (a unimodal `score` assumed).
+fn golden_section_max(mut a: f64, mut b: f64, score: impl Fn(f64) -> f64) -> f64 {
     let gr = 0.5 * (5f64.sqrt() - 1.0);
     let (mut c, mut d) = (b - gr * (b - a), a + gr * (b - a));
     let (mut sc, mut sd) = (score(c), score(d));
@@ -295,6 +334,56 @@ pub(super) fn remove_line(series: &mut [Vec<f64>], v: &VibrationResult, dt: f64)
         for (i, x) in s.iter_mut().enumerate() {
             let ph = w * i as f64;
             *x -= re * ph.cos() - im * ph.sin();
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use rand::SeedableRng;
+    use rand_chacha::ChaCha8Rng;
+
+    use super::*;
+    use crate::model::simulator::normal;
+
+    /// White noise of `sigma` plus a line of `amplitude` at `frequency_hz`, `n` samples at `dt`.
+    fn dwell(n: usize, dt: f64, sigma: f64, amplitude: f64, frequency_hz: f64, seed: u64) -> Vec<f64> {
+        let mut rng = ChaCha8Rng::seed_from_u64(seed);
+        (0..n)
+            .map(|i| {
+                sigma * normal(&mut rng)
+                    + amplitude * (std::f64::consts::TAU * frequency_hz * dt * i as f64 + 0.3).sin()
+            })
+            .collect()
+    }
+
+    #[test]
+    fn the_pieces_of_the_dwells_hold_every_sample_once_in_order() {
+        let dwells = vec![vec![1.0; 10], (0..MAX_PIECE * 2 + 5).map(|i| i as f64).collect::<Vec<_>>()];
+        let pieces = pieces(&dwells);
+        assert_eq!(pieces.len(), 1 + 3);
+        assert!(pieces.iter().all(|p| p.len() <= MAX_PIECE));
+        let joined: Vec<f64> = pieces[1..].iter().flat_map(|p| p.iter().copied()).collect();
+        assert_eq!(joined, dwells[1]);
+    }
+
+    /// A dwell longer than one transform: its line is found at its frequency and amplitude (the periodogram
+    /// once thinned such a dwell, and a line found at 1,000,000 samples was missed at 1,100,000).
+    #[test]
+    fn a_line_in_a_dwell_longer_than_one_transform_is_found() {
+        let dt_s = 1e-3;
+        for (n, seed) in [(1_000_000, 7), (1_100_000, 8)] {
+            let d = vec![dwell(n, dt_s, 1e-3, 2e-4, 37.0, seed)];
+            let mut search = LineSearch::new(&d).expect("a search");
+            let v = search.next(&d, dt_s).expect("a line");
+            assert!((v.frequency_hz - 37.0).abs() < 1e-5, "{n} samples: {} Hz", v.frequency_hz);
+            assert!(
+                (v.amplitude_seen - 2e-4).abs() < 3.0 * v.amplitude_std,
+                "{n}: {} +- {}",
+                v.amplitude_seen,
+                v.amplitude_std
+            );
+            assert!(v.lr > 10_000.0, "{n} samples: likelihood ratio {}", v.lr);
         }
     }
 }
