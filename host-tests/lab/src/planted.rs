@@ -18,9 +18,11 @@
 //! reference offset, position error) are added as that constant; effects that move within a dwell (drift,
 //! warm-up, vibration, correlated noise) are added through a quantiser with the measured record's step, so
 //! that a quantised channel stays on its lattice: for the PSINS increments the remainder is carried from
-//! sample to sample as a pulse-output sensor does (`carry_quantised`), for the imu_tk sampled counts the
-//! sum is rounded again with the record's unknown rounding error drawn uniform (`sample_quantised`); a
-//! planted quantisation requantises the channel to a coarser step.
+//! sample to sample as a pulse-output sensor does, from the record's unknown remainder drawn uniform
+//! (`carried_with_unknown_carry`), for the imu_tk sampled counts the sum is rounded again with the record's
+//! unknown rounding error drawn uniform (`sample_quantised`); a planted quantisation requantises the
+//! channel to a coarser step. The planting itself ([`plant_into`]) takes any record with its poses
+//! ([`Base`]); [`crate::own_poses`] plants in the records' own poses.
 //!
 //! **Magnitudes** ([`draw`]): 10 to 20 standard errors of the effect in that construction. For the effects
 //! linear in their parameter the standard error is the one `sinscal analyze` gives the candidate fitted
@@ -57,6 +59,14 @@ pub enum Source {
 }
 
 impl Source {
+    /// How the record's quantised channels take a planted signal.
+    pub fn quantiser(self) -> Quantiser {
+        match self {
+            Source::Psins => Quantiser::Carried,
+            Source::Imutk => Quantiser::Sampled,
+        }
+    }
+
     /// The data set's folder name.
     pub fn name(self) -> &'static str {
         match self {
@@ -64,6 +74,37 @@ impl Source {
             Source::Imutk => "imu-tk-xsens",
         }
     }
+}
+
+/// How a record's quantised channel is read out, and so how a signal planted on it is quantised
+/// ([`plant_into`]).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Quantiser {
+    /// Increments of a pulse-output sensor (the PSINS record): the quantiser carries its remainder from
+    /// sample to sample (`carried_with_unknown_carry`).
+    Carried,
+    /// Sampled counts (imu_tk, the imucal BMI160): each sample is rounded on its own, with an unknown
+    /// rounding error (`sample_quantised`).
+    Sampled,
+}
+
+/// What planting needs of a base recording: its rows, the site's Earth rate and specific force at rest, and
+/// per channel the record's quantisation step and how its quantiser reads out.
+#[derive(Clone, Copy, Debug)]
+pub struct Base<'a> {
+    /// The untouched recording.
+    pub recording: &'a Recording,
+    /// Per position label, the `C_b^n` the planting takes as the sensor's attitude instead of the one its rows
+    /// state (a record levelled from its own raw accelerometers states attitudes that carry its biases).
+    pub attitudes: Option<&'a BTreeMap<u32, M3>>,
+    /// Earth rate in the navigation frame, rad/s.
+    pub w_n_radps: [f64; 3],
+    /// Specific force at rest in the navigation frame, m/s^2.
+    pub f_n_mps2: [f64; 3],
+    /// Per channel (gx..az): the record's quantisation step, SI, when its samples are quantised.
+    pub steps_si: [Option<f64>; 6],
+    /// How the quantised channels read out.
+    pub quantiser: Quantiser,
 }
 
 /// Body axis names.
@@ -91,6 +132,20 @@ pub struct Construction {
     pub w_n_radps: [f64; 3],
     /// Specific force at rest in the navigation frame, m/s^2.
     pub f_n_mps2: [f64; 3],
+}
+
+impl Construction {
+    /// The construction as the base of a planting.
+    pub fn base(&self) -> Base<'_> {
+        Base {
+            recording: &self.recording,
+            attitudes: None,
+            w_n_radps: self.w_n_radps,
+            f_n_mps2: self.f_n_mps2,
+            steps_si: self.steps_si,
+            quantiser: self.source.quantiser(),
+        }
+    }
 }
 
 /// A stretch of the measured record placed at one pose (`pos` 0: between dwells).
@@ -356,35 +411,35 @@ fn session_drift(
 }
 
 /// The blocks of a dwell of `n` samples, as the analysis cuts them (docs/analysis.md#observations).
-fn block_ranges(n: usize) -> Vec<(usize, usize)> {
+pub(crate) fn block_ranges(n: usize) -> Vec<(usize, usize)> {
     let blocks = (n / BLOCK_SAMPLES).clamp(4, MAX_BLOCKS_PER_DWELL).min(n / 16).max(1);
     (0..blocks).map(|b| (b * n / blocks, (b + 1) * n / blocks)).collect()
 }
 
 /// What the untouched construction says about its noise, for the magnitudes of the planted effects.
 #[derive(Clone, Debug)]
-struct Reference {
+pub(crate) struct Reference {
     /// Standard error of every linear candidate fitted with the base model alone, by the analysis's name.
-    std_error: BTreeMap<String, f64>,
+    pub(crate) std_error: BTreeMap<String, f64>,
     /// Per channel: RMS residual of the block means after the base model.
     block_sigma: [f64; 6],
     /// Per channel: RMS of the samples after each dwell's mean and trend.
-    sample_sigma: [f64; 6],
+    pub(crate) sample_sigma: [f64; 6],
     /// Per channel: one-sided noise density averaged over the dwells (frequencies, Hz; density, SI^2/Hz).
-    spectra: Vec<(Vec<f64>, Vec<f64>)>,
+    pub(crate) spectra: Vec<(Vec<f64>, Vec<f64>)>,
     /// The sample times of every block (all dwells), s.
     block_times: Vec<Vec<f64>>,
     /// Samples in the dwells.
-    samples: usize,
+    pub(crate) samples: usize,
     /// Sample rate, Hz.
-    rate_hz: f64,
+    pub(crate) rate_hz: f64,
     /// Position labels.
     positions: Vec<u32>,
 }
 
 impl Reference {
-    fn new(c: &Construction, untouched: &Analysis) -> Reference {
-        let rec = &c.recording;
+    /// What the analysis `untouched` of `rec` says about its noise.
+    pub(crate) fn new(rec: &Recording, untouched: &Analysis) -> Reference {
         let dwells = rec.dwells();
         let rate_hz = rec.header.rate_hz.unwrap_or(100.0);
         let shortest = dwells.iter().map(|d| d.rows.len()).min().unwrap_or(0);
@@ -428,7 +483,7 @@ impl Reference {
 
     /// The per-sample white noise that would have the channel's measured noise density at `f_hz`: the median
     /// of the density over the bins within 20 % of `f_hz` (at least two bins either side), `sqrt(S rate / 2)`.
-    fn line_sigma(&self, ch: usize, f_hz: f64) -> f64 {
+    pub(crate) fn line_sigma(&self, ch: usize, f_hz: f64) -> f64 {
         let (freqs, density) = &self.spectra[ch];
         let resolution = freqs.get(1).copied().unwrap_or(1.0);
         let half_width = (0.2 * f_hz).max(2.0 * resolution);
@@ -458,7 +513,7 @@ pub struct Prepared {
 /// Analyses the untouched construction.
 pub fn prepare(construction: Construction) -> Result<Prepared, InputError> {
     let untouched = analyze_recording(&construction.recording)?;
-    let reference = Reference::new(&construction, &untouched);
+    let reference = Reference::new(&construction.recording, &untouched);
     Ok(Prepared { construction, untouched, reference })
 }
 
@@ -599,16 +654,23 @@ fn enu_axis(axes: &str) -> usize {
 
 /// The construction with the planted effect (see the module's documentation).
 pub fn plant(c: &Construction, planted: &Planted) -> Recording {
-    let mut rec = c.recording.clone();
+    plant_into(&c.base(), planted)
+}
+
+/// `base`'s recording with the planted effect, by the sensor model (see the module's documentation): the
+/// effects constant within a dwell added as that constant at each row's pose, the moving ones through the
+/// record's quantiser, a planted quantisation as the channel requantised.
+pub fn plant_into(base: &Base, planted: &Planted) -> Recording {
+    let mut rec = base.recording.clone();
     let h = &planted.hidden;
     let ch = if h.sensor == Sensor::Gyro { 0 } else { 3 } + AXES.iter().position(|a| *a == h.axes).unwrap_or(0);
     match h.effect {
         EffectKind::Quantization => requantise(&mut rec, ch, h.value),
         EffectKind::BiasDrift | EffectKind::BiasWarmup | EffectKind::Vibration | EffectKind::CorrelatedNoise => {
             let signal = moving_signal(&rec, planted);
-            let signal = match (c.steps_si[ch], c.source) {
-                (Some(q), Source::Psins) => carry_quantised(&signal, q),
-                (Some(q), Source::Imutk) => sample_quantised(&signal, q, planted.seed ^ 0x5eed),
+            let signal = match (base.steps_si[ch], base.quantiser) {
+                (Some(q), Quantiser::Carried) => carried_with_unknown_carry(&signal, q, planted.seed ^ 0x5eed),
+                (Some(q), Quantiser::Sampled) => sample_quantised(&signal, q, planted.seed ^ 0x5eed),
                 (None, _) => signal,
             };
             for (row, s) in rec.rows.iter_mut().zip(signal) {
@@ -617,14 +679,14 @@ pub fn plant(c: &Construction, planted: &Planted) -> Recording {
         }
         _ => {
             for row in rec.rows.iter_mut() {
-                let delta = static_signal(c, h, row);
+                let delta = static_signal(base, h, row);
                 for (k, d) in delta.iter().enumerate() {
                     add(row, k, *d);
                 }
             }
         }
     }
-    rec.source = format!("{} with {} planted", c.recording.source, candidate_name(h));
+    rec.source = format!("{} with {} planted", base.recording.source, candidate_name(h));
     rec
 }
 
@@ -637,9 +699,12 @@ fn add(row: &mut Row, c: usize, v: f64) {
     }
 }
 
-/// The change of the six channels of `row` that a constant effect makes at its pose.
-fn static_signal(c: &Construction, h: &Hidden, row: &Row) -> [f64; 6] {
-    let cbn = c_b_n(row.pitch_deg, row.roll_deg, row.heading_deg.unwrap_or(0.0));
+/// The change of the six channels of `row` that a constant effect makes at its pose (an unknown heading
+/// taken as 0: the analysis uses the Earth rate of such a pose only along a vertical axis, where the heading
+/// does not matter).
+fn static_signal(c: &Base, h: &Hidden, row: &Row) -> [f64; 6] {
+    let stated = || c_b_n(row.pitch_deg, row.roll_deg, row.heading_deg.unwrap_or(0.0));
+    let cbn = c.attitudes.and_then(|a| a.get(&row.pos).copied()).unwrap_or_else(stated);
     let (w_b, f_b) = (mul_t_vec(&cbn, c.w_n_radps), mul_t_vec(&cbn, c.f_n_mps2));
     let mut delta = [0.0; 6];
     match h.effect {
@@ -668,17 +733,19 @@ fn static_signal(c: &Construction, h: &Hidden, row: &Row) -> [f64; 6] {
 
 /// A drift, warm-up, vibration or Gauss-Markov signal at every row, each sample the average over its
 /// interval as the simulator makes it (the Gauss-Markov process at the sample times, started stationary).
+/// Time runs from the recording's first row, the warm-up's origin in the analysis.
 fn moving_signal(rec: &Recording, planted: &Planted) -> Vec<f64> {
     let h = &planted.hidden;
     let dt = 1.0 / rec.header.rate_hz.unwrap_or(100.0);
     let tau = h.tau_s.unwrap_or(1.0);
     let mut markov_rng = ChaCha8Rng::seed_from_u64(planted.seed ^ 0x5E_ED0F_6A55);
     let mut x = h.value * normal(&mut markov_rng);
-    let mut last_t = rec.rows.first().map_or(0.0, |r| r.t_s);
+    let t0 = rec.rows.first().map_or(0.0, |r| r.t_s);
+    let mut last_t = 0.0;
     rec.rows
         .iter()
         .map(|r| {
-            let t = r.t_s;
+            let t = r.t_s - t0;
             match h.effect {
                 EffectKind::BiasDrift => h.value * (t + 0.5 * dt),
                 EffectKind::BiasWarmup => h.value * tau / dt * ((-t / tau).exp() - (-(t + dt) / tau).exp()),
@@ -708,6 +775,31 @@ fn carry_quantised(signal: &[f64], q: f64) -> Vec<f64> {
             let total = carry + s / q;
             let steps = total.round();
             carry = total - steps;
+            steps * q
+        })
+        .collect()
+}
+
+/// `signal` added to the output of a quantiser that carries its remainder (a pulse-output sensor, as the PSINS
+/// increments are): the record's sample is on the lattice, what the sensor's quantiser carried after each
+/// sample is unknown and is drawn uniform over a step (seeded, independent from sample to sample, as the
+/// remainder of a sensor whose noise spans many steps is), and the quantiser is run again on the record's
+/// input plus `signal` from the same remainder. Every output is a multiple of `q`; with `signal` zero it is
+/// zero (the record comes back unchanged); the running sum of the outputs stays within a step of the
+/// signal's. Quantising the signal alone (`carry_quantised`) would not do: a line whose integral stays within
+/// half a step comes out as no pulse at all (measured: a 0.048 m/s^2 line at 27.7 Hz on the PSINS
+/// accelerometers, step 0.122 m/s^2, vanished; with this quantiser it is found at 0.0489).
+fn carried_with_unknown_carry(signal: &[f64], q: f64, seed: u64) -> Vec<f64> {
+    let mut rng = ChaCha8Rng::seed_from_u64(seed);
+    // The sensor's carry less the record's, after the previous sample: it starts at 0 (the same sensor) and
+    // stays within (-1, 1).
+    let mut lead = 0.0;
+    signal
+        .iter()
+        .map(|s| {
+            let record_carry = rng.random::<f64>() - 0.5;
+            let steps = (lead + record_carry + s / q).round();
+            lead += s / q - steps;
             steps * q
         })
         .collect()
@@ -813,7 +905,7 @@ pub fn effect_label(e: &Effect) -> String {
 
 /// A line at `found_hz` is the one at `reference_hz`: within 2 % of it (at least 0.02 Hz). Without both
 /// frequencies (an effect that is not a line), true.
-fn same_line(reference_hz: Option<f64>, found_hz: Option<f64>) -> bool {
+pub(crate) fn same_line(reference_hz: Option<f64>, found_hz: Option<f64>) -> bool {
     match (reference_hz, found_hz) {
         (Some(r), Some(f)) => (f - r).abs() <= 0.02 * r.max(1.0),
         _ => true,
@@ -981,6 +1073,33 @@ mod tests {
             })
             .collect();
         Recording { source: "synthetic".into(), header, rows, has_gyro: true }
+    }
+
+    #[test]
+    fn a_line_within_half_a_step_survives_the_carrying_quantiser_of_an_unknown_remainder() {
+        // A line of 0.4 steps at 0.277 cycles per sample: its integral stays within half a step, so the
+        // quantiser of the signal alone emits nothing; with the record's unknown remainder it comes through.
+        let (q, n) = (1.0, 20_000);
+        let w = std::f64::consts::TAU * 0.277;
+        let line: Vec<f64> = (0..n).map(|i| 0.4 * q * (w * i as f64).sin()).collect();
+        assert!(carry_quantised(&line, q).iter().all(|v| *v == 0.0));
+        let out = carried_with_unknown_carry(&line, q, 7);
+        assert!(out.iter().all(|v| (v / q - (v / q).round()).abs() < 1e-12), "off the lattice");
+        let (mut c, mut s) = (0.0, 0.0);
+        for (i, v) in out.iter().enumerate() {
+            c += v * (w * i as f64).sin();
+            s += v * (w * i as f64).cos();
+        }
+        let amplitude = 2.0 * c.hypot(s) / n as f64;
+        assert!((amplitude - 0.4 * q).abs() < 0.02 * q, "amplitude {amplitude}");
+        // The running sum follows the signal's within a step; no signal, no change.
+        let (mut sum_out, mut sum_in) = (0.0, 0.0);
+        for (o, l) in out.iter().zip(&line) {
+            sum_out += o;
+            sum_in += l;
+            assert!((sum_out - sum_in).abs() < q, "running sums {sum_out} and {sum_in}");
+        }
+        assert!(carried_with_unknown_carry(&[0.0; 100], q, 7).iter().all(|v| *v == 0.0));
     }
 
     #[test]
