@@ -6,6 +6,7 @@
 //! |---|---|
 //! | [`hidden`] | hidden-effect trials: a simulated Table 1 session with one effect of the catalogue hidden, through `analyze` |
 //! | [`planted`] | the same trials in the measured noise of a real recording |
+//! | [`own_poses`] | planted effects in the three measured data sets with their own poses and time base, at 3, 5 and 10 standard errors |
 //! | [`bound`] | the Cramer-Rao bound of a calibration from its dwell means under coloured noise |
 //! | [`rotation_mc`] | the rotation Monte Carlo: the general estimator with moves against its bound |
 //! | [`compare`] | estimator comparisons: the general estimator against the paper's angle method on the same runs |
@@ -16,5 +17,6 @@ pub mod bound;
 pub mod compare;
 pub mod fuzz;
 pub mod hidden;
+pub mod own_poses;
 pub mod planted;
 pub mod rotation_mc;
