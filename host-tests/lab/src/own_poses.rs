@@ -7,7 +7,8 @@
 //! what the record can show: every linear candidate of the baseline's `tested` list (observable in these
 //! poses), but for the shared tilts of an up/down pair (only single-pose position errors are planted), and
 //! only where the largest planted value plus the baseline's own estimate of that candidate stays within the
-//! catalogue's plausible limit; the warm-up on the channels whose warm-up is tested; vibration and
+//! catalogue's plausible limit; the warm-up on the channels whose warm-up is tested, where the largest size
+//! stays within the plausible limit of its amplitude at some time constant of the range; vibration and
 //! correlated noise on every channel; quantisation on the channels where the smallest planted step is at
 //! least [`QUANTISATION_MARGIN`] times the record's own.
 //!
@@ -24,7 +25,8 @@
 //!   of the channel over the norm of the block-mean shape), the shape taken over the blocks where the
 //!   analysis observes the channel and freed of the base model's columns there (levelled records: the
 //!   accelerometer's share of the force along gravity, the three biases projected; gyros of unknown heading:
-//!   the dwells with the gyro's axis vertical); `tau` 5 to 26 % of the session, at least 10 s;
+//!   the dwells with the gyro's axis vertical); `tau` 5 to 26 % of the session, at least 10 s, and such that
+//!   the largest size stays within the plausible limit of a warm-up's amplitude;
 //! - a vibration line: as [`crate::planted`], the amplitude standard error of a sinusoid in the channel's
 //!   measured noise density at the line, `sqrt(S(f) rate / 2) sqrt(2 / n)`; frequency 1 Hz to 0.4 times the
 //!   sample rate;
@@ -324,8 +326,8 @@ impl Baseline {
                     self.steps_si[ch].is_none_or(|q| self.quantisation_step(ch, smallest) >= QUANTISATION_MARGIN * q)
                 }),
                 EffectKind::BiasWarmup => channels(&|ch| {
-                    self.tested_names()
-                        .any(|n| n == format!("bias_warmup:{} ({})", AXES[ch % 3], Sensor::of_channel(ch)))
+                    let tested = format!("bias_warmup:{} ({})", AXES[ch % 3], Sensor::of_channel(ch));
+                    self.tested_names().any(|n| n == tested) && self.warmup_fits(ch, largest)
                 }),
                 _ => self.linear_targets(effect, largest),
             };
@@ -354,6 +356,23 @@ impl Baseline {
             }
         }
         out
+    }
+
+    /// The range of the warm-up time constants planted, s: 5 to 26 % of the session, at least 10 s.
+    fn warmup_taus_s(&self) -> std::ops::Range<f64> {
+        let lo = (0.05 * self.span_s).max(10.0);
+        lo..(0.26 * self.span_s).max(2.0 * lo)
+    }
+
+    /// Whether a warm-up of `size` standard errors on channel `ch` stays within the plausible limit of its
+    /// amplitude at a time constant of the range (20 tried).
+    fn warmup_fits(&self, ch: usize, size: f64) -> bool {
+        let limit = EffectKind::BiasWarmup.plausible_limit(Sensor::of_channel(ch), AXES[ch % 3], self.span_s, 0.0);
+        let taus = self.warmup_taus_s();
+        (0..20).any(|i| {
+            let tau = taus.start + (taus.end - taus.start) * i as f64 / 19.0;
+            limit.is_none_or(|l| size * self.warmup_unit(ch, tau) <= l)
+        })
     }
 
     /// One standard error of a warm-up of time constant `tau_s` on channel `ch` (see the module's
@@ -530,8 +549,7 @@ pub fn draw(b: &Baseline, effect: EffectKind, size: f64, seed: u64) -> Result<Pl
     let ch = target.channel.unwrap_or(0);
     h.value = match effect {
         EffectKind::BiasWarmup => {
-            let tau_lo_s = (0.05 * b.span_s).max(10.0);
-            let tau = rng.random_range(tau_lo_s..(0.26 * b.span_s).max(2.0 * tau_lo_s));
+            let tau = warmup_tau(b, target, &mut rng)?;
             h.tau_s = Some(tau);
             sign * size * b.warmup_unit(ch, tau)
         }
@@ -549,6 +567,23 @@ pub fn draw(b: &Baseline, effect: EffectKind, size: f64, seed: u64) -> Result<Pl
         _ => sign * size * target.std_error.ok_or_else(|| format!("{effect}: no standard error"))?,
     };
     Ok(Planted { hidden: h, phase_rad: rng.random::<f64>() * std::f64::consts::TAU, seed })
+}
+
+/// A warm-up time constant: 5 to 26 % of the session, at least 10 s, drawn again (at most 100 times) while
+/// the largest size would pass the plausible limit of a warm-up's amplitude (a short time constant leaves
+/// little of the exponential in the blocks, and its standard error is large).
+fn warmup_tau(b: &Baseline, target: &Target, rng: &mut ChaCha8Rng) -> Result<f64, String> {
+    let largest = SIZES.iter().fold(0.0f64, |m, &k| m.max(k));
+    let limit =
+        EffectKind::BiasWarmup.plausible_limit(target.sensor, &target.axes, b.span_s, 0.0).unwrap_or(f64::INFINITY);
+    let ch = target.channel.unwrap_or(0);
+    for _ in 0..100 {
+        let tau = rng.random_range(b.warmup_taus_s());
+        if largest * b.warmup_unit(ch, tau) <= limit {
+            return Ok(tau);
+        }
+    }
+    Err(format!("bias_warmup:{}: no time constant keeps {largest} standard errors within {limit}", target.text()))
 }
 
 /// How one trial came out.
@@ -746,12 +781,12 @@ fn share(k: usize, n: usize) -> String {
 
 /// The campaign's tables: per effect and size found/trials (with how many of those found are uncertain),
 /// the targets, the median planted value in standard errors of the effect named at the planted place
-/// (largest size), the most frequent reason of a miss; then the false alarms per size and the most
-/// frequent, and the run time.
+/// (largest size), the most frequent reason of a miss, the trials with a false alarm (with a certain one);
+/// then the false alarms per size and the most frequent, and the run time.
 pub fn table(c: &Campaign, b: &Baseline) -> String {
     let sizes: Vec<String> = c.sizes.iter().map(|k| format!("{k} SE")).collect();
     let mut out = format!(
-        "### {}\n\n| planted effect | targets | distinct draws per size | {} | largest size in the named effect's own SE (median) | why missed (most often) |\n|---|---|---|{}---|---|\n",
+        "### {}\n\n| planted effect | targets | distinct draws per size | {} | largest size in the named effect's own SE (median) | why missed (most often) | trials with a false alarm (certain) |\n|---|---|---|{}---|---|---|\n",
         c.summary,
         sizes.join(" | "),
         "---|".repeat(sizes.len())
@@ -774,7 +809,10 @@ pub fn table(c: &Campaign, b: &Baseline) -> String {
         ratios.sort_by(f64::total_cmp);
         let ratio = ratios.get(ratios.len() / 2).map_or("-".to_string(), |r| format!("{r:.3}"));
         let why = most_frequent(per_size.iter().flatten().filter_map(|o| o.miss.as_deref()));
-        out.push_str(&format!(" {ratio} | {why} |\n"));
+        let all: Vec<&Outcome> = per_size.iter().flatten().collect();
+        let alarms = all.iter().filter(|o| !o.false_alarms.is_empty()).count();
+        let certain = all.iter().filter(|o| o.false_alarms.iter().any(|(_, u)| !u)).count();
+        out.push_str(&format!(" {ratio} | {why} | {alarms}/{} ({certain}) |\n", all.len()));
     }
     out.push_str(&false_alarm_lines(c));
     out.push_str(&format!("\ntrials: {:.0} s\n", c.seconds));
