@@ -46,8 +46,9 @@
 //! is not the baseline's own (a candidate the baseline names counts only when the estimate moved away from
 //! the baseline's by more than 3 standard errors, or 30 %). FALSE ALARM: an effect named in the trial that
 //! is neither of the planted kind, sensor, axes and position nor in the baseline (same candidate, same
-//! line). An effect is UNCERTAIN when its aliases say so (pose order, the session's halves, the bias's slow
-//! wander, the thirds of the dwells).
+//! line). An effect is UNCERTAIN when the analysis ranks it so (`Effect::uncertain`: an alias of pose order,
+//! the session's halves, the bias's slow wander or the thirds of the dwells, or a time constant at the end
+//! of its grid).
 
 use std::collections::BTreeMap;
 use std::path::Path;
@@ -72,10 +73,6 @@ pub const SIZES: [f64; 3] = [3.0, 5.0, 10.0];
 /// A quantisation is planted only on a channel where its smallest step is at least this many times the
 /// record's own step: a finer one leaves the record's lattice, and one close to it cannot be told from it.
 pub const QUANTISATION_MARGIN: f64 = 1.5;
-
-/// Alias texts that make an effect uncertain (docs/analysis.md#confounding, #windows).
-const UNCERTAIN: [&str; 4] =
-    ["pose order", "the session's halves", "the bias's slow wander", "the thirds of the dwells"];
 
 /// Body axis names.
 const AXES: [&str; 3] = ["x", "y", "z"];
@@ -516,9 +513,9 @@ fn parse_candidate(name: &str, effect: EffectKind, std_error: f64) -> Option<Tar
     Some(Target { sensor, axes, pos, channel, std_error: Some(std_error) })
 }
 
-/// Whether the analysis marks `e` uncertain (its aliases).
+/// Whether the analysis ranks `e` with the uncertain effects ([`Effect::uncertain`]).
 pub fn is_uncertain(e: &Effect) -> bool {
-    e.aliases.iter().any(|a| UNCERTAIN.iter().any(|u| a.contains(u)))
+    e.uncertain
 }
 
 /// "effect:sensor:axes", with ":posP" (position errors) and "+posQ" (a pair's shared tilt).

@@ -165,6 +165,11 @@ pub struct Effect {
     /// The profiled time constant sits at an end of its grid: it is not determined by the data.
     #[serde(skip_serializing_if = "std::ops::Not::not")]
     pub at_grid_edge: bool,
+    /// Ranked with the uncertain effects (docs/analysis.md#verdict): a time term confounded with pose order,
+    /// the session's halves or the bias's wander, a noise term that differs between the thirds of the
+    /// dwells, or a column effect whose time constant is an end of its grid. Set when the effects are ranked.
+    #[serde(skip_serializing_if = "std::ops::Not::not")]
+    pub uncertain: bool,
 }
 
 /// The error an effect induces in the base model's biases when it is left out (docs/analysis.md#verdict).

@@ -75,6 +75,7 @@ fn effect_of(problem: &Problem, selection: &Selection, index: usize) -> Effect {
         aliases: selection.aliases[index].clone(),
         consequence: consequence(problem, selection, index),
         at_grid_edge: cand.variants.len() > 1 && (c.variant == 0 || c.variant + 1 == cand.variants.len()),
+        uncertain: false,
     }
 }
 
@@ -137,13 +138,11 @@ fn misfits_and_confounded(problem: &Problem, selection: &Selection) -> (Vec<Misf
 /// grid's end) and the noise terms that differ between the thirds of the dwells after all of them. Each column effect carries its consequence; the ranking does not sort by it (a small partial alias
 /// of a strong effect can move a bias more than the effect itself: docs/analysis.md#verdict).
 fn rank(effects: &mut [Effect]) {
+    for e in effects.iter_mut() {
+        e.uncertain = is_uncertain(e);
+    }
     let class = |e: &Effect| {
-        let uncertain = e
-            .aliases
-            .iter()
-            .any(|a| a == POSE_ORDER || a == HALVES || a == super::wander::WANDER || a == NOT_STATIONARY);
-        // A column effect whose time constant is an end of its grid is not determined either.
-        if uncertain || (e.at_grid_edge && e.consequence.is_some()) {
+        if e.uncertain {
             2
         } else if e.consequence.is_none() {
             1
@@ -162,6 +161,14 @@ fn rank(effects: &mut [Effect]) {
             }
         })
     });
+}
+
+/// An effect the analysis cannot stand behind: an alias of pose order, the session's halves, the bias's
+/// wander or the thirds of the dwells, or a column effect whose time constant is an end of its grid (not
+/// determined either).
+fn is_uncertain(e: &Effect) -> bool {
+    let alias = |a: &String| a == POSE_ORDER || a == HALVES || a == super::wander::WANDER || a == NOT_STATIONARY;
+    e.aliases.iter().any(alias) || (e.at_grid_edge && e.consequence.is_some())
 }
 
 /// The verdict: the first ranked effect, except a quantisation whose error (step / sqrt(12)) is below half

@@ -21,8 +21,8 @@ use super::candidates::axis_of;
 use super::correlated_noise::{gauss_markov_test, GaussMarkovResult};
 use super::observations::Session;
 use super::parallel::on_cores;
-use super::vibration::{line_in, remove_line, sinc, LineSearch, VibrationResult, MAX_COMPONENTS, MAX_LINES};
-use super::windows::{in_windows, not_stationary, widening, NOT_STATIONARY};
+use super::vibration::{line_in, remove_line, sinc, LineFits, LineSearch, VibrationResult, MAX_COMPONENTS, MAX_LINES};
+use super::windows::{in_windows, in_windows_indexed, not_stationary, widening, window_starts, NOT_STATIONARY};
 use super::{ChannelDiagnostics, Effect, FigureData, ALPHA, CHANNELS, CHANNEL_UNITS};
 
 /// Tests on the samples, counted in the Bonferroni `m`: quantisation, vibration, correlated noise on every
@@ -200,11 +200,16 @@ impl ChannelMeasures {
         let mut lines: Vec<Line> = Vec::new();
         let mut search = LineSearch::new(&series);
         let room = |lines: &[Line]| lines.len() < MAX_COMPONENTS && wandering(lines).len() < MAX_LINES;
-        while let Some(v) = search.as_mut().filter(|_| room(&lines)).and_then(|s| s.next(&series, session.dt)) {
-            if !vibration_criterion(&v, series.len(), n_all, sample_tests(session) as f64).accepted {
+        let starts: Vec<f64> = session.dwells.iter().map(|d| (d.t[0] - session.dwells[0].t[0]) / session.dt).collect();
+        while let Some(fits) =
+            search.as_mut().filter(|_| room(&lines)).and_then(|s| s.next(&series, &starts, session.dt))
+        {
+            let Some(v) = chosen_line(fits, series.len(), n_all, sample_tests(session) as f64) else {
                 break;
-            }
-            let windows = in_windows(&series, |w| Some(line_in(w, &v, session.dt)));
+            };
+            let windows = in_windows_indexed(&series, |k, w| {
+                Some(line_in(w, &window_starts(&series, &starts, k), &v, session.dt))
+            });
             remove_line(&mut series, &v, session.dt);
             lines.push(Line { line: v, windows });
         }
@@ -291,6 +296,7 @@ impl ChannelMeasures {
             aliases: Vec::new(),
             consequence: None,
             at_grid_edge: false,
+            uncertain: false,
         }
     }
 
@@ -411,15 +417,32 @@ struct VibrationCriterion {
     accepted: bool,
     /// Degrees of freedom of the statistic.
     dof: f64,
+    /// Change of the BIC (negative: the line is preferred).
+    delta_bic: f64,
 }
 
-/// Parameters: amplitude, frequency, a phase per dwell (`dwells`). The statistic is tested as chi-square with
-/// one degree per phase and one for the amplitude, Bonferroni over the frequencies searched; `n_all` samples.
+/// Parameters: amplitude, frequency and a phase per dwell (`dwells`), or one phase in the record's time (a
+/// line whose phase holds across the dwells). The statistic is tested as chi-square with one degree per phase
+/// and one for the amplitude, Bonferroni over the frequencies searched; `n_all` samples.
 fn vibration_criterion(v: &VibrationResult, dwells: usize, n_all: usize, m: f64) -> VibrationCriterion {
-    let dof = dwells as f64 + 1.0;
+    let phases = if v.starts.is_some() { 1.0 } else { dwells as f64 };
+    let dof = phases + 1.0;
     let threshold = chi_square_quantile_upper(ALPHA / (m * v.independent_frequencies), dof);
     let delta_bic = -v.lr + (dof + 1.0) * (n_all as f64).ln();
-    VibrationCriterion { accepted: v.lr > threshold && delta_bic < 0.0, dof }
+    VibrationCriterion { accepted: v.lr > threshold && delta_bic < 0.0, dof, delta_bic }
+}
+
+/// Of a line's two fits ([`LineFits`]), the one accepted at `m` with the lower BIC: a line whose phase holds
+/// across many dwells needs two parameters where the phase per dwell needs one per dwell, and a line whose
+/// phase does not hold (a wandering mains line) is better fitted dwell by dwell. `None` when neither passes.
+fn chosen_line(fits: LineFits, dwells: usize, n_all: usize, m: f64) -> Option<VibrationResult> {
+    [Some(fits.per_dwell), fits.coherent]
+        .into_iter()
+        .flatten()
+        .map(|v| (vibration_criterion(&v, dwells, n_all, m), v))
+        .filter(|(c, _)| c.accepted)
+        .min_by(|a, b| a.0.delta_bic.total_cmp(&b.0.delta_bic))
+        .map(|(_, v)| v)
 }
 
 /// Below this fraction of the step, the standard error of a quantisation step is the rounding of f64 and is

@@ -24,7 +24,24 @@ pub(super) struct VibrationResult {
     pub per_dwell: Vec<(f64, f64)>,
     /// The background variance about the line (the samples' unit squared).
     pub background: f64,
+    /// A line whose phase holds across the dwells (one phase in the record's time): each dwell's first
+    /// sample, counted in samples from the first dwell's first. `None`: a phase per dwell.
+    pub starts: Option<Vec<f64>>,
 }
+
+/// The two fits of a line found: one phase per dwell, and (two dwells or more, within
+/// [`COHERENT_BUDGET`]) one phase in the record's time.
+pub(super) struct LineFits {
+    /// Common amplitude, a phase per dwell.
+    pub per_dwell: VibrationResult,
+    /// Common amplitude and phase in the record's time.
+    pub coherent: Option<VibrationResult>,
+}
+
+/// Most frequencies times samples that the scan of a coherent line's frequency may take (its direct DFTs):
+/// the scan needs a quarter of `1 / span` steps over two bins of the longest dwell. Beyond (many short dwells
+/// spread over a long record, or few very long ones), only the phase per dwell is tried.
+const COHERENT_BUDGET: f64 = 1e8;
 
 /// `sin(pi x) / (pi x)`: the response of an integrating sensor's interval average at `x = f dt`.
 pub(super) fn sinc(x: f64) -> f64 {
@@ -122,9 +139,10 @@ impl LineSearch {
             .then(|| LineSearch { len: (piece_max.next_power_of_two() * 4).min(MAX_PIECE), bands: Vec::new() })
     }
 
-    /// The strongest line of `dwells` against the local background, outside the bands of the lines found
-    /// before; its band is excluded from the next calls.
-    pub fn next(&mut self, dwells: &[Vec<f64>], dt: f64) -> Option<VibrationResult> {
+    /// The strongest line of `dwells` (whose first samples are `starts`, counted in samples from the first
+    /// dwell's first) against the local background, outside the bands of the lines found before, fitted
+    /// both ways; its band is excluded from the next calls.
+    pub fn next(&mut self, dwells: &[Vec<f64>], starts: &[f64], dt: f64) -> Option<LineFits> {
         let n_min = dwells.iter().map(|d| d.len()).min()?;
         let len = self.len;
         let pieces = pieces(dwells);
@@ -136,7 +154,9 @@ impl LineSearch {
         let high = (k_hat..len / 2).find(|k| !above(k)).unwrap_or(len / 2).max(k_hat + MIN_HALF_BAND);
         self.bands.push((low, high));
         let f = refine_frequency(dwells, k_hat, len);
-        Some(fit_line(dwells, f, background, n_min, dt))
+        let per_dwell = fit_line(dwells, f, background, n_min, dt);
+        let coherent = refine_coherent(dwells, starts, f).map(|fc| fit_coherent(dwells, starts, fc, background, dt));
+        Some(LineFits { per_dwell, coherent })
     }
 }
 
@@ -316,14 +336,90 @@ fn fit_line(dwells: &[Vec<f64>], f: f64, background: f64, n_min: usize, dt: f64)
         independent_frequencies: (n_min as f64 / 2.0).max(1.0),
         per_dwell,
         background,
+        starts: None,
     }
 }
 
-/// The line `v` fitted again on other samples (a window of the dwells it was found in), at its frequency
-/// and against its background: the amplitude seen and its standard error.
-pub(super) fn line_in(dwells: &[Vec<f64>], v: &VibrationResult, dt: f64) -> (f64, f64) {
+/// The coherent sum `Z = sum_p X_p e^{-i w s_p}` of the dwells' DFTs at `f` cycles per sample, each turned to
+/// the record's time by its first sample `s_p`; and the dwells' own `X_p`.
+fn coherent_sum(dwells: &[Vec<f64>], starts: &[f64], f: f64) -> ((f64, f64), Vec<(f64, f64)>) {
+    let per_dwell: Vec<(f64, f64)> = dwells.iter().map(|d| dft_at(d, f)).collect();
+    let (mut zr, mut zi) = (0.0, 0.0);
+    for ((re, im), s) in per_dwell.iter().zip(starts) {
+        let ph = std::f64::consts::TAU * f * s;
+        let (c, sn) = (ph.cos(), -ph.sin());
+        zr += re * c - im * sn;
+        zi += re * sn + im * c;
+    }
+    ((zr, zi), per_dwell)
+}
+
+/// The frequency (cycles per sample) of a line whose phase holds across the dwells, near the frequency `f`
+/// refined with a phase per dwell: the coherent power `|Z|^2` is scanned over one bin of the longest dwell on
+/// either side at a quarter of `1 / span` (span: first to last sample of the record's dwells), then refined
+/// by golden section between the best point's neighbours. `None` for one dwell (the two fits are the same)
+/// or when the scan passes [`COHERENT_BUDGET`].
+fn refine_coherent(dwells: &[Vec<f64>], starts: &[f64], f: f64) -> Option<f64> {
+    if dwells.len() < 2 || starts.len() != dwells.len() {
+        return None;
+    }
+    let n_max = dwells.iter().map(Vec::len).max()? as f64;
+    let n_all = dwells.iter().map(Vec::len).sum::<usize>() as f64;
+    let span = starts.last()? + dwells.last()?.len() as f64 - starts[0];
+    let step = 0.25 / span;
+    let points = (2.0 / n_max / step).ceil();
+    if !(points.is_finite() && points >= 1.0 && points * n_all <= COHERENT_BUDGET) {
+        return None;
+    }
+    let score = |f: f64| {
+        let ((zr, zi), _) = coherent_sum(dwells, starts, f);
+        zr * zr + zi * zi
+    };
+    let (a, b) = (f - 1.0 / n_max, f + 1.0 / n_max);
+    let best = (0..=points as usize)
+        .map(|i| a + (b - a) * i as f64 / points)
+        .map(|f| (f, score(f)))
+        .max_by(|x, y| x.1.total_cmp(&y.1))
+        .map(|(f, _)| f)?;
+    Some(golden_section_max(best - step, best + step, score))
+}
+
+/// One amplitude and one phase in the record's time at `f` cycles per sample: the reduction of the residual
+/// sum of squares is `2 |Z|^2 / N` ([`coherent_sum`]), amplitude `2 |Z| / N`, and each dwell's complex
+/// amplitude is `(2 Z / N) e^{i w s_p}`. The frequencies searched are those of the whole span.
+fn fit_coherent(dwells: &[Vec<f64>], starts: &[f64], f: f64, background: f64, dt: f64) -> VibrationResult {
+    let ((zr, zi), _) = coherent_sum(dwells, starts, f);
+    let total = dwells.iter().map(Vec::len).sum::<usize>() as f64;
+    let (cr, ci) = (2.0 * zr / total, 2.0 * zi / total);
+    let per_dwell = starts
+        .iter()
+        .map(|s| {
+            let ph = std::f64::consts::TAU * f * s;
+            (cr * ph.cos() - ci * ph.sin(), cr * ph.sin() + ci * ph.cos())
+        })
+        .collect();
+    let span = starts.last().copied().unwrap_or(0.0) + dwells.last().map_or(0, Vec::len) as f64 - starts[0];
+    VibrationResult {
+        frequency_hz: f / dt,
+        amplitude_seen: cr.hypot(ci),
+        amplitude_std: (2.0 * background / total).sqrt(),
+        lr: 2.0 * (zr * zr + zi * zi) / total / background,
+        independent_frequencies: (span / 2.0).max(1.0),
+        per_dwell,
+        background,
+        starts: Some(starts.to_vec()),
+    }
+}
+
+/// The line `v` fitted again on other samples (a window of the dwells it was found in, whose first samples
+/// are `starts` in the counting of `v`'s), at its frequency, against its background and with its phases (one
+/// per dwell, or one in the record's time): the amplitude seen and its standard error.
+pub(super) fn line_in(dwells: &[Vec<f64>], starts: &[f64], v: &VibrationResult, dt: f64) -> (f64, f64) {
     let n_min = dwells.iter().map(Vec::len).min().unwrap_or(0);
-    let refit = fit_line(dwells, v.frequency_hz * dt, v.background, n_min, dt);
+    let refit = match v.starts {
+        Some(_) => fit_coherent(dwells, starts, v.frequency_hz * dt, v.background, dt),
+        None => fit_line(dwells, v.frequency_hz * dt, v.background, n_min, dt),
+    };
     (refit.amplitude_seen, refit.amplitude_std)
 }
 
@@ -375,7 +471,7 @@ mod tests {
         for (n, seed) in [(1_000_000, 7), (1_100_000, 8)] {
             let d = vec![dwell(n, dt_s, 1e-3, 2e-4, 37.0, seed)];
             let mut search = LineSearch::new(&d).expect("a search");
-            let v = search.next(&d, dt_s).expect("a line");
+            let v = search.next(&d, &[0.0], dt_s).expect("a line").per_dwell;
             assert!((v.frequency_hz - 37.0).abs() < 1e-5, "{n} samples: {} Hz", v.frequency_hz);
             assert!(
                 (v.amplitude_seen - 2e-4).abs() < 3.0 * v.amplitude_std,

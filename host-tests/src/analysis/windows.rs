@@ -109,7 +109,21 @@ pub(super) fn window_of_samples(series: &[Vec<f64>], k: usize) -> Vec<Vec<f64>> 
 /// A term's estimate and standard error by `each` on every [`window_of_samples`] of `series`; empty when a
 /// window gives none.
 pub(super) fn in_windows(series: &[Vec<f64>], each: impl Fn(&[Vec<f64>]) -> Option<(f64, f64)>) -> Vec<(f64, f64)> {
-    (0..WINDOWS).map(|k| each(&window_of_samples(series, k))).collect::<Option<Vec<_>>>().unwrap_or_default()
+    in_windows_indexed(series, |_, w| each(w))
+}
+
+/// [`in_windows`] with each window's index `k` given to `each`.
+pub(super) fn in_windows_indexed(
+    series: &[Vec<f64>],
+    each: impl Fn(usize, &[Vec<f64>]) -> Option<(f64, f64)>,
+) -> Vec<(f64, f64)> {
+    (0..WINDOWS).map(|k| each(k, &window_of_samples(series, k))).collect::<Option<Vec<_>>>().unwrap_or_default()
+}
+
+/// The first samples of the `k`-th [`window_of_samples`] of `series`, whose dwells start at `starts` (samples
+/// in the record's time).
+pub(super) fn window_starts(series: &[Vec<f64>], starts: &[f64], k: usize) -> Vec<f64> {
+    series.iter().zip(starts).map(|(d, s)| s + (d.len() * k / WINDOWS) as f64).collect()
 }
 
 /// The window (0, 1 or 2) of each observation: the third of its dwell's blocks of its group it lies in, in
