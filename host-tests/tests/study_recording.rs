@@ -190,7 +190,7 @@ fn cli_refusals_are_one_line_exit_1() {
 /// agree with the built-in study of the whole set within the stated tolerances (a tenth of the record is gone,
 /// and the halves of the gain split elsewhere): white std within 10 %, the long-tau ratios of the horizontal
 /// channels above 2 in both and within a factor 1.5, sway correlations within 0.1; and the gate keeps no
-/// sinusoid on any channel in either (the Allan fit's sinusoids are 2.5 to 30 x larger than direct fits).
+/// sinusoid on any channel in either (the Allan fit's sinusoids are 2.5 to 42 x larger than direct fits).
 #[test]
 fn real_psins_reimported_and_cut_studied_by_path() {
     let Some(dir) = data_dir() else { return };

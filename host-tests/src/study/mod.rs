@@ -1,7 +1,8 @@
 //! `sinscal study`: measured data against a SIMULATION of them, the disagreement named and the model extended.
 //!
 //! For one of the three measured data sets (PSINS laser gyro, imucal Ferraris session, imu_tk Xsens session;
-//! docs/data.md) a study
+//! docs/data.md) or any recording given by path ([`recording`]: single pose or at least six poses, labelled
+//! unless levelled from its own accelerometers, gravity and rate from its header) a study
 //! 1. fits the BASE model: in every static pose a constant mean per channel plus white noise. The white noise's
 //!    standard deviation per sample is the data's sample-to-sample noise, the overlapping Allan deviation at the
 //!    shortest tau (one sample), which equals the RMS of the first differences divided by sqrt 2 (pooled over the
@@ -14,7 +15,10 @@
 //! 4. names the cause from those numbers ([`Cause`]);
 //! 5. extends the model (IEEE Std 952 noise terms with a generator for them; accelerometer scale factors and
 //!    misalignments; gyro g-sensitivity or drift; the Ferraris turns' gyro scale factors);
-//! 6. measures the gain on data not used for the fit (second half of the record, odd poses, or the left-out pose).
+//! 6. measures the gain on data not used for the fit (second half of the record, odd poses, or the left-out pose);
+//!    a term of the extended noise model stays only when it improves the held-out half significantly (the gate
+//!    of [`noise_extension`]: chi^2 rise of at least max(9, 10 %) when it is removed; a sinusoid must also be
+//!    found by a direct fit), and the dropped terms are reported with why.
 //!
 //! Every simulated number is labelled SIMULATION. Units inside: SI; the human text says its units. What the
 //! studies find: docs/data.md#what-sinscal-study-finds; the command: docs/cli.md#study.
@@ -22,8 +26,9 @@
 //! | file | what |
 //! |---|---|
 //! | `mod.rs` | the data sets, the result types, reading a data set and [`run`] |
+//! | [`recording`] | any recording by path: which study, poses labelled or not, gravity, rate, turns |
 //! | [`noise`] | one channel's noise: the white base model, its SIMULATION, the Allan disagreement |
-//! | [`noise_extension`] | the IEEE 952 (and band-limited) noise model: its fit and its gain on the second half |
+//! | [`noise_extension`] | the IEEE 952 (and band-limited) noise model: its fit, the held-out gate of its terms, its gain on the second half |
 //! | [`generate`] | the seeded noise generators of the SIMULATIONs |
 //! | [`psins`] | the single-pose study (PSINS laser gyro): noise and the vehicle sway test |
 //! | [`multi_pose`] | the pose studies (Ferraris, imu_tk): poses, noise, SIMULATIONs, held-out gains |

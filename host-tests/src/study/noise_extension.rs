@@ -298,8 +298,9 @@ fn gate_terms(
     ps: &[&AllanPoint],
     second: &[f64],
     rate_hz: f64,
+    allow_extra: bool,
 ) -> Option<(Vec<f64>, Option<ExtraShape>, Vec<TermGate>)> {
-    let (mut c, shape) = fit_masked(pf, ALL)?;
+    let (mut c, shape) = fit_masked(pf, [true, true, true, true, true, allow_extra])?;
     let mut mask: Mask = [true, true, true, true, true, shape.is_some()];
     let mut verdicts = Vec::new();
     loop {
@@ -409,6 +410,40 @@ fn dominant_term(t: &NoiseTerms, tau: f64) -> &'static str {
     parts.iter().max_by(|a, b| a.1.total_cmp(&b.1)).map_or("white", |p| p.0)
 }
 
+/// The gate run twice, with and without the band-limited term (which can stand in for an IEEE term on the first
+/// half, a Gauss-Markov process for a rate random walk): the model with a band-limited term is taken only when
+/// its held-out chi^2 is significantly lower ([`significant`]) than the gated IEEE-only model's; otherwise its
+/// band-limited term is reported dropped beside the IEEE-only model's verdicts.
+type Gated = (Vec<f64>, Option<ExtraShape>, Vec<TermGate>);
+fn with_or_without_extra(pf: &[&AllanPoint], ps: &[&AllanPoint], second: &[f64], rate_hz: f64) -> Option<Gated> {
+    let ieee = gate_terms(pf, ps, second, rate_hz, false)?;
+    let Some(full) = gate_terms(pf, ps, second, rate_hz, true) else { return Some(ieee) };
+    let Some(extra) = full.1 else {
+        // The band-limited term was dropped inside the run with it: its verdict goes beside the IEEE-only model's.
+        let (c, shape, mut gate) = ieee;
+        gate.extend(full.2.into_iter().filter(|g| !TERM_NAMES.contains(&g.term.as_str())));
+        return Some((c, shape, gate));
+    };
+    let (x_full, x_ieee) = (held_out_chi2(ps, &full.0, full.1), held_out_chi2(ps, &ieee.0, None));
+    if significant(x_full, x_ieee) {
+        return Some(full);
+    }
+    let (c, shape, mut gate) = ieee;
+    gate.push(TermGate {
+        term: term_name(EXTRA, Some(extra)),
+        kept: false,
+        chi2_with: x_full,
+        chi2_without: x_ieee,
+        reason: format!(
+            "held-out chi^2 {x_full:.1} with it (and its own gated IEEE terms), {x_ieee:.1} for the gated IEEE \
+             terms alone (fall {:.1} < max({GATE_MIN_DELTA_CHI2}, {:.0} %))",
+            x_ieee - x_full,
+            100.0 * GATE_MIN_RELATIVE_RISE
+        ),
+    });
+    Some((c, shape, gate))
+}
+
 /// The last step of the gate: the extended model as a whole against the base model (white noise of the first
 /// half's sample-to-sample std, coefficients `base_c`) on the held-out points `ps`, by the same rule
 /// ([`significant`]). When the extension is not significantly better, every kept term is dropped and the extended
@@ -462,7 +497,7 @@ pub(crate) fn held_out_noise_extension(
     let sigma_first = white_std(&[first]);
     let base_c = [0.0, sigma_first * sigma_first / rate_hz, 0.0, 0.0, 0.0];
     let (c_first, shape_first, gate) =
-        gate_terms(&pf, &ps, second, rate_hz).unwrap_or_else(|| (base_c.to_vec(), None, Vec::new()));
+        with_or_without_extra(&pf, &ps, second, rate_hz).unwrap_or_else(|| (base_c.to_vec(), None, Vec::new()));
     let (c_first, shape_first, gate) = gate_against_base(c_first, shape_first, gate, &ps, &base_c);
     let mut kept: Mask = [false, true, false, false, false, shape_first.is_some()];
     for (i, name) in TERM_NAMES.iter().enumerate() {
