@@ -1,17 +1,15 @@
-//! `sinscal study DATASET --report DIR`: a measured data set against a SIMULATION of it: base model,
-//! disagreement, cause, extended model, gain on held-out data.
+//! `sinscal study DATASET|RECORDING --report DIR`: a measured data set or any recording against a SIMULATION of
+//! it: base model, disagreement, cause, extended model, gain on held-out data.
 
 use std::path::PathBuf;
-
-use crate::study::Dataset;
 
 /// Arguments of `sinscal study`.
 #[derive(clap::Args)]
 pub struct Args {
-    /// The data set.
-    #[arg(value_enum)]
-    dataset: Dataset,
-    /// The data directory (default: $SINSCAL_DATA).
+    /// A recording file (an existing file wins), or a data set: psins, ferraris or imutk.
+    #[arg(value_name = "DATASET|RECORDING")]
+    target: String,
+    /// The data directory of the data sets (default: $SINSCAL_DATA); not used for a recording.
     #[arg(long)]
     data: Option<PathBuf>,
     /// Directory for summary.md and the figures.
@@ -24,5 +22,5 @@ pub struct Args {
 
 /// Runs `sinscal study`.
 pub fn run(args: Args) -> anyhow::Result<()> {
-    crate::study::run(args.dataset, args.data.as_deref(), &args.report, args.json.as_deref()).map(|_| ())
+    crate::study::run(&args.target, args.data.as_deref(), &args.report, args.json.as_deref()).map(|_| ())
 }

@@ -1,7 +1,8 @@
 //! `sinscal study`: measured data against a SIMULATION of them, the disagreement named and the model extended.
 //!
 //! For one of the three measured data sets (PSINS laser gyro, imucal Ferraris session, imu_tk Xsens session;
-//! docs/data.md) a study
+//! docs/data.md) or any recording given by path ([`recording`]: single pose or at least six poses, labelled
+//! unless levelled from its own accelerometers, gravity and rate from its header) a study
 //! 1. fits the BASE model: in every static pose a constant mean per channel plus white noise. The white noise's
 //!    standard deviation per sample is the data's sample-to-sample noise, the overlapping Allan deviation at the
 //!    shortest tau (one sample), which equals the RMS of the first differences divided by sqrt 2 (pooled over the
@@ -14,7 +15,10 @@
 //! 4. names the cause from those numbers ([`Cause`]);
 //! 5. extends the model (IEEE Std 952 noise terms with a generator for them; accelerometer scale factors and
 //!    misalignments; gyro g-sensitivity or drift; the Ferraris turns' gyro scale factors);
-//! 6. measures the gain on data not used for the fit (second half of the record, odd poses, or the left-out pose).
+//! 6. measures the gain on data not used for the fit (second half of the record, odd poses, or the left-out pose);
+//!    a term of the extended noise model stays only when it improves the held-out half significantly (the gate
+//!    of [`noise_extension`]: chi^2 rise of at least max(9, 10 %) when it is removed; a sinusoid must also be
+//!    found by a direct fit), and the dropped terms are reported with why.
 //!
 //! Every simulated number is labelled SIMULATION. Units inside: SI; the human text says its units. What the
 //! studies find: docs/data.md#what-sinscal-study-finds; the command: docs/cli.md#study.
@@ -22,8 +26,9 @@
 //! | file | what |
 //! |---|---|
 //! | `mod.rs` | the data sets, the result types, reading a data set and [`run`] |
+//! | [`recording`] | any recording by path: which study, poses labelled or not, gravity, rate, turns |
 //! | [`noise`] | one channel's noise: the white base model, its SIMULATION, the Allan disagreement |
-//! | [`noise_extension`] | the IEEE 952 (and band-limited) noise model: its fit and its gain on the second half |
+//! | [`noise_extension`] | the IEEE 952 (and band-limited) noise model: its fit, the held-out gate of its terms, its gain on the second half |
 //! | [`generate`] | the seeded noise generators of the SIMULATIONs |
 //! | [`psins`] | the single-pose study (PSINS laser gyro): noise and the vehicle sway test |
 //! | [`multi_pose`] | the pose studies (Ferraris, imu_tk): poses, noise, SIMULATIONs, held-out gains |
@@ -43,6 +48,7 @@ pub mod multi_pose;
 pub mod noise;
 pub mod noise_extension;
 pub mod psins;
+pub mod recording;
 pub mod report;
 pub mod rests;
 pub mod rotations;
@@ -59,7 +65,7 @@ use crate::model::synth::{mul_vec, DEG_PER_HOUR, M3, MICRO_G};
 use crate::stats::noise::NoiseTerms;
 use crate::stats::solve::inverse3;
 use multi_pose::{study_multi_pose, PoseKind};
-use noise_extension::ExtraTerm;
+use noise_extension::{ExtraTerm, TermGate};
 use psins::study_single_pose;
 
 /// Seed of every SIMULATION of a study (the same seed gives the same numbers).
@@ -155,9 +161,9 @@ impl ChannelNoise {
 /// The IEEE 952 noise extension of one channel and its gain on held-out data.
 #[derive(Clone, Debug, PartialEq)]
 pub struct NoiseExtension {
-    /// Terms fitted to the whole record's ADEV (Q u*s, N u*sqrt(s), B u, K u/sqrt(s), R u/s; u = rad/s or m/s^2).
+    /// The terms kept by the held-out gate, refitted to the whole record's ADEV (Q u*s, N u*sqrt(s), B u, K u/sqrt(s), R u/s; u = rad/s or m/s^2).
     pub terms_all: NoiseTerms,
-    /// Terms fitted to the first half's ADEV (used for the held-out evaluation).
+    /// The kept terms fitted to the first half's ADEV (used for the held-out evaluation).
     pub terms_first_half: NoiseTerms,
     /// A band-limited term fitted beside the IEEE terms on the whole record, when it improves the fit (the
     /// catalogue's `correlated_noise` or `vibration`: sway and other motion).
@@ -174,6 +180,15 @@ pub struct NoiseExtension {
     pub held_out_rms_log10_base: f64,
     /// The same for the extended model (dimensionless).
     pub held_out_rms_log10_extended: f64,
+    /// Held-out chi^2 of the base model (white, std of the first half) on the second half's Allan points:
+    /// sum of (ln(ADEV data / ADEV model) / relative uncertainty)^2 (dimensionless).
+    pub held_out_chi2_base: f64,
+    /// The same for the gated extended model of the first half (dimensionless).
+    pub held_out_chi2_extended: f64,
+    /// Number of Allan points of the second half in those chi^2.
+    pub held_out_points: usize,
+    /// The held-out verdict on each term of the extension (kept or dropped, and why).
+    pub gate: Vec<TermGate>,
     /// The term that dominates the fitted model at the long tau: "white", "quantization", "bias instability",
     /// "rate random walk" or "rate ramp".
     pub dominant_term: &'static str,
@@ -496,14 +511,25 @@ pub fn ferraris_turns(rec: &Recording, labels: &Path) -> Result<Vec<LabelledTurn
     Ok(turns)
 }
 
-/// Runs `sinscal study`: reads the data set, writes `summary.md` and the figures into `report_dir` and, with
-/// `json`, the JSON ('-' = stdout, then the summary is not printed). Returns the study.
+/// Runs `sinscal study`: reads the data set or the recording ([`recording::target_of`]), writes `summary.md`
+/// and the figures into `report_dir` and, with `json`, the JSON ('-' = stdout, then the summary is not printed).
+/// Returns the study.
 pub fn run(
-    dataset: Dataset,
+    target: &str,
     data_dir: Option<&Path>,
     report_dir: &Path,
     json_path: Option<&Path>,
 ) -> anyhow::Result<Study> {
+    let study = match recording::target_of(target)? {
+        recording::Target::Recording(path) => recording::study_recording(&path)?,
+        recording::Target::Dataset(dataset) => study_dataset(dataset, &resolve_data_dir(data_dir)?)?,
+    };
+    crate::study::report::write_report(&study, report_dir, json_path)?;
+    Ok(study)
+}
+
+/// The data directory of the built-in data sets: `data_dir`, else $SINSCAL_DATA; it must be a directory.
+fn resolve_data_dir(data_dir: Option<&Path>) -> Result<PathBuf, InputError> {
     let data_dir: PathBuf = match data_dir {
         Some(d) => d.to_path_buf(),
         None => std::env::var_os("SINSCAL_DATA").map(PathBuf::from).ok_or_else(|| {
@@ -511,9 +537,7 @@ pub fn run(
         })?,
     };
     if !data_dir.is_dir() {
-        return Err(InputError::file(&data_dir.display().to_string(), "not a directory (the data directory)").into());
+        return Err(InputError::file(&data_dir.display().to_string(), "not a directory (the data directory)"));
     }
-    let study = study_dataset(dataset, &data_dir)?;
-    crate::study::report::write_report(&study, report_dir, json_path)?;
-    Ok(study)
+    Ok(data_dir)
 }

@@ -16,7 +16,8 @@ use crate::io::recording::{Dwell, Recording};
 /// How the poses' orientations are known.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub enum PoseKind {
-    /// imucal labels: each pose has a known up axis; the turns are labelled too.
+    /// Each pose has a known up axis, from its recorded pitch and roll (imucal labels, a turntable); the turns
+    /// are labelled too.
     Labelled,
     /// No labels: only |f| = g is known (imu_tk).
     Unlabelled,
@@ -41,7 +42,7 @@ pub fn study_multi_pose(
         return Err(InputError::file(&rec.source, format!("{} static poses: a study needs at least 6", dwells.len())));
     }
     let (noise, sigma) = pose_noise(&dwells, rate_hz, seed);
-    let mut poses = static_poses(rec, kind);
+    let mut poses = static_poses(rec, kind, dataset);
     let means: Vec<[f64; 3]> = poses.iter().map(|p| p.mean_force_mps2).collect();
     let ups: Vec<[f64; 3]> = poses.iter().map(|p| p.up_b.unwrap_or([0.0, 0.0, 1.0])).collect();
     let (base, extended, method) = fit_models(kind, &means, &ups, g, &rec.source)?;
@@ -110,26 +111,27 @@ fn pose_noise(dwells: &[Dwell<'_>], rate_hz: f64, seed: u64) -> (Vec<ChannelNois
     (noise, sigma)
 }
 
-/// The static poses of `rec` with their means, named and (Ferraris) given their labelled up axes; the norms are
-/// filled in later; the odd poses (1, 3, ... in record order) are marked held out.
-fn static_poses(rec: &Recording, kind: PoseKind) -> Vec<Pose> {
+/// The static poses of `rec` with their means, named (the Ferraris labels for the `ferraris` data set) and, when
+/// labelled, given the up axes of their recorded pitch and roll; the norms are filled in later; the odd poses
+/// (1, 3, ... in record order) are marked held out.
+fn static_poses(rec: &Recording, kind: PoseKind, dataset: &str) -> Vec<Pose> {
     position_stats(rec)
         .iter()
         .enumerate()
         .map(|(k, s)| Pose {
             pos: s.pos,
             name: match kind {
-                PoseKind::Labelled => FERRARIS_POSES
+                PoseKind::Labelled if dataset == "ferraris" => FERRARIS_POSES
                     .iter()
                     .find(|p| p.pos == s.pos)
                     .map_or(format!("pose {}", s.pos), |p| p.label.to_string()),
-                PoseKind::Unlabelled => format!("pose {}", s.pos),
+                _ => format!("pose {}", s.pos),
             },
             samples: s.samples,
             t_mid_s: 0.5 * (s.first_t_s + s.last_t_s),
             mean_rate_radps: s.mean_rate_b_radps,
             mean_force_mps2: s.mean_force_b_mps2,
-            up_b: if kind == PoseKind::Labelled { labelled_up(s.pos) } else { None },
+            up_b: if kind == PoseKind::Labelled { Some(labelled_up(s.pitch_deg, s.roll_deg)) } else { None },
             norm_minus_g_data_mps2: 0.0,
             norm_minus_g_base_sim_mps2: 0.0,
             norm_minus_g_extended_sim_mps2: 0.0,
@@ -140,10 +142,9 @@ fn static_poses(rec: &Recording, kind: PoseKind) -> Vec<Pose> {
         .collect()
 }
 
-/// The up direction in the body of Ferraris pose `pos` from its labelled pitch and roll (exact zeros kept).
-fn labelled_up(pos: u32) -> Option<[f64; 3]> {
-    let p = FERRARIS_POSES.iter().find(|p| p.pos == pos)?;
-    let (st, ct) = p.pitch_deg.to_radians().sin_cos();
-    let (sg, cg) = p.roll_deg.to_radians().sin_cos();
-    Some([-sg * ct, st, cg * ct].map(|v: f64| if v.abs() < 1e-12 { 0.0 } else { v }))
+/// The up direction in the body of a pose of labelled pitch and roll, deg (exact zeros kept).
+fn labelled_up(pitch_deg: f64, roll_deg: f64) -> [f64; 3] {
+    let (st, ct) = pitch_deg.to_radians().sin_cos();
+    let (sg, cg) = roll_deg.to_radians().sin_cos();
+    [-sg * ct, st, cg * ct].map(|v: f64| if v.abs() < 1e-12 { 0.0 } else { v })
 }

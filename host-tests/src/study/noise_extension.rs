@@ -81,61 +81,112 @@ fn extended_basis(tau: f64, extra: Option<ExtraShape>) -> Vec<f64> {
     b
 }
 
+/// The columns of the extended basis a fit uses: quantization, white, bias instability, rate random walk, rate
+/// ramp, band-limited term (the last only with a shape).
+type Mask = [bool; 6];
+
+/// Every column.
+const ALL: Mask = [true; 6];
+
+/// Index of the white term (the base model: never gated) and of the band-limited term in the basis.
+const WHITE: usize = 1;
+const EXTRA: usize = 5;
+
+/// Names of the IEEE 952 columns of the basis.
+const TERM_NAMES: [&str; 5] = ["quantization", "white", "bias instability", "rate random walk", "rate ramp"];
+
+/// The held-out gate of a term: dropping it must raise the held-out chi^2 by at least this much
+/// (dimensionless; chi^2 with one degree of freedom at 9 is a 3-sigma change)...
+pub const GATE_MIN_DELTA_CHI2: f64 = 9.0;
+
+/// ... and by at least this fraction of the held-out chi^2 with it (dimensionless): the overlapping Allan points
+/// are correlated and the model is not exact, so a chi^2 difference in a model that misfits is inflated.
+pub const GATE_MIN_RELATIVE_RISE: f64 = 0.10;
+
+/// The points of a curve a fit can use (positive, finite, with an uncertainty).
+fn usable(points: &[AllanPoint]) -> Vec<&AllanPoint> {
+    points.iter().filter(|q| q.adev > 0.0 && q.adev.is_finite() && q.rel_uncertainty > 0.0).collect()
+}
+
 /// Fits the extended noise model to Allan points: the IEEE 952 terms (as [`fit_noise_terms`]: weighted
 /// non-negative least squares on the variance, weights 1 / (2 u sigma^2), re-weighted once by the model) plus,
 /// optionally, one band-limited term: a Gauss-Markov process (correlation time on a grid of 4 per decade over
 /// the curve's tau range) or a sinusoid (frequency on a grid of 12 per decade from 1 / (4 tau_max) to 1 /
 /// (2 tau_min)), the one with the smallest weighted residual; it is kept only if it lowers the weighted residual
-/// sum by more than 20 %.
+/// sum by more than 20 %. No held-out gate: [`held_out_noise_extension`] gates the terms.
 pub fn fit_extended_noise(points: &[AllanPoint]) -> (NoiseTerms, Option<ExtraTerm>) {
-    let p: Vec<&AllanPoint> =
-        points.iter().filter(|q| q.adev > 0.0 && q.adev.is_finite() && q.rel_uncertainty > 0.0).collect();
-    let fallback = || (fit_noise_terms(points).map(|f| f.terms).unwrap_or_default(), None);
-    if p.len() < 6 {
-        return fallback();
+    let p = usable(points);
+    match fit_masked(&p, ALL) {
+        Some((c, shape)) => (terms_of(&c), extra_term(&c, shape)),
+        None => (fit_noise_terms(points).map(|f| f.terms).unwrap_or_default(), None),
     }
-    let Some((c0, ss0)) = reweighted_fit(&p, None) else { return fallback() };
+}
+
+/// The fit of the columns of `mask` to `p` (at least 6 points); with `mask[EXTRA]`, the best band-limited shape
+/// is searched and kept when it lowers the weighted residual by more than 20 %. Returns the six coefficients (variances; zero for
+/// the columns left out) and the shape.
+fn fit_masked(p: &[&AllanPoint], mask: Mask) -> Option<(Vec<f64>, Option<ExtraShape>)> {
+    if p.len() < 6 {
+        return None;
+    }
+    let (c0, ss0) = reweighted_fit(p, None, mask)?;
+    if !mask[EXTRA] {
+        return Some((c0, None));
+    }
     let mut best: Option<(Vec<f64>, f64, ExtraShape)> = None;
     for shape in extra_shapes(p[0].tau_s, p[p.len() - 1].tau_s) {
-        if let Some((c, ss)) = reweighted_fit(&p, Some(shape)) {
+        if let Some((c, ss)) = reweighted_fit(p, Some(shape), mask) {
             if best.as_ref().is_none_or(|b| ss < b.1) {
                 best = Some((c, ss, shape));
             }
         }
     }
-    match best {
-        Some((c, ss, shape)) if ss < 0.8 * ss0 && c[5] > 0.0 => (
-            terms_of(&c),
-            Some(match shape {
-                ExtraShape::Gm(tc_s) => ExtraTerm::GaussMarkov { sigma: c[5].sqrt(), tc_s },
-                ExtraShape::Sine(frequency_hz) => ExtraTerm::Sine { amplitude: c[5].sqrt(), frequency_hz },
-            }),
-        ),
-        _ => (terms_of(&c0), None),
-    }
+    Some(match best {
+        Some((c, ss, shape)) if ss < 0.8 * ss0 && c[EXTRA] > 0.0 => (c, Some(shape)),
+        _ => (c0, None),
+    })
 }
 
-/// One fit of the extended basis (with the band-limited term `extra`, if any) to the Allan variance of `p`:
-/// weighted NNLS, weights from the measured variance, then once more with weights from the fitted model.
-/// Returns the coefficients (variances) and the weighted residual sum of squares of the last fit.
-fn reweighted_fit(p: &[&AllanPoint], extra: Option<ExtraShape>) -> Option<(Vec<f64>, f64)> {
+/// The band-limited term of fitted coefficients `c` with `shape`.
+fn extra_term(c: &[f64], shape: Option<ExtraShape>) -> Option<ExtraTerm> {
+    let size = c.get(EXTRA).copied().unwrap_or(0.0).sqrt();
+    shape.filter(|_| size > 0.0).map(|s| match s {
+        ExtraShape::Gm(tc_s) => ExtraTerm::GaussMarkov { sigma: size, tc_s },
+        ExtraShape::Sine(frequency_hz) => ExtraTerm::Sine { amplitude: size, frequency_hz },
+    })
+}
+
+/// One fit of the extended basis (the columns of `mask`, with the band-limited term `extra`, if any) to the
+/// Allan variance of `p`: weighted NNLS, weights from the measured variance, then once more with weights from the
+/// fitted model. Returns the six coefficients (variances, zero where left out) and the weighted residual sum of
+/// squares of the last fit.
+fn reweighted_fit(p: &[&AllanPoint], extra: Option<ExtraShape>, mask: Mask) -> Option<(Vec<f64>, f64)> {
+    let cols = |tau: f64| -> Vec<f64> {
+        extended_basis(tau, extra).into_iter().enumerate().filter(|(i, _)| mask[*i]).map(|(_, b)| b).collect()
+    };
     let measured: Vec<f64> = p.iter().map(|q| q.avar()).collect();
     let mut reference = measured.clone();
     let mut out = None;
     for _ in 0..2 {
         let w: Vec<f64> = p.iter().zip(&reference).map(|(q, r)| 1.0 / (2.0 * q.rel_uncertainty * r)).collect();
         let rows: Vec<Vec<f64>> =
-            p.iter().zip(&w).map(|(q, w)| extended_basis(q.tau_s, extra).iter().map(|b| b * w).collect()).collect();
+            p.iter().zip(&w).map(|(q, w)| cols(q.tau_s).iter().map(|b| b * w).collect()).collect();
         let y: Vec<f64> = measured.iter().zip(&w).map(|(m, w)| m * w).collect();
-        let (c, _) = nnls_normal(&rows, &y)?;
-        let model: Vec<f64> =
-            p.iter().map(|q| extended_basis(q.tau_s, extra).iter().zip(&c).map(|(b, c)| b * c).sum()).collect();
+        let (cm, _) = nnls_normal(&rows, &y)?;
+        let model: Vec<f64> = p.iter().map(|q| cols(q.tau_s).iter().zip(&cm).map(|(b, c)| b * c).sum()).collect();
         let ss: f64 = p
             .iter()
             .zip(&measured)
             .zip(&model)
             .map(|((q, m), md)| ((md - m) / (2.0 * q.rel_uncertainty * md.max(f64::MIN_POSITIVE))).powi(2))
             .sum();
+        let mut c = vec![0.0; 6];
+        let mut it = cm.into_iter();
+        for (i, ci) in c.iter_mut().enumerate().take(if extra.is_some() { 6 } else { 5 }) {
+            if mask[i] {
+                *ci = it.next().unwrap_or(0.0);
+            }
+        }
         out = Some((c, ss));
         if model.iter().any(|v| v.is_nan() || *v <= 0.0) {
             break;
@@ -143,6 +194,179 @@ fn reweighted_fit(p: &[&AllanPoint], extra: Option<ExtraShape>) -> Option<(Vec<f
         reference = model;
     }
     out
+}
+
+/// The held-out misfit of a model (coefficients `c`, shape `extra`) to Allan points `p` of data it was not
+/// fitted on: chi^2 = sum over the points of (ln(ADEV data / ADEV model) / u)^2, u the point's relative
+/// uncertainty (dimensionless).
+fn held_out_chi2(p: &[&AllanPoint], c: &[f64], extra: Option<ExtraShape>) -> f64 {
+    p.iter()
+        .map(|q| {
+            let model: f64 = extended_basis(q.tau_s, extra).iter().zip(c).map(|(b, c)| b * c).sum();
+            let z = 0.5 * (q.avar() / model.max(f64::MIN_POSITIVE)).ln() / q.rel_uncertainty;
+            z * z
+        })
+        .sum()
+}
+
+/// The held-out verdict on one term of the extended model.
+#[derive(Clone, Debug, PartialEq)]
+pub struct TermGate {
+    /// The term: "quantization", "bias instability", "rate random walk", "rate ramp", or the band-limited term
+    /// ("Gauss-Markov, correlation time ... s", "sinusoid at ... Hz").
+    pub term: String,
+    /// Whether it stays in the extended model.
+    pub kept: bool,
+    /// Held-out chi^2 of the first half's model with the term (dimensionless).
+    pub chi2_with: f64,
+    /// Held-out chi^2 of the first half's model refitted without it (dimensionless).
+    pub chi2_without: f64,
+    /// Why, in words with the numbers.
+    pub reason: String,
+}
+
+/// The name of column `i` of the basis with the band-limited `shape`.
+fn term_name(i: usize, shape: Option<ExtraShape>) -> String {
+    match (i, shape) {
+        (EXTRA, Some(ExtraShape::Gm(tc))) => format!("Gauss-Markov, correlation time {tc:.3} s"),
+        (EXTRA, Some(ExtraShape::Sine(f))) => format!("sinusoid at {f:.3} Hz"),
+        _ => TERM_NAMES.get(i).map_or("band-limited term".to_string(), |s| s.to_string()),
+    }
+}
+
+/// Whether dropping a term that raises the held-out chi^2 from `with` to `without` would lose a significant
+/// improvement ([`GATE_MIN_DELTA_CHI2`], [`GATE_MIN_RELATIVE_RISE`]).
+fn significant(with: f64, without: f64) -> bool {
+    without - with >= GATE_MIN_DELTA_CHI2.max(GATE_MIN_RELATIVE_RISE * with)
+}
+
+/// A sinusoid of the model also has to be in the held-out samples: a direct fit on them must find at least
+/// this fraction of its amplitude (dimensionless). An Allan-variance fit can use a sinusoid as a curve-fitting
+/// device for a hump of another origin; a direct fit cannot.
+pub const SINE_DIRECT_MIN_RATIO: f64 = 0.5;
+
+/// The largest amplitude of a sinusoid fitted directly (least squares, mean removed) to `x` sampled at `rate_hz`,
+/// over the frequencies within a factor 10^(1/24) of `f_hz` (half a step of the fit's frequency grid), in steps
+/// of 1 / duration (a sinusoid between two steps keeps at least 0.64 of its amplitude); SI of `x`.
+pub fn direct_sine_amplitude(x: &[f64], rate_hz: f64, f_hz: f64) -> f64 {
+    let n = x.len().max(1) as f64;
+    let m = x.iter().sum::<f64>() / n;
+    let step = 10f64.powf(1.0 / 24.0);
+    let (mut f, hi, df) = (f_hz / step, f_hz * step, rate_hz / n);
+    let mut best: f64 = 0.0;
+    while f <= hi {
+        let (s1, c1) = (std::f64::consts::TAU * f / rate_hz).sin_cos();
+        let (mut c, mut s, mut re, mut im) = (1.0, 0.0, 0.0, 0.0);
+        for v in x {
+            re += (v - m) * c;
+            im += (v - m) * s;
+            (c, s) = (c * c1 - s * s1, s * c1 + c * s1);
+        }
+        best = best.max(2.0 * re.hypot(im) / n);
+        f += df;
+    }
+    best
+}
+
+/// The direct check of a kept sinusoid (coefficients `c`, `shape`) on the held-out samples `second`: `None`
+/// when it passes or is no sinusoid; else the verdict that drops it (`with`: the held-out chi^2 with it).
+fn sine_check(c: &[f64], shape: Option<ExtraShape>, second: &[f64], rate_hz: f64, with: f64) -> Option<TermGate> {
+    let Some(ExtraShape::Sine(f)) = shape else { return None };
+    let amplitude = c[EXTRA].sqrt();
+    let direct = direct_sine_amplitude(second, rate_hz, f);
+    (direct < SINE_DIRECT_MIN_RATIO * amplitude).then(|| TermGate {
+        term: term_name(EXTRA, shape),
+        kept: false,
+        chi2_with: with,
+        chi2_without: f64::NAN,
+        reason: format!(
+            "amplitude {amplitude:.3e} (SI) from the Allan fit, but a direct fit near {f:.3} Hz on the second half \
+             finds {direct:.3e} ({:.1} x smaller; at least {SINE_DIRECT_MIN_RATIO} of it is required): a \
+             curve-fitting device, not a sinusoid in the data",
+            amplitude / direct.max(f64::MIN_POSITIVE)
+        ),
+    })
+}
+
+/// The held-out gate (backward elimination): the full model fitted on the first half (`pf`); terms fitted to zero
+/// leave; then, as long as a term's removal (the first half refitted without it) raises the second half's
+/// (`ps`) chi^2 by less than [`significant`] asks, the term of the smallest rise leaves; a
+/// sinusoid must also pass [`sine_check`] on the second half's samples. The white term is the
+/// base model and always stays. Returns the first half's gated coefficients, shape and the verdicts.
+fn gate_terms(
+    pf: &[&AllanPoint],
+    ps: &[&AllanPoint],
+    second: &[f64],
+    rate_hz: f64,
+    allow_extra: bool,
+) -> Option<(Vec<f64>, Option<ExtraShape>, Vec<TermGate>)> {
+    let (mut c, shape) = fit_masked(pf, [true, true, true, true, true, allow_extra])?;
+    let mut mask: Mask = [true, true, true, true, true, shape.is_some()];
+    let mut verdicts = Vec::new();
+    loop {
+        let with = held_out_chi2(ps, &c, shape);
+        let zero: Vec<usize> = (0..6).filter(|&i| i != WHITE && mask[i] && c[i] <= 0.0).collect();
+        for i in zero {
+            mask[i] = false;
+            let reason = "fitted to zero on the first half".to_string();
+            verdicts.push(TermGate {
+                term: term_name(i, shape),
+                kept: false,
+                chi2_with: with,
+                chi2_without: with,
+                reason,
+            });
+        }
+        let mut rises: Vec<(usize, Vec<f64>, f64)> = Vec::new();
+        for i in (0..6).filter(|&i| i != WHITE && mask[i]) {
+            let mut m = mask;
+            m[i] = false;
+            let (ci, _) = reweighted_fit(pf, shape, m)?;
+            let without = held_out_chi2(ps, &ci, shape);
+            rises.push((i, ci, without));
+        }
+        let weakest = rises.iter().enumerate().min_by(|a, b| a.1 .2.total_cmp(&b.1 .2)).map(|(k, _)| k);
+        match weakest {
+            Some(k) if !significant(with, rises[k].2) => {
+                let (i, ci, without) = rises.swap_remove(k);
+                mask[i] = false;
+                let reason = format!(
+                    "held-out chi^2 {with:.1} with it, {without:.1} without (rise {:.1} < max({GATE_MIN_DELTA_CHI2}, {:.0} % of {with:.1}))",
+                    without - with,
+                    100.0 * GATE_MIN_RELATIVE_RISE
+                );
+                verdicts.push(TermGate {
+                    term: term_name(i, shape),
+                    kept: false,
+                    chi2_with: with,
+                    chi2_without: without,
+                    reason,
+                });
+                c = ci;
+            }
+            _ => {
+                if let Some(verdict) = sine_check(&c, shape.filter(|_| mask[EXTRA]), second, rate_hz, with) {
+                    mask[EXTRA] = false;
+                    c = reweighted_fit(pf, shape, mask)?.0;
+                    verdicts.push(verdict);
+                    continue;
+                }
+                for (i, _, without) in rises {
+                    let reason =
+                        format!("held-out chi^2 {with:.1} with it, {without:.1} without (rise {:.1})", without - with);
+                    verdicts.push(TermGate {
+                        term: term_name(i, shape),
+                        kept: true,
+                        chi2_with: with,
+                        chi2_without: without,
+                        reason,
+                    });
+                }
+                let shape = shape.filter(|_| mask[EXTRA]);
+                return Some((c, shape, verdicts));
+            }
+        }
+    }
 }
 
 /// The candidate band-limited terms for a curve from `tmin` to `tmax` (s): Gauss-Markov correlation times from
@@ -186,9 +410,76 @@ fn dominant_term(t: &NoiseTerms, tau: f64) -> &'static str {
     parts.iter().max_by(|a, b| a.1.total_cmp(&b.1)).map_or("white", |p| p.0)
 }
 
-/// The IEEE 952 extension of one channel (`m`: the whole record's cluster sizes): fitted on the whole record
-/// and on the first half; on the second half, the data's ADEV against the base SIMULATION (white, std of the
-/// first half; stream + 100) and the extended SIMULATION (terms of the first half; streams + 200, + 300).
+/// The gate run twice, with and without the band-limited term (which can stand in for an IEEE term on the first
+/// half, a Gauss-Markov process for a rate random walk): the model with a band-limited term is taken only when
+/// its held-out chi^2 is significantly lower ([`significant`]) than the gated IEEE-only model's; otherwise its
+/// band-limited term is reported dropped beside the IEEE-only model's verdicts.
+type Gated = (Vec<f64>, Option<ExtraShape>, Vec<TermGate>);
+fn with_or_without_extra(pf: &[&AllanPoint], ps: &[&AllanPoint], second: &[f64], rate_hz: f64) -> Option<Gated> {
+    let ieee = gate_terms(pf, ps, second, rate_hz, false)?;
+    let Some(full) = gate_terms(pf, ps, second, rate_hz, true) else { return Some(ieee) };
+    let Some(extra) = full.1 else {
+        // The band-limited term was dropped inside the run with it: its verdict goes beside the IEEE-only model's.
+        let (c, shape, mut gate) = ieee;
+        gate.extend(full.2.into_iter().filter(|g| !TERM_NAMES.contains(&g.term.as_str())));
+        return Some((c, shape, gate));
+    };
+    let (x_full, x_ieee) = (held_out_chi2(ps, &full.0, full.1), held_out_chi2(ps, &ieee.0, None));
+    if significant(x_full, x_ieee) {
+        return Some(full);
+    }
+    let (c, shape, mut gate) = ieee;
+    gate.push(TermGate {
+        term: term_name(EXTRA, Some(extra)),
+        kept: false,
+        chi2_with: x_full,
+        chi2_without: x_ieee,
+        reason: format!(
+            "held-out chi^2 {x_full:.1} with it (and its own gated IEEE terms), {x_ieee:.1} for the gated IEEE \
+             terms alone (fall {:.1} < max({GATE_MIN_DELTA_CHI2}, {:.0} %))",
+            x_ieee - x_full,
+            100.0 * GATE_MIN_RELATIVE_RISE
+        ),
+    });
+    Some((c, shape, gate))
+}
+
+/// The last step of the gate: the extended model as a whole against the base model (white noise of the first
+/// half's sample-to-sample std, coefficients `base_c`) on the held-out points `ps`, by the same rule
+/// ([`significant`]). When the extension is not significantly better, every kept term is dropped and the extended
+/// model is the base model (so it is too when no term is kept).
+fn gate_against_base(
+    c: Vec<f64>,
+    shape: Option<ExtraShape>,
+    mut gate: Vec<TermGate>,
+    ps: &[&AllanPoint],
+    base_c: &[f64],
+) -> (Vec<f64>, Option<ExtraShape>, Vec<TermGate>) {
+    let (with, base) = (held_out_chi2(ps, &c, shape), held_out_chi2(ps, base_c, None));
+    let any_kept = gate.iter().any(|g| g.kept);
+    if any_kept && significant(with, base) {
+        return (c, shape, gate);
+    }
+    for g in gate.iter_mut().filter(|g| g.kept) {
+        g.kept = false;
+        g.reason = format!(
+            "{}; but the extended model as a whole does not beat the base model on the held-out half (chi^2 {with:.1} \
+             against {base:.1} for white noise alone; a fall of at least max({GATE_MIN_DELTA_CHI2}, {:.0} %) is \
+             required)",
+            g.reason,
+            100.0 * GATE_MIN_RELATIVE_RISE
+        );
+    }
+    let mut c = base_c.to_vec();
+    c.push(0.0);
+    (c, None, gate)
+}
+
+/// The IEEE 952 extension of one channel (`m`: the whole record's cluster sizes), gated on held-out data: fitted
+/// on the first half, each term kept only when it improves the second half significantly ([`gate_terms`]); the
+/// kept terms refitted on the whole record. On the second half, the data's ADEV against the base SIMULATION
+/// (white, std of the first half; stream + 100) and the extended SIMULATION (kept terms of the first half;
+/// streams + 200, + 300), and the held-out chi^2 of both models.
 pub(crate) fn held_out_noise_extension(
     samples: &[f64],
     rate_hz: f64,
@@ -198,13 +489,27 @@ pub(crate) fn held_out_noise_extension(
 ) -> NoiseExtension {
     let half = samples.len() / 2;
     let (first, second) = (&samples[..half], &samples[half..]);
-    let (terms_all, extra_all) = fit_extended_noise(&overlapping_allan_deviation(samples, rate_hz, m));
     let points_first = overlapping_allan_deviation(first, rate_hz, &clusters(half));
-    let (terms_first_half, extra_first_half) = fit_extended_noise(&points_first);
     let l2 = second.len();
     let m2 = clusters(l2);
+    let points_second = overlapping_allan_deviation(second, rate_hz, &m2);
+    let (pf, ps) = (usable(&points_first), usable(&points_second));
+    let sigma_first = white_std(&[first]);
+    let base_c = [0.0, sigma_first * sigma_first / rate_hz, 0.0, 0.0, 0.0];
+    let (c_first, shape_first, gate) =
+        with_or_without_extra(&pf, &ps, second, rate_hz).unwrap_or_else(|| (base_c.to_vec(), None, Vec::new()));
+    let (c_first, shape_first, gate) = gate_against_base(c_first, shape_first, gate, &ps, &base_c);
+    let mut kept: Mask = [false, true, false, false, false, shape_first.is_some()];
+    for (i, name) in TERM_NAMES.iter().enumerate() {
+        kept[i] |= gate.iter().any(|g| g.kept && g.term == *name);
+    }
+    let all_points = overlapping_allan_deviation(samples, rate_hz, m);
+    let c_all = reweighted_fit(&usable(&all_points), shape_first, kept).map_or_else(|| c_first.clone(), |f| f.0);
+    let shape_all = shape_first;
+    let (terms_all, extra_all) = (terms_of(&c_all), extra_term(&c_all, shape_all));
+    let (terms_first_half, extra_first_half) = (terms_of(&c_first), extra_term(&c_first, shape_first));
     let held_out_data = curve(second, rate_hz, &m2);
-    let held_out_base_sim = curve(&white(l2, white_std(&[first]), seed, stream + 100), rate_hz, &m2);
+    let held_out_base_sim = curve(&white(l2, sigma_first, seed, stream + 100), rate_hz, &m2);
     let mut ext = generate_noise_terms(&terms_first_half, l2, rate_hz, seed, stream + 200);
     if let Some(extra) = extra_first_half {
         for (y, x) in ext.iter_mut().zip(extra.generate(l2, rate_hz, seed, stream + 300)) {
@@ -216,6 +521,10 @@ pub(crate) fn held_out_noise_extension(
     NoiseExtension {
         held_out_rms_log10_base: rms_log10(&held_out_base_sim, &held_out_data, l2, rate_hz),
         held_out_rms_log10_extended: rms_log10(&held_out_extended_sim, &held_out_data, l2, rate_hz),
+        held_out_chi2_base: held_out_chi2(&ps, &base_c, None),
+        held_out_chi2_extended: held_out_chi2(&ps, &c_first, shape_first),
+        held_out_points: ps.len(),
+        gate,
         dominant_term: dominant_term(&terms_all, long_tau),
         terms_all,
         terms_first_half,

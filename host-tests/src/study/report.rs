@@ -13,7 +13,7 @@ use crate::io::ARCSEC_PER_RAD;
 use crate::model::synth::MICRO_G;
 use crate::plot::{figure, Png};
 use crate::stats::noise::NoiseTerms;
-use crate::study::noise_extension::ExtraTerm;
+use crate::study::noise_extension::{ExtraTerm, GATE_MIN_DELTA_CHI2, GATE_MIN_RELATIVE_RISE};
 use crate::study::rests::rms;
 use crate::study::rotations::{RotationFit, RotationStudy};
 use crate::study::{
@@ -243,6 +243,7 @@ fn extended_noise_section(o: &mut String, s: &Study) {
             if let Some(x) = &e.extra_all {
                 let _ = writeln!(o, "  plus {}", x.describe(if gyro { "rad/s" } else { "m/s^2" }));
             }
+            gate_lines(o, e);
         }
     }
     if s.noise.iter().any(|c| c.extended.is_some()) {
@@ -250,8 +251,25 @@ fn extended_noise_section(o: &mut String, s: &Study) {
             o,
             "\nGenerator: quantisation as differenced white angle noise, white noise, bias instability as a sum of \
              Gauss-Markov processes (two per decade), rate random walk, ramp, and the band-limited term (Gauss-Markov \
-             or sinusoid with random phase) where it lowers the weighted Allan residual by more than 20 %."
+             or sinusoid with random phase) where it lowers the weighted Allan residual by more than 20 %. Held-out \
+             gate: the model is fitted on the first half; a term (other than white) stays only when refitting the \
+             first half without it raises the second half's chi^2 = sum of (ln(ADEV data / ADEV model) / relative \
+             uncertainty)^2 by at least max({GATE_MIN_DELTA_CHI2}, {:.0} % of the chi^2 with it); the weakest \
+             term leaves first, one at a time. The kept terms are refitted on the whole record.",
+            100.0 * GATE_MIN_RELATIVE_RISE
         );
+    }
+}
+
+/// The held-out gate's verdicts of one channel: the kept terms, then the dropped ones with why.
+fn gate_lines(o: &mut String, e: &NoiseExtension) {
+    let names =
+        |kept: bool| -> Vec<&str> { e.gate.iter().filter(|g| g.kept == kept).map(|g| g.term.as_str()).collect() };
+    let (kept, dropped) = (names(true), names(false));
+    let list = |v: &[&str]| if v.is_empty() { "none".to_string() } else { v.join(", ") };
+    let _ = writeln!(o, "  held-out gate: kept {} (besides white); dropped {}", list(&kept), list(&dropped));
+    for g in &e.gate {
+        let _ = writeln!(o, "  - {} {}: {}", if g.kept { "kept" } else { "dropped" }, g.term, g.reason);
     }
 }
 
@@ -292,8 +310,14 @@ fn gain_section(o: &mut String, s: &Study) {
         if let Some(e) = &ch.extended {
             let _ = writeln!(
                 o,
-                "- {}: second half, RMS log10(ADEV SIMULATION / ADEV data): base {:.3}, extended {:.3} (dimensionless)",
-                ch.channel, e.held_out_rms_log10_base, e.held_out_rms_log10_extended
+                "- {}: second half, RMS log10(ADEV SIMULATION / ADEV data): base {:.3}, extended {:.3}; chi^2 of the \
+                 model's ADEV over {} Allan points: base {:.1}, extended {:.1} (dimensionless)",
+                ch.channel,
+                e.held_out_rms_log10_base,
+                e.held_out_rms_log10_extended,
+                e.held_out_points,
+                e.held_out_chi2_base,
+                e.held_out_chi2_extended
             );
         }
     }
@@ -636,10 +660,25 @@ fn noise_extension_json(
     for (key, x) in [("", e.extra_all), ("_first_half", e.extra_first_half)] {
         extended.insert(format!("{channel}_extra_term{key}"), extra_term_json(x, u));
     }
+    let gate: Vec<Value> = e
+        .gate
+        .iter()
+        .map(|g| {
+            json!({"term": g.term, "kept": g.kept, "held_out_chi2_with": g.chi2_with,
+                   "held_out_chi2_without": g.chi2_without, "reason": g.reason})
+        })
+        .collect();
+    extended.insert(format!("{channel}_term_gate"), Value::Array(gate));
     gain.insert(
         format!("{channel}_held_out_rms_log10_adev"),
         json!({"rule": "fit on the first half, evaluate on the second", "base": e.held_out_rms_log10_base,
                "extended": e.held_out_rms_log10_extended}),
+    );
+    gain.insert(
+        format!("{channel}_held_out_chi2"),
+        json!({"rule": "fit on the first half, evaluate on the second", "points": e.held_out_points,
+               "base": e.held_out_chi2_base, "extended": e.held_out_chi2_extended,
+               "gate": {"min_rise": GATE_MIN_DELTA_CHI2, "min_relative_rise": GATE_MIN_RELATIVE_RISE}}),
     );
 }
 
