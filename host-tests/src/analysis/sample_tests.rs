@@ -196,8 +196,11 @@ impl ChannelMeasures {
             (q, std_error)
         });
         // A line can be accepted only if it passes at the smallest m (no block candidate observable): the lines
-        // that do, strongest first, each removed before the next is searched.
+        // that do, highest over the spectrum's level first, each removed before the next is searched; the
+        // search ends after MAX_MISSES candidates in a row fail (a candidate that stands high over a level
+        // that rises can fail where a stronger line elsewhere passes).
         let mut lines: Vec<Line> = Vec::new();
+        let mut misses = 0;
         let mut search = LineSearch::new(&series);
         let room = |lines: &[Line]| lines.len() < MAX_COMPONENTS && wandering(lines).len() < MAX_LINES;
         let starts: Vec<f64> = session.dwells.iter().map(|d| (d.t[0] - session.dwells[0].t[0]) / session.dt).collect();
@@ -205,12 +208,20 @@ impl ChannelMeasures {
             search.as_mut().filter(|_| room(&lines)).and_then(|s| s.next(&series, &starts, session.dt))
         {
             let Some(v) = chosen_line(fits, series.len(), n_all, sample_tests(session) as f64) else {
-                break;
+                misses += 1;
+                if misses == MAX_MISSES {
+                    break;
+                }
+                continue;
             };
+            misses = 0;
             let windows = in_windows_indexed(&series, |k, w| {
                 Some(line_in(w, &window_starts(&series, &starts, k), &v, session.dt))
             });
             remove_line(&mut series, &v, session.dt);
+            if let Some(s) = search.as_mut() {
+                s.removed();
+            }
             lines.push(Line { line: v, windows });
         }
         let correlated_windows =
@@ -411,6 +422,9 @@ impl ChannelMeasures {
         Some((gm.sigma, gm.tau_s))
     }
 }
+
+/// Candidates of the line search that fail in a row before it ends.
+const MAX_MISSES: usize = 3;
 
 /// The vibration test's decision against `alpha / m`.
 struct VibrationCriterion {

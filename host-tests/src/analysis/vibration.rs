@@ -1,5 +1,5 @@
 //! Vibration on the samples: the lines of the periodogram summed over dwells (each dwell's mean and trend
-//! removed), strongest first, each against the median of its neighbourhood (a line, not a coloured
+//! removed), the one that stands highest over the spectrum's level first, each against the median of its neighbourhood (a line, not a coloured
 //! background), its frequency refined within a bin, one amplitude and a phase per dwell. A dwell longer than
 //! the longest transform is searched in consecutive pieces, every sample in one; the frequency and the line
 //! are then fitted on the whole dwells.
@@ -120,14 +120,17 @@ const BAND_OVER_BACKGROUND: f64 = 10.0;
 /// out.
 const MIN_HALF_BAND: usize = LINE_HALF_WIDTH;
 
-/// The search for the spectral lines of the dwells' detrended samples, strongest first: each call of
-/// [`LineSearch::next`] finds the strongest line outside the bands of the lines found before (the caller
-/// removes each line from the samples before the next call).
+/// The search for the spectral lines of the dwells' detrended samples, the one that stands highest over the
+/// spectrum's level first: each call of [`LineSearch::next`] finds the next candidate outside the bands of
+/// the candidates before (the caller removes each line it keeps from the samples, and says so with
+/// [`LineSearch::removed`], before the next call).
 pub(super) struct LineSearch {
     /// Transform length (zero-padded, a power of two).
     len: usize,
-    /// Bin ranges of the lines found.
+    /// Bin ranges of the candidates found.
     bands: Vec<(usize, usize)>,
+    /// The summed periodogram of the samples as they are (none until computed, or after a line is removed).
+    power: Option<Vec<f64>>,
 }
 
 impl LineSearch {
@@ -135,8 +138,16 @@ impl LineSearch {
     pub fn new(dwells: &[Vec<f64>]) -> Option<LineSearch> {
         let n_min = dwells.iter().map(|d| d.len()).min()?;
         let piece_max = pieces(dwells).iter().map(|d| d.len()).max()?;
-        (n_min >= MIN_DWELL_SAMPLES)
-            .then(|| LineSearch { len: (piece_max.next_power_of_two() * 4).min(MAX_PIECE), bands: Vec::new() })
+        (n_min >= MIN_DWELL_SAMPLES).then(|| LineSearch {
+            len: (piece_max.next_power_of_two() * 4).min(MAX_PIECE),
+            bands: Vec::new(),
+            power: None,
+        })
+    }
+
+    /// The caller removed a line from the samples: the periodogram is computed again at the next call.
+    pub fn removed(&mut self) {
+        self.power = None;
     }
 
     /// The strongest line of `dwells` (whose first samples are `starts`, counted in samples from the first
@@ -147,8 +158,11 @@ impl LineSearch {
         let len = self.len;
         let pieces = pieces(dwells);
         let piece_min = pieces.iter().map(|d| d.len()).min()?;
-        let power = summed_periodogram(&pieces, len)?;
-        let (k_hat, background) = strongest_line(&power, len, piece_min, pieces.len() as f64, &self.bands)?;
+        if self.power.is_none() {
+            self.power = Some(summed_periodogram(&pieces, len)?);
+        }
+        let power = self.power.as_deref()?;
+        let (k_hat, background) = strongest_line(power, len, piece_min, pieces.len() as f64, &self.bands)?;
         let above = |k: &usize| power[*k] > BAND_OVER_BACKGROUND * background * pieces.len() as f64;
         let low = (0..k_hat).rev().find(|k| !above(k)).unwrap_or(0).min(k_hat.saturating_sub(MIN_HALF_BAND));
         let high = (k_hat..len / 2).find(|k| !above(k)).unwrap_or(len / 2).max(k_hat + MIN_HALF_BAND);
@@ -226,7 +240,33 @@ const BACKGROUND_HALF_WIDTH: usize = 150;
 /// Fewest bins on either side of a candidate bin that its background takes.
 const MIN_BACKGROUND_SIDE: usize = 10;
 
-/// The largest bin (above three cycles per shortest dwell, outside `bands`) and the background level at it:
+/// Bins of each block whose median is the spectrum's level at the block's centre ([`spectrum_level`]).
+const LEVEL_BLOCK: usize = 128;
+
+/// The spectrum's level at every bin: the median of each block of [`LEVEL_BLOCK`] bins, interpolated
+/// linearly between the blocks' centres (held beyond the first and last). A line is a few bins of a block and
+/// leaves its median; a coloured background (a ring-laser gyro's quantised increments rise with frequency,
+/// a vehicle's sway falls) is followed.
+fn spectrum_level(power: &[f64]) -> impl Fn(usize) -> f64 {
+    let medians: Vec<f64> = power
+        .chunks(LEVEL_BLOCK)
+        .map(|b| {
+            let mut b = b.to_vec();
+            b.sort_by(f64::total_cmp);
+            b[b.len() / 2].max(f64::MIN_POSITIVE)
+        })
+        .collect();
+    move |k: usize| {
+        let x = (k as f64 - 0.5 * (LEVEL_BLOCK - 1) as f64) / LEVEL_BLOCK as f64;
+        let i = (x.floor().max(0.0) as usize).min(medians.len() - 1);
+        let j = (i + 1).min(medians.len() - 1);
+        let w = (x - i as f64).clamp(0.0, 1.0);
+        medians[i] * (1.0 - w) + medians[j] * w
+    }
+}
+
+/// The bin that stands highest over the spectrum's level ([`spectrum_level`]; above three cycles per
+/// shortest dwell, outside `bands`) and the background level at it:
 /// the median of its neighbourhood, scaled to the mean of `p` dwells' periodograms. The neighbourhood is
 /// symmetric (as many bins below as above, up to [`BACKGROUND_HALF_WIDTH`]): the median of a spectrum that
 /// slopes across it is then its level at the bin. A one-sided neighbourhood at the low end, where coloured
@@ -240,7 +280,9 @@ fn strongest_line(power: &[f64], len: usize, n_min: usize, p: f64, bands: &[(usi
         return None;
     }
     let outside = |k: &usize| !bands.iter().any(|&(a, b)| (a..b).contains(k));
-    let k_hat = (low..high).filter(outside).max_by(|&a, &b| power[a].total_cmp(&power[b]))?;
+    let level = spectrum_level(power);
+    let over = |k: usize| power[k] / level(k);
+    let k_hat = (low..high).filter(outside).max_by(|&a, &b| over(a).total_cmp(&over(b)))?;
     let half_window = BACKGROUND_HALF_WIDTH.min(k_hat - k_min).min(len / 2 - 1 - k_hat);
     let mut neighbours: Vec<f64> = (k_hat - half_window..=k_hat + half_window)
         .filter(|&k| k.abs_diff(k_hat) > LINE_HALF_WIDTH)
