@@ -34,11 +34,11 @@ fn describe(o: &Outcome) -> String {
     )
 }
 
-/// The kinds the fast test plants per set: a static term and a sample-level or time term each (ones the
-/// campaign finds in every trial at 10 standard errors).
-const FAST: [(DataSet, [EffectKind; 2]); 2] = [
-    (DataSet::Ferraris, [EffectKind::AccelScaleFactor, EffectKind::Quantization]),
-    (DataSet::Imutk, [EffectKind::AccelMisalignment, EffectKind::BiasWarmup]),
+/// The kinds the fast test plants per set: a static term and sample-level or time terms (ones the campaign
+/// finds in every trial, or nine of ten for the imu_tk lines, at 10 standard errors).
+const FAST: [(DataSet, &[EffectKind]); 2] = [
+    (DataSet::Ferraris, &[EffectKind::AccelScaleFactor, EffectKind::Quantization]),
+    (DataSet::Imutk, &[EffectKind::AccelMisalignment, EffectKind::BiasWarmup, EffectKind::Vibration]),
 ];
 
 #[test]
@@ -47,10 +47,10 @@ fn planted_effects_at_ten_standard_errors_are_found_in_the_records_own_poses() {
     let start = Instant::now();
     for (set, kinds) in FAST {
         let b = baseline(&dir, set);
-        for kind in kinds {
+        for &kind in kinds {
             assert!(!b.targets(kind).is_empty(), "{}: {kind} cannot be planted", set.name());
         }
-        let c = campaign(&b, &kinds, &[10.0], 2, 2);
+        let c = campaign(&b, kinds, &[10.0], 2, 2);
         println!("{}", table(&c, &b));
         for (kind, per_size) in &c.rows {
             assert_eq!(per_size[0].len(), 2, "{}: {kind}", set.name());

@@ -201,13 +201,17 @@ impl ChannelMeasures {
         // that rises can fail where a stronger line elsewhere passes).
         let mut lines: Vec<Line> = Vec::new();
         let mut misses = 0;
-        let mut search = LineSearch::new(&series);
-        let room = |lines: &[Line]| lines.len() < MAX_COMPONENTS && wandering(lines).len() < MAX_LINES;
         let starts: Vec<f64> = session.dwells.iter().map(|d| (d.t[0] - session.dwells[0].t[0]) / session.dt).collect();
+        let mut search = LineSearch::new(&series, &starts);
+        let room = |lines: &[Line]| lines.len() < MAX_COMPONENTS && wandering(lines).len() < MAX_LINES;
         while let Some(fits) =
             search.as_mut().filter(|_| room(&lines)).and_then(|s| s.next(&series, &starts, session.dt))
         {
-            let Some(v) = chosen_line(fits, series.len(), n_all, sample_tests(session) as f64) else {
+            let chosen = chosen_line(fits, series.len(), n_all, sample_tests(session) as f64);
+            if let Some(s) = search.as_mut() {
+                s.settle(chosen.as_ref());
+            }
+            let Some(v) = chosen else {
                 misses += 1;
                 if misses == MAX_MISSES {
                     break;
@@ -219,9 +223,6 @@ impl ChannelMeasures {
                 Some(line_in(w, &window_starts(&series, &starts, k), &v, session.dt))
             });
             remove_line(&mut series, &v, session.dt);
-            if let Some(s) = search.as_mut() {
-                s.removed();
-            }
             lines.push(Line { line: v, windows });
         }
         let correlated_windows =
@@ -450,7 +451,7 @@ fn vibration_criterion(v: &VibrationResult, dwells: usize, n_all: usize, m: f64)
 /// across many dwells needs two parameters where the phase per dwell needs one per dwell, and a line whose
 /// phase does not hold (a wandering mains line) is better fitted dwell by dwell. `None` when neither passes.
 fn chosen_line(fits: LineFits, dwells: usize, n_all: usize, m: f64) -> Option<VibrationResult> {
-    [Some(fits.per_dwell), fits.coherent]
+    [Some(fits.per_dwell), fits.coherent, fits.coherent_here]
         .into_iter()
         .flatten()
         .map(|v| (vibration_criterion(&v, dwells, n_all, m), v))

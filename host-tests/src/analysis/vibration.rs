@@ -34,8 +34,10 @@ pub(super) struct VibrationResult {
 pub(super) struct LineFits {
     /// Common amplitude, a phase per dwell.
     pub per_dwell: VibrationResult,
-    /// Common amplitude and phase in the record's time.
+    /// Common amplitude and phase in the record's time, at the coherent spectrum's candidate.
     pub coherent: Option<VibrationResult>,
+    /// The same at the per-dwell candidate's frequency.
+    pub coherent_here: Option<VibrationResult>,
 }
 
 /// Most frequencies times samples that the scan of a coherent line's frequency may take (its direct DFTs):
@@ -131,28 +133,74 @@ pub(super) struct LineSearch {
     bands: Vec<(usize, usize)>,
     /// The summed periodogram of the samples as they are (none until computed, or after a line is removed).
     power: Option<Vec<f64>>,
+    /// The search of the record's coherent periodogram (two dwells or more, a span of at most a quarter of
+    /// [`MAX_PIECE`]).
+    coherent: Option<Spectrum>,
+    /// The candidates of the last call, not yet settled: (frequency in Hz, band, sample interval in s) of the
+    /// per-dwell candidate, and of the coherent one.
+    pending: [Option<(f64, (usize, usize), f64)>; 2],
+}
+
+/// One spectrum of the search: its transform length, the bands of its candidates, and its periodogram as the
+/// samples are (none until computed, or after a line is removed).
+struct Spectrum {
+    len: usize,
+    bands: Vec<(usize, usize)>,
+    power: Option<Vec<f64>>,
 }
 
 impl LineSearch {
-    /// A search over `dwells`; `None` when a dwell is too short for one.
-    pub fn new(dwells: &[Vec<f64>]) -> Option<LineSearch> {
+    /// A search over `dwells`, whose first samples are `starts` (samples from the first dwell's first);
+    /// `None` when a dwell is too short for one.
+    pub fn new(dwells: &[Vec<f64>], starts: &[f64]) -> Option<LineSearch> {
         let n_min = dwells.iter().map(|d| d.len()).min()?;
         let piece_max = pieces(dwells).iter().map(|d| d.len()).max()?;
+        let span = (starts.last()? - starts[0]).max(0.0).round() as usize + dwells.last()?.len();
+        let coherent = (dwells.len() >= 2 && starts.len() == dwells.len() && span <= MAX_PIECE / 4).then(|| Spectrum {
+            len: span.next_power_of_two() * 4,
+            bands: Vec::new(),
+            power: None,
+        });
         (n_min >= MIN_DWELL_SAMPLES).then(|| LineSearch {
             len: (piece_max.next_power_of_two() * 4).min(MAX_PIECE),
             bands: Vec::new(),
             power: None,
+            coherent,
+            pending: [None, None],
         })
     }
 
-    /// The caller removed a line from the samples: the periodogram is computed again at the next call.
-    pub fn removed(&mut self) {
-        self.power = None;
+    /// Settles the candidates of the last call: `kept` is the line the caller kept and removed from the
+    /// samples (`None`: none passed). Every candidate is excluded from the next calls when none passed, and
+    /// a candidate whose band holds the kept line's frequency (the same line, seen the other way) when one
+    /// did; a candidate elsewhere stays.
+    pub fn settle(&mut self, kept: Option<&VibrationResult>) {
+        let pending = std::mem::take(&mut self.pending);
+        let lens = [self.len, self.coherent.as_ref().map_or(1, |c| c.len)];
+        for (i, entry) in pending.into_iter().enumerate() {
+            let Some((f_hz, (a, b), dt)) = entry else { continue };
+            let half_hz = ((b - a) as f64 / 2.0).max(MIN_HALF_BAND as f64) / lens[i] as f64 / dt;
+            if kept.is_none_or(|v| (v.frequency_hz - f_hz).abs() <= half_hz) {
+                match i {
+                    0 => self.bands.push((a, b)),
+                    _ => self.coherent.iter_mut().for_each(|c| c.bands.push((a, b))),
+                }
+            }
+        }
+        if kept.is_some() {
+            self.power = None;
+            if let Some(s) = self.coherent.as_mut() {
+                s.power = None;
+            }
+        }
     }
 
-    /// The strongest line of `dwells` (whose first samples are `starts`, counted in samples from the first
-    /// dwell's first) against the local background, outside the bands of the lines found before, fitted
-    /// both ways; its band is excluded from the next calls.
+    /// The next candidate line of `dwells` (whose first samples are `starts`): the bin highest over the level
+    /// of the summed periodogram of the dwells, fitted with a phase per dwell; and the bin highest over the
+    /// level of the record's coherent periodogram, fitted with one phase in the record's time (or, without
+    /// that spectrum, the first candidate's frequency refined coherently). Each against its local background,
+    /// outside the bands of the candidates excluded before ([`LineSearch::settle`], which the caller calls
+    /// after each).
     pub fn next(&mut self, dwells: &[Vec<f64>], starts: &[f64], dt: f64) -> Option<LineFits> {
         let n_min = dwells.iter().map(|d| d.len()).min()?;
         let len = self.len;
@@ -163,15 +211,61 @@ impl LineSearch {
         }
         let power = self.power.as_deref()?;
         let (k_hat, background) = strongest_line(power, len, piece_min, pieces.len() as f64, &self.bands)?;
-        let above = |k: &usize| power[*k] > BAND_OVER_BACKGROUND * background * pieces.len() as f64;
-        let low = (0..k_hat).rev().find(|k| !above(k)).unwrap_or(0).min(k_hat.saturating_sub(MIN_HALF_BAND));
-        let high = (k_hat..len / 2).find(|k| !above(k)).unwrap_or(len / 2).max(k_hat + MIN_HALF_BAND);
-        self.bands.push((low, high));
+        let band = line_band(power, k_hat, BAND_OVER_BACKGROUND * background * pieces.len() as f64);
         let f = refine_frequency(dwells, k_hat, len);
+        self.pending = [Some((f / dt, band, dt)), None];
         let per_dwell = fit_line(dwells, f, background, n_min, dt);
-        let coherent = refine_coherent(dwells, starts, f).map(|fc| fit_coherent(dwells, starts, fc, background, dt));
-        Some(LineFits { per_dwell, coherent })
+        let coherent = match self.coherent.as_mut() {
+            Some(s) => {
+                if s.power.is_none() {
+                    s.power = Some(coherent_periodogram(dwells, starts, s.len)?);
+                }
+                let power = s.power.as_deref()?;
+                strongest_line(power, s.len, n_min, 1.0, &s.bands).map(|(k, background)| {
+                    let band = line_band(power, k, BAND_OVER_BACKGROUND * background);
+                    let score = |f: f64| {
+                        let ((zr, zi), _) = coherent_sum(dwells, starts, f);
+                        zr * zr + zi * zi
+                    };
+                    let fc =
+                        golden_section_max((k as f64 - 1.0) / s.len as f64, (k as f64 + 1.0) / s.len as f64, score);
+                    self.pending[1] = Some((fc / dt, band, dt));
+                    fit_coherent(dwells, starts, fc, background, dt)
+                })
+            }
+            None => None,
+        };
+        // The per-dwell candidate's frequency refined coherently: a line the coherent spectrum does not put
+        // first can still keep its phase.
+        let coherent_here =
+            refine_coherent(dwells, starts, f).map(|fc| fit_coherent(dwells, starts, fc, background, dt));
+        Some(LineFits { per_dwell, coherent, coherent_here })
     }
+}
+
+/// The band of a line at bin `k_hat` of `power`: the neighbouring bins above `threshold`, and at least
+/// [`MIN_HALF_BAND`] bins on either side.
+fn line_band(power: &[f64], k_hat: usize, threshold: f64) -> (usize, usize) {
+    let above = |k: &usize| power[*k] > threshold;
+    let low = (0..k_hat).rev().find(|k| !above(k)).unwrap_or(0).min(k_hat.saturating_sub(MIN_HALF_BAND));
+    let high = (k_hat..power.len()).find(|k| !above(k)).unwrap_or(power.len()).max(k_hat + MIN_HALF_BAND);
+    (low, high)
+}
+
+/// The periodogram `|Z_k|^2 / N` (bins 0..len/2) of the record's time line of length `len`: every dwell's
+/// samples at their place (`starts`, rounded to a sample), zero between the dwells. A line whose phase holds
+/// across the dwells adds up in it; white noise of variance `s^2` has the level `s^2`, as in one dwell's.
+fn coherent_periodogram(dwells: &[Vec<f64>], starts: &[f64], len: usize) -> Option<Vec<f64>> {
+    let plan = FftPlan::new(len).ok()?;
+    let (mut re, mut im) = (vec![0.0; len], vec![0.0; len]);
+    let s0 = *starts.first()?;
+    for (d, s) in dwells.iter().zip(starts) {
+        let at = (s - s0).max(0.0).round() as usize;
+        re.get_mut(at..at + d.len())?.copy_from_slice(d);
+    }
+    plan.run(&mut re, &mut im).ok()?;
+    let total = dwells.iter().map(Vec::len).sum::<usize>() as f64;
+    Some((0..len / 2).map(|k| (re[k] * re[k] + im[k] * im[k]) / total).collect())
 }
 
 /// Longest piece of a dwell that one periodogram takes, samples, and the longest transform (a shorter dwell
@@ -512,7 +606,7 @@ mod tests {
         let dt_s = 1e-3;
         for (n, seed) in [(1_000_000, 7), (1_100_000, 8)] {
             let d = vec![dwell(n, dt_s, 1e-3, 2e-4, 37.0, seed)];
-            let mut search = LineSearch::new(&d).expect("a search");
+            let mut search = LineSearch::new(&d, &[0.0]).expect("a search");
             let v = search.next(&d, &[0.0], dt_s).expect("a line").per_dwell;
             assert!((v.frequency_hz - 37.0).abs() < 1e-5, "{n} samples: {} Hz", v.frequency_hz);
             assert!(
