@@ -136,10 +136,13 @@ pub(super) struct LineSearch {
     /// The search of the record's coherent periodogram (two dwells or more, a span of at most a quarter of
     /// [`MAX_PIECE`]).
     coherent: Option<Spectrum>,
-    /// The candidates of the last call, not yet settled: (frequency in Hz, band, sample interval in s) of the
-    /// per-dwell candidate, and of the coherent one.
-    pending: [Option<(f64, (usize, usize), f64)>; 2],
+    /// The candidates of the last call, not yet settled: the per-dwell one and the coherent one.
+    pending: [Option<Pending>; 2],
 }
+
+/// A candidate of the search not yet settled: its frequency, Hz, its band (bins of its spectrum) and the
+/// sample interval, s.
+type Pending = (f64, (usize, usize), f64);
 
 /// One spectrum of the search: its transform length, the bands of its candidates, and its periodogram as the
 /// samples are (none until computed, or after a line is removed).
