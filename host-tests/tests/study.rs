@@ -34,18 +34,7 @@ fn header(rate_hz: f64, gravity_mps2: f64) -> Header {
 }
 
 fn row(t_s: f64, pos: u32, rate: [f64; 3], force: [f64; 3]) -> Row {
-    Row {
-        t_s,
-        pos,
-        pitch_deg: 0.0,
-        roll_deg: 0.0,
-        heading_deg: None,
-        rate_b_radps: rate,
-        force_b_mps2: force,
-        temp_c: None,
-        turn_axis: None,
-        line: 0,
-    }
+    common::static_row(t_s, pos, (0.0, 0.0), rate, force)
 }
 
 fn cause<'a>(s: &'a Study, name_starts: &str, channel: &str) -> Option<&'a sinscal_host::study::Cause> {

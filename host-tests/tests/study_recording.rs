@@ -33,18 +33,7 @@ fn header(rate_hz: f64) -> Header {
 }
 
 fn row(t_s: f64, pos: u32, attitude_deg: (f64, f64), rate: [f64; 3], force: [f64; 3]) -> Row {
-    Row {
-        t_s,
-        pos,
-        pitch_deg: attitude_deg.0,
-        roll_deg: attitude_deg.1,
-        heading_deg: None,
-        rate_b_radps: rate,
-        force_b_mps2: force,
-        temp_c: None,
-        turn_axis: None,
-        line: 0,
-    }
+    common::static_row(t_s, pos, attitude_deg, rate, force)
 }
 
 /// One static pose of `n` samples at 100 Hz: white noise of 1e-4 (rad/s, m/s^2) per sample on every channel,

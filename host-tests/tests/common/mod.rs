@@ -91,3 +91,26 @@ pub fn qemu_available(what: &str) -> bool {
     }
     found
 }
+
+/// A row of a static pose: time, s; position (0 = moving); pitch and roll, deg; body rate, rad/s; specific
+/// force, m/s^2; no heading, temperature or turn.
+pub fn static_row(
+    t_s: f64,
+    pos: u32,
+    attitude_deg: (f64, f64),
+    rate_b_radps: [f64; 3],
+    force_b_mps2: [f64; 3],
+) -> sinscal_host::io::recording::Row {
+    sinscal_host::io::recording::Row {
+        t_s,
+        pos,
+        pitch_deg: attitude_deg.0,
+        roll_deg: attitude_deg.1,
+        heading_deg: None,
+        rate_b_radps,
+        force_b_mps2,
+        temp_c: None,
+        turn_axis: None,
+        line: 0,
+    }
+}
