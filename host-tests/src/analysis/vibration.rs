@@ -1,8 +1,9 @@
 //! Vibration on the samples: the lines of the periodogram summed over dwells (each dwell's mean and trend
-//! removed), the one that stands highest over the spectrum's level first, each against the median of its neighbourhood (a line, not a coloured
-//! background), its frequency refined within a bin, one amplitude and a phase per dwell. A dwell longer than
-//! the longest transform is searched in consecutive pieces, every sample in one; the frequency and the line
-//! are then fitted on the whole dwells.
+//! removed) and of the record's coherent periodogram, the one that stands highest over the spectrum's level
+//! first, each against the median of its neighbourhood (a line, not a coloured background), its frequency
+//! refined within a bin, one amplitude and a phase per dwell or one phase in the record's time. A dwell
+//! longer than the longest transform is searched in consecutive pieces, every sample in one; the frequency
+//! and the line are then fitted on the whole dwells.
 
 use crate::stats::noise::FftPlan;
 
@@ -29,8 +30,9 @@ pub(super) struct VibrationResult {
     pub starts: Option<Vec<f64>>,
 }
 
-/// The two fits of a line found: one phase per dwell, and (two dwells or more, within
-/// [`COHERENT_BUDGET`]) one phase in the record's time.
+/// The fits of a step of the line search: one phase per dwell, and (two dwells or more) one phase in the
+/// record's time, at the coherent periodogram's candidate and (within [`COHERENT_BUDGET`]) at the per-dwell
+/// candidate's frequency.
 pub(super) struct LineFits {
     /// Common amplitude, a phase per dwell.
     pub per_dwell: VibrationResult,
@@ -125,7 +127,7 @@ const MIN_HALF_BAND: usize = LINE_HALF_WIDTH;
 /// The search for the spectral lines of the dwells' detrended samples, the one that stands highest over the
 /// spectrum's level first: each call of [`LineSearch::next`] finds the next candidate outside the bands of
 /// the candidates before (the caller removes each line it keeps from the samples, and says so with
-/// [`LineSearch::removed`], before the next call).
+/// [`LineSearch::settle`], before the next call).
 pub(super) struct LineSearch {
     /// Transform length (zero-padded, a power of two).
     len: usize,
@@ -218,26 +220,23 @@ impl LineSearch {
         let f = refine_frequency(dwells, k_hat, len);
         self.pending = [Some((f / dt, band, dt)), None];
         let per_dwell = fit_line(dwells, f, background, n_min, dt);
-        let coherent = match self.coherent.as_mut() {
-            Some(s) => {
-                if s.power.is_none() {
-                    s.power = Some(coherent_periodogram(dwells, starts, s.len)?);
-                }
-                let power = s.power.as_deref()?;
-                strongest_line(power, s.len, n_min, 1.0, &s.bands).map(|(k, background)| {
-                    let band = line_band(power, k, BAND_OVER_BACKGROUND * background);
-                    let score = |f: f64| {
-                        let ((zr, zi), _) = coherent_sum(dwells, starts, f);
-                        zr * zr + zi * zi
-                    };
-                    let fc =
-                        golden_section_max((k as f64 - 1.0) / s.len as f64, (k as f64 + 1.0) / s.len as f64, score);
-                    self.pending[1] = Some((fc / dt, band, dt));
-                    fit_coherent(dwells, starts, fc, background, dt)
-                })
+        let coherent = self.coherent.as_mut().and_then(|s| {
+            if s.power.is_none() {
+                s.power = coherent_periodogram(dwells, starts, s.len);
             }
-            None => None,
-        };
+            let power = s.power.as_deref()?;
+            let (k, background) = strongest_line(power, s.len, n_min, 1.0, &s.bands)?;
+            let score = |f: f64| {
+                let ((zr, zi), _) = coherent_sum(dwells, starts, f);
+                zr * zr + zi * zi
+            };
+            let fc = golden_section_max((k as f64 - 1.0) / s.len as f64, (k as f64 + 1.0) / s.len as f64, score);
+            Some((fc, line_band(power, k, BAND_OVER_BACKGROUND * background), background))
+        });
+        let coherent = coherent.map(|(fc, band, background)| {
+            self.pending[1] = Some((fc / dt, band, dt));
+            fit_coherent(dwells, starts, fc, background, dt)
+        });
         // The per-dwell candidate's frequency refined coherently: a line the coherent spectrum does not put
         // first can still keep its phase.
         let coherent_here =
