@@ -114,6 +114,12 @@ fn measured_data_give_plausible_effects_and_name_what_they_cannot_tell_apart() {
     let time_terms: Vec<_> = a.effects.iter().filter(column_effect).filter(|e| e.effect.starts_with("bias_")).collect();
     assert!(time_terms.is_empty(), "{time_terms:?}");
     assert!(a.effects.iter().any(|e| e.effect == "position_error"), "no tilt named");
+    // A face's tilt, its pair's shared tilt and a misalignment are dependent three ways in six faces of
+    // unknown heading: given the rest of the model, each names the other two as aliases.
+    let xz = a.effects.iter().find(|e| e.effect == "accel_misalignment" && e.axes == "xz").expect("misalignment xz");
+    for alias in ["position_error:n:pos5", "position_error:n:pos5+pos6"] {
+        assert!(xz.aliases.contains(&alias.to_string()), "{:?}", xz.aliases);
+    }
     assert!(!a.confounded.is_empty() && a.confounded.iter().all(|c| c.contradicted), "{:?}", a.confounded);
     // Its vertical gyros see +-W sin L whatever the heading: their biases are estimated, not unobservable.
     assert!(a.base_model.biases.contains_key("gyro_bias_x"), "{:?}", a.base_model.biases);
@@ -314,6 +320,11 @@ fn accelerometer_only_faces_off_their_labels_name_the_tilts_and_a_planted_misali
     let planted = 5.0 * se(&tilted_faces(1e-3));
     let a = tilted_faces(planted);
     let e = a.effects.iter().find(|e| e.effect == "accel_misalignment" && e.axes == "xy").expect("misalignment xy");
+    // Given the rest of the model (the pairs' shared tilts, the scale factors), faces 3 and 4's own tilts
+    // about north would explain the misalignment as well: they are named as its aliases.
+    for alias in ["position_error:n:pos3", "position_error:n:pos4"] {
+        assert!(e.aliases.contains(&alias.to_string()), "{:?}", e.aliases);
+    }
     assert!(e.estimate > 0.0 && (e.estimate - planted).abs() < 3.0 * e.std_error, "{e:?} planted {planted:e}");
     assert!(!a.effects.iter().any(|e| e.effect.starts_with("bias_")), "{:?}", a.effects);
 }

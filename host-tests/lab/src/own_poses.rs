@@ -46,7 +46,8 @@
 //! is not the baseline's own (a candidate the baseline names counts only when the estimate moved away from
 //! the baseline's by more than 3 standard errors, or 30 %). FALSE ALARM: an effect named in the trial that
 //! is neither of the planted kind, sensor, axes and position nor in the baseline (same candidate, same
-//! line). An effect is UNCERTAIN when the analysis ranks it so (`Effect::uncertain`: an alias of pose order,
+//! line), and that the analysis does not name as indistinguishable (an alias of any kind) from a baseline
+//! effect or from the planted candidate. An effect is UNCERTAIN when the analysis ranks it so (`Effect::uncertain`: an alias of pose order,
 //! the session's halves, the bias's slow wander or the thirds of the dwells, or a time constant at the end
 //! of its grid).
 
@@ -640,6 +641,19 @@ fn baseline_twin<'a>(baseline: &'a Analysis, e: &Effect) -> Option<&'a Effect> {
     baseline.effects.iter().find(|u| same_candidate(u, e))
 }
 
+/// `e` is no false alarm: the baseline's own effect ([`baseline_twin`]), or named as indistinguishable (an
+/// alias either way, of any kind) from a baseline effect or from the planted candidate: the analysis says
+/// that the data cannot tell them apart, given the rest of its model.
+fn explained(e: &Effect, baseline: &Analysis, h: &Hidden) -> bool {
+    let aliased = |u: &Effect| {
+        (u.aliases.contains(&candidate_of(e)) || e.aliases.contains(&candidate_of(u)))
+            && same_line(u.frequency_hz, e.frequency_hz)
+    };
+    baseline_twin(baseline, e).is_some()
+        || baseline.effects.iter().any(aliased)
+        || e.aliases.iter().any(|a| *a == candidate_name(h))
+}
+
 /// `a` agrees with `b` within 30 % of `b`.
 fn within_30(a: f64, b: f64) -> bool {
     (a - b).abs() <= 0.3 * b.abs()
@@ -686,7 +700,7 @@ pub fn judge(analysis: &Analysis, baseline: &Analysis, h: &Hidden, size: f64) ->
     let false_alarms: Vec<(String, bool)> = analysis
         .effects
         .iter()
-        .filter(|e| !at_planted_place(e, h) && baseline_twin(baseline, e).is_none())
+        .filter(|e| !at_planted_place(e, h) && !explained(e, baseline, h))
         .map(|e| (label(e), is_uncertain(e)))
         .collect();
     let miss = match (hit, verdicts.first()) {

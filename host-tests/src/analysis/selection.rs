@@ -151,13 +151,24 @@ pub(super) fn select(problem: &mut Problem, extra_tests: usize) -> Result<Select
     let m = (screen.observable.len() + extra_tests).max(1) as f64;
     let forward = Forward::run(problem, &screen.observable, base_fit.clone(), m);
     let chosen: Vec<usize> = forward.chosen.iter().map(|c| c.candidate).collect();
+    let base_count = problem.base.len();
     let aliases = forward
         .chosen
         .iter()
         .zip(&forward.correlated)
-        .map(|(c, correlated)| {
+        .enumerate()
+        .map(|(j, (c, correlated))| {
             let mut names = screen.aliases(problem, &base, c, &chosen);
             names.extend(correlated.iter().filter(|n| !names.contains(n)).cloned().collect::<Vec<_>>());
+            // Given the rest of the final model: the columns of the model but this effect's.
+            let rest: Vec<&[f64]> = (0..forward.columns.len())
+                .filter(|&k| k != base_count + j)
+                .map(|k| forward.columns[k].as_slice())
+                .collect();
+            if let Some(given) = Projection::new(&problem.obs, rest, &forward.current) {
+                let more = screen.aliases(problem, &given, c, &chosen);
+                names.extend(more.into_iter().filter(|n| !names.contains(n)).collect::<Vec<_>>());
+            }
             names
         })
         .collect();
@@ -363,18 +374,22 @@ impl Screen {
         screen
     }
 
-    /// Aliases of a chosen effect: other observable candidates with (nearly) the same base-free column (the
-    /// correlation of the two remainders, from the columns' own product and their products with the base).
-    fn aliases(&self, problem: &Problem, base: &Projection, c: &Chosen, chosen: &[usize]) -> Vec<String> {
+    /// Aliases of a chosen effect: other observable candidates with (nearly) the same column once the
+    /// columns of `given` are removed (the correlation of the two remainders, from the columns' own product
+    /// and their products with `given`). With `given` the base model: what the poses alone cannot tell apart;
+    /// with the final model but this effect: what the rest of the model makes indistinguishable (a face's
+    /// tilt, its pair's shared tilt and a misalignment in six faces of unknown heading, any one of the three
+    /// given the other two).
+    fn aliases(&self, problem: &Problem, given: &Projection, c: &Chosen, chosen: &[usize]) -> Vec<String> {
         let own = &problem.candidates[c.candidate].variants[c.variant].1;
-        let (own_g, own_rest) = &self.remainders[c.candidate][c.variant];
+        let (own_g, own_rest) = given.remainder(own);
         let mut names = Vec::new();
         for &oi in self.observable.iter().filter(|&&oi| oi != c.candidate && !chosen.contains(&oi)) {
-            let similar =
-                problem.candidates[oi].variants.iter().zip(&self.remainders[oi]).any(|((_, col), (g, rest))| {
-                    let product = own.weighted_dot_column(&base.weights, col) - base.quadratic(own_g, g);
-                    *rest > 0.0 && (product / (own_rest * rest).sqrt()).abs() > ALIAS_CORRELATION
-                });
+            let similar = problem.candidates[oi].variants.iter().any(|(_, col)| {
+                let (g, rest) = given.remainder(col);
+                let product = own.weighted_dot_column(&given.weights, col) - given.quadratic(&own_g, &g);
+                own_rest > 0.0 && rest > 0.0 && (product / (own_rest * rest).sqrt()).abs() > ALIAS_CORRELATION
+            });
             if similar {
                 names.push(problem.candidates[oi].name());
             }
