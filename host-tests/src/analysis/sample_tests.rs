@@ -201,7 +201,12 @@ impl ChannelMeasures {
         // that rises can fail where a stronger line elsewhere passes).
         let mut lines: Vec<Line> = Vec::new();
         let mut misses = 0;
-        let starts: Vec<f64> = session.dwells.iter().map(|d| (d.t[0] - session.dwells[0].t[0]) / session.dt).collect();
+        let first_s = |d: &super::observations::DwellData| d.t.first().copied().unwrap_or(0.0);
+        let starts: Vec<f64> = session
+            .dwells
+            .iter()
+            .map(|d| (first_s(d) - session.dwells.first().map_or(0.0, first_s)) / session.dt)
+            .collect();
         let mut search = LineSearch::new(&series, &starts);
         let room = |lines: &[Line]| lines.len() < MAX_COMPONENTS && wandering(lines).len() < MAX_LINES;
         while let Some(fits) =
@@ -447,9 +452,10 @@ fn vibration_criterion(v: &VibrationResult, dwells: usize, n_all: usize, m: f64)
     VibrationCriterion { accepted: v.lr > threshold && delta_bic < 0.0, dof, delta_bic }
 }
 
-/// Of a line's two fits ([`LineFits`]), the one accepted at `m` with the lower BIC: a line whose phase holds
-/// across many dwells needs two parameters where the phase per dwell needs one per dwell, and a line whose
-/// phase does not hold (a wandering mains line) is better fitted dwell by dwell. `None` when neither passes.
+/// Of the fits of a step of the line search ([`LineFits`]), the one accepted at `m` with the lower BIC: a
+/// line whose phase holds across many dwells needs two parameters where the phase per dwell needs one per
+/// dwell, and a line whose phase does not hold (a wandering mains line) is better fitted dwell by dwell.
+/// `None` when none passes.
 fn chosen_line(fits: LineFits, dwells: usize, n_all: usize, m: f64) -> Option<VibrationResult> {
     [Some(fits.per_dwell), fits.coherent, fits.coherent_here]
         .into_iter()
