@@ -21,7 +21,9 @@ use super::candidates::axis_of;
 use super::correlated_noise::{gauss_markov_test, GaussMarkovResult};
 use super::observations::Session;
 use super::parallel::on_cores;
-use super::vibration::{line_in, remove_line, sinc, LineFits, LineSearch, VibrationResult, MAX_COMPONENTS, MAX_LINES};
+use super::vibration::{
+    ambiguous_frequency, line_in, remove_line, sinc, LineFits, LineSearch, VibrationResult, MAX_COMPONENTS, MAX_LINES,
+};
 use super::windows::{in_windows, in_windows_indexed, not_stationary, widening, window_starts, NOT_STATIONARY};
 use super::{ChannelDiagnostics, Effect, FigureData, ALPHA, CHANNELS, CHANNEL_UNITS};
 
@@ -216,7 +218,7 @@ impl ChannelMeasures {
             if let Some(s) = search.as_mut() {
                 s.settle(chosen.as_ref());
             }
-            let Some(v) = chosen else {
+            let Some(mut v) = chosen else {
                 misses += 1;
                 if misses == MAX_MISSES {
                     break;
@@ -224,6 +226,7 @@ impl ChannelMeasures {
                 continue;
             };
             misses = 0;
+            v.ambiguous_hz = ambiguous_frequency(&series, &v, session.dt);
             let windows = in_windows_indexed(&series, |k, w| {
                 Some(line_in(w, &window_starts(&series, &starts, k), &v, session.dt))
             });
@@ -390,7 +393,7 @@ impl ChannelMeasures {
                 likelihood_ratio: lr,
                 parameters: dof as usize + components.len(),
                 p_value: chi_square_upper(lr, dof),
-                aliases: if not_stationary { vec![NOT_STATIONARY.to_string()] } else { Vec::new() },
+                aliases: line_aliases(not_stationary, strongest.ambiguous_hz),
                 ..self.effect(EffectKind::Vibration, "samples")
             });
             rms = after;
@@ -427,6 +430,19 @@ impl ChannelMeasures {
         });
         Some((gm.sigma, gm.tau_s))
     }
+}
+
+/// The aliases of a line: [`NOT_STATIONARY`] when its thirds differ, and the other frequency that fits it
+/// nearly as well when the dwells' spacing leaves it ambiguous ([`ambiguous_frequency`]).
+fn line_aliases(not_stationary: bool, ambiguous_hz: Option<f64>) -> Vec<String> {
+    let mut aliases = Vec::new();
+    if not_stationary {
+        aliases.push(NOT_STATIONARY.to_string());
+    }
+    if let Some(f) = ambiguous_hz {
+        aliases.push(format!("a line at {f:.4} Hz (the dwells' spacing: its sidelobe fits nearly as well)"));
+    }
+    aliases
 }
 
 /// Candidates of the line search that fail in a row before it ends.

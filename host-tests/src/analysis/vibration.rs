@@ -28,6 +28,47 @@ pub(super) struct VibrationResult {
     /// A line whose phase holds across the dwells (one phase in the record's time): each dwell's first
     /// sample, counted in samples from the first dwell's first. `None`: a phase per dwell.
     pub starts: Option<Vec<f64>>,
+    /// A line with one phase whose frequency the dwells' spacing leaves ambiguous ([`ambiguous_frequency`]):
+    /// the other frequency, Hz.
+    pub ambiguous_hz: Option<f64>,
+}
+
+/// A second frequency fits a coherent line nearly as well when its coherent power is at least this share of
+/// the best's ([`ambiguous_frequency`]).
+const AMBIGUOUS_POWER: f64 = 0.5;
+
+/// The other frequency (Hz) that the coherent line `v` of `dwells` (first samples `starts`) fits nearly as
+/// well, if any: dwells that repeat with a period `T` leave sidelobes at `f +- k/T` of `sinc(k d)` of the
+/// line's amplitude (`d` the dwell's share of `T`), and noise can put the line on one of them. The coherent
+/// power is scanned as [`refine_coherent`] scans it, over one bin of the longest dwell on either side; the
+/// highest local maximum outside the main lobe (`1 / span` from the line) is the candidate, named when its
+/// power is at least [`AMBIGUOUS_POWER`] of the line's. `None` for a line with a phase per dwell, or beyond
+/// [`COHERENT_BUDGET`].
+pub(super) fn ambiguous_frequency(dwells: &[Vec<f64>], v: &VibrationResult, dt: f64) -> Option<f64> {
+    let starts = v.starts.as_deref()?;
+    let f = v.frequency_hz * dt;
+    let n_max = dwells.iter().map(Vec::len).max()? as f64;
+    let n_all = dwells.iter().map(Vec::len).sum::<usize>() as f64;
+    let span = starts.last()? + dwells.last()?.len() as f64 - starts[0];
+    let step = 0.25 / span;
+    let points = (2.0 / n_max / step).ceil();
+    if !(points.is_finite() && points >= 3.0 && points * n_all <= COHERENT_BUDGET) {
+        return None;
+    }
+    let power = |f: f64| {
+        let ((zr, zi), _) = coherent_sum(dwells, starts, f);
+        zr * zr + zi * zi
+    };
+    let (a, b) = (f - 1.0 / n_max, f + 1.0 / n_max);
+    let scan: Vec<(f64, f64)> =
+        (0..=points as usize).map(|i| a + (b - a) * i as f64 / points).map(|x| (x, power(x))).collect();
+    let best = power(f);
+    scan.windows(3)
+        .filter(|w| w[1].1 > w[0].1 && w[1].1 >= w[2].1 && (w[1].0 - f).abs() > 1.0 / span)
+        .map(|w| w[1])
+        .max_by(|x, y| x.1.total_cmp(&y.1))
+        .filter(|&(_, p)| p >= AMBIGUOUS_POWER * best)
+        .map(|(x, _)| x / dt)
 }
 
 /// The fits of a step of the line search: one phase per dwell, and (two dwells or more) one phase in the
@@ -475,6 +516,7 @@ fn fit_line(dwells: &[Vec<f64>], f: f64, background: f64, n_min: usize, dt: f64)
         per_dwell,
         background,
         starts: None,
+        ambiguous_hz: None,
     }
 }
 
@@ -546,6 +588,7 @@ fn fit_coherent(dwells: &[Vec<f64>], starts: &[f64], f: f64, background: f64, dt
         per_dwell,
         background,
         starts: Some(starts.to_vec()),
+        ambiguous_hz: None,
     }
 }
 
