@@ -47,24 +47,14 @@ const AMBIGUOUS_POWER: f64 = 0.5;
 pub(super) fn ambiguous_frequency(dwells: &[Vec<f64>], v: &VibrationResult, dt: f64) -> Option<f64> {
     let starts = v.starts.as_deref()?;
     let f = v.frequency_hz * dt;
-    let n_max = dwells.iter().map(Vec::len).max()? as f64;
-    let n_all = dwells.iter().map(Vec::len).sum::<usize>() as f64;
-    let span = starts.last()? + dwells.last()?.len() as f64 - starts[0];
-    let step = 0.25 / span;
-    let points = (2.0 / n_max / step).ceil();
-    if !(points.is_finite() && points >= 3.0 && points * n_all <= COHERENT_BUDGET) {
+    let (scan, _) = coherent_scan(dwells, starts, f)?;
+    if scan.len() < 4 {
         return None;
     }
-    let power = |f: f64| {
-        let ((zr, zi), _) = coherent_sum(dwells, starts, f);
-        zr * zr + zi * zi
-    };
-    let (a, b) = (f - 1.0 / n_max, f + 1.0 / n_max);
-    let scan: Vec<(f64, f64)> =
-        (0..=points as usize).map(|i| a + (b - a) * i as f64 / points).map(|x| (x, power(x))).collect();
-    let best = power(f);
+    let main_lobe = 1.0 / span_samples(dwells, starts)?;
+    let best = coherent_power(dwells, starts, f);
     scan.windows(3)
-        .filter(|w| w[1].1 > w[0].1 && w[1].1 >= w[2].1 && (w[1].0 - f).abs() > 1.0 / span)
+        .filter(|w| w[1].1 > w[0].1 && w[1].1 >= w[2].1 && (w[1].0 - f).abs() > main_lobe)
         .map(|w| w[1])
         .max_by(|x, y| x.1.total_cmp(&y.1))
         .filter(|&(_, p)| p >= AMBIGUOUS_POWER * best)
@@ -201,7 +191,7 @@ impl LineSearch {
     pub fn new(dwells: &[Vec<f64>], starts: &[f64]) -> Option<LineSearch> {
         let n_min = dwells.iter().map(|d| d.len()).min()?;
         let piece_max = pieces(dwells).iter().map(|d| d.len()).max()?;
-        let span = (starts.last()? - starts[0]).max(0.0).round() as usize + dwells.last()?.len();
+        let span = span_samples(dwells, starts)?.max(0.0).round() as usize;
         let coherent = (dwells.len() >= 2 && starts.len() == dwells.len() && span <= MAX_PIECE / 4).then(|| Spectrum {
             len: span.next_power_of_two() * 4,
             bands: Vec::new(),
@@ -267,10 +257,7 @@ impl LineSearch {
             }
             let power = s.power.as_deref()?;
             let (k, background) = strongest_line(power, s.len, n_min, 1.0, &s.bands)?;
-            let score = |f: f64| {
-                let ((zr, zi), _) = coherent_sum(dwells, starts, f);
-                zr * zr + zi * zi
-            };
+            let score = |f: f64| coherent_power(dwells, starts, f);
             let fc = golden_section_max((k as f64 - 1.0) / s.len as f64, (k as f64 + 1.0) / s.len as f64, score);
             Some((fc, line_band(power, k, BAND_OVER_BACKGROUND * background), background))
         });
@@ -520,55 +507,69 @@ fn fit_line(dwells: &[Vec<f64>], f: f64, background: f64, n_min: usize, dt: f64)
     }
 }
 
-/// The coherent sum `Z = sum_p X_p e^{-i w s_p}` of the dwells' DFTs at `f` cycles per sample, each turned to
-/// the record's time by its first sample `s_p`; and the dwells' own `X_p`.
-fn coherent_sum(dwells: &[Vec<f64>], starts: &[f64], f: f64) -> ((f64, f64), Vec<(f64, f64)>) {
-    let per_dwell: Vec<(f64, f64)> = dwells.iter().map(|d| dft_at(d, f)).collect();
+/// The coherent sum `Z = sum_p X_p e^{-i w s_p}` of the dwells' DFTs `X_p` at `f` cycles per sample, each
+/// turned to the record's time by its first sample `s_p` (samples).
+fn coherent_sum(dwells: &[Vec<f64>], starts: &[f64], f: f64) -> (f64, f64) {
     let (mut zr, mut zi) = (0.0, 0.0);
-    for ((re, im), s) in per_dwell.iter().zip(starts) {
+    for (d, s) in dwells.iter().zip(starts) {
+        let (re, im) = dft_at(d, f);
         let ph = std::f64::consts::TAU * f * s;
         let (c, sn) = (ph.cos(), -ph.sin());
         zr += re * c - im * sn;
         zi += re * sn + im * c;
     }
-    ((zr, zi), per_dwell)
+    (zr, zi)
 }
 
-/// The frequency (cycles per sample) of a line whose phase holds across the dwells, near the frequency `f`
-/// refined with a phase per dwell: the coherent power `|Z|^2` is scanned over one bin of the longest dwell on
-/// either side at a quarter of `1 / span` (span: first to last sample of the record's dwells), then refined
-/// by golden section between the best point's neighbours. `None` for one dwell (the two fits are the same)
-/// or when the scan passes [`COHERENT_BUDGET`].
-fn refine_coherent(dwells: &[Vec<f64>], starts: &[f64], f: f64) -> Option<f64> {
+/// The coherent power `|Z|^2` at `f` cycles per sample ([`coherent_sum`]).
+fn coherent_power(dwells: &[Vec<f64>], starts: &[f64], f: f64) -> f64 {
+    let (zr, zi) = coherent_sum(dwells, starts, f);
+    zr * zr + zi * zi
+}
+
+/// Samples from the first dwell's first sample to the end of the last dwell (`starts`: the dwells' first
+/// samples, counted from the first dwell's).
+fn span_samples(dwells: &[Vec<f64>], starts: &[f64]) -> Option<f64> {
+    Some(starts.last()? + dwells.last()?.len() as f64 - starts.first()?)
+}
+
+/// The coherent power scanned around `f` (cycles per sample): over one bin of the longest dwell on either side
+/// at a quarter of `1 / span`; the points (frequency, power) and the step. `None` for fewer than two dwells or
+/// when the scan passes [`COHERENT_BUDGET`].
+fn coherent_scan(dwells: &[Vec<f64>], starts: &[f64], f: f64) -> Option<(Vec<(f64, f64)>, f64)> {
     if dwells.len() < 2 || starts.len() != dwells.len() {
         return None;
     }
     let n_max = dwells.iter().map(Vec::len).max()? as f64;
     let n_all = dwells.iter().map(Vec::len).sum::<usize>() as f64;
-    let span = starts.last()? + dwells.last()?.len() as f64 - starts[0];
-    let step = 0.25 / span;
+    let step = 0.25 / span_samples(dwells, starts)?;
     let points = (2.0 / n_max / step).ceil();
     if !(points.is_finite() && points >= 1.0 && points * n_all <= COHERENT_BUDGET) {
         return None;
     }
-    let score = |f: f64| {
-        let ((zr, zi), _) = coherent_sum(dwells, starts, f);
-        zr * zr + zi * zi
-    };
     let (a, b) = (f - 1.0 / n_max, f + 1.0 / n_max);
-    let best = (0..=points as usize)
+    let scan = (0..=points as usize)
         .map(|i| a + (b - a) * i as f64 / points)
-        .map(|f| (f, score(f)))
-        .max_by(|x, y| x.1.total_cmp(&y.1))
-        .map(|(f, _)| f)?;
-    Some(golden_section_max(best - step, best + step, score))
+        .map(|x| (x, coherent_power(dwells, starts, x)))
+        .collect();
+    Some((scan, step))
+}
+
+/// The frequency (cycles per sample) of a line whose phase holds across the dwells, near the frequency `f`
+/// refined with a phase per dwell: the best point of [`coherent_scan`] (span: first to last sample of the
+/// record's dwells), refined by golden section between its neighbours. `None` for one dwell (the two fits are
+/// the same) or when the scan passes [`COHERENT_BUDGET`].
+fn refine_coherent(dwells: &[Vec<f64>], starts: &[f64], f: f64) -> Option<f64> {
+    let (scan, step) = coherent_scan(dwells, starts, f)?;
+    let best = scan.iter().max_by(|x, y| x.1.total_cmp(&y.1)).map(|(f, _)| *f)?;
+    Some(golden_section_max(best - step, best + step, |f| coherent_power(dwells, starts, f)))
 }
 
 /// One amplitude and one phase in the record's time at `f` cycles per sample: the reduction of the residual
 /// sum of squares is `2 |Z|^2 / N` ([`coherent_sum`]), amplitude `2 |Z| / N`, and each dwell's complex
 /// amplitude is `(2 Z / N) e^{i w s_p}`. The frequencies searched are those of the whole span.
 fn fit_coherent(dwells: &[Vec<f64>], starts: &[f64], f: f64, background: f64, dt: f64) -> VibrationResult {
-    let ((zr, zi), _) = coherent_sum(dwells, starts, f);
+    let (zr, zi) = coherent_sum(dwells, starts, f);
     let total = dwells.iter().map(Vec::len).sum::<usize>() as f64;
     let (cr, ci) = (2.0 * zr / total, 2.0 * zi / total);
     let per_dwell = starts
@@ -578,7 +579,7 @@ fn fit_coherent(dwells: &[Vec<f64>], starts: &[f64], f: f64, background: f64, dt
             (cr * ph.cos() - ci * ph.sin(), cr * ph.sin() + ci * ph.cos())
         })
         .collect();
-    let span = starts.last().copied().unwrap_or(0.0) + dwells.last().map_or(0, Vec::len) as f64 - starts[0];
+    let span = span_samples(dwells, starts).unwrap_or(0.0);
     VibrationResult {
         frequency_hz: f / dt,
         amplitude_seen: cr.hypot(ci),
