@@ -164,6 +164,23 @@ fn dwell_count(fit: &FitResiduals) -> usize {
     cells.len().max(1)
 }
 
+/// One dwell's sums over its blocks in a group's fit.
+#[derive(Default)]
+struct DwellSums {
+    /// `sum r / v` (residual `r`, noise variance `v` of the block mean).
+    weighted_residual: f64,
+    /// `sum 1 / v`.
+    weight: f64,
+    /// `sum r^2 / v`.
+    chi_square: f64,
+    /// Blocks.
+    blocks: usize,
+    /// The dwell's label.
+    pos: u32,
+    /// Sum of the blocks' middle times, s.
+    t_mid_sum_s: f64,
+}
+
 /// Group `g`'s fit (its observations `rows`, their noise variances `variance`) and its dwells beyond the
 /// noise model at `alpha` over `dwell_cells`. Between the dwells, the dwells' mean residuals are whitened with
 /// the bias's rate random walk `walk_per_sqrt_s` (the noise model's `K`): a bias that wanders by what the
@@ -177,21 +194,22 @@ fn group_fit(
 ) -> (GroupFit, Vec<DwellFit>) {
     let name = fit.group_names[g].clone();
     let within_and_means: f64 = rows.iter().zip(variance).map(|(&i, v)| fit.residual[i].powi(2) / v).sum();
-    // Per dwell: the weighted sums of the residual and of the weights, the chi-square, the blocks, its label,
-    // and the sum of its blocks' middle times.
-    let mut per_dwell: std::collections::BTreeMap<usize, (f64, f64, f64, usize, u32, f64)> = Default::default();
+    let mut per_dwell: std::collections::BTreeMap<usize, DwellSums> = Default::default();
     for (&i, v) in rows.iter().zip(variance) {
-        let d = per_dwell.entry(fit.block[i].dwell).or_insert((0.0, 0.0, 0.0, 0, fit.pos[i], 0.0));
-        d.0 += fit.residual[i] / v;
-        d.1 += 1.0 / v;
-        d.2 += fit.residual[i].powi(2) / v;
-        d.3 += 1;
-        d.5 += fit.block[i].t_mid_s;
+        let d = per_dwell.entry(fit.block[i].dwell).or_insert(DwellSums { pos: fit.pos[i], ..Default::default() });
+        d.weighted_residual += fit.residual[i] / v;
+        d.weight += 1.0 / v;
+        d.chi_square += fit.residual[i].powi(2) / v;
+        d.blocks += 1;
+        d.t_mid_sum_s += fit.block[i].t_mid_s;
     }
-    let mut means: Vec<(f64, f64, f64)> =
-        per_dwell.values().map(|d| (d.5 / d.3 as f64, d.0 / d.1, 1.0 / d.1)).collect();
+    // Per dwell, in time order: its mean time, s, its weighted mean residual and that mean's variance.
+    let mut means: Vec<(f64, f64, f64)> = per_dwell
+        .values()
+        .map(|d| (d.t_mid_sum_s / d.blocks as f64, d.weighted_residual / d.weight, 1.0 / d.weight))
+        .collect();
     means.sort_by(|a, b| a.0.total_cmp(&b.0));
-    let unwhitened: f64 = per_dwell.values().map(|d| d.0 * d.0 / d.1).sum();
+    let unwhitened: f64 = per_dwell.values().map(|d| d.weighted_residual.powi(2) / d.weight).sum();
     let (t_s, mean, mean_variance): (Vec<f64>, Vec<f64>, Vec<f64>) =
         (means.iter().map(|m| m.0).collect(), means.iter().map(|m| m.1).collect(), means.iter().map(|m| m.2).collect());
     let between: f64 = whiten_walk(walk_per_sqrt_s, &t_s, &mean_variance, &mean).0.iter().map(|e| e * e).sum();
@@ -203,8 +221,14 @@ fn group_fit(
     let level = ALPHA / dwell_cells as f64;
     let named = per_dwell
         .values()
-        .filter(|d| chi_square_upper(d.2, d.3 as f64) < level)
-        .map(|d| DwellFit { pos: d.4, channel: name.clone(), blocks: d.3, mean_residual: d.0 / d.1, chi_square: d.2 })
+        .filter(|d| chi_square_upper(d.chi_square, d.blocks as f64) < level)
+        .map(|d| DwellFit {
+            pos: d.pos,
+            channel: name.clone(),
+            blocks: d.blocks,
+            mean_residual: d.weighted_residual / d.weight,
+            chi_square: d.chi_square,
+        })
         .collect();
     let rms = |v: &mut dyn Iterator<Item = f64>| (v.sum::<f64>() / n).sqrt();
     let group = GroupFit {
