@@ -188,23 +188,36 @@ fn every_line_of_a_channel_is_found_and_the_stronger_does_not_mask_the_weaker() 
     }
 }
 
+/// The analysis of the clean scenario's six poses repeated `repeats` times with dwells of `dwell_s`, seed
+/// `seed`, with a steady line (`amplitude_mps2` at `f_hz`, phase `phase_rad` at t = 0) on accelerometer
+/// `axis`, as an integrating sensor's interval averages show it.
+fn steady_line_on_repeated_poses(
+    repeats: usize,
+    dwell_s: f64,
+    seed: u64,
+    (axis, f_hz, amplitude_mps2, phase_rad): (usize, f64, f64, f64),
+) -> Analysis {
+    let mut s: ScenarioFile = clean_scenario();
+    let six = s.schedule.positions_deg.clone();
+    s.schedule.positions_deg = (0..repeats).flat_map(|_| six.iter().copied()).collect();
+    s.schedule.dwell_s = dwell_s;
+    let mut recording = simulate(&s, seed, "steady line");
+    let x = std::f64::consts::PI * f_hz / recording.header.rate_hz.unwrap();
+    for row in recording.rows.iter_mut() {
+        row.force_b_mps2[axis] +=
+            amplitude_mps2 * x.sin() / x * (std::f64::consts::TAU * f_hz * row.t_s + phase_rad).sin();
+    }
+    analyze_recording(&recording).unwrap()
+}
+
 /// SIMULATION: a steady line whose phase holds across 30 short dwells (13 Hz, 1e-3 m/s^2 on the y
 /// accelerometer, a tenth of the white noise per sample) is found with one phase in the record's time: its
 /// likelihood ratio (about 150) passes the test with two degrees of freedom, where a phase per dwell needs 31
 /// and a BIC penalty of about 330. Before, the line was not found.
 #[test]
 fn a_line_whose_phase_holds_across_many_short_dwells_is_found() {
-    let mut s: ScenarioFile = clean_scenario();
-    let six = s.schedule.positions_deg.clone();
-    s.schedule.positions_deg = (0..5).flat_map(|_| six.iter().copied()).collect();
-    s.schedule.dwell_s = 10.0;
-    let mut recording = simulate(&s, 13, "coherent line");
     let (f_hz, amplitude_mps2) = (13.0, 1e-3);
-    let x = std::f64::consts::PI * f_hz / recording.header.rate_hz.unwrap();
-    for row in recording.rows.iter_mut() {
-        row.force_b_mps2[1] += amplitude_mps2 * x.sin() / x * (std::f64::consts::TAU * f_hz * row.t_s + 0.4).sin();
-    }
-    let a = analyze_recording(&recording).unwrap();
+    let a = steady_line_on_repeated_poses(5, 10.0, 13, (1, f_hz, amplitude_mps2, 0.4));
     let lines: Vec<_> = a.effects.iter().filter(|e| e.effect == "vibration").collect();
     assert_eq!(lines.len(), 1, "{lines:?}");
     let line = lines[0];
@@ -222,17 +235,8 @@ fn a_line_whose_phase_holds_across_many_short_dwells_is_found() {
 /// was ambiguous.
 #[test]
 fn a_line_on_periodic_dwells_names_the_frequency_its_sidelobe_leaves_ambiguous() {
-    let mut s: ScenarioFile = clean_scenario();
-    let six = s.schedule.positions_deg.clone();
-    s.schedule.positions_deg = (0..20).flat_map(|_| six.iter().copied()).collect();
-    s.schedule.dwell_s = 2.5;
-    let mut recording = simulate(&s, 14, "periodic dwells");
-    let (f_hz, amplitude_mps2) = (17.0, 6e-4);
-    let x = std::f64::consts::PI * f_hz / recording.header.rate_hz.unwrap();
-    for row in recording.rows.iter_mut() {
-        row.force_b_mps2[2] += amplitude_mps2 * x.sin() / x * (std::f64::consts::TAU * f_hz * row.t_s + 1.1).sin();
-    }
-    let a = analyze_recording(&recording).unwrap();
+    let f_hz = 17.0;
+    let a = steady_line_on_repeated_poses(20, 2.5, 14, (2, f_hz, 6e-4, 1.1));
     let lines: Vec<_> = a.effects.iter().filter(|e| e.effect == "vibration").collect();
     assert_eq!(lines.len(), 1, "{lines:?}");
     let line = lines[0];
