@@ -158,7 +158,7 @@ pub(super) fn select(problem: &mut Problem, extra_tests: usize) -> Result<Select
         .zip(&forward.correlated)
         .enumerate()
         .map(|(j, (c, correlated))| {
-            let mut names = screen.aliases(problem, &base, c, &chosen);
+            let mut names = screen.aliases(problem, Given::Base(&base), c, &chosen);
             names.extend(correlated.iter().filter(|n| !names.contains(n)).cloned().collect::<Vec<_>>());
             // Given the rest of the final model: the columns of the model but this effect's.
             let rest: Vec<&[f64]> = (0..forward.columns.len())
@@ -166,7 +166,7 @@ pub(super) fn select(problem: &mut Problem, extra_tests: usize) -> Result<Select
                 .map(|k| forward.columns[k].as_slice())
                 .collect();
             if let Some(given) = Projection::new(&problem.obs, rest, &forward.current) {
-                let more = screen.aliases(problem, &given, c, &chosen);
+                let more = screen.aliases(problem, Given::Rest(&given), c, &chosen);
                 names.extend(more.into_iter().filter(|n| !names.contains(n)).collect::<Vec<_>>());
             }
             names
@@ -347,6 +347,14 @@ impl<'a> Projection<'a> {
     }
 }
 
+/// The columns the aliases are taken against ([`Screen::aliases`]).
+enum Given<'p, 'a> {
+    /// The base model (its remainders are the screen's).
+    Base(&'p Projection<'a>),
+    /// The final model but the effect itself.
+    Rest(&'p Projection<'a>),
+}
+
 /// What the base model leaves of every candidate's columns.
 struct Screen {
     /// Candidates with a variant the base model does not explain.
@@ -380,14 +388,25 @@ impl Screen {
     /// with the final model but this effect: what the rest of the model makes indistinguishable (a face's
     /// tilt, its pair's shared tilt and a misalignment in six faces of unknown heading, any one of the three
     /// given the other two).
-    fn aliases(&self, problem: &Problem, given: &Projection, c: &Chosen, chosen: &[usize]) -> Vec<String> {
+    fn aliases(&self, problem: &Problem, given: Given, c: &Chosen, chosen: &[usize]) -> Vec<String> {
+        // The base model's remainders were computed by `Screen::new`; the rest of the model's are computed here.
+        let (projection, cached) = match given {
+            Given::Base(p) => (p, Some(&self.remainders)),
+            Given::Rest(p) => (p, None),
+        };
+        let remainder = |ci: usize, vi: usize| match cached {
+            Some(r) => std::borrow::Cow::Borrowed(&r[ci][vi]),
+            None => std::borrow::Cow::Owned(projection.remainder(&problem.candidates[ci].variants[vi].1)),
+        };
         let own = &problem.candidates[c.candidate].variants[c.variant].1;
-        let (own_g, own_rest) = given.remainder(own);
+        let own_remainder = remainder(c.candidate, c.variant);
+        let (own_g, own_rest) = (&own_remainder.0, own_remainder.1);
         let mut names = Vec::new();
         for &oi in self.observable.iter().filter(|&&oi| oi != c.candidate && !chosen.contains(&oi)) {
-            let similar = problem.candidates[oi].variants.iter().any(|(_, col)| {
-                let (g, rest) = given.remainder(col);
-                let product = own.weighted_dot_column(&given.weights, col) - given.quadratic(&own_g, &g);
+            let similar = problem.candidates[oi].variants.iter().enumerate().any(|(vi, (_, col))| {
+                let r = remainder(oi, vi);
+                let (g, rest) = (&r.0, r.1);
+                let product = own.weighted_dot_column(&projection.weights, col) - projection.quadratic(own_g, g);
                 own_rest > 0.0 && rest > 0.0 && (product / (own_rest * rest).sqrt()).abs() > ALIAS_CORRELATION
             });
             if similar {
