@@ -204,15 +204,15 @@ impl ChannelMeasures {
         let mut lines: Vec<Line> = Vec::new();
         let mut misses = 0;
         let first_s = |d: &super::observations::DwellData| d.t.first().copied().unwrap_or(0.0);
-        let starts: Vec<f64> = session
+        let starts_samples: Vec<f64> = session
             .dwells
             .iter()
             .map(|d| (first_s(d) - session.dwells.first().map_or(0.0, first_s)) / session.dt)
             .collect();
-        let mut search = LineSearch::new(&series, &starts);
+        let mut search = LineSearch::new(&series, &starts_samples);
         let room = |lines: &[Line]| lines.len() < MAX_COMPONENTS && wandering(lines).len() < MAX_LINES;
         while let Some(fits) =
-            search.as_mut().filter(|_| room(&lines)).and_then(|s| s.next(&series, &starts, session.dt))
+            search.as_mut().filter(|_| room(&lines)).and_then(|s| s.next(&series, &starts_samples, session.dt))
         {
             let chosen = chosen_line(fits, series.len(), n_all, sample_tests(session) as f64);
             if let Some(s) = search.as_mut() {
@@ -228,7 +228,7 @@ impl ChannelMeasures {
             misses = 0;
             v.ambiguous_hz = ambiguous_frequency(&series, &v, session.dt);
             let windows = in_windows_indexed(&series, |k, w| {
-                Some(line_in(w, &window_starts(&series, &starts, k), &v, session.dt))
+                Some(line_in(w, &window_starts(&series, &starts_samples, k), &v, session.dt))
             });
             remove_line(&mut series, &v, session.dt);
             lines.push(Line { line: v, windows });
@@ -461,7 +461,7 @@ struct VibrationCriterion {
 /// line whose phase holds across the dwells). The statistic is tested as chi-square with one degree per phase
 /// and one for the amplitude, Bonferroni over the frequencies searched; `n_all` samples.
 fn vibration_criterion(v: &VibrationResult, dwells: usize, n_all: usize, m: f64) -> VibrationCriterion {
-    let phases = if v.starts.is_some() { 1.0 } else { dwells as f64 };
+    let phases = if v.starts_samples.is_some() { 1.0 } else { dwells as f64 };
     let dof = phases + 1.0;
     let threshold = chi_square_quantile_upper(ALPHA / (m * v.independent_frequencies), dof);
     let delta_bic = -v.lr + (dof + 1.0) * (n_all as f64).ln();

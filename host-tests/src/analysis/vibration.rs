@@ -27,7 +27,7 @@ pub(super) struct VibrationResult {
     pub background: f64,
     /// A line whose phase holds across the dwells (one phase in the record's time): each dwell's first
     /// sample, counted in samples from the first dwell's first. `None`: a phase per dwell.
-    pub starts: Option<Vec<f64>>,
+    pub starts_samples: Option<Vec<f64>>,
     /// A line with one phase whose frequency the dwells' spacing leaves ambiguous ([`ambiguous_frequency`]):
     /// the other frequency, Hz.
     pub ambiguous_hz: Option<f64>,
@@ -45,7 +45,7 @@ const AMBIGUOUS_POWER: f64 = 0.5;
 /// power is at least [`AMBIGUOUS_POWER`] of the line's. `None` for a line with a phase per dwell, or beyond
 /// [`COHERENT_BUDGET`].
 pub(super) fn ambiguous_frequency(dwells: &[Vec<f64>], v: &VibrationResult, dt: f64) -> Option<f64> {
-    let starts = v.starts.as_deref()?;
+    let starts = v.starts_samples.as_deref()?;
     let f = v.frequency_hz * dt;
     let (scan, _) = coherent_scan(dwells, starts, f)?;
     if scan.len() < 4 {
@@ -502,7 +502,7 @@ fn fit_line(dwells: &[Vec<f64>], f: f64, background: f64, n_min: usize, dt: f64)
         independent_frequencies: (n_min as f64 / 2.0).max(1.0),
         per_dwell,
         background,
-        starts: None,
+        starts_samples: None,
         ambiguous_hz: None,
     }
 }
@@ -588,7 +588,7 @@ fn fit_coherent(dwells: &[Vec<f64>], starts: &[f64], f: f64, background: f64, dt
         independent_frequencies: (span / 2.0).max(1.0),
         per_dwell,
         background,
-        starts: Some(starts.to_vec()),
+        starts_samples: Some(starts.to_vec()),
         ambiguous_hz: None,
     }
 }
@@ -598,7 +598,7 @@ fn fit_coherent(dwells: &[Vec<f64>], starts: &[f64], f: f64, background: f64, dt
 /// per dwell, or one in the record's time): the amplitude seen and its standard error.
 pub(super) fn line_in(dwells: &[Vec<f64>], starts: &[f64], v: &VibrationResult, dt: f64) -> (f64, f64) {
     let n_min = dwells.iter().map(Vec::len).min().unwrap_or(0);
-    let refit = match v.starts {
+    let refit = match v.starts_samples {
         Some(_) => fit_coherent(dwells, starts, v.frequency_hz * dt, v.background, dt),
         None => fit_line(dwells, v.frequency_hz * dt, v.background, n_min, dt),
     };
