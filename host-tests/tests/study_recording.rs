@@ -111,12 +111,14 @@ fn planted_rate_random_walk_is_kept_by_the_gate() {
     assert!(s.causes.iter().any(|c| c.channels == "gz" && c.name.contains("rate random walk")), "{:?}", s.causes);
 }
 
-/// Six labelled poses (each axis up and down, 20 s each) of an accelerometer whose z reads 2 % high: studied
-/// by path as labelled poses, the cause is named and the extended model finds the scale factor within 0.001.
-#[test]
-fn labelled_pose_recording_finds_planted_scale_factor() {
-    let tmp = tempfile::tempdir().unwrap();
-    let g = 9.80619; // normal gravity at 45 deg, 0 m, m/s^2 (the header has no gravity_mps2)
+/// Normal gravity at 45 deg latitude, 0 m (the header has no gravity_mps2), m/s^2.
+const G_45_MPS2: f64 = 9.80619;
+
+/// Six labelled poses (each axis up and down, 20 s each at 100 Hz) of an accelerometer whose z reads 2 % high
+/// (biases 0.01, -0.02, 0.03 m/s^2, noise 0.005 m/s^2) and gyros reading `gyro_bias` plus noise of 1e-4 per
+/// sample (the recording says rad/s).
+fn labelled_pose_rows(gyro_bias: [f64; 3]) -> Vec<Row> {
+    let g = G_45_MPS2;
     let attitudes = [(0.0, -90.0), (0.0, 90.0), (90.0, 0.0), (-90.0, 0.0), (0.0, 0.0), (0.0, 180.0)];
     let mut r = ChaCha8Rng::seed_from_u64(13);
     let mut n = || -> f64 { StandardNormal.sample(&mut r) };
@@ -127,11 +129,22 @@ fn labelled_pose_recording_finds_planted_scale_factor() {
         let up = [-sg * ct, st, cg * ct];
         for _ in 0..2000 {
             let f = [g * up[0] + 0.01, g * up[1] - 0.02, 1.02 * g * up[2] + 0.03].map(|v| v + 0.005 * n());
-            rows.push(row(t, p as u32 + 1, (pitch, roll), [1e-4 * n(), 1e-4 * n(), 1e-4 * n()], f));
+            let w = [gyro_bias[0] + 1e-4 * n(), gyro_bias[1] + 1e-4 * n(), gyro_bias[2] + 1e-4 * n()];
+            rows.push(row(t, p as u32 + 1, (pitch, roll), w, f));
             t += 0.01;
         }
     }
-    let rec = Recording { source: "poses".into(), header: header(100.0), rows, has_gyro: true };
+    rows
+}
+
+/// Six labelled poses of an accelerometer whose z reads 2 % high ([`labelled_pose_rows`]): studied by path as
+/// labelled poses, the cause is named and the extended model finds the scale factor within 0.001.
+#[test]
+fn labelled_pose_recording_finds_planted_scale_factor() {
+    let tmp = tempfile::tempdir().unwrap();
+    let g = G_45_MPS2;
+    let rec =
+        Recording { source: "poses".into(), header: header(100.0), rows: labelled_pose_rows([0.0; 3]), has_gyro: true };
     let path = tmp.path().join("poses.csv");
     rec.write(&path).unwrap();
     let s = study_recording(&path).unwrap();
@@ -140,6 +153,23 @@ fn labelled_pose_recording_finds_planted_scale_factor() {
     assert!((p.gravity_mps2 - g).abs() < 1e-4, "{}", p.gravity_mps2);
     assert!((p.extended_accel.scale_factors()[2] - 0.02).abs() < 1e-3, "{:?}", p.extended_accel.scale_factors());
     assert_eq!(s.causes[0].name, "accel scale factors and misalignments", "{:?}", s.causes);
+}
+
+/// Gyros in deg/s written as rad/s (a consumer gyro's biases of 0.6, -0.4 and 0.5 deg/s read as rad/s): the
+/// study is written, and `sinscal study FILE` ends with calibrate's physics check failed, "gyros in deg/s?",
+/// status 3. Before, it exited 0 and named gyro scale factors of about 57 as the cause.
+#[test]
+fn gyros_in_degrees_per_second_fail_the_physics_check_with_status_3() {
+    let tmp = tempfile::tempdir().unwrap();
+    let rows = labelled_pose_rows([0.6, -0.4, 0.5]);
+    let path = tmp.path().join("degrees.csv");
+    Recording { source: "degrees".into(), header: header(100.0), rows, has_gyro: true }.write(&path).unwrap();
+    let report = tmp.path().join("r");
+    let run = sinscal().arg("study").arg(&path).arg("--report").arg(&report).output().unwrap();
+    let stderr = String::from_utf8_lossy(&run.stderr);
+    assert_eq!(run.status.code(), Some(3), "{stderr}");
+    assert!(stderr.contains("check failed: physics: gyros in deg/s?"), "{stderr}");
+    assert!(report.join("summary.md").is_file(), "{stderr}");
 }
 
 /// The command line's refusals: a name that is neither a file nor a data set, an accelerometer-only recording,

@@ -328,6 +328,19 @@ pub fn physics(c: &Calibration) -> Check {
     physics_of(&dwells, &c.site, c.has_gyro)
 }
 
+/// `physics` of a recording's dwells before any calibration (the dwells as `options`' prefilter collects
+/// them, the site of its header); `None` when they cannot be collected or a dwell has no attitude (the reasons
+/// a calibration gives instead).
+pub fn physics_of_recording(rec: &impl crate::io::recording::RowSource, options: &super::Options) -> Option<Check> {
+    let prefilter = super::prefilter_of(options, rec).ok()?;
+    let dwells = super::collect_dwells(rec, &prefilter, sinscal::calib::general::MAX_DWELLS, None).ok()?;
+    let source = rec.source();
+    let dwells: Option<Vec<PhysicsDwell>> =
+        dwells.into_iter().map(|(tally, summary)| tally.attitude(source).ok().map(|a| (a, summary))).collect();
+    let (site, _) = super::site_of(rec.header());
+    Some(physics_of(&dwells?, &site, rec.has_gyro()))
+}
+
 /// `physics`, before any fit: (a) each dwell's |f| against g; (b) the direction of gravity and of the Earth rate
 /// against the labels: the misfit (chi-square of a constant bias per channel, weighted by each dwell mean's
 /// noise) of the data as stated against that of each alternative (headings half a turn off, latitude sign, gyros

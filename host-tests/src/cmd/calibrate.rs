@@ -7,7 +7,7 @@ use clap::ValueEnum;
 use sinscal::calib::align::DwellValue;
 use sinscal::calib::general::{AttitudeKnowledge, Model};
 
-use crate::calibration::checks::{failed_lines, physics_of, PhysicsDwell};
+use crate::calibration::checks::{failed_lines, physics_of_recording};
 use crate::calibration::estimates::parse_model;
 use crate::calibration::firmware_path::calibrate_on_host;
 use crate::calibration::qemu::calibrate_on_qemu;
@@ -15,12 +15,10 @@ use crate::calibration::result::{summary, CalibrationJson};
 use crate::calibration::{
     calibrate, Calibration, Coefficient, Method, Options, PrefilterKind, DEFAULT_METHOD, DEFAULT_MODEL,
 };
-use crate::calibration::{collect_dwells, prefilter_of, site_of};
 use crate::cmd::{write_json, ChecksFailed};
 use crate::io::error::InputError;
 use crate::io::noise_file::NoiseTerms;
 use crate::io::recording::{RecordingFile, RowSource};
-use sinscal::calib::general::MAX_DWELLS;
 
 /// The prefilter in front of the dwell statistics.
 #[derive(Clone, Copy, ValueEnum)]
@@ -360,17 +358,8 @@ pub fn finish(cal: &Calibration, json: Option<&Path>) -> anyhow::Result<()> {
 /// A calibration that the input refused, with the physics check's hint when the dwells contradict gravity or
 /// the Earth rate (the reason the input was refused, more often than not).
 fn with_physics_hint(e: InputError, rec: &RecordingFile, options: &Options) -> anyhow::Error {
-    let Ok(prefilter) = prefilter_of(options, rec) else { return e.into() };
-    let Ok(dwells) = collect_dwells(rec, &prefilter, MAX_DWELLS, None) else { return e.into() };
-    let source = rec.source();
-    let dwells: Option<Vec<PhysicsDwell>> =
-        dwells.into_iter().map(|(tally, summary)| tally.attitude(source).ok().map(|a| (a, summary))).collect();
-    let Some(dwells) = dwells else { return e.into() };
-    let (site, _) = site_of(rec.header());
-    let check = physics_of(&dwells, &site, rec.has_gyro());
-    if check.passed {
-        e.into()
-    } else {
-        anyhow::anyhow!("{e} (check failed: physics: {})", check.detail)
+    match physics_of_recording(rec, options) {
+        Some(check) if !check.passed => anyhow::anyhow!("{e} (check failed: physics: {})", check.detail),
+        _ => e.into(),
     }
 }

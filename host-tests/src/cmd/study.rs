@@ -20,7 +20,12 @@ pub struct Args {
     json: Option<PathBuf>,
 }
 
-/// Runs `sinscal study`.
+/// Runs `sinscal study`: status 3 (`ChecksFailed`) when the recording failed a check, the study written.
 pub fn run(args: Args) -> anyhow::Result<()> {
-    crate::study::run(&args.target, args.data.as_deref(), &args.report, args.json.as_deref()).map(|_| ())
+    let (_, failed) = crate::study::run(&args.target, args.data.as_deref(), &args.report, args.json.as_deref())?;
+    if failed.is_empty() {
+        Ok(())
+    } else {
+        Err(super::ChecksFailed(failed).into())
+    }
 }

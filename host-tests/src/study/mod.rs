@@ -513,19 +513,26 @@ pub fn ferraris_turns(rec: &Recording, labels: &Path) -> Result<Vec<LabelledTurn
 
 /// Runs `sinscal study`: reads the data set or the recording ([`recording::target_of`]), writes `summary.md`
 /// and the figures into `report_dir` and, with `json`, the JSON ('-' = stdout, then the summary is not printed).
-/// Returns the study.
+/// Returns the study and the lines of the checks it failed. A recording's dwells are held against gravity and
+/// the Earth rate as `calibrate` holds them (its `physics` check: gyros in deg/s, headings half a turn off,
+/// ...); when they fail, the study is still written, and the line says so.
 pub fn run(
     target: &str,
     data_dir: Option<&Path>,
     report_dir: &Path,
     json_path: Option<&Path>,
-) -> anyhow::Result<Study> {
-    let study = match recording::target_of(target)? {
-        recording::Target::Recording(path) => recording::study_recording(&path)?,
-        recording::Target::Dataset(dataset) => study_dataset(dataset, &resolve_data_dir(data_dir)?)?,
+) -> anyhow::Result<(Study, Vec<String>)> {
+    let (study, failed) = match recording::target_of(target)? {
+        recording::Target::Recording(path) => {
+            let rec = recording::read_recording(&path)?;
+            let physics = crate::calibration::checks::physics_of_recording(&rec, &Default::default());
+            let failed = crate::calibration::checks::failed_lines(physics.iter());
+            (recording::study_of(rec, &path)?, failed)
+        }
+        recording::Target::Dataset(dataset) => (study_dataset(dataset, &resolve_data_dir(data_dir)?)?, Vec::new()),
     };
     crate::study::report::write_report(&study, report_dir, json_path)?;
-    Ok(study)
+    Ok((study, failed))
 }
 
 /// The data directory of the built-in data sets: `data_dir`, else $SINSCAL_DATA; it must be a directory.

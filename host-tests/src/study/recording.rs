@@ -78,12 +78,23 @@ pub fn recording_turns(rec: &Recording) -> Vec<LabelledTurn> {
 
 /// Reads the recording at `path` and studies it (no files written). The study's name is the file's name.
 pub fn study_recording(path: &Path) -> Result<Study, InputError> {
+    study_of(read_recording(path)?, path)
+}
+
+/// Reads the recording at `path` for a study: it needs gyros; a rate the header does not give is 1 / the median
+/// time step.
+pub fn read_recording(path: &Path) -> Result<Recording, InputError> {
     eprintln!("study: reading the recording {}", path.display());
     let mut rec = Recording::read(path)?;
     rec.require_gyro("study")?;
     if rec.header.rate_hz.is_none() {
         rec.header.rate_hz = TimeSteps::of(rec.rows.iter().map(|r| r.t_s)).median_s().map(|dt| 1.0 / dt);
     }
+    Ok(rec)
+}
+
+/// The study of `rec`, read from `path` ([`read_recording`]).
+pub fn study_of(mut rec: Recording, path: &Path) -> Result<Study, InputError> {
     let name = path.file_name().map_or_else(|| path.display().to_string(), |n| n.to_string_lossy().into_owned());
     let sources = vec![path.display().to_string()];
     let poses = rec.dwells().len();
