@@ -6,7 +6,7 @@ use super::generate::{gauss_markov, generate_noise_terms, sine, white};
 use super::noise::{clusters, curve, long_index, rms_log10, white_std};
 use super::NoiseExtension;
 use crate::stats::noise::{
-    fit_noise_terms, gauss_markov_allan_variance, overlapping_allan_deviation, AllanPoint, NoiseTerms,
+    fft_in_place, fit_noise_terms, gauss_markov_allan_variance, overlapping_allan_deviation, AllanPoint, NoiseTerms,
 };
 use crate::stats::solve::nnls_normal;
 
@@ -246,26 +246,33 @@ fn significant(with: f64, without: f64) -> bool {
 pub const SINE_DIRECT_MIN_RATIO: f64 = 0.5;
 
 /// The largest amplitude of a sinusoid fitted directly (least squares, mean removed) to `x` sampled at `rate_hz`,
-/// over the frequencies within a factor 10^(1/24) of `f_hz` (half a step of the fit's frequency grid), in steps
-/// of 1 / duration (a sinusoid between two steps keeps at least 0.64 of its amplitude); SI of `x`.
+/// over the frequencies within a factor 10^(1/24) of `f_hz` (half a step of the fit's frequency grid); SI of
+/// `x`. The frequencies are the bins of one FFT of `x` zero-padded to at least twice its length, so they are
+/// 1 / (2 duration) apart or closer: a sinusoid between two of them keeps at least 0.90 of its amplitude. The
+/// cost is n log n (a scan of every frequency over every sample was quadratic: 221 s on a 1.85-million-sample
+/// recording). `0` for fewer than two samples or a length whose transform cannot be planned.
 pub fn direct_sine_amplitude(x: &[f64], rate_hz: f64, f_hz: f64) -> f64 {
-    let n = x.len().max(1) as f64;
-    let m = x.iter().sum::<f64>() / n;
-    let step = 10f64.powf(1.0 / 24.0);
-    let (mut f, hi, df) = (f_hz / step, f_hz * step, rate_hz / n);
-    let mut best: f64 = 0.0;
-    while f <= hi {
-        let (s1, c1) = (std::f64::consts::TAU * f / rate_hz).sin_cos();
-        let (mut c, mut s, mut re, mut im) = (1.0, 0.0, 0.0, 0.0);
-        for v in x {
-            re += (v - m) * c;
-            im += (v - m) * s;
-            (c, s) = (c * c1 - s * s1, s * c1 + c * s1);
-        }
-        best = best.max(2.0 * re.hypot(im) / n);
-        f += df;
+    if x.len() < 2 {
+        return 0.0;
     }
-    best
+    let n = x.len() as f64;
+    let m = x.iter().sum::<f64>() / n;
+    let len = (2 * x.len()).next_power_of_two();
+    let (mut re, mut im) = (vec![0.0; len], vec![0.0; len]);
+    for (r, v) in re.iter_mut().zip(x) {
+        *r = v - m;
+    }
+    if fft_in_place(&mut re, &mut im).is_err() {
+        return 0.0;
+    }
+    let step = 10f64.powf(1.0 / 24.0);
+    let bin_hz = rate_hz / len as f64;
+    let lo = ((f_hz / step) / bin_hz).ceil().max(1.0) as usize;
+    let hi = (((f_hz * step) / bin_hz).floor() as usize).min(len / 2);
+    // A band narrower than a bin (a short record) takes the bin nearest `f_hz`.
+    let nearest = ((f_hz / bin_hz).round() as usize).clamp(1, len / 2);
+    let (lo, hi) = if lo > hi { (nearest, nearest) } else { (lo, hi) };
+    (lo..=hi).map(|k| 2.0 * re[k].hypot(im[k]) / n).fold(0.0, f64::max)
 }
 
 /// The direct check of a kept sinusoid (coefficients `c`, `shape`) on the held-out samples `second`: `None`
@@ -533,5 +540,54 @@ pub(crate) fn held_out_noise_extension(
         held_out_data,
         held_out_base_sim,
         held_out_extended_sim,
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::direct_sine_amplitude;
+
+    /// A sinusoid of 0.3 between the FFT's bins, in white noise of 1 (SI), at 100 Hz: the FFT scan finds its
+    /// amplitude within 10 %, and equals the largest least-squares amplitude a brute-force scan of the same
+    /// frequencies finds.
+    #[test]
+    fn the_direct_amplitude_of_a_sinusoid_between_bins_is_found() {
+        let (n, rate_hz, f_hz, a) = (5_000usize, 100.0, 7.3137, 0.3);
+        let mut state = 12345u64;
+        let mut uniform = || {
+            state = state.wrapping_mul(6364136223846793005).wrapping_add(1442695040888963407);
+            (state >> 11) as f64 / (1u64 << 53) as f64
+        };
+        let x: Vec<f64> = (0..n)
+            .map(|i| {
+                let t = i as f64 / rate_hz;
+                let noise = (-2.0 * uniform().max(1e-300).ln()).sqrt() * (std::f64::consts::TAU * uniform()).cos();
+                5.0 + a * (std::f64::consts::TAU * f_hz * t + 0.4).sin() + noise
+            })
+            .collect();
+        let found = direct_sine_amplitude(&x, rate_hz, f_hz);
+        assert!((found - a).abs() < 0.1 * a, "found {found}, planted {a}");
+        // Brute force over a grid 10x finer than the FFT's: the FFT misses at most its scalloping (10 %) plus noise.
+        let m = x.iter().sum::<f64>() / n as f64;
+        let brute = (0..400)
+            .map(|j| {
+                let f = f_hz * (1.0 + (j as f64 - 200.0) * 1e-4);
+                let (re, im) = x.iter().enumerate().fold((0.0, 0.0), |(re, im), (i, v)| {
+                    let (s, c) = (std::f64::consts::TAU * f * i as f64 / rate_hz).sin_cos();
+                    (re + (v - m) * c, im + (v - m) * s)
+                });
+                2.0 * f64::hypot(re, im) / n as f64
+            })
+            .fold(0.0, f64::max);
+        assert!(found <= brute * 1.0001 && found >= 0.9 * brute, "FFT {found}, brute force {brute}");
+    }
+
+    /// Fewer than two samples, or a band narrower than a bin, give an amplitude, never a panic.
+    #[test]
+    fn short_records_give_an_amplitude_without_panicking() {
+        assert_eq!(direct_sine_amplitude(&[], 100.0, 5.0), 0.0);
+        assert_eq!(direct_sine_amplitude(&[1.0], 100.0, 5.0), 0.0);
+        let x = [0.0, 1.0, 0.0, -1.0];
+        assert!((direct_sine_amplitude(&x, 100.0, 25.0) - 1.0).abs() < 1e-12);
     }
 }
