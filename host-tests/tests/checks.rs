@@ -380,3 +380,35 @@ fn one_pose_gyros_in_deg_per_s_fail_the_physics_check() {
         fails_physics_of(dir.path(), &path, "gyros in deg/s?");
     }
 }
+
+/// `analyze` holds the dwells against gravity and the Earth rate as `calibrate` does (one check, one place):
+/// SIMULATION, the built-in example passes `physics` in the analysis's JSON; with headings half a turn off or
+/// gyros in deg/s it fails with the same hint as `calibrate`'s, on stderr and in the JSON, exit 3.
+#[test]
+fn analyze_runs_the_same_physics_check_as_calibrate() {
+    let dir = tempfile::tempdir().unwrap();
+    let analyze = |rec: &Path| {
+        let json = dir.path().join("analysis.json");
+        let out = sinscal().arg("analyze").arg(rec).arg("--json").arg(&json).output().unwrap();
+        let v: Value = serde_json::from_str(&std::fs::read_to_string(&json).unwrap()).unwrap();
+        (out.status.code().unwrap(), String::from_utf8_lossy(&out.stderr).into_owned(), v)
+    };
+    let (code, stderr, v) = analyze(&example(dir.path()));
+    assert_eq!(code, 0, "{stderr}");
+    assert_eq!(v["checks"][0]["check"], "physics", "{v}");
+    assert_eq!(v["checks"][0]["passed"], true, "{v}");
+    let degrees = |h: f64, v: [f64; 6]| (h, std::array::from_fn(|i| if i < 3 { v[i] * 57.29578 } else { v[i] }));
+    let half_turn = |h: f64, v: [f64; 6]| ((h + 180.0) % 360.0, v);
+    for (name, hint, rec) in [
+        ("degs", "gyros in deg/s?", variant(dir.path(), "degs", degrees, str::to_string)),
+        ("h180", "headings half a turn off?", variant(dir.path(), "h180", half_turn, str::to_string)),
+    ] {
+        let (code, stderr, v) = analyze(&rec);
+        assert_eq!(code, 3, "{name}: {stderr}");
+        let line = format!("sinscal: check failed: physics: {hint}");
+        assert!(stderr.lines().any(|l| l.starts_with(&line)), "{name}: {stderr}");
+        let physics = check(&v, "physics");
+        assert_eq!(physics["passed"], false, "{name}: {physics}");
+        assert!(physics["detail"].as_str().unwrap().starts_with(hint), "{name}: {physics}");
+    }
+}

@@ -1,7 +1,8 @@
 //! The checks of an analysis that fail loudly (docs/cli.md#checks), as a calibration's do: `fit` (the final
 //! model's block means against each channel's noise model, recordings: [`super::model_fit`]) and
 //! `plausibility` (no candidate the data want needs a value no instrument has: `misfits`). Both are listed,
-//! passed or failed, in the JSON's `checks`; a failed one makes `analyze` exit with status 3.
+//! passed or failed, in the JSON's `checks`, after a recording's `physics` check (calibrate's own, added by
+//! [`super::recording::analyze_recording`]); a failed one makes `analyze` exit with status 3.
 
 use crate::calibration::checks::{Check, MISFIT_LEVEL};
 
