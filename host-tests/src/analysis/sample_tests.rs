@@ -18,7 +18,9 @@ use crate::stats::noise::{
 };
 
 use super::candidates::axis_of;
-use super::correlated_noise::{gauss_markov_test, GaussMarkovResult};
+use super::correlated_noise::{
+    gauss_markov_test, two_process_test, GaussMarkovResult, TwoProcessResult, MAX_TWO_PROCESS_SAMPLES,
+};
 use super::observations::Session;
 use super::parallel::on_cores;
 use super::vibration::{
@@ -150,8 +152,8 @@ struct ChannelMeasures {
     print_step: Option<f64>,
     /// The spectral lines that pass at the smallest `m`, strongest first.
     lines: Vec<Line>,
-    /// The correlated-noise fit, on the series with every line of `lines` removed.
-    correlated: Option<GaussMarkovResult>,
+    /// The correlated-noise fits (one process, and two), on the series with every line of `lines` removed.
+    correlated: CorrelatedFits,
     /// Its sigma and standard error in each third of every dwell; empty when a third is too short.
     correlated_windows: Vec<(f64, f64)>,
 }
@@ -235,7 +237,7 @@ impl ChannelMeasures {
         }
         let correlated_windows =
             in_windows(&series, |w| gauss_markov_test(w.to_vec(), session.dt).map(|gm| (gm.sigma, gm.sigma_std)));
-        let correlated = gauss_markov_test(series, session.dt);
+        let correlated = CorrelatedFits::of(series, session.dt);
         let dwells = session.dwells.len();
         ChannelMeasures {
             c,
@@ -260,7 +262,7 @@ impl ChannelMeasures {
         let (passing, vib) = self.vibration(m, session.dt, &mut effects);
         let refitted;
         let correlated = if passing == self.lines.len() {
-            self.correlated.as_ref()
+            &self.correlated
         } else {
             // Fewer lines pass at this m than at the smallest m: fit the series with those removed.
             let mut series: Vec<Vec<f64>> =
@@ -268,8 +270,8 @@ impl ChannelMeasures {
             for l in &self.lines[..passing] {
                 remove_line(&mut series, &l.line, session.dt);
             }
-            refitted = gauss_markov_test(series, session.dt);
-            refitted.as_ref()
+            refitted = CorrelatedFits::of(series, session.dt);
+            &refitted
         };
         let corr_found = self.correlated_noise(correlated, m, &mut effects);
         let long = self.long.clone();
@@ -402,17 +404,18 @@ impl ChannelMeasures {
         (passing, found)
     }
 
-    /// Gauss-Markov plus white noise (the fit `gm`) against white noise alone; returns (sigma, tau) if found.
-    fn correlated_noise(
-        &self,
-        gm: Option<&GaussMarkovResult>,
-        m: f64,
-        effects: &mut Vec<Effect>,
-    ) -> Option<(f64, f64)> {
-        let gm = gm?;
-        let delta_bic = -gm.lr + 2.0 * (self.n_all as f64).ln();
-        if !(gm.lr > chi_square_quantile_upper(ALPHA / m, 2.0) && delta_bic < 0.0) {
-            return None;
+    /// Gauss-Markov plus white noise (the fit `fits.one`) against white noise alone, then two processes
+    /// (`fits.two`) against one, each against `alpha / m` and the BIC; returns the (sigma, tau) of the one
+    /// process, or of the two processes' larger, if found.
+    fn correlated_noise(&self, fits: &CorrelatedFits, m: f64, effects: &mut Vec<Effect>) -> Option<(f64, f64)> {
+        let gm = fits.one.as_ref()?;
+        let passes = |lr: f64| {
+            let delta_bic = -lr + 2.0 * (self.n_all as f64).ln();
+            (lr > chi_square_quantile_upper(ALPHA / m, 2.0) && delta_bic < 0.0).then_some(delta_bic)
+        };
+        let delta_bic = passes(gm.lr)?;
+        if let Some((two, delta_bic_two)) = fits.two.as_ref().and_then(|t| passes(t.lr).map(|d| (t, d))) {
+            return Some(self.two_processes(gm, two, [delta_bic, delta_bic_two], effects));
         }
         effects.push(Effect {
             estimate: gm.sigma,
@@ -429,6 +432,55 @@ impl ChannelMeasures {
             ..self.effect(EffectKind::CorrelatedNoise, "innovations")
         });
         Some((gm.sigma, gm.tau_s))
+    }
+
+    /// The two processes of `two` as two effects: the one of larger variance carries the one process's test
+    /// against white noise (`gm`), the other the test of two processes against one; `delta_bic` of each.
+    fn two_processes(
+        &self,
+        gm: &GaussMarkovResult,
+        two: &TwoProcessResult,
+        delta_bic: [f64; 2],
+        effects: &mut Vec<Effect>,
+    ) -> (f64, f64) {
+        let larger = usize::from(two.processes[1].sigma > two.processes[0].sigma);
+        for (k, p) in [larger, 1 - larger].into_iter().map(|k| (k, &two.processes[k])) {
+            let first = k == larger;
+            let lr = if first { gm.lr } else { two.lr };
+            effects.push(Effect {
+                estimate: p.sigma,
+                std_error: p.sigma_std * widening(&self.correlated_windows),
+                delta_bic: delta_bic[usize::from(!first)],
+                residual_rms_before: if first { gm.rms_white } else { gm.rms_innovation },
+                residual_rms_after: if first { gm.rms_innovation } else { two.rms_innovation },
+                tau_s: Some(p.tau_s),
+                likelihood_ratio: lr,
+                parameters: 2,
+                p_value: chi_square_upper(lr, 2.0),
+                at_grid_edge: p.tau_at_edge,
+                aliases: stationarity(&self.correlated_windows),
+                ..self.effect(EffectKind::CorrelatedNoise, "innovations")
+            });
+        }
+        let p = &two.processes[larger];
+        (p.sigma, p.tau_s)
+    }
+}
+
+/// The correlated-noise fits of a channel's series: one Gauss-Markov process, and two where the record is
+/// short enough ([`MAX_TWO_PROCESS_SAMPLES`]) and one was fitted.
+struct CorrelatedFits {
+    one: Option<GaussMarkovResult>,
+    two: Option<TwoProcessResult>,
+}
+
+impl CorrelatedFits {
+    fn of(series: Vec<Vec<f64>>, dt: f64) -> CorrelatedFits {
+        let n: usize = series.iter().map(Vec::len).sum();
+        let kept = (n <= MAX_TWO_PROCESS_SAMPLES).then(|| series.clone());
+        let one = gauss_markov_test(series, dt);
+        let two = one.as_ref().zip(kept).and_then(|(gm, s)| two_process_test(&s, dt, gm));
+        CorrelatedFits { one, two }
     }
 }
 
