@@ -164,7 +164,7 @@ pub fn read_layout(bytes: &[u8]) -> Result<bool, String> {
             let det = m[0][0] * (m[1][1] * m[2][2] - m[1][2] * m[2][1])
                 - m[0][1] * (m[1][0] * m[2][2] - m[1][2] * m[2][0])
                 + m[0][2] * (m[1][0] * m[2][1] - m[1][1] * m[2][0]);
-            let scales_ok = [&layout.gyro, &layout.accel].iter().all(|c| {
+            let scales_ok = layout.gyro.iter().chain([&layout.accel]).all(|c| {
                 c.scale.iter().chain(&c.counts_per_unit).all(|s| s.is_finite() && *s != 0.0)
                     && c.fields[0] != c.fields[1]
                     && c.fields[1] != c.fields[2]
