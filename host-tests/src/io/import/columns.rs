@@ -1,7 +1,9 @@
 //! `sinscal import columns`: any file of time, gyro and accelerometer values, read through a described layout
-//! ([`Layout`], docs/data.md#described-layouts): text, binary records or a MATLAB matrix; several text files side
-//! by side; values converted to rad/s and m/s^2 in sinscal's body axes; positions from a labels file or found as
-//! static intervals.
+//! ([`Layout`], docs/data.md#described-layouts): text, binary records or a MATLAB matrix; several files side by
+//! side, in sequence or as sessions on their own time bases (docs/data.md#several-files); values converted to
+//! rad/s and m/s^2 in sinscal's body axes (no gyro: an accelerometer-only recording); time stamps kept with a
+//! nominal rate checked against them; positions from a labels file (by time or by file) or found as static
+//! intervals.
 
 use std::io::Read as _;
 

@@ -541,11 +541,15 @@ fn summarise(recording: &Recording, title: &str, notes: &[String], name: &dyn Fn
     );
     for s in &stats {
         let heading = s.heading_deg.map_or("-".to_string(), |h| format!("{h:.2}"));
-        let w = s.mean_rate_b_radps.map(f64::to_degrees);
+        // An accelerometer-only recording has no gyro means: "-".
+        let w = s.mean_rate_b_radps.map(|v| match recording.has_gyro {
+            true => format!("{:>+10.6}", v.to_degrees()),
+            false => format!("{:>10}", "-"),
+        });
         let f = s.mean_force_b_mps2;
         let _ = writeln!(
             out,
-            "  {:>4} {:<12} {:>8} {:>9.2} {:>8.2} {:>7.2} {:>8.2} {:>8}  {:>+10.6} {:>+10.6} {:>+10.6}  {:>+9.4} {:>+9.4} {:>+9.4}",
+            "  {:>4} {:<12} {:>8} {:>9.2} {:>8.2} {:>7.2} {:>8.2} {:>8}  {} {} {}  {:>+9.4} {:>+9.4} {:>+9.4}",
             s.pos,
             name(s.pos),
             s.samples,
