@@ -737,7 +737,7 @@ fn apply_labels(rows: &mut [Row], labels: &[Label], source: &str, files: &Files<
                         ),
                     ));
                 }
-                let part = files.parts.get(f - 1).ok_or_else(|| {
+                let part = f.checked_sub(1).and_then(|i| files.parts.get(i)).ok_or_else(|| {
                     InputError::at(source, label.line, format!("file {f}: there are {} input files", files.parts.len()))
                 })?;
                 (part.records.start, part.records.end, part.shift_s)
