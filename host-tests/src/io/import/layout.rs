@@ -596,3 +596,50 @@ fn axes(a: Option<&AxesFile>) -> Result<[[f64; 3]; 3], String> {
     }
     Ok(m)
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    const ACCEL: &str = "[accel]\nfields = [1, 2, 3]\nunit = \"m/s^2\"\n";
+
+    #[test]
+    fn a_time_field_with_a_nominal_rate_keeps_the_rate_and_its_line() {
+        let text = format!("format = \"text\"\n[time]\nfield = 0\nunit = \"ms\"\n\nrate_hz = 200\n{ACCEL}");
+        let layout = Layout::parse(&text, "l.toml").unwrap();
+        let nominal = Some(NominalRate { rate_hz: 200.0, line: 6 });
+        assert_eq!(layout.time, TimeSource::Field { field: 0, seconds_per_unit: 1e-3, nominal });
+        assert!(layout.describe().contains("time field 0 x 0.001 s at a nominal 200 Hz"), "{}", layout.describe());
+        let bad = Layout::parse(&text.replace("rate_hz = 200", "rate_hz = -2"), "l.toml").unwrap_err();
+        assert_eq!(bad.to_string(), "l.toml: [time] rate_hz -2 is not a sample rate (0 to 1 MHz)");
+    }
+
+    #[test]
+    fn without_gyro_the_layout_reads_the_accelerometer_and_the_time_only() {
+        let layout = Layout::parse(&format!("format = \"text\"\n[time]\nfield = 0\n{ACCEL}"), "l.toml").unwrap();
+        assert_eq!(layout.gyro, None);
+        assert_eq!(layout.slots(), vec![(0, 0), (4, 1), (5, 2), (6, 3)]);
+        assert!(layout.describe().contains("; no gyro (accelerometer-only); accel fields [1, 2, 3]"));
+    }
+
+    #[test]
+    fn the_files_table_names_an_arrangement() {
+        let accel = ACCEL.replace("[1, 2, 3]", "[4, 5, 6]");
+        let base = format!(
+            "format = \"binary\"\n[binary]\ntype = \"f32\"\nendian = \"little\"\nfields = 4\n[time]\nfield = 0\n{accel}"
+        );
+        // Without [files], a binary record holds every field; side by side, the fields number on.
+        let one = Layout::parse(&base, "l.toml").unwrap_err().to_string();
+        assert!(one.contains("field 4 is beyond the binary record of 4 fields"), "{one}");
+        let two = Layout::parse(&format!("{base}[files]\narrange = \"side-by-side\"\n"), "l.toml").unwrap();
+        assert_eq!(two.files, Some(Arrangement::SideBySide));
+        assert!(two.describe().ends_with("; files side by side"));
+        let sessions = Layout::parse(&format!("{base}[files]\narrange = \"sessions\"\n"), "l.toml").unwrap_err();
+        assert!(sessions.to_string().contains("field 4 is beyond the binary record of 4 fields"));
+        let unknown = Layout::parse(&format!("{base}[files]\narrange = \"zip\"\n"), "l.toml").unwrap_err();
+        assert_eq!(
+            unknown.to_string(),
+            "l.toml: [files] arrange \"zip\": \"side-by-side\", \"sequence\" or \"sessions\""
+        );
+    }
+}

@@ -44,8 +44,8 @@ impl ValueBudget {
         let bytes = count.saturating_mul(8);
         if bytes > self.left as u64 {
             return Err(format!(
-                "{count} values, {} MB as f64, more than the {} MB left of the {} MB sinscal reads from one MAT-file (or the MAT-files \
-                 of one import)",
+                "{count} values, {} MB as f64, more than the {} MB left of the {} MB sinscal reads from one MAT-file \
+                 (or the MAT-files of one import)",
                 bytes >> 20,
                 self.left >> 20,
                 MAX_MAT_VALUE_BYTES >> 20
