@@ -164,7 +164,7 @@ pub fn read_layout(bytes: &[u8]) -> Result<bool, String> {
             let det = m[0][0] * (m[1][1] * m[2][2] - m[1][2] * m[2][1])
                 - m[0][1] * (m[1][0] * m[2][2] - m[1][2] * m[2][0])
                 + m[0][2] * (m[1][0] * m[2][1] - m[1][1] * m[2][0]);
-            let scales_ok = [&layout.gyro, &layout.accel].iter().all(|c| {
+            let scales_ok = layout.gyro.iter().chain([&layout.accel]).all(|c| {
                 c.scale.iter().chain(&c.counts_per_unit).all(|s| s.is_finite() && *s != 0.0)
                     && c.fields[0] != c.fields[1]
                     && c.fields[1] != c.fields[2]
@@ -297,10 +297,42 @@ const COLUMNS_MAT_LAYOUT: &str = "format = \"mat\"\n[mat]\nvariable = \"imu\"\n[
 const COLUMNS_LABELS: &str = "pos,start_s,end_s,pitch_deg,roll_deg,heading_deg\n1,0,1,0,0,0\n2,1.5,2.5,0,180,?\n\
     3,3,4,90,0,90\n4,4.5,5.5,-90,0,\n5,6,7,0,90,0\n6,7.5,8.5,0,-90,270\n";
 
+/// The layout of the `columns-sessions` target: two whitespace-separated text files (t, gyro rad/s, accel m/s^2),
+/// each a session on its own time base.
+const COLUMNS_SESSIONS_LAYOUT: &str = "format = \"text\"\n[time]\nfield = 0\n[gyro]\nfields = [1, 2, 3]\n\
+    unit = \"rad/s\"\n[accel]\nfields = [4, 5, 6]\nunit = \"m/s^2\"\n[files]\narrange = \"sessions\"\n";
+
+/// The labels of the `columns-sessions` target: three poses in each file, in the file's own times.
+const COLUMNS_FILE_LABELS: &str = "file,pos,start_s,end_s,pitch_deg,roll_deg,heading_deg\n1,1,0,1,0,0,0\n\
+    1,2,1.5,2.5,0,180,?\n1,3,3,4,90,0,90\n2,4,0,1,-90,0,\n2,5,1.5,2.5,0,90,0\n2,6,3,4,0,-90,270\n";
+
+/// The layout of the `columns-side-by-side` target: two binary files of little-endian f32 records of four fields
+/// side by side, time and gyro in the first, accelerometer (and a spare field) in the second.
+const COLUMNS_SIDE_BY_SIDE_LAYOUT: &str = "format = \"binary\"\n[binary]\ntype = \"f32\"\nendian = \"little\"\n\
+    fields = 4\n[time]\nfield = 0\n[gyro]\nfields = [1, 2, 3]\nunit = \"rad/s\"\n[accel]\nfields = [4, 5, 6]\n\
+    unit = \"m/s^2\"\n[files]\narrange = \"side-by-side\"\n";
+
 /// `sinscal import columns` (`import_columns`) of a data file through a fixed layout and the fixed labels.
 fn read_columns(layout: &str, name: &str, bytes: &[u8]) -> Result<bool, String> {
+    read_columns_files(layout, &[(name, bytes)], COLUMNS_LABELS)
+}
+
+/// `import columns` of two text files (split at the first zero byte) as sessions, positions by file.
+pub fn read_columns_sessions(bytes: &[u8]) -> Result<bool, String> {
+    let (a, b) = two_files(bytes);
+    read_columns_files(COLUMNS_SESSIONS_LAYOUT, &[("a.txt", a), ("b.txt", b)], COLUMNS_FILE_LABELS)
+}
+
+/// `import columns` of two binary files side by side: the first and the second half of the bytes.
+pub fn read_columns_side_by_side(bytes: &[u8]) -> Result<bool, String> {
+    let (a, b) = bytes.split_at(bytes.len() / 2);
+    read_columns_files(COLUMNS_SIDE_BY_SIDE_LAYOUT, &[("a.bin", a), ("b.bin", b)], COLUMNS_LABELS)
+}
+
+/// `import columns` of the files `(name, bytes)` through a fixed layout and labels.
+fn read_columns_files(layout: &str, files: &[(&str, &[u8])], labels: &str) -> Result<bool, String> {
     let layout = Layout::parse(&format!("{layout}{COLUMNS_SITE}"), "fuzz.toml").map_err(|e| e.to_string())?;
-    let labels = parse_labels(COLUMNS_LABELS, "labels.csv").map_err(|e| e.to_string())?;
+    let labels = parse_labels(labels, "labels.csv").map_err(|e| e.to_string())?;
     let import = ColumnsImport {
         layout: &layout,
         layout_source: "fuzz.toml",
@@ -308,8 +340,9 @@ fn read_columns(layout: &str, name: &str, bytes: &[u8]) -> Result<bool, String> 
         labels_source: Some("labels.csv"),
         latitude_deg: None,
     };
-    let file = scratch(name, bytes)?;
-    imported(import_columns(&[file.path()], &import), name)
+    let scratches = files.iter().map(|(name, bytes)| scratch(name, bytes)).collect::<Result<Vec<_>, _>>()?;
+    let paths: Vec<&std::path::Path> = scratches.iter().map(|f| f.path()).collect();
+    imported(import_columns(&paths, &import), files[0].0)
 }
 
 /// `import columns` of a text file (comma-separated, a header line, comments).
@@ -570,6 +603,27 @@ fn columns_seeds() -> (Vec<u8>, Vec<u8>, Vec<u8>) {
     (columns_text.into_bytes(), columns_binary, columns_mat)
 }
 
+/// The seeds of the several-file `import columns` targets: the session of [`columns_rows`] as two text files of
+/// three poses each (the second's times from 0 again) with a zero byte between them, and as two binary files
+/// side by side (t and gyro; accelerometer and a spare field), one after the other.
+fn columns_files_seeds() -> (Vec<u8>, Vec<u8>) {
+    let rows = columns_rows();
+    let text = |rows: &[[f64; 7]], t0: f64| -> String {
+        let line = |r: &[f64; 7]| {
+            let cells: Vec<String> =
+                std::iter::once(r[0] - t0).chain(r[1..].iter().copied()).map(|v| format!("{v:?}")).collect();
+            cells.join(" ") + "\n"
+        };
+        rows.iter().map(line).collect()
+    };
+    let sessions = [text(&rows[..45], 0.0).into_bytes(), vec![0], text(&rows[45..], 4.5).into_bytes()].concat();
+    let f32s =
+        |values: &mut dyn Iterator<Item = f64>| -> Vec<u8> { values.flat_map(|v| (v as f32).to_le_bytes()).collect() };
+    let first = f32s(&mut rows.iter().flat_map(|r| r[..4].to_vec()));
+    let second = f32s(&mut rows.iter().flat_map(|r| [r[4], r[5], r[6], 20.0]));
+    (sessions, [first, second].concat())
+}
+
 /// The valid inputs the fuzzing starts from, per target: its name, its reader and a valid input that sinscal
 /// writes itself.
 pub fn seeds() -> Vec<(&'static str, Reader, Vec<u8>)> {
@@ -601,6 +655,7 @@ pub fn seeds() -> Vec<(&'static str, Reader, Vec<u8>)> {
     }
     let (psins, imucal, imucal_raw) = importer_seeds();
     let (columns_text, columns_binary, columns_mat) = columns_seeds();
+    let (columns_sessions, columns_side_by_side) = columns_files_seeds();
     let mut burst = vec![0u8; Model::Adis16505_2.burst_len()];
     let lsb = |x: f64| I16F16::from_num(x);
     let b = Burst {
@@ -645,6 +700,8 @@ pub fn seeds() -> Vec<(&'static str, Reader, Vec<u8>)> {
         ("columns-text", read_columns_text as Reader, columns_text),
         ("columns-binary", read_columns_binary as Reader, columns_binary),
         ("columns-mat", read_columns_mat as Reader, columns_mat),
+        ("columns-sessions", read_columns_sessions as Reader, columns_sessions),
+        ("columns-side-by-side", read_columns_side_by_side as Reader, columns_side_by_side),
         ("link-frames", read_link_frames as Reader, link_frames),
         ("link-requests", read_link_requests as Reader, link_requests),
         ("link-record", read_link_record as Reader, record),

@@ -1,7 +1,8 @@
 //! Fuzzing of every reader on stable Rust: a seeded mutation fuzzer (docs/formats.md#bad-input). Each target
 //! starts from a valid input that sinscal writes itself (a recording, an angles file, a scenario, a
 //! calibration JSON, a replay file, an ADIS burst, MAT-files, a layout, a labels file, the files of the four
-//! importers, the data files of `import columns`' text, binary and MAT layouts, the device link's frames and
+//! importers, the data files of `import columns`' text, binary and MAT layouts and of
+//! several files (sessions, side by side), the device link's frames and
 //! requests, a stored calibration record), mutates it (bytes flipped, inserted, deleted or
 //! repeated; lines repeated or dropped; numbers replaced by extreme ones; the end cut off), and feeds it to
 //! the reader. A reader must return a value or an error: a panic is a failure, and the input that caused it

@@ -15,8 +15,9 @@ pub struct Layout {
     pub storage: Storage,
     /// Where the time comes from.
     pub time: TimeSource,
-    /// The gyro's three fields and their conversion to rad/s.
-    pub gyro: Channel,
+    /// The gyro's three fields and their conversion to rad/s; `None`: no gyro (accelerometer-only data, written
+    /// without gyro columns).
+    pub gyro: Option<Channel>,
     /// The accelerometer's three fields and their conversion to m/s^2.
     pub accel: Channel,
     /// Body (x right, y forward, z up) from the sensor's axes: `body = axes * sensor`, a signed permutation of
@@ -28,6 +29,34 @@ pub struct Layout {
     pub gravity_mps2: Option<f64>,
     /// Height above the ellipsoid, m (0 when the layout does not say).
     pub height_m: f64,
+    /// How several input files make one record stream (`[files]`); `None`: the layout has no `[files]` table (text
+    /// files side by side, one binary or MAT-file).
+    pub files: Option<Arrangement>,
+}
+
+/// How several input files make one record stream (`[files] arrange`).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Arrangement {
+    /// Record k of every file is one record; the fields are numbered on from one file to the next.
+    SideBySide,
+    /// The files one after another, on one time base: each file's first time follows the last of the one before.
+    Sequence,
+    /// The files one after another, each on its own time base: each is shifted to start [`SESSION_GAP_S`] after
+    /// the end of the one before.
+    Sessions,
+}
+
+/// The gap between two sessions in the recording, s: session k + 1 is shifted so that its first record lies this
+/// long after the last record of session k (more than one sample interval, so that no dwell reads across it).
+pub const SESSION_GAP_S: f64 = 1.0;
+
+/// A nominal rate given with a time field: the time stamps are kept and checked against it.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct NominalRate {
+    /// Samples per second.
+    pub rate_hz: f64,
+    /// The layout file's line that gives it (for the refusal when the time stamps disagree).
+    pub line: usize,
 }
 
 /// How the records are stored.
@@ -94,6 +123,9 @@ pub enum TimeSource {
         field: usize,
         /// Seconds per unit of the field.
         seconds_per_unit: f64,
+        /// The nominal rate, when the layout gives one with the field (`rate_hz`): the recording's rate, checked
+        /// against the time stamps; `None`: the rate is measured from them.
+        nominal: Option<NominalRate>,
     },
     /// A field that counts samples at `rate_hz`: `t = value / rate_hz`.
     Samples {
@@ -139,10 +171,17 @@ struct LayoutFile {
     binary: Option<BinaryFile>,
     mat: Option<MatFile>,
     time: TimeFile,
-    gyro: ChannelFile,
-    accel: ChannelFile,
+    gyro: Option<ChannelFile>,
+    accel: Option<ChannelFile>,
     axes: Option<AxesFile>,
     site: Option<SiteFile>,
+    files: Option<FilesFile>,
+}
+
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+struct FilesFile {
+    arrange: String,
 }
 
 #[derive(Deserialize, Default)]
@@ -174,7 +213,7 @@ struct MatFile {
 struct TimeFile {
     field: Option<usize>,
     unit: Option<String>,
-    rate_hz: Option<f64>,
+    rate_hz: Option<toml::Spanned<f64>>,
     start_s: Option<f64>,
 }
 
@@ -254,12 +293,19 @@ impl Layout {
             return Err(bad(format!("[site] height_m {height_m} is outside [-1000, 10000]")));
         }
         let storage = storage(&file).map_err(bad)?;
-        let time = time_source(&file.time).map_err(bad)?;
+        let line_of = |offset: usize| text[..offset.min(text.len())].matches('\n').count() + 1;
+        let time = time_source(&file.time, &line_of).map_err(bad)?;
         let g = gravity_mps2.unwrap_or(STANDARD_GRAVITY_MPS2);
-        let gyro = channel(&file.gyro, "gyro", &gyro_unit).map_err(bad)?;
-        let accel = channel(&file.accel, "accel", &|u, inc| accel_unit(u, inc, g)).map_err(bad)?;
+        let gyro = file.gyro.as_ref().map(|c| channel(c, "gyro", &gyro_unit)).transpose().map_err(bad)?;
+        let accel_file = file.accel.as_ref().ok_or_else(|| {
+            bad("no [accel] table: a recording holds the accelerometers (gyro-only data cannot be imported); \
+                 [gyro] may be left out for accelerometer-only data"
+                .to_string())
+        })?;
+        let accel = channel(accel_file, "accel", &|u, inc| accel_unit(u, inc, g)).map_err(bad)?;
         let axes = axes(file.axes.as_ref()).map_err(bad)?;
-        let layout = Layout { storage, time, gyro, accel, axes, latitude_deg, gravity_mps2, height_m };
+        let files = file.files.as_ref().map(|f| arrangement(&f.arrange)).transpose().map_err(bad)?;
+        let layout = Layout { storage, time, gyro, accel, axes, latitude_deg, gravity_mps2, height_m, files };
         // One field read as two quantities (gyro fields pointing at the accelerometer's) is a layout mistake.
         let slots = layout.slots();
         for (k, &(slot, field)) in slots.iter().enumerate() {
@@ -268,7 +314,11 @@ impl Layout {
                 return Err(bad(format!("field {field} is read as both {} and {}", name(other), name(slot))));
             }
         }
-        if let Storage::Binary { fields, .. } = layout.storage {
+        // Every binary file holds the whole record, but for files side by side (their fields numbered on).
+        if let (Storage::Binary { fields, .. }, false) =
+            (&layout.storage, layout.files == Some(Arrangement::SideBySide))
+        {
+            let fields = *fields;
             if let Some((_, f)) = layout.slots().into_iter().find(|&(_, f)| f >= fields) {
                 return Err(bad(format!(
                     "field {f} is beyond the binary record of {fields} fields (0 to {})",
@@ -287,7 +337,9 @@ impl Layout {
             out.push((0, field));
         }
         for i in 0..3 {
-            out.push((1 + i, self.gyro.fields[i]));
+            if let Some(gyro) = &self.gyro {
+                out.push((1 + i, gyro.fields[i]));
+            }
             out.push((4 + i, self.accel.fields[i]));
         }
         out
@@ -307,7 +359,12 @@ impl Layout {
             Storage::Mat { variable } => format!("MAT-file matrix {}", variable.as_deref().unwrap_or("(the only one)")),
         };
         let time = match self.time {
-            TimeSource::Field { field, seconds_per_unit } => format!("time field {field} x {seconds_per_unit} s"),
+            TimeSource::Field { field, seconds_per_unit, nominal: None } => {
+                format!("time field {field} x {seconds_per_unit} s")
+            }
+            TimeSource::Field { field, seconds_per_unit, nominal: Some(n) } => {
+                format!("time field {field} x {seconds_per_unit} s at a nominal {} Hz", n.rate_hz)
+            }
             TimeSource::Samples { field, rate_hz } => format!("time field {field} in samples at {rate_hz} Hz"),
             TimeSource::Rate { rate_hz, start_s } => format!("time from {rate_hz} Hz from {start_s} s"),
         };
@@ -322,9 +379,15 @@ impl Layout {
                 c.counts_per_unit
             )
         };
+        let gyro = self.gyro.as_ref().map_or("no gyro (accelerometer-only)".to_string(), |c| channel(c, "gyro"));
+        let files = match self.files {
+            None => "",
+            Some(Arrangement::SideBySide) => "; files side by side",
+            Some(Arrangement::Sequence) => "; files in sequence",
+            Some(Arrangement::Sessions) => "; files as sessions",
+        };
         format!(
-            "{storage}; {time}; {}; {}; body from sensor axes {:?}",
-            channel(&self.gyro, "gyro"),
+            "{storage}; {time}; {gyro}; {}; body from sensor axes {:?}{files}",
             channel(&self.accel, "accel"),
             self.axes
         )
@@ -373,16 +436,31 @@ fn storage(file: &LayoutFile) -> Result<Storage, String> {
     }
 }
 
-fn time_source(t: &TimeFile) -> Result<TimeSource, String> {
-    if let (Some(field), Some("samples")) = (t.field, t.unit.as_deref()) {
-        let rate_hz = t.rate_hz.ok_or("[time] unit \"samples\" needs rate_hz")?;
+/// `[files] arrange`.
+fn arrangement(name: &str) -> Result<Arrangement, String> {
+    match name {
+        "side-by-side" => Ok(Arrangement::SideBySide),
+        "sequence" => Ok(Arrangement::Sequence),
+        "sessions" => Ok(Arrangement::Sessions),
+        other => Err(format!("[files] arrange \"{other}\": \"side-by-side\", \"sequence\" or \"sessions\"")),
+    }
+}
+
+/// `[time]`; `line_of` turns a byte offset of the layout's text into its line.
+fn time_source(t: &TimeFile, line_of: &dyn Fn(usize) -> usize) -> Result<TimeSource, String> {
+    let rate_line = t.rate_hz.as_ref().map(|r| line_of(r.span().start));
+    let rate_hz = t.rate_hz.as_ref().map(|r| *r.get_ref());
+    if let Some(rate_hz) = rate_hz {
         if !(rate_hz.is_finite() && rate_hz > 0.0 && rate_hz <= 1e6) {
             return Err(format!("[time] rate_hz {rate_hz} is not a sample rate (0 to 1 MHz)"));
         }
+    }
+    if let (Some(field), Some("samples")) = (t.field, t.unit.as_deref()) {
+        let rate_hz = rate_hz.ok_or("[time] unit \"samples\" needs rate_hz")?;
         return Ok(TimeSource::Samples { field, rate_hz });
     }
-    match (t.field, t.rate_hz) {
-        (Some(field), None) => {
+    match (t.field, rate_hz) {
+        (Some(field), rate_hz) => {
             let seconds_per_unit = match t.unit.as_deref().unwrap_or("s") {
                 "s" => 1.0,
                 "ms" => 1e-3,
@@ -393,12 +471,10 @@ fn time_source(t: &TimeFile) -> Result<TimeSource, String> {
             if t.start_s.is_some() {
                 return Err("[time] start_s goes with rate_hz, not with a time field".to_string());
             }
-            Ok(TimeSource::Field { field, seconds_per_unit })
+            let nominal = rate_hz.map(|rate_hz| NominalRate { rate_hz, line: rate_line.unwrap_or(0) });
+            Ok(TimeSource::Field { field, seconds_per_unit, nominal })
         }
         (None, Some(rate_hz)) => {
-            if !(rate_hz.is_finite() && rate_hz > 0.0 && rate_hz <= 1e6) {
-                return Err(format!("[time] rate_hz {rate_hz} is not a sample rate (0 to 1 MHz)"));
-            }
             if t.unit.is_some() {
                 return Err("[time] unit goes with a time field, not with rate_hz".to_string());
             }
@@ -408,7 +484,6 @@ fn time_source(t: &TimeFile) -> Result<TimeSource, String> {
             }
             Ok(TimeSource::Rate { rate_hz, start_s })
         }
-        (Some(_), Some(_)) => Err("[time]: give a field or rate_hz, not both (or unit = \"samples\")".to_string()),
         (None, None) => Err("[time]: give the time's field (with its unit) or rate_hz".to_string()),
     }
 }
@@ -520,4 +595,51 @@ fn axes(a: Option<&AxesFile>) -> Result<[[f64; 3]; 3], String> {
         ));
     }
     Ok(m)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    const ACCEL: &str = "[accel]\nfields = [1, 2, 3]\nunit = \"m/s^2\"\n";
+
+    #[test]
+    fn a_time_field_with_a_nominal_rate_keeps_the_rate_and_its_line() {
+        let text = format!("format = \"text\"\n[time]\nfield = 0\nunit = \"ms\"\n\nrate_hz = 200\n{ACCEL}");
+        let layout = Layout::parse(&text, "l.toml").unwrap();
+        let nominal = Some(NominalRate { rate_hz: 200.0, line: 6 });
+        assert_eq!(layout.time, TimeSource::Field { field: 0, seconds_per_unit: 1e-3, nominal });
+        assert!(layout.describe().contains("time field 0 x 0.001 s at a nominal 200 Hz"), "{}", layout.describe());
+        let bad = Layout::parse(&text.replace("rate_hz = 200", "rate_hz = -2"), "l.toml").unwrap_err();
+        assert_eq!(bad.to_string(), "l.toml: [time] rate_hz -2 is not a sample rate (0 to 1 MHz)");
+    }
+
+    #[test]
+    fn without_gyro_the_layout_reads_the_accelerometer_and_the_time_only() {
+        let layout = Layout::parse(&format!("format = \"text\"\n[time]\nfield = 0\n{ACCEL}"), "l.toml").unwrap();
+        assert_eq!(layout.gyro, None);
+        assert_eq!(layout.slots(), vec![(0, 0), (4, 1), (5, 2), (6, 3)]);
+        assert!(layout.describe().contains("; no gyro (accelerometer-only); accel fields [1, 2, 3]"));
+    }
+
+    #[test]
+    fn the_files_table_names_an_arrangement() {
+        let accel = ACCEL.replace("[1, 2, 3]", "[4, 5, 6]");
+        let base = format!(
+            "format = \"binary\"\n[binary]\ntype = \"f32\"\nendian = \"little\"\nfields = 4\n[time]\nfield = 0\n{accel}"
+        );
+        // Without [files], a binary record holds every field; side by side, the fields number on.
+        let one = Layout::parse(&base, "l.toml").unwrap_err().to_string();
+        assert!(one.contains("field 4 is beyond the binary record of 4 fields"), "{one}");
+        let two = Layout::parse(&format!("{base}[files]\narrange = \"side-by-side\"\n"), "l.toml").unwrap();
+        assert_eq!(two.files, Some(Arrangement::SideBySide));
+        assert!(two.describe().ends_with("; files side by side"));
+        let sessions = Layout::parse(&format!("{base}[files]\narrange = \"sessions\"\n"), "l.toml").unwrap_err();
+        assert!(sessions.to_string().contains("field 4 is beyond the binary record of 4 fields"));
+        let unknown = Layout::parse(&format!("{base}[files]\narrange = \"zip\"\n"), "l.toml").unwrap_err();
+        assert_eq!(
+            unknown.to_string(),
+            "l.toml: [files] arrange \"zip\": \"side-by-side\", \"sequence\" or \"sessions\""
+        );
+    }
 }

@@ -44,7 +44,8 @@ impl ValueBudget {
         let bytes = count.saturating_mul(8);
         if bytes > self.left as u64 {
             return Err(format!(
-                "{count} values, {} MB as f64, more than the {} MB left of the {} MB sinscal reads from one MAT-file",
+                "{count} values, {} MB as f64, more than the {} MB left of the {} MB sinscal reads from one MAT-file \
+                 (or the MAT-files of one import)",
                 bytes >> 20,
                 self.left >> 20,
                 MAX_MAT_VALUE_BYTES >> 20
@@ -153,6 +154,16 @@ impl MatMatrix {
 /// whose product overflows or disagrees with the number of values, and a NaN or infinite value (named by its
 /// variable, row and column: sinscal reads finite values only).
 pub fn read_mat(bytes: &[u8], source: &str) -> Result<Vec<MatMatrix>, InputError> {
+    read_mat_within(bytes, source, &mut ValueBudget::new())
+}
+
+/// [`read_mat`] with the values taken from `budget`: the MAT-files of one import share one
+/// [`MAX_MAT_VALUE_BYTES`].
+pub(super) fn read_mat_within(
+    bytes: &[u8],
+    source: &str,
+    budget: &mut ValueBudget,
+) -> Result<Vec<MatMatrix>, InputError> {
     if bytes.starts_with(V73_TEXT) {
         if bytes.get(HDF5_SIGNATURE_OFFSET..HDF5_SIGNATURE_OFFSET + 8) != Some(HDF5_SIGNATURE) {
             let reason = format!(
@@ -162,20 +173,19 @@ pub fn read_mat(bytes: &[u8], source: &str) -> Result<Vec<MatMatrix>, InputError
             );
             return Err(InputError::file(source, reason));
         }
-        let variables = v73::read_variables(bytes, &mut ValueBudget::new())
-            .map_err(|r| InputError::file(source, format!("MATLAB 7.3: {r}")))?;
+        let variables =
+            v73::read_variables(bytes, budget).map_err(|r| InputError::file(source, format!("MATLAB 7.3: {r}")))?;
         return matrices_or_refused(variables, source);
     }
     let order = header_byte_order(bytes).map_err(|reason| InputError::file(source, reason))?;
     let mut variables = Vec::new();
     let mut cursor = Cursor { bytes, pos: HEADER_BYTES, order };
-    let mut budget = ValueBudget::new();
     while cursor.pos < bytes.len() {
         let at = cursor.pos;
         if bytes[at..].len() < 8 && bytes[at..].iter().all(|&b| b == 0) {
             break; // the last element's padding
         }
-        let element = top_level_element(&mut cursor, &mut budget)
+        let element = top_level_element(&mut cursor, budget)
             .map_err(|reason| InputError::file(source, format!("element at byte {at}: {reason}")))?;
         variables.push(element);
     }

@@ -141,7 +141,8 @@ pub struct ImportArgs {
     #[arg(value_enum)]
     pub format: Format,
     /// Input file(s): one for psins, imucal and imucal-raw; two (accelerometer, then gyro) for imutk; for columns,
-    /// one, or several text files read side by side (their fields numbered on from one file to the next).
+    /// one, or several read as the layout's [files] says (side by side, the fields numbered on from one file to the
+    /// next: the default for text files; in sequence; or as sessions).
     #[arg(required = true, num_args = 1..)]
     pub inputs: Vec<PathBuf>,
     /// The recording to write (docs/formats.md#recording).
@@ -151,7 +152,8 @@ pub struct ImportArgs {
     #[arg(long, allow_negative_numbers = true)]
     pub latitude_deg: Option<f64>,
     /// imucal: the JSON label file (default: INPUT with '.csv' replaced by '_list.json'). columns: a CSV of
-    /// positions (start_s, end_s, pitch_deg, roll_deg, heading_deg, pos); without it static intervals are detected.
+    /// positions (start_s, end_s, pitch_deg, roll_deg, heading_deg, pos, file); without it static intervals are
+    /// detected.
     #[arg(long)]
     pub labels: Option<PathBuf>,
     /// columns: the layout file (TOML, docs/data.md#described-layouts).
@@ -161,6 +163,10 @@ pub struct ImportArgs {
     /// instead of a labels file; repeat it for each position (numbered 1, 2, ... in order).
     #[arg(long, value_name = "START_S,END_S,PITCH_DEG,ROLL_DEG[,HEADING_DEG]")]
     pub position: Vec<String>,
+    /// columns, files in sequence or sessions: the position of a whole input file as `PITCH_DEG,ROLL_DEG[,
+    /// HEADING_DEG]`, one flag per input file in order (file k is position k), instead of a labels file.
+    #[arg(long, value_name = "PITCH_DEG,ROLL_DEG[,HEADING_DEG]", allow_hyphen_values = true)]
+    pub file_position: Vec<String>,
     /// Static detection (imutk, columns without --labels): length of the sliding window, s.
     #[arg(long, default_value_t = StaticDetection::default().window_s)]
     pub static_window_s: f64,
@@ -204,6 +210,20 @@ impl ImportArgs {
         }
         if !self.position.is_empty() && (self.format != Format::Columns || self.labels.is_some()) {
             return usage("--position applies only to the columns format, and not with --labels".to_string());
+        }
+        if !self.file_position.is_empty() {
+            if self.format != Format::Columns || self.labels.is_some() || !self.position.is_empty() {
+                return usage(
+                    "--file-position applies only to the columns format, and not with --labels or --position".into(),
+                );
+            }
+            if self.file_position.len() != self.inputs.len() {
+                return usage(format!(
+                    "--file-position: one per input file ({} flags for {} files)",
+                    self.file_position.len(),
+                    self.inputs.len()
+                ));
+            }
         }
         let d = self.static_detection();
         let positive = [d.window_s, d.init_static_s, d.threshold_factor, d.min_static_s];
@@ -272,6 +292,7 @@ fn run_columns(args: &ImportArgs) -> Result<Imported, InputError> {
     let labels_source = match &args.labels {
         Some(p) => Some(p.display().to_string()),
         None if !args.position.is_empty() => Some("--position flags".to_string()),
+        None if !args.file_position.is_empty() => Some("--file-position flags".to_string()),
         None => None,
     };
     let positions = match &args.labels {
@@ -281,6 +302,13 @@ fn run_columns(args: &ImportArgs) -> Result<Imported, InputError> {
             let lines: Vec<&str> = args.position.iter().map(|p| p.as_str()).collect();
             let text = format!("start_s,end_s,pitch_deg,roll_deg,heading_deg\n{}\n", lines.join("\n"));
             Positions::Labels(parse_labels(&text, "--position")?)
+        }
+        None if !args.file_position.is_empty() => {
+            // The flags as the lines of a labels file of whole files (line k + 1 is the k-th flag, for file k).
+            let lines: Vec<String> =
+                args.file_position.iter().enumerate().map(|(k, p)| format!("{},{p}", k + 1)).collect();
+            let text = format!("file,pitch_deg,roll_deg,heading_deg\n{}\n", lines.join("\n"));
+            Positions::Labels(parse_labels(&text, "--file-position")?)
         }
         None => Positions::Detect(args.static_detection()),
     };
@@ -513,11 +541,15 @@ fn summarise(recording: &Recording, title: &str, notes: &[String], name: &dyn Fn
     );
     for s in &stats {
         let heading = s.heading_deg.map_or("-".to_string(), |h| format!("{h:.2}"));
-        let w = s.mean_rate_b_radps.map(f64::to_degrees);
+        // An accelerometer-only recording has no gyro means: "-".
+        let w = s.mean_rate_b_radps.map(|v| match recording.has_gyro {
+            true => format!("{:>+10.6}", v.to_degrees()),
+            false => format!("{:>10}", "-"),
+        });
         let f = s.mean_force_b_mps2;
         let _ = writeln!(
             out,
-            "  {:>4} {:<12} {:>8} {:>9.2} {:>8.2} {:>7.2} {:>8.2} {:>8}  {:>+10.6} {:>+10.6} {:>+10.6}  {:>+9.4} {:>+9.4} {:>+9.4}",
+            "  {:>4} {:<12} {:>8} {:>9.2} {:>8.2} {:>7.2} {:>8.2} {:>8}  {} {} {}  {:>+9.4} {:>+9.4} {:>+9.4}",
             s.pos,
             name(s.pos),
             s.samples,
