@@ -56,9 +56,14 @@ fn variant(
 
 /// Runs `calibrate` with `--json`: exit status, stderr, the JSON (null when none was written).
 fn calibrate(dir: &Path, recording: &Path) -> (i32, String, Value) {
-    let json = dir.join("cal.json");
+    run_json(dir, "calibrate", recording, "cal.json")
+}
+
+/// Runs `command RECORDING --json DIR/JSON`: exit status, stderr, the JSON (null when none was written).
+fn run_json(dir: &Path, command: &str, recording: &Path, json: &str) -> (i32, String, Value) {
+    let json = dir.join(json);
     let _ = std::fs::remove_file(&json);
-    let out = sinscal().arg("calibrate").arg(recording).arg("--json").arg(&json).output().unwrap();
+    let out = sinscal().arg(command).arg(recording).arg("--json").arg(&json).output().unwrap();
     let stderr = String::from_utf8_lossy(&out.stderr).into_owned();
     let value = std::fs::read_to_string(&json).map_or(Value::Null, |t| serde_json::from_str(&t).unwrap());
     (out.status.code().unwrap(), stderr, value)
@@ -77,7 +82,12 @@ fn fails_physics(name: &str, hint: &str, row: impl Fn(f64, [f64; 6]) -> (f64, [f
 }
 
 fn fails_physics_of(dir: &Path, rec: &Path, hint: &str) {
-    let (code, stderr, v) = calibrate(dir, rec);
+    fails_physics_in(dir, "calibrate", rec, hint);
+}
+
+/// `command` of `rec` fails the physics check with `hint`: exit 3, the hint on stderr and in the JSON.
+fn fails_physics_in(dir: &Path, command: &str, rec: &Path, hint: &str) {
+    let (code, stderr, v) = run_json(dir, command, rec, &format!("{command}.json"));
     assert_eq!(code, 3, "{stderr}");
     let line = format!("sinscal: check failed: physics: {hint}");
     assert!(stderr.lines().any(|l| l.starts_with(&line)), "{stderr}");
@@ -387,28 +397,14 @@ fn one_pose_gyros_in_deg_per_s_fail_the_physics_check() {
 #[test]
 fn analyze_runs_the_same_physics_check_as_calibrate() {
     let dir = tempfile::tempdir().unwrap();
-    let analyze = |rec: &Path| {
-        let json = dir.path().join("analysis.json");
-        let out = sinscal().arg("analyze").arg(rec).arg("--json").arg(&json).output().unwrap();
-        let v: Value = serde_json::from_str(&std::fs::read_to_string(&json).unwrap()).unwrap();
-        (out.status.code().unwrap(), String::from_utf8_lossy(&out.stderr).into_owned(), v)
-    };
-    let (code, stderr, v) = analyze(&example(dir.path()));
+    let (code, stderr, v) = run_json(dir.path(), "analyze", &example(dir.path()), "analysis.json");
     assert_eq!(code, 0, "{stderr}");
     assert_eq!(v["checks"][0]["check"], "physics", "{v}");
     assert_eq!(v["checks"][0]["passed"], true, "{v}");
     let degrees = |h: f64, v: [f64; 6]| (h, std::array::from_fn(|i| if i < 3 { v[i] * 57.29578 } else { v[i] }));
     let half_turn = |h: f64, v: [f64; 6]| ((h + 180.0) % 360.0, v);
-    for (name, hint, rec) in [
-        ("degs", "gyros in deg/s?", variant(dir.path(), "degs", degrees, str::to_string)),
-        ("h180", "headings half a turn off?", variant(dir.path(), "h180", half_turn, str::to_string)),
-    ] {
-        let (code, stderr, v) = analyze(&rec);
-        assert_eq!(code, 3, "{name}: {stderr}");
-        let line = format!("sinscal: check failed: physics: {hint}");
-        assert!(stderr.lines().any(|l| l.starts_with(&line)), "{name}: {stderr}");
-        let physics = check(&v, "physics");
-        assert_eq!(physics["passed"], false, "{name}: {physics}");
-        assert!(physics["detail"].as_str().unwrap().starts_with(hint), "{name}: {physics}");
-    }
+    let rec = variant(dir.path(), "degs", degrees, str::to_string);
+    fails_physics_in(dir.path(), "analyze", &rec, "gyros in deg/s?");
+    let rec = variant(dir.path(), "h180", half_turn, str::to_string);
+    fails_physics_in(dir.path(), "analyze", &rec, "headings half a turn off?");
 }

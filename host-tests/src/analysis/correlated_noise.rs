@@ -619,25 +619,7 @@ mod tests {
     /// `dwells` dwells of `len` samples (dt 0.01 s): a Gauss-Markov process (sigma 1, `tau_s`) plus white
     /// noise (0.5), each dwell with its own mean and straight line removed, as the sample tests see them.
     fn detrended_dwells(dwells: usize, len: usize, tau_s: f64, seed: u64) -> Vec<Vec<f64>> {
-        let mut rng = ChaCha8Rng::seed_from_u64(seed);
-        let phi = (-0.01 / tau_s).exp();
-        (0..dwells)
-            .map(|_| {
-                let mut x = normal(&mut rng);
-                let y: Vec<f64> = (0..len)
-                    .map(|_| {
-                        x = phi * x + (1.0 - phi * phi).sqrt() * normal(&mut rng);
-                        x + 0.5 * normal(&mut rng)
-                    })
-                    .collect();
-                let n = len as f64;
-                let mid = (n - 1.0) / 2.0;
-                let mean = y.iter().sum::<f64>() / n;
-                let sxx: f64 = (0..len).map(|i| (i as f64 - mid).powi(2)).sum();
-                let slope = y.iter().enumerate().map(|(i, v)| (i as f64 - mid) * (v - mean)).sum::<f64>() / sxx;
-                y.iter().enumerate().map(|(i, v)| v - mean - slope * (i as f64 - mid)).collect()
-            })
-            .collect()
+        dwells_of(&[(1.0, tau_s)], dwells, len, seed)
     }
 
     #[test]
