@@ -26,13 +26,24 @@ pub(crate) fn base_labelled(means: &[[f64; 3]], ups: &[[f64; 3]], g: f64) -> Acc
 /// Ferraris fit: per output axis m_k,i = b_i + g sum_j A_ij u_k,j by least squares (needs 4 poses spanning
 /// the three axes).
 pub(crate) fn extended_labelled(means: &[[f64; 3]], ups: &[[f64; 3]], g: f64) -> Option<AccelModel> {
-    let rows: Vec<Vec<f64>> = ups.iter().map(|u| vec![1.0, g * u[0], g * u[1], g * u[2]]).collect();
+    labelled_with(means, ups, g, &[true; 9])
+}
+
+/// [`extended_labelled`] with only the entries of A that `free` marks (row-major) fitted; the others fixed at
+/// the identity's (1 on the diagonal, 0 off it).
+fn labelled_with(means: &[[f64; 3]], ups: &[[f64; 3]], g: f64, free: &[bool]) -> Option<AccelModel> {
     let mut model = AccelModel { bias_mps2: [0.0; 3], matrix: IDENTITY };
     for i in 0..3 {
-        let y: Vec<f64> = means.iter().map(|m| m[i]).collect();
+        let cols: Vec<usize> = (0..3).filter(|&j| free[3 * i + j]).collect();
+        let rows: Vec<Vec<f64>> =
+            ups.iter().map(|u| std::iter::once(1.0).chain(cols.iter().map(|&j| g * u[j])).collect()).collect();
+        let fixed = |u: &[f64; 3]| (0..3).filter(|&j| !free[3 * i + j]).map(|j| IDENTITY[i][j] * g * u[j]).sum::<f64>();
+        let y: Vec<f64> = means.iter().zip(ups).map(|(m, u)| m[i] - fixed(u)).collect();
         let x = least_squares_normal(&rows, &y)?;
         model.bias_mps2[i] = x[0];
-        model.matrix[i] = [x[1], x[2], x[3]];
+        for (c, &j) in cols.iter().enumerate() {
+            model.matrix[i][j] = x[1 + c];
+        }
     }
     Some(model)
 }
@@ -48,16 +59,83 @@ pub(crate) fn base_unlabelled(means: &[[f64; 3]], g: f64) -> AccelModel {
 /// misalignments; the rotation of the body frame is not observable from |f| and is fixed by the triangular
 /// form: body x = accelerometer x, body y in the accelerometers' x-y plane). A = T^-1 (lower-triangular too).
 pub(crate) fn extended_unlabelled(means: &[[f64; 3]], g: f64) -> Option<AccelModel> {
+    unlabelled_with(means, g, &[true; 6])
+}
+
+/// [`extended_unlabelled`] with only the entries of T's lower triangle that `free` marks (00, 10, 11, 20, 21,
+/// 22) fitted; the others fixed at the identity's.
+fn unlabelled_with(means: &[[f64; 3]], g: f64, free: &[bool]) -> Option<AccelModel> {
+    const START: [f64; 9] = [0.0, 0.0, 0.0, 1.0, 0.0, 1.0, 0.0, 0.0, 1.0];
     let t_of = |p: &[f64]| -> M3 { [[p[3], 0.0, 0.0], [p[4], p[5], 0.0], [p[6], p[7], p[8]]] };
-    let residuals = |p: &[f64]| -> Vec<f64> {
-        let t = t_of(p);
+    // The full parameters (bias, T's six entries) from the fitted ones (bias, the free entries).
+    let expand = |q: &[f64]| -> Vec<f64> {
+        let mut p = START.to_vec();
+        p[..3].copy_from_slice(&q[..3]);
+        let mut k = 3;
+        for (t, &f) in free.iter().enumerate() {
+            if f {
+                p[3 + t] = q[k];
+                k += 1;
+            }
+        }
+        p
+    };
+    let residuals = |q: &[f64]| -> Vec<f64> {
+        let p = expand(q);
+        let t = t_of(&p);
         means.iter().map(|m| norm(mul_vec(&t, sub(*m, [p[0], p[1], p[2]]))) - g).collect()
     };
     if means.len() < 9 {
         return None;
     }
-    let p = gauss_newton(vec![0.0, 0.0, 0.0, 1.0, 0.0, 1.0, 0.0, 0.0, 1.0], &residuals);
+    let start: Vec<f64> =
+        START[..3].iter().chain(free.iter().zip(&START[3..]).filter(|(f, _)| **f).map(|(_, v)| v)).copied().collect();
+    let p = expand(&gauss_newton(start, &residuals));
     Some(AccelModel { bias_mps2: [p[0], p[1], p[2]], matrix: inverse3(&t_of(&p))? })
+}
+
+/// What the held-out gate of the extended model ([`super::accel_gate`]) fits and holds out: the poses' mean
+/// forces (m/s^2), labelled up axes and samples, and which poses are held out (unlabelled poses: the odd ones;
+/// labelled poses: each in turn).
+pub(crate) struct ExtendedFit<'a> {
+    pub kind: PoseKind,
+    pub means: &'a [[f64; 3]],
+    pub ups: &'a [[f64; 3]],
+    pub samples: Vec<usize>,
+    pub held_out: Vec<bool>,
+    pub g: f64,
+}
+
+impl ExtendedFit<'_> {
+    /// The extended model with the terms `free` fitted on the poses `keep` marks.
+    fn fit_on(&self, free: &[bool], keep: &dyn Fn(usize) -> bool) -> Option<AccelModel> {
+        let pick = |v: &[[f64; 3]]| -> Vec<[f64; 3]> { (0..v.len()).filter(|&k| keep(k)).map(|k| v[k]).collect() };
+        match self.kind {
+            PoseKind::Labelled => labelled_with(&pick(self.means), &pick(self.ups), self.g, free),
+            PoseKind::Unlabelled => unlabelled_with(&pick(self.means), self.g, free),
+        }
+    }
+
+    /// The extended model with the terms `free`, fitted on all poses.
+    pub fn fit(&self, free: &[bool]) -> Option<AccelModel> {
+        self.fit_on(free, &|_| true)
+    }
+}
+
+/// |f calibrated| - g (m/s^2) of each held-out pose (its index beside) under the extended model with the terms
+/// `free` fitted without it: labelled poses, each left out in turn; unlabelled, the odd poses under the fit on
+/// the even ones. `None` when a fit is not determined.
+pub(crate) fn held_out_of(fit: &ExtendedFit<'_>, free: &[bool]) -> Option<Vec<(usize, f64)>> {
+    let residual = |model: &AccelModel, k: usize| norm(model.calibrate(fit.means[k])) - fit.g;
+    match fit.kind {
+        PoseKind::Labelled => {
+            (0..fit.means.len()).map(|k| fit.fit_on(free, &|j| j != k).map(|model| (k, residual(&model, k)))).collect()
+        }
+        PoseKind::Unlabelled => {
+            let model = fit.fit_on(free, &|j| !fit.held_out[j])?;
+            Some((0..fit.means.len()).filter(|&k| fit.held_out[k]).map(|k| (k, residual(&model, k))).collect())
+        }
+    }
 }
 
 /// The base and extended models fitted on all poses (`means`, m/s^2; `ups`, the labelled up axes), and the
@@ -85,53 +163,37 @@ pub(crate) fn fit_models(
     })
 }
 
-/// The gain on poses not used for the fit: |f calibrated| - g (m/s^2) of each held-out pose under the base and
-/// the extended model, with the rule in words. Labelled: leave one pose out (every pose is then marked held
-/// out); unlabelled: fit on the even poses, evaluate on the odd ones.
-pub(crate) fn held_out_norms(
+/// The base model's gain on poses not used for the fit: |f calibrated| - g (m/s^2) of each held-out pose,
+/// with the rule in words. Labelled: leave one pose out (every pose is then marked held out); unlabelled: fit
+/// on the even poses, evaluate on the odd ones. The extended model's are [`held_out_of`]'s.
+pub(crate) fn held_out_base(
     kind: PoseKind,
     poses: &mut [Pose],
     means: &[[f64; 3]],
     ups: &[[f64; 3]],
     g: f64,
-    source: &str,
-) -> Result<(&'static str, Vec<f64>, Vec<f64>), InputError> {
+) -> (&'static str, Vec<f64>) {
     match kind {
         PoseKind::Labelled => {
-            let (rb, re) = leave_one_out(means, ups, g);
+            let rb = (0..means.len())
+                .map(|k| {
+                    let keep =
+                        |v: &[[f64; 3]]| -> Vec<[f64; 3]> { (0..v.len()).filter(|&j| j != k).map(|j| v[j]).collect() };
+                    norm(base_labelled(&keep(means), &keep(ups), g).calibrate(means[k])) - g
+                })
+                .collect();
             for p in poses.iter_mut() {
                 p.held_out = true;
             }
-            Ok(("leave one pose out (each pose predicted by the fit on the other five)", rb, re))
+            ("leave one pose out (each pose predicted by the fit on the other five)", rb)
         }
         PoseKind::Unlabelled => {
             let fit: Vec<[f64; 3]> = poses.iter().zip(means).filter(|(p, _)| !p.held_out).map(|(_, m)| *m).collect();
             let b = base_unlabelled(&fit, g);
-            let e = extended_unlabelled(&fit, g)
-                .ok_or_else(|| InputError::file(source, "fewer than 9 even poses: cannot fit 9 parameters"))?;
             let test = poses.iter().zip(means).filter(|(p, _)| p.held_out).map(|(_, m)| *m);
-            let rb = test.clone().map(|m| norm(b.calibrate(m)) - g).collect();
-            let re = test.map(|m| norm(e.calibrate(m)) - g).collect();
-            Ok(("odd poses (models fitted on the even poses)", rb, re))
+            ("odd poses (models fitted on the even poses)", test.map(|m| norm(b.calibrate(m)) - g).collect())
         }
     }
-}
-
-/// Labelled poses, each predicted by the base and the extended fit on the others: |f calibrated| - g, m/s^2
-/// (the extended one only where the other poses determine it).
-fn leave_one_out(means: &[[f64; 3]], ups: &[[f64; 3]], g: f64) -> (Vec<f64>, Vec<f64>) {
-    let (mut rb, mut re) = (Vec::new(), Vec::new());
-    for k in 0..means.len() {
-        let keep: Vec<usize> = (0..means.len()).filter(|&j| j != k).collect();
-        let m: Vec<[f64; 3]> = keep.iter().map(|&j| means[j]).collect();
-        let u: Vec<[f64; 3]> = keep.iter().map(|&j| ups[j]).collect();
-        let b = base_labelled(&m, &u, g);
-        rb.push(norm(b.calibrate(means[k])) - g);
-        if let Some(e) = extended_labelled(&m, &u, g) {
-            re.push(norm(e.calibrate(means[k])) - g);
-        }
-    }
-    (rb, re)
 }
 
 /// Fills the per-pose norms: |mean f - b| - g of the data, of the base SIMULATION (stream 77) and of the

@@ -40,6 +40,7 @@
 //! The summary, the JSON and the figures are written by [`crate::study::report`].
 
 pub mod accel;
+pub mod accel_gate;
 pub mod causes;
 pub mod factory;
 pub mod generate;
@@ -274,8 +275,12 @@ pub struct PoseStudy {
     pub poses: Vec<Pose>,
     /// Base accelerometer model (bias only), fitted on all poses.
     pub base_accel: AccelModel,
-    /// Extended accelerometer model (bias, 3 scale factors, misalignments), fitted on all poses.
+    /// Extended accelerometer model (bias, and the scale factors and misalignments that the held-out gate
+    /// keeps), fitted on all poses.
     pub extended_accel: AccelModel,
+    /// The held-out gate's verdict on each scale factor and misalignment of the extended accelerometer model
+    /// (docs/cli.md#held-out-gate-of-the-pose-model), in the order they were decided.
+    pub accel_term_gate: Vec<noise_extension::TermGate>,
     /// RMS over poses of |f - b| - g of the data, base model, m/s^2.
     pub norm_rms_data_mps2: f64,
     /// RMS over poses of the white-noise standard deviation of the pose's norm, m/s^2.

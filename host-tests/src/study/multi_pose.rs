@@ -3,7 +3,8 @@
 //! gyro pose means against the base model and its SIMULATION, the extensions and their gain on held-out poses,
 //! the Ferraris turns and the imu_tk factory comparison.
 
-use super::accel::{fit_models, held_out_norms, simulate_pose_norms};
+use super::accel::{fit_models, held_out_base, held_out_of, simulate_pose_norms, ExtendedFit};
+use super::accel_gate::{gate, term_names};
 use super::causes::name_causes;
 use super::factory::factory_comparison;
 use super::gyro::{gyro_models, gyro_spread, integrate_turns};
@@ -46,7 +47,24 @@ pub fn study_multi_pose(
     let means: Vec<[f64; 3]> = poses.iter().map(|p| p.mean_force_mps2).collect();
     let ups: Vec<[f64; 3]> = poses.iter().map(|p| p.up_b.unwrap_or([0.0, 0.0, 1.0])).collect();
     let (base, extended, method) = fit_models(kind, &means, &ups, g, &rec.source)?;
-    let (held_out_rule, base_res, ext_res) = held_out_norms(kind, &mut poses, &means, &ups, g, &rec.source)?;
+    let fit = ExtendedFit {
+        kind,
+        means: &means,
+        ups: &ups,
+        samples: poses.iter().map(|p| p.samples).collect(),
+        held_out: poses.iter().map(|p| p.held_out).collect(),
+        g,
+    };
+    // The held-out gate keeps the terms of the extended model that the held-out poses need.
+    let accel_gate = gate(&fit, [sigma[3], sigma[4], sigma[5]]);
+    let free = accel_gate.as_ref().map_or_else(|| vec![true; term_names(kind).len()], |a| a.free.clone());
+    let ext_res: Vec<f64> = held_out_of(&fit, &free)
+        .ok_or_else(|| InputError::file(&rec.source, "the poses held out leave too few to fit the extended model"))?
+        .into_iter()
+        .map(|(_, r)| r)
+        .collect();
+    let (accel_term_gate, extended) = accel_gate.map_or((Vec::new(), extended), |a| (a.verdicts, a.model));
+    let (held_out_rule, base_res) = held_out_base(kind, &mut poses, &means, &ups, g);
     simulate_pose_norms(&mut poses, &base, &extended, g, [sigma[3], sigma[4], sigma[5]], seed);
     let (spread, spread_noise) = gyro_spread(&poses, [sigma[0], sigma[1], sigma[2]]);
     let (gyro_models_held_out_radps, gyro_g_sensitivity) =
@@ -77,6 +95,7 @@ pub fn study_multi_pose(
         poses,
         base_accel: base,
         extended_accel: extended,
+        accel_term_gate,
     };
     let mut study = Study {
         dataset: dataset.to_string(),

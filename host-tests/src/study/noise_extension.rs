@@ -236,7 +236,7 @@ fn term_name(i: usize, shape: Option<ExtraShape>) -> String {
 
 /// Whether dropping a term that raises the held-out chi^2 from `with` to `without` would lose a significant
 /// improvement ([`GATE_MIN_DELTA_CHI2`], [`GATE_MIN_RELATIVE_RISE`]).
-fn significant(with: f64, without: f64) -> bool {
+pub(crate) fn significant(with: f64, without: f64) -> bool {
     without - with >= GATE_MIN_DELTA_CHI2.max(GATE_MIN_RELATIVE_RISE * with)
 }
 

@@ -13,7 +13,7 @@ use crate::io::ARCSEC_PER_RAD;
 use crate::model::synth::MICRO_G;
 use crate::plot::{figure, Png};
 use crate::stats::noise::NoiseTerms;
-use crate::study::noise_extension::{ExtraTerm, GATE_MIN_DELTA_CHI2, GATE_MIN_RELATIVE_RISE};
+use crate::study::noise_extension::{ExtraTerm, TermGate, GATE_MIN_DELTA_CHI2, GATE_MIN_RELATIVE_RISE};
 use crate::study::rests::rms;
 use crate::study::rotations::{RotationFit, RotationStudy};
 use crate::study::{
@@ -263,12 +263,17 @@ fn extended_noise_section(o: &mut String, s: &Study) {
 
 /// The held-out gate's verdicts of one channel: the kept terms, then the dropped ones with why.
 fn gate_lines(o: &mut String, e: &NoiseExtension) {
-    let names =
-        |kept: bool| -> Vec<&str> { e.gate.iter().filter(|g| g.kept == kept).map(|g| g.term.as_str()).collect() };
+    verdict_lines(o, &e.gate, " (besides white)");
+}
+
+/// Verdicts of a held-out gate: the kept terms (`besides`: what is kept without a verdict), the dropped ones,
+/// then each with why.
+fn verdict_lines(o: &mut String, gate: &[TermGate], besides: &str) {
+    let names = |kept: bool| -> Vec<&str> { gate.iter().filter(|g| g.kept == kept).map(|g| g.term.as_str()).collect() };
     let (kept, dropped) = (names(true), names(false));
     let list = |v: &[&str]| if v.is_empty() { "none".to_string() } else { v.join(", ") };
-    let _ = writeln!(o, "  held-out gate: kept {} (besides white); dropped {}", list(&kept), list(&dropped));
-    for g in &e.gate {
+    let _ = writeln!(o, "  held-out gate: kept {}{besides}; dropped {}", list(&kept), list(&dropped));
+    for g in gate {
         let _ = writeln!(o, "  - {} {}: {}", if g.kept { "kept" } else { "dropped" }, g.term, g.reason);
     }
 }
@@ -330,6 +335,7 @@ fn gain_section(o: &mut String, s: &Study) {
             p.held_out_norm_rms_extended_mps2,
             p.held_out_norm_rms_base_mps2 / p.held_out_norm_rms_extended_mps2
         );
+        verdict_lines(o, &p.accel_term_gate, " (besides the biases)");
         for (name, v) in &p.gyro_models_held_out_radps {
             let _ = writeln!(o, "- gyro per-pose means, odd poses, {name}: RMS residual {:.5} deg/s", v.to_degrees());
         }
@@ -660,15 +666,7 @@ fn noise_extension_json(
     for (key, x) in [("", e.extra_all), ("_first_half", e.extra_first_half)] {
         extended.insert(format!("{channel}_extra_term{key}"), extra_term_json(x, u));
     }
-    let gate: Vec<Value> = e
-        .gate
-        .iter()
-        .map(|g| {
-            json!({"term": g.term, "kept": g.kept, "held_out_chi2_with": g.chi2_with,
-                   "held_out_chi2_without": g.chi2_without, "reason": g.reason})
-        })
-        .collect();
-    extended.insert(format!("{channel}_term_gate"), Value::Array(gate));
+    extended.insert(format!("{channel}_term_gate"), gate_json(&e.gate));
     gain.insert(
         format!("{channel}_held_out_rms_log10_adev"),
         json!({"rule": "fit on the first half, evaluate on the second", "base": e.held_out_rms_log10_base,
@@ -715,13 +713,24 @@ fn pose_disagreement_json(p: &PoseStudy) -> Vec<Value> {
     disagreement
 }
 
+/// A held-out gate's verdicts as JSON.
+fn gate_json(gate: &[TermGate]) -> Value {
+    gate.iter()
+        .map(|g| {
+            json!({"term": g.term, "kept": g.kept, "held_out_chi2_with": g.chi2_with,
+                   "held_out_chi2_without": g.chi2_without, "reason": g.reason})
+        })
+        .collect()
+}
+
 /// The pose sets' extensions (accelerometer model, gyro g-sensitivity and scale factors, factory comparison)
 /// into `extended`, their held-out gains into `gain`.
 fn pose_extension_json(p: &PoseStudy, extended: &mut Map<String, Value>, gain: &mut Map<String, Value>) {
     extended.insert(
         "accel".into(),
         json!({"method": p.method, "bias_mps2": p.extended_accel.bias_mps2,
-        "scale_factors": p.extended_accel.scale_factors(), "matrix_a": p.extended_accel.matrix}),
+        "scale_factors": p.extended_accel.scale_factors(), "matrix_a": p.extended_accel.matrix,
+        "term_gate": gate_json(&p.accel_term_gate)}),
     );
     if let Some(gs) = &p.gyro_g_sensitivity {
         extended.insert("gyro_g_sensitivity_radps_per_mps2".into(), json!(gs));
