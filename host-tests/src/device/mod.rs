@@ -81,12 +81,23 @@ pub fn boot_stm32f405(elf: &Path) -> Result<QemuDevice, String> {
     boot_machine(&["-machine", "netduinoplus2"], elf)
 }
 
+/// A listener on the Unix socket `path`. A socket file already there is stale: the path's directory is this
+/// process's own (its id and a counter in the name), so what is there was left by a process that ended
+/// without removing it; it is removed first (binding over it fails with "Address already in use").
+fn bind_fresh(path: &Path) -> Result<UnixListener, String> {
+    use std::os::unix::fs::FileTypeExt;
+    if std::fs::symlink_metadata(path).is_ok_and(|m| m.file_type().is_socket()) {
+        std::fs::remove_file(path).map_err(|e| format!("{}: a stale socket cannot be removed: {e}", path.display()))?;
+    }
+    UnixListener::bind(path).map_err(|e| format!("{}: {e}", path.display()))
+}
+
 /// Boots `elf` in QEMU with `machine_args`, its first serial port on a Unix socket, and connects the link.
 fn boot_machine(machine_args: &[&str], elf: &Path) -> Result<QemuDevice, String> {
     let dir = ScratchFile::new("link");
     std::fs::create_dir_all(dir.path()).map_err(|e| format!("{}: {e}", dir.path().display()))?;
     let socket = dir.path().join("uart0");
-    let listener = UnixListener::bind(&socket).map_err(|e| format!("{}: {e}", socket.display()))?;
+    let listener = bind_fresh(&socket)?;
     let mut child = Command::new(QEMU)
         .args(machine_args)
         .args(["-nographic", "-monitor", "none"])
@@ -313,4 +324,27 @@ pub struct RecordRead {
     pub record: Option<DeviceRecord>,
     /// A damaged newer record's sequence number.
     pub damaged_newer: Option<u32>,
+}
+
+#[cfg(test)]
+mod tests {
+    use super::bind_fresh;
+    use crate::io::ScratchFile;
+
+    /// A socket left by a listener that is gone (a process that was killed) does not stop the next bind; the
+    /// scratch directory that held it is removed with what it holds.
+    #[test]
+    fn a_stale_socket_is_bound_over_and_its_directory_removed() {
+        let dir = ScratchFile::new("link-test");
+        std::fs::create_dir_all(dir.path()).unwrap();
+        let socket = dir.path().join("uart0");
+        drop(std::os::unix::net::UnixListener::bind(&socket).unwrap());
+        assert!(socket.exists(), "the socket file outlives its listener");
+        let err = std::os::unix::net::UnixListener::bind(&socket).unwrap_err();
+        assert_eq!(err.kind(), std::io::ErrorKind::AddrInUse, "{err}");
+        bind_fresh(&socket).expect("the stale socket is removed and bound again");
+        let path = dir.path().to_path_buf();
+        drop(dir);
+        assert!(!path.exists(), "{} is left behind", path.display());
+    }
 }

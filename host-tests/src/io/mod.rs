@@ -70,7 +70,14 @@ impl ScratchFile {
 }
 
 impl Drop for ScratchFile {
+    /// Removes the file, or the directory and what it holds when one was made at the path (the device link's
+    /// socket directory): a directory left behind, its name made again by a later process of the same id,
+    /// held a stale socket that the next bind refused ("Address already in use").
     fn drop(&mut self) {
-        let _ = std::fs::remove_file(&self.0);
+        if self.0.is_dir() {
+            let _ = std::fs::remove_dir_all(&self.0);
+        } else {
+            let _ = std::fs::remove_file(&self.0);
+        }
     }
 }
