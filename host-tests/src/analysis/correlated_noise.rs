@@ -547,9 +547,11 @@ pub(super) fn two_process_test(dwells: &[Vec<f64>], dt: f64, one: &GaussMarkovRe
     let norm: Vec<Vec<f64>> = dwells.iter().map(|d| d.iter().map(|v| v / scale).collect()).collect();
     let tau = ((2.0 * dt).ln(), (n_min as f64 * dt / 4.0).max(4.0 * dt).ln());
     let q = ((1e-3f64).ln() - 4.0, (1e3f64).ln() + 4.0);
+    // A likelihood that is not a number (a variance rounded below zero) is no maximum.
     let fit = |p: [f64; 4]| {
         let phi = [(-dt / p[0].exp()).exp(), (-dt / p[2].exp()).exp()];
-        restricted_loglik(&norm, two_filter_sums(&norm, phi, [p[1].exp(), p[3].exp()]))
+        let (ll, var, e2) = restricted_loglik(&norm, two_filter_sums(&norm, phi, [p[1].exp(), p[3].exp()]));
+        (if ll.is_nan() { f64::NEG_INFINITY } else { ll }, var, e2)
     };
     let (ll_one, lt0, lq0) = one.optimum;
     let grid = |i: usize| tau.0 + (tau.1 - tau.0) * i as f64 / 5.0;
