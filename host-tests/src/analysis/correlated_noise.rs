@@ -315,7 +315,7 @@ impl Profile {
     /// unit tests).
     fn refine(&self, start: (f64, f64, f64)) -> (f64, f64, f64) {
         let ((tau_lo, tau_hi), (q_lo, q_hi)) = (self.tau, self.q);
-        let clamp = |p: [f64; 2]| [p[0].clamp(tau_lo, tau_hi), p[1].clamp(q_lo - 4.0, q_hi + 4.0)];
+        let clamp = |p: [f64; 2]| [p[0].clamp(tau_lo, tau_hi), p[1].clamp(q_lo - LN_Q_BEYOND, q_hi + LN_Q_BEYOND)];
         let (st, sq) = ((tau_hi - tau_lo) / 11.0, (q_hi - q_lo) / 9.0);
         let (p, ll) = nelder_mead(|p| self.ll_at(p[0], p[1]), clamp, [start.1, start.2], [st, sq], 200);
         (ll, p[0], p[1])
@@ -383,6 +383,18 @@ fn nelder_mead<const N: usize>(
     simplex[0]
 }
 
+/// The range of ln tau (tau in s) a process is searched over, for samples `dt_s` apart and a shortest dwell of
+/// `n_min` samples: from two samples to a quarter of the shortest dwell (at least four samples).
+fn ln_tau_range(dt_s: f64, n_min: usize) -> (f64, f64) {
+    ((2.0 * dt_s).ln(), (n_min as f64 * dt_s / 4.0).max(4.0 * dt_s).ln())
+}
+
+/// The grid of ln q (q: the process's variance over the white noise's, dimensionless): 1e-3 to 1e3.
+const LN_Q_GRID: (f64, f64) = (-6.907755278982137, 6.907755278982137);
+
+/// How far beyond [`LN_Q_GRID`] the simplex may take ln q.
+const LN_Q_BEYOND: f64 = 4.0;
+
 /// First-order Gauss-Markov plus white noise against white noise alone (exact likelihood). The samples are
 /// normalised in place.
 pub(super) fn gauss_markov_test(mut dwells: Vec<Vec<f64>>, dt: f64) -> Option<GaussMarkovResult> {
@@ -401,12 +413,7 @@ pub(super) fn gauss_markov_test(mut dwells: Vec<Vec<f64>>, dt: f64) -> Option<Ga
     for v in dwells.iter_mut().flatten() {
         *v /= scale;
     }
-    let profile = Profile {
-        norm: dwells,
-        dt,
-        tau: ((2.0 * dt).ln(), (n_min as f64 * dt / 4.0).max(4.0 * dt).ln()),
-        q: ((1e-3f64).ln(), (1e3f64).ln()),
-    };
+    let profile = Profile { norm: dwells, dt, tau: ln_tau_range(dt, n_min), q: LN_Q_GRID };
     let (ll, lt, lq) = profile.refine(profile.grid());
     let phi = (-dt / lt.exp()).exp();
     let (_, var_w, e2) = ar1_white_loglik(&profile.norm, phi, lq.exp());
@@ -545,8 +552,8 @@ pub(super) fn two_process_test(dwells: &[Vec<f64>], dt: f64, one: &GaussMarkovRe
         return None;
     }
     let norm: Vec<Vec<f64>> = dwells.iter().map(|d| d.iter().map(|v| v / scale).collect()).collect();
-    let tau = ((2.0 * dt).ln(), (n_min as f64 * dt / 4.0).max(4.0 * dt).ln());
-    let q = ((1e-3f64).ln() - 4.0, (1e3f64).ln() + 4.0);
+    let tau = ln_tau_range(dt, n_min);
+    let q = (LN_Q_GRID.0 - LN_Q_BEYOND, LN_Q_GRID.1 + LN_Q_BEYOND);
     // A likelihood that is not a number (a variance rounded below zero) is no maximum.
     let fit = |p: [f64; 4]| {
         let phi = [(-dt / p[0].exp()).exp(), (-dt / p[2].exp()).exp()];
@@ -708,6 +715,11 @@ mod tests {
         let two = two_process_test(&single, 0.01, &one).expect("a fit");
         // Two more parameters: above 13.8 one time in a thousand.
         assert!(two.lr < 13.8, "likelihood ratio {} on one process", two.lr);
+    }
+
+    #[test]
+    fn the_ln_q_grid_is_1e_minus_3_to_1e3() {
+        assert_eq!(LN_Q_GRID, ((1e-3f64).ln(), (1e3f64).ln()));
     }
 
     #[test]
