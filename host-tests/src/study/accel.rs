@@ -94,48 +94,72 @@ fn unlabelled_with(means: &[[f64; 3]], g: f64, free: &[bool]) -> Option<AccelMod
     Some(AccelModel { bias_mps2: [p[0], p[1], p[2]], matrix: inverse3(&t_of(&p))? })
 }
 
-/// What the held-out gate of the extended model ([`super::accel_gate`]) fits and holds out: the poses' mean
-/// forces (m/s^2), labelled up axes and samples, and which poses are held out (unlabelled poses: the odd ones;
-/// labelled poses: each in turn).
+/// What the held-out comparisons fit and hold out: the poses' mean forces, labelled up axes and samples, and
+/// which poses are held out (unlabelled poses: the odd ones; labelled poses: each in turn).
 pub(crate) struct ExtendedFit<'a> {
     pub kind: PoseKind,
+    /// Mean specific force of each pose, body axes, m/s^2.
     pub means: &'a [[f64; 3]],
+    /// Labelled up direction of each pose, body axes (unit vectors; unused for unlabelled poses).
     pub ups: &'a [[f64; 3]],
+    /// Samples of each pose.
     pub samples: Vec<usize>,
+    /// Unlabelled poses: whether each is held out of the fit.
     pub held_out: Vec<bool>,
+    /// Gravity, m/s^2.
     pub g: f64,
 }
 
 impl ExtendedFit<'_> {
     /// The extended model with the terms `free` fitted on the poses `keep` marks.
     fn fit_on(&self, free: &[bool], keep: &dyn Fn(usize) -> bool) -> Option<AccelModel> {
+        self.model_on(
+            &|means, ups| match self.kind {
+                PoseKind::Labelled => labelled_with(means, ups, self.g, free),
+                PoseKind::Unlabelled => unlabelled_with(means, self.g, free),
+            },
+            keep,
+        )
+    }
+
+    /// `model` fitted on the poses `keep` marks (their means and up axes).
+    fn model_on(&self, model: &Fitter<'_>, keep: &dyn Fn(usize) -> bool) -> Option<AccelModel> {
         let pick = |v: &[[f64; 3]]| -> Vec<[f64; 3]> { (0..v.len()).filter(|&k| keep(k)).map(|k| v[k]).collect() };
-        match self.kind {
-            PoseKind::Labelled => labelled_with(&pick(self.means), &pick(self.ups), self.g, free),
-            PoseKind::Unlabelled => unlabelled_with(&pick(self.means), self.g, free),
-        }
+        model(&pick(self.means), &pick(self.ups))
     }
 
     /// The extended model with the terms `free`, fitted on all poses.
     pub fn fit(&self, free: &[bool]) -> Option<AccelModel> {
         self.fit_on(free, &|_| true)
     }
-}
 
-/// |f calibrated| - g (m/s^2) of each held-out pose (its index beside) under the extended model with the terms
-/// `free` fitted without it: labelled poses, each left out in turn; unlabelled, the odd poses under the fit on
-/// the even ones. `None` when a fit is not determined.
-pub(crate) fn held_out_of(fit: &ExtendedFit<'_>, free: &[bool]) -> Option<Vec<(usize, f64)>> {
-    let residual = |model: &AccelModel, k: usize| norm(model.calibrate(fit.means[k])) - fit.g;
-    match fit.kind {
-        PoseKind::Labelled => {
-            (0..fit.means.len()).map(|k| fit.fit_on(free, &|j| j != k).map(|model| (k, residual(&model, k)))).collect()
-        }
-        PoseKind::Unlabelled => {
-            let model = fit.fit_on(free, &|j| !fit.held_out[j])?;
-            Some((0..fit.means.len()).filter(|&k| fit.held_out[k]).map(|k| (k, residual(&model, k))).collect())
+    /// |f calibrated| - g (m/s^2) of each held-out pose (its index beside) under `model` fitted without it:
+    /// labelled poses, each left out in turn; unlabelled, the odd poses under the fit on the even ones. `None`
+    /// when a fit is not determined.
+    fn held_out(&self, model: &Fitter<'_>) -> Option<Vec<(usize, f64)>> {
+        let residual = |m: &AccelModel, k: usize| norm(m.calibrate(self.means[k])) - self.g;
+        match self.kind {
+            PoseKind::Labelled => {
+                (0..self.means.len()).map(|k| self.model_on(model, &|j| j != k).map(|m| (k, residual(&m, k)))).collect()
+            }
+            PoseKind::Unlabelled => {
+                let m = self.model_on(model, &|j| !self.held_out[j])?;
+                Some((0..self.means.len()).filter(|&k| self.held_out[k]).map(|k| (k, residual(&m, k))).collect())
+            }
         }
     }
+}
+
+/// A model fitted on poses' mean forces and up axes.
+type Fitter<'f> = dyn Fn(&[[f64; 3]], &[[f64; 3]]) -> Option<AccelModel> + 'f;
+
+/// The held-out poses' |f calibrated| - g (m/s^2) under the extended model with the terms `free`
+/// ([`ExtendedFit::held_out`]).
+pub(crate) fn held_out_of(fit: &ExtendedFit<'_>, free: &[bool]) -> Option<Vec<(usize, f64)>> {
+    fit.held_out(&|means, ups| match fit.kind {
+        PoseKind::Labelled => labelled_with(means, ups, fit.g, free),
+        PoseKind::Unlabelled => unlabelled_with(means, fit.g, free),
+    })
 }
 
 /// The base and extended models fitted on all poses (`means`, m/s^2; `ups`, the labelled up axes), and the
@@ -163,36 +187,24 @@ pub(crate) fn fit_models(
     })
 }
 
-/// The base model's gain on poses not used for the fit: |f calibrated| - g (m/s^2) of each held-out pose,
-/// with the rule in words. Labelled: leave one pose out (every pose is then marked held out); unlabelled: fit
-/// on the even poses, evaluate on the odd ones. The extended model's are [`held_out_of`]'s.
-pub(crate) fn held_out_base(
-    kind: PoseKind,
-    poses: &mut [Pose],
-    means: &[[f64; 3]],
-    ups: &[[f64; 3]],
-    g: f64,
-) -> (&'static str, Vec<f64>) {
-    match kind {
+/// The base model's gain on poses not used for the fit ([`ExtendedFit::held_out`]): |f calibrated| - g
+/// (m/s^2) of each held-out pose, with the rule in words. Labelled poses are then all marked held out.
+pub(crate) fn held_out_base(fit: &ExtendedFit<'_>, poses: &mut [Pose]) -> (&'static str, Vec<f64>) {
+    let base = fit.held_out(&|means, ups| {
+        Some(match fit.kind {
+            PoseKind::Labelled => base_labelled(means, ups, fit.g),
+            PoseKind::Unlabelled => base_unlabelled(means, fit.g),
+        })
+    });
+    let residuals = base.unwrap_or_default().into_iter().map(|(_, r)| r).collect();
+    match fit.kind {
         PoseKind::Labelled => {
-            let rb = (0..means.len())
-                .map(|k| {
-                    let keep =
-                        |v: &[[f64; 3]]| -> Vec<[f64; 3]> { (0..v.len()).filter(|&j| j != k).map(|j| v[j]).collect() };
-                    norm(base_labelled(&keep(means), &keep(ups), g).calibrate(means[k])) - g
-                })
-                .collect();
             for p in poses.iter_mut() {
                 p.held_out = true;
             }
-            ("leave one pose out (each pose predicted by the fit on the other five)", rb)
+            ("leave one pose out (each pose predicted by the fit on the other five)", residuals)
         }
-        PoseKind::Unlabelled => {
-            let fit: Vec<[f64; 3]> = poses.iter().zip(means).filter(|(p, _)| !p.held_out).map(|(_, m)| *m).collect();
-            let b = base_unlabelled(&fit, g);
-            let test = poses.iter().zip(means).filter(|(p, _)| p.held_out).map(|(_, m)| *m);
-            ("odd poses (models fitted on the even poses)", test.map(|m| norm(b.calibrate(m)) - g).collect())
-        }
+        PoseKind::Unlabelled => ("odd poses (models fitted on the even poses)", residuals),
     }
 }
 

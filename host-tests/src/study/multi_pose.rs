@@ -64,7 +64,7 @@ pub fn study_multi_pose(
         .map(|(_, r)| r)
         .collect();
     let (accel_term_gate, extended) = accel_gate.map_or((Vec::new(), extended), |a| (a.verdicts, a.model));
-    let (held_out_rule, base_res) = held_out_base(kind, &mut poses, &means, &ups, g);
+    let (held_out_rule, base_res) = held_out_base(&fit, &mut poses);
     simulate_pose_norms(&mut poses, &base, &extended, g, [sigma[3], sigma[4], sigma[5]], seed);
     let (spread, spread_noise) = gyro_spread(&poses, [sigma[0], sigma[1], sigma[2]]);
     let (gyro_models_held_out_radps, gyro_g_sensitivity) =
