@@ -63,28 +63,26 @@ pub(crate) fn gate(fit: &ExtendedFit<'_>, noise_std_mps2: [f64; 3]) -> Option<Ac
     let mut verdicts = Vec::new();
     loop {
         let with = chi2(fit, &free, noise_std_mps2)?;
-        // The free term whose removal raises the held-out chi^2 least (a model the poses cannot determine
-        // without a term keeps it).
-        let weakest = (0..free.len())
+        // Each free term's held-out chi^2 without it (`None`: the poses cannot determine the model without it,
+        // which keeps it).
+        let without: Vec<(usize, Option<f64>)> = (0..free.len())
             .filter(|&j| free[j])
-            .filter_map(|j| {
-                let mut without = free.clone();
-                without[j] = false;
-                chi2(fit, &without, noise_std_mps2).map(|c| (j, c))
-            })
-            .min_by(|a, b| a.1.total_cmp(&b.1));
-        let Some((j, without)) = weakest.filter(|&(_, without)| !significant(with, without)) else {
-            // Every term left is needed: each one's own rise, with the rest kept.
-            for j in (0..free.len()).filter(|&j| free[j]) {
+            .map(|j| {
                 let mut less = free.clone();
                 less[j] = false;
-                let without = chi2(fit, &less, noise_std_mps2).unwrap_or(f64::INFINITY);
-                verdicts.push(verdict(&names[j], true, with, without));
+                (j, chi2(fit, &less, noise_std_mps2))
+            })
+            .collect();
+        let weakest = without.iter().filter_map(|&(j, c)| c.map(|c| (j, c))).min_by(|a, b| a.1.total_cmp(&b.1));
+        let Some((j, without_j)) = weakest.filter(|&(_, c)| !significant(with, c)) else {
+            // Every term left is needed: each one's own rise, with the rest kept.
+            for (j, c) in without {
+                verdicts.push(verdict(&names[j], true, with, c.unwrap_or(f64::INFINITY)));
             }
             break;
         };
         free[j] = false;
-        verdicts.push(verdict(&names[j], false, with, without));
+        verdicts.push(verdict(&names[j], false, with, without_j));
     }
     let model = fit.fit(&free)?;
     Some(AccelGate { verdicts, free, model })
