@@ -303,20 +303,21 @@ impl ChannelEstimator {
     /// determined parameters and of a completion of the undetermined ones (see [`Pass::solved`]).
     /// How many times the f32 rounding of the fit's arithmetic ([`ROUNDING_ULPS`] units of f32 rounding of
     /// gravity and of the Earth rate, the magnitudes its residuals are computed from) exceeds the smallest
-    /// standard deviation of a used channel's dwell mean; 1 when it does not. A step of the fit cannot shrink
+    /// standard deviation of a dwell mean (of its accelerometers, and of its gyros when they are used); 1 when
+    /// it does not. A step of the fit cannot shrink
     /// below that rounding: measured on a noise-free SIMULATION of the paper's six positions, whose dwell
     /// means are as precise as f32 holds them, the steps stalled at about one of their standard errors and
     /// the fit never converged (`sinscal calibrate`, exit 3).
     fn rounding_ratio(&self) -> f32 {
         let rounding = |magnitude: f32| ROUNDING_ULPS * f32::EPSILON * magnitude;
-        let (rate, force) = (rounding(EARTH_RATE_RADPS), rounding(self.site.gravity_mps2));
+        let (rate_radps, force_mps2) = (rounding(EARTH_RATE_RADPS), rounding(self.site.gravity_mps2));
         let mut ratio = 1.0f32;
         for d in &self.dwells {
             for i in 0..3 {
                 if self.settings.use_gyro {
-                    ratio = ratio.max(rate / libm::sqrtf(d.rate_mean_var_b_radps2[i].max(f32::MIN_POSITIVE)));
+                    ratio = ratio.max(rate_radps / libm::sqrtf(d.rate_mean_var_b_radps2[i].max(f32::MIN_POSITIVE)));
                 }
-                ratio = ratio.max(force / libm::sqrtf(d.force_mean_var_b_mps2sq[i].max(f32::MIN_POSITIVE)));
+                ratio = ratio.max(force_mps2 / libm::sqrtf(d.force_mean_var_b_mps2sq[i].max(f32::MIN_POSITIVE)));
             }
         }
         ratio
