@@ -158,6 +158,12 @@ pub struct Effect {
     pub p_value: f64,
     /// Other candidates this data set cannot tell apart from this one.
     pub aliases: Vec<String>,
+    /// Its standard error once the worst of its aliases (those of `aliases` that are candidates) is fitted
+    /// beside it, SI: what the estimate is worth when the data cannot tell which of them it is
+    /// (docs/analysis.md#confounding). Absent when none of its aliases is a candidate; `null` when the data
+    /// determine only their combination, not this effect's share.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub std_error_with_aliases: Option<Option<f64>>,
     /// What the effect does to the calibration if it is left out (block effects; the noise effects move
     /// no estimate).
     #[serde(skip_serializing_if = "Option::is_none")]
@@ -237,6 +243,22 @@ impl Effect {
         } else {
             format!("{:.2e}", self.std_error)
         }
+    }
+
+    /// The aliases in words, with what the estimate is worth apart from them: "indistinguishable here from:
+    /// a, b; with them: +- 1.23e-4" (or "...; with them: not determined, only the combination is"); empty
+    /// without aliases.
+    pub fn aliases_text(&self) -> String {
+        if self.aliases.is_empty() {
+            return String::new();
+        }
+        let mut text = format!("indistinguishable here from: {}", self.aliases.join(", "));
+        match self.std_error_with_aliases {
+            Some(Some(s)) => text += &format!("; with them: +- {s:.2e}"),
+            Some(None) => text += "; with them: not determined, only the combination is",
+            None => {}
+        }
+        text
     }
 
     /// The extra fields in words: "pos 3", "tau 1.234 s", "f 7.3000 Hz" (comma-separated, empty if none).

@@ -64,8 +64,12 @@ fn analyze_session(mut session: Session, levelled: bool, source: &str) -> Result
     widen_tested(&problem, &mut selection, &noise_model);
     let windows = window_check(&problem, &selection, &noise_model);
     let mut effects = effects_of(&problem, &selection);
+    let widened_by = windows.as_ref().map_or(1.0, |w| w.widened_by);
     for e in &mut effects {
-        e.std_error *= windows.as_ref().map_or(1.0, |w| w.widened_by);
+        e.std_error *= widened_by;
+        if let Some(Some(s)) = e.std_error_with_aliases.as_mut() {
+            *s *= widened_by;
+        }
     }
     effects.extend(sample_effects);
     let (residual_rms, block_residual_rms) = residual_rms(&problem, &selection, &diagnostics);

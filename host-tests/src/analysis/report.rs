@@ -92,7 +92,7 @@ fn effects_md(md: &mut String, a: &Analysis) {
             e.residual_unit,
             e.residual_of,
             extras,
-            e.aliases.join(", ")
+            e.aliases_text()
         );
     }
     if !a.misfits.is_empty() {

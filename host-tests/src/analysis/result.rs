@@ -6,7 +6,7 @@ use std::collections::BTreeMap;
 
 use crate::model::catalogue::EffectKind;
 
-use super::selection::{Problem, Selection, HALVES, POSE_ORDER};
+use super::selection::{ApartFromAliases, Problem, Selection, HALVES, POSE_ORDER};
 use super::windows::NOT_STATIONARY;
 use super::{Analysis, BaseModel, ChannelDiagnostics, Confounded, Consequence, Effect, FigureData, Misfit, ALPHA};
 
@@ -48,7 +48,7 @@ fn effect_of(problem: &Problem, selection: &Selection, index: usize) -> Effect {
     let cand = &problem.candidates[c.candidate];
     let j = problem.base.len() + index;
     let units: Vec<&str> = cand.groups.iter().map(|&g| problem.group_units[g]).collect();
-    Effect {
+    let mut effect = Effect {
         effect: cand.effect.name().to_string(),
         sensor: cand.sensor.name().to_string(),
         axes: cand.axes.clone(),
@@ -73,10 +73,20 @@ fn effect_of(problem: &Problem, selection: &Selection, index: usize) -> Effect {
         parameters: cand.parameters(),
         p_value: c.p_value,
         aliases: selection.aliases[index].clone(),
+        std_error_with_aliases: None,
         consequence: consequence(problem, selection, index),
         at_grid_edge: cand.variants.len() > 1 && (c.variant == 0 || c.variant + 1 == cand.variants.len()),
         uncertain: false,
-    }
+    };
+    effect.std_error_with_aliases = match selection.apart_from_aliases.get(index) {
+        None | Some(ApartFromAliases::NoAliases) => None,
+        // A standard error beyond the plausible limit of the term says no more than "not determined".
+        Some(ApartFromAliases::Inflated(factor)) if cand.limit.is_none_or(|l| effect.std_error * factor <= l) => {
+            Some(Some(effect.std_error * factor))
+        }
+        Some(ApartFromAliases::Inflated(_) | ApartFromAliases::NotDetermined) => Some(None),
+    };
+    effect
 }
 
 /// What leaving chosen effect `index` out of the final model does to the biases: refitting without it moves

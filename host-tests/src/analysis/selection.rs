@@ -96,6 +96,8 @@ pub(super) struct Selection {
     /// Per column of the final model: its standard error with each channel's random walk of the bias
     /// (`wander::wander_std_errors`); empty until it is computed, and for angles.
     pub wander_std_errors: Vec<f64>,
+    /// Per chosen candidate: its standard error with its aliases beside it ([`apart_from_aliases`]).
+    pub apart_from_aliases: Vec<ApartFromAliases>,
 }
 
 /// A candidate that passes the criterion at an implausible value: the model misses something there.
@@ -152,7 +154,7 @@ pub(super) fn select(problem: &mut Problem, extra_tests: usize) -> Result<Select
     let forward = Forward::run(problem, &screen.observable, base_fit.clone(), m);
     let chosen: Vec<usize> = forward.chosen.iter().map(|c| c.candidate).collect();
     let base_count = problem.base.len();
-    let aliases = forward
+    let aliases: Vec<Vec<String>> = forward
         .chosen
         .iter()
         .zip(&forward.correlated)
@@ -172,6 +174,14 @@ pub(super) fn select(problem: &mut Problem, extra_tests: usize) -> Result<Select
             names
         })
         .collect();
+    let full_columns: Vec<&[f64]> = forward.columns.iter().map(|c| c.as_slice()).collect();
+    let full = Projection::new(&problem.obs, full_columns, &forward.current);
+    let apart_from_aliases: Vec<ApartFromAliases> = (0..forward.chosen.len())
+        .map(|j| match &full {
+            Some(model) => apart_from_aliases(problem, model, base_count + j, &aliases[j]),
+            None => ApartFromAliases::NotDetermined,
+        })
+        .collect();
     Ok(Selection {
         base_fit,
         final_fit: forward.current,
@@ -183,7 +193,58 @@ pub(super) fn select(problem: &mut Problem, extra_tests: usize) -> Result<Select
         confounded: forward.confounded,
         inflation: forward.inflation,
         wander_std_errors: Vec::new(),
+        apart_from_aliases,
     })
+}
+
+/// What a chosen effect's estimate is worth once any one of its aliases might be in the model instead
+/// (docs/analysis.md#confounding).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub(super) enum ApartFromAliases {
+    /// None of its aliases is a candidate (or it has none): its standard error stands as it is.
+    NoAliases,
+    /// Its standard error grows by this factor (at least 1) when its worst alias is fitted beside it.
+    Inflated(f64),
+    /// With one of its aliases beside it the estimate is not determined: the data cannot tell which of them
+    /// it is, only their combination.
+    NotDetermined,
+}
+
+/// Standard errors beyond this many times their own with an alias beside them are not determined: the
+/// alias's remainder is below 1e-6 of its norm, as [`EXPLAINED`] has it.
+const NOT_DETERMINED: f64 = 1e6;
+
+/// Column `j` of the final model (`model`) against each alias of `names` that is a candidate, each of its
+/// variants fitted beside the model ([`inflation`]). The worst alias's factor.
+fn apart_from_aliases(problem: &Problem, model: &Projection, j: usize, names: &[String]) -> ApartFromAliases {
+    let mut worst: Option<f64> = None;
+    for name in names {
+        let Some(candidate) = problem.candidates.iter().find(|c| c.name() == *name) else { continue };
+        for (_, column) in &candidate.variants {
+            let factor = inflation(model, j, column);
+            if factor.is_nan() || factor >= NOT_DETERMINED {
+                return ApartFromAliases::NotDetermined;
+            }
+            worst = Some(worst.map_or(factor, |w: f64| w.max(factor)));
+        }
+    }
+    worst.map_or(ApartFromAliases::NoAliases, ApartFromAliases::Inflated)
+}
+
+/// The factor by which the standard error of column `j` of `model` grows when `column` is fitted beside it
+/// with the weights held: adding column `c` adds `a a' / r` to the covariance of the estimates
+/// (`a = (X'WX)^-1 X'W c`, `r` the weighted square norm of `c`'s remainder), so the standard error grows by
+/// `sqrt(1 + a_j^2 / (r C_jj))`. A column the model's columns make ([`EXPLAINED`]) gives infinity when its
+/// combination of them holds column `j` (`a_j^2 / C_jj` beyond [`EXPLAINED`] of its norm), else 1.
+fn inflation(model: &Projection, j: usize, column: &Column) -> f64 {
+    let (g, rest) = model.remainder(column);
+    let full = column.weighted_dot_column(&model.weights, column);
+    let a_j = dot(&model.inverse[j], &g);
+    let along_j = a_j * a_j / model.inverse[j][j].max(f64::MIN_POSITIVE);
+    if rest <= 0.0 {
+        return if along_j <= EXPLAINED * full { 1.0 } else { f64::INFINITY };
+    }
+    (1.0 + along_j / rest).sqrt()
 }
 
 /// Observation weights: the given standard deviations, else the fit's variance of the group.
@@ -843,4 +904,43 @@ impl<'a> Forward<'a> {
 /// RMS residual over the observation groups `groups`.
 fn group_rms(fit: &LinearFit, groups: &[usize]) -> f64 {
     (groups.iter().map(|&g| fit.rms[g] * fit.rms[g]).sum::<f64>() / groups.len().max(1) as f64).sqrt()
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// Observations of known standard deviation 0.5 at `t = 0, 0.1, ...`: a line, with a small wiggle.
+    fn line(n: usize) -> (Observations, Vec<Vec<f64>>) {
+        let t: Vec<f64> = (0..n).map(|i| i as f64 * 0.1).collect();
+        let y = t.iter().map(|t| 1.0 + 0.3 * t + 0.2 * (7.0 * t).sin()).collect();
+        let obs = Observations { y, group: vec![0; n], groups: 1, sigma: Some(vec![0.5; n]) };
+        (obs, vec![vec![1.0; n], t])
+    }
+
+    /// The factor of [`inflation`] is the ratio of the slope's standard errors fitted with and without the
+    /// alias (to 1e-9), for an alias along the slope (`t^2`) and one along a single observation; an alias the
+    /// model's columns make (exactly dependent) gives at least [`NOT_DETERMINED`] when it holds the slope, 1
+    /// when it does not (the constant column).
+    #[test]
+    fn the_inflation_is_the_ratio_of_the_refitted_standard_errors() {
+        let n = 40;
+        let (obs, columns) = line(n);
+        let refs: Vec<&[f64]> = columns.iter().map(|c| c.as_slice()).collect();
+        let without = fit(&obs, &refs).unwrap();
+        let model = Projection::new(&obs, refs.clone(), &without).unwrap();
+        let square: Vec<f64> = columns[1].iter().map(|t| t * t).collect();
+        let first: Vec<f64> = (0..n).map(|i| f64::from(u8::from(i == 0))).collect();
+        for alias in [square, first] {
+            let mut with_alias = refs.clone();
+            with_alias.push(&alias);
+            let with = fit(&obs, &with_alias).unwrap();
+            let want = with.std_error(1) / without.std_error(1);
+            let got = inflation(&model, 1, &Column::new(alias.clone()));
+            assert!(want > 1.0 && (got - want).abs() < 1e-9 * want, "{got} vs {want}");
+        }
+        let dependent: Vec<f64> = columns[1].iter().map(|t| 2.0 - 3.0 * t).collect();
+        assert!(inflation(&model, 1, &Column::new(dependent)) >= NOT_DETERMINED);
+        assert_eq!(inflation(&model, 1, &Column::new(vec![2.0; n])), 1.0);
+    }
 }

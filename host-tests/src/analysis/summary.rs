@@ -91,7 +91,7 @@ fn effect_line(s: &mut String, e: &Effect) {
         let _ = write!(s, "  moves {} by {:.1} standard errors", c.bias, c.in_std_errors);
     }
     if !e.aliases.is_empty() {
-        let _ = write!(s, "  (indistinguishable here from: {})", e.aliases.join(", "));
+        let _ = write!(s, "  ({})", e.aliases_text());
     }
     let _ = writeln!(s);
 }
