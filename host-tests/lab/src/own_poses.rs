@@ -601,8 +601,9 @@ pub struct Outcome {
     pub own_se_ratio: Option<f64>,
     /// Effects named that are neither planted nor the baseline's: label, and whether uncertain.
     pub false_alarms: Vec<(String, bool)>,
-    /// Why it was not found (None when found): "estimate off", "the baseline's value", "another line",
-    /// "instead: LABEL", "nothing new".
+    /// Why it was not found (None when found): "estimate off", "not determined apart from its aliases" (off,
+    /// and the analysis says the data fix only its combination with an alias), "the baseline's value",
+    /// "another line", "instead: LABEL", "nothing new".
     pub miss: Option<String>,
 }
 
@@ -673,7 +674,17 @@ fn carries_planted(e: &Effect, twin: Option<&Effect>, h: &Hidden) -> Result<(), 
             return Err("the baseline's value");
         }
         let expected = h.value + twin.map_or(0.0, |u| u.estimate);
-        if (e.estimate - expected).abs() > 3.0 * e.std_error {
+        // The standard error the analysis gives the estimate across the models its aliases allow
+        // (docs/analysis.md#confounding); none when it determines only their combination.
+        let std_error = match e.std_error_with_aliases {
+            None => e.std_error,
+            Some(Some(s)) => s.max(e.std_error),
+            Some(None) if (e.estimate - expected).abs() > 3.0 * e.std_error => {
+                return Err("not determined apart from its aliases");
+            }
+            Some(None) => e.std_error,
+        };
+        if (e.estimate - expected).abs() > 3.0 * std_error {
             return Err("estimate off");
         }
     } else {
