@@ -161,6 +161,70 @@ fn standard_errors_hold_across_the_thirds_of_every_dwell_of_the_measured_data() 
     }
 }
 
+/// SIMULATION: an accelerometer's second-order nonlinearity K2 (docs/analysis.md#base-model-and-candidates)
+/// hidden in the clean session (1000 ug per sample) laid over the six faces, on y at 2e-5 per m/s^2 (1.9e-3
+/// m/s^2 in the y faces), of either sign: the analysis names `accel_nonlinearity:y` within 3 standard errors
+/// of it and no other nonlinearity; the clean six faces name none. In Table 1 (four level poses, then x up
+/// and x down) K2 on x and the misalignment `xz` are the same column (no pose has z down): whichever is named
+/// has the other as its alias, and is not determined apart from it.
+#[test]
+fn a_second_order_nonlinearity_is_found_on_its_axis_with_its_sign() {
+    let nonlinearities = |a: &Analysis| -> Vec<Effect> {
+        a.effects.iter().filter(|e| e.effect == EffectKind::AccelNonlinearity).cloned().collect()
+    };
+    let session = |positions_deg: &[[f64; 3]], k2_per_mps2: [f64; 3]| {
+        let mut s: ScenarioFile = clean_scenario();
+        s.schedule.positions_deg = positions_deg.to_vec();
+        s.accel.nonlinearity_per_mps2 = k2_per_mps2;
+        analyze_recording(&simulate(&s, 21, "nonlinearity")).unwrap()
+    };
+    for k2_per_mps2 in [2e-5, -2e-5] {
+        let a = session(&FACES_DEG, [0.0, k2_per_mps2, 0.0]);
+        let found = nonlinearities(&a);
+        assert_eq!(found.len(), 1, "{found:?}");
+        let e = &found[0];
+        assert_eq!((e.axes.as_str(), e.unit.as_str()), ("y", "1/(m/s^2)"), "{e:?}");
+        assert!((e.estimate - k2_per_mps2).abs() < 3.0 * e.std_error, "{e:?}");
+    }
+    let clean = session(&FACES_DEG, [0.0; 3]);
+    assert!(nonlinearities(&clean).is_empty(), "{:?}", clean.effects);
+    let table1 = session(&clean_scenario().schedule.positions_deg, [2e-5, 0.0, 0.0]);
+    let named: Vec<&Effect> = table1.effects.iter().filter(|e| e.consequence.is_some()).collect();
+    assert_eq!(named.len(), 1, "{named:?}");
+    let (e, pair) = (named[0], ["accel_misalignment:xz", "accel_nonlinearity:x"]);
+    let own = if e.effect == EffectKind::AccelNonlinearity { pair[1] } else { pair[0] };
+    let other = if own == pair[0] { pair[1] } else { pair[0] };
+    assert!(format!("{}:{}", e.effect, e.axes) == own && e.aliases.contains(&other.to_string()), "{e:?}");
+    assert_eq!(e.std_error_with_aliases, Some(None), "{e:?}");
+}
+
+/// REAL DATA (`SINSCAL_DATA`; skipped, and says so, without it): no column effect other than a time term is
+/// named whose own standard error (with the bias's wander) cannot tell it from zero, on the three shared
+/// sets: `(estimate / std_error)^2` beyond the criterion's `chi2(1 - alpha / m, 1)` (docs/analysis.md#criterion).
+/// On imu_tk the first selection admits `accel_nonlinearity:y` at 0.65 of its standard error: it is listed as
+/// unsupported, not as an effect.
+#[test]
+fn every_static_effect_named_is_beyond_the_criterion_by_its_own_standard_error() {
+    let Some(dir) = common::data_dir() else { return };
+    let sets = [
+        ("ferraris", common::ferraris_session(&dir)),
+        ("imu_tk", common::imutk_session(&dir)),
+        ("psins", common::psins_session(&dir)),
+    ];
+    for (name, recording) in sets {
+        let a = analyze_recording(&recording).unwrap();
+        let criterion =
+            sinscal_host::stats::linfit::chi_square_quantile_upper(a.alpha / a.candidates_tested as f64, 1.0);
+        let time_term = |e: &Effect| e.effect.parse::<EffectKind>().is_ok_and(|k| k.is_time_term());
+        for e in a.effects.iter().filter(|e| e.consequence.is_some() && !time_term(e)) {
+            assert!((e.estimate / e.std_error).powi(2) > criterion, "{name}: {e:?}");
+        }
+        if name == "imu_tk" {
+            assert!(a.unsupported.iter().any(|u| u.candidate == "accel_nonlinearity:y"), "{:?}", a.unsupported);
+        }
+    }
+}
+
 /// `recording` with only the `k`-th of [`WINDOWS`] parts of every dwell (the rows between dwells kept).
 fn part_of_every_dwell(recording: &Recording, k: usize) -> Recording {
     let mut part = recording.clone();

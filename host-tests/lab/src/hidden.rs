@@ -43,7 +43,9 @@ const TRIALS: [(EffectKind, &[&str]); 13] = [
 /// that this schedule cannot see (body y is horizontal in every position, so nothing proportional to the
 /// force along y) or cannot tell apart (the gyro's response to rate about z and to force along z have the
 /// same pattern over the six positions: gyro_misalignment xz/yz, gyro_scale_factor z and gyro_g_sensitivity
-/// xz/yz/zz) are left out; `sinscal analyze` lists them as unobservable or as aliases.
+/// xz/yz/zz; the accelerometers' nonlinearity, the same column as `accel_misalignment:xz` on x and as
+/// `accel_scale_factor:z` on z, since no pose has z down) are left out; `sinscal analyze` lists them as
+/// unobservable or as aliases.
 pub fn catalogue() -> Vec<(&'static str, Vec<&'static str>)> {
     TRIALS.iter().map(|(effect, axes)| (effect.name(), axes.to_vec())).collect()
 }
@@ -113,6 +115,7 @@ pub fn draw(effect: EffectKind, seed: u64, reference: &ReferenceErrors) -> (Scen
     let mut d = Draw::new(effect, seed, reference);
     match effect {
         EffectKind::AccelScaleFactor | EffectKind::AccelMisalignment => d.accel_term(),
+        EffectKind::AccelNonlinearity => d.nonlinearity(),
         EffectKind::GyroScaleFactor | EffectKind::GyroMisalignment => d.gyro_term(),
         EffectKind::GyroGSensitivity => d.g_sensitivity(),
         EffectKind::ReferenceOffset => d.reference_offset(),
@@ -184,6 +187,11 @@ impl<'a> Draw<'a> {
         if i == j {
             self.s.accel.scale_factor[i] = self.hidden.value;
         }
+    }
+
+    fn nonlinearity(&mut self) {
+        self.hidden.value = self.linear_value();
+        self.s.accel.nonlinearity_per_mps2[axis(self.axes.as_bytes()[0] as char)] = self.hidden.value;
     }
 
     fn gyro_term(&mut self) {

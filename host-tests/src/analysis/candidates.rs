@@ -159,6 +159,7 @@ impl<'a> RecordingColumns<'a> {
     /// `unobservable` ("gyro_misalignment:xy: heading unknown", "temperature_bias:x (gyro)").
     pub fn candidates(&self, unobservable: &mut Vec<String>) -> Vec<Candidate> {
         let mut candidates = self.sensor_term_candidates(unobservable);
+        candidates.extend(self.nonlinearities());
         if !self.session.has_gyro {
             use EffectKind::*;
             for effect in [GyroScaleFactor, GyroMisalignment, GyroGSensitivity] {
@@ -237,6 +238,27 @@ impl<'a> RecordingColumns<'a> {
             candidates.push(Candidate::single(t.effect, sensor, t.axes, Column::new(values), vec![t.channel]));
         }
         candidates
+    }
+
+    /// The accelerometers' second-order nonlinearity K2 (docs/analysis.md#base-model-and-candidates): axis
+    /// `i` reads `K2_i f_i^2` more, so its column is the square of the predicted force along the axis. Even
+    /// in the force, it tells an up face from a down one no more than a bias does, and a face across the axis
+    /// from both: a schedule of one face per axis and sign sees it, one pose does not (the base model's bias
+    /// explains it, and the screen names it unobservable).
+    fn nonlinearities(&self) -> Vec<Candidate> {
+        (0..3)
+            .filter(|&i| self.blocks.present[3 + i])
+            .map(|i| {
+                let values = self.blocks.column(|b| if b.channel == 3 + i { self.force_b(b)[i].powi(2) } else { 0.0 });
+                Candidate::single(
+                    EffectKind::AccelNonlinearity,
+                    Sensor::Accel,
+                    AXES[i].to_string(),
+                    Column::new(values),
+                    vec![3 + i],
+                )
+            })
+            .collect()
     }
 
     /// Table attitude error about navigation axis `k` at block `b`: d(measurement)/d(err_k) = C^T (e_k x v).

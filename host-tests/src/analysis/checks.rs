@@ -1,18 +1,36 @@
 //! The checks of an analysis that fail loudly (docs/cli.md#checks), as a calibration's do: `fit` (the final
-//! model's block means against each channel's noise model, recordings: [`super::model_fit`]) and
-//! `plausibility` (no candidate the data want needs a value no instrument has: `misfits`). Both are listed,
+//! model's block means against each channel's noise model, recordings: [`super::model_fit`]),
+//! `plausibility` (no candidate the data want needs a value no instrument has: `misfits`) and `selection`
+//! (the forward selection was not stopped by its most effects with a candidate still passing). All are listed,
 //! passed or failed, in the JSON's `checks`, after a recording's `physics` check (calibrate's own, added by
 //! [`super::recording::analyze_recording`]); a failed one makes `analyze` exit with status 3.
 
 use crate::calibration::checks::{Check, MISFIT_LEVEL};
 
-use super::{Analysis, ModelFit};
+use super::{Analysis, ModelFit, MAX_EFFECTS};
 
 /// Every check of an analysis, in the order they are listed.
 pub(super) fn checks(a: &Analysis) -> Vec<Check> {
     let mut all: Vec<Check> = a.model_fit.iter().map(fit).collect();
     all.push(plausibility(a));
+    all.push(selection(a));
     all
+}
+
+/// The forward selection ended because no candidate passed, not because it reached its most effects.
+fn selection(a: &Analysis) -> Check {
+    match &a.cut_short {
+        None => Check::new("selection", true, "the forward selection ended with no candidate passing the criterion"),
+        Some(c) => Check::new(
+            "selection",
+            false,
+            format!(
+                "the forward selection stopped at its most effects ({MAX_EFFECTS}) while {} still passed the \
+                 criterion (likelihood ratio {:.1}): the final model is incomplete",
+                c.candidate, c.likelihood_ratio
+            ),
+        ),
+    }
 }
 
 /// The final model against the noise model: every channel's chi-square within the 0.1 % level, over the

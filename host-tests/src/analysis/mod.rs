@@ -100,7 +100,7 @@ pub const MAX_BLOCKS_PER_DWELL: usize = 200;
 /// Fewest samples a dwell needs.
 pub const MIN_DWELL_SAMPLES: usize = 64;
 /// Most effects the forward selection adds.
-pub const MAX_EFFECTS: usize = 12;
+pub const MAX_EFFECTS: usize = 24;
 /// Channel names (the recording's columns).
 pub const CHANNELS: [&str; 6] = ["gx_radps", "gy_radps", "gz_radps", "ax_mps2", "ay_mps2", "az_mps2"];
 /// Units of the channels.
@@ -176,6 +176,40 @@ pub struct Effect {
     /// dwells, or a column effect whose time constant is an end of its grid. Set when the effects are ranked.
     #[serde(skip_serializing_if = "std::ops::Not::not")]
     pub uncertain: bool,
+}
+
+/// A candidate the criterion admitted that its own standard error cannot tell from zero.
+#[derive(Clone, Debug, Serialize)]
+pub struct UnsupportedEffect {
+    /// The candidate ("accel_nonlinearity:y").
+    pub candidate: String,
+    /// Its estimate in the first selection's final model, SI.
+    pub estimate: f64,
+    /// Its standard error there, with the bias's wander, SI.
+    pub std_error: f64,
+    /// The SI unit of both.
+    pub unit: String,
+}
+
+impl UnsupportedEffect {
+    /// One line: "accel_nonlinearity:y: estimate +1.19e-5 +- 1.85e-5 1/(m/s^2), within the criterion of zero
+    /// by its own standard error: not an effect".
+    pub fn text(&self) -> String {
+        format!(
+            "{}: estimate {:+.3e} +- {:.2e} {}, within the criterion of zero by its own standard error (with the \
+             bias's wander): not an effect",
+            self.candidate, self.estimate, self.std_error, self.unit
+        )
+    }
+}
+
+/// A candidate that still passed the criterion when the forward selection reached its most effects.
+#[derive(Clone, Debug, Serialize)]
+pub struct CutShort {
+    /// The candidate ("accel_nonlinearity:y").
+    pub candidate: String,
+    /// Its likelihood ratio against the final model.
+    pub likelihood_ratio: f64,
 }
 
 /// The error an effect induces in the base model's biases when it is left out (docs/analysis.md#verdict).
@@ -356,6 +390,11 @@ pub struct Analysis {
     pub misfits: Vec<Misfit>,
     /// Time terms confounded with the order of the poses.
     pub confounded: Vec<Confounded>,
+    /// Candidates the criterion admitted on the likelihood of white block means whose estimate their own
+    /// standard error (with the bias's wander) cannot tell from zero: not effects; the selection ran again
+    /// without them (docs/analysis.md#criterion).
+    #[serde(skip_serializing_if = "Vec::is_empty")]
+    pub unsupported: Vec<UnsupportedEffect>,
     /// `effects[0].effect` or "none".
     pub verdict: String,
     /// The criterion, in words, with its numbers.
@@ -364,6 +403,11 @@ pub struct Analysis {
     pub alpha: f64,
     /// Candidates tested (m of the Bonferroni correction).
     pub candidates_tested: usize,
+    /// The forward selection stopped at its most effects ([`MAX_EFFECTS`]) while a candidate still passed
+    /// the criterion: that candidate and its likelihood ratio (docs/analysis.md#criterion). The final model
+    /// is then incomplete, and the `selection` check fails.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub cut_short: Option<CutShort>,
     /// Every candidate against the base model alone.
     pub tested: Vec<Tested>,
     /// Per-channel diagnostics (recordings).

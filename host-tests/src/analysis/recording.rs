@@ -17,8 +17,8 @@ use super::noise_terms::noise_models;
 use super::observations::{BlockObs, Blocks, Session};
 use super::result::{assemble, effects_of, residuals_by_group, Findings, RECORDING};
 use super::sample_tests::{measure_samples, sample_tests, test_samples, SampleFindings};
-use super::selection::{final_columns, select, BlockOf, Problem, Selection};
-use super::wander::{mark_wander, wander_std_errors, widen_tested};
+use super::selection::{final_columns, select, select_without, BlockOf, Problem, Selection};
+use super::wander::{mark_wander, unsupported, wander_std_errors, widen_tested};
 use super::windows::window_check;
 use super::{Analysis, ChannelDiagnostics, CHANNELS, CHANNEL_UNITS};
 
@@ -48,7 +48,7 @@ fn analyze_session(mut session: Session, levelled: bool, source: &str) -> Result
     let blocks = Blocks::cut(session);
     check_column_memory(session, &blocks, source)?;
     // The sample statistics are measured while the block observations are fitted (docs/analysis.md#speed-and-memory).
-    let (problem, selection, measures) = std::thread::scope(|scope| {
+    let (mut problem, selection, measures) = std::thread::scope(|scope| {
         let measuring = scope.spawn(|| measure_samples(session));
         let mut problem = problem(session, &blocks, levelled.then_some(accel_bias_mps2));
         let selection = select(&mut problem, sample_tests(session));
@@ -61,6 +61,16 @@ fn analyze_session(mut session: Session, levelled: bool, source: &str) -> Result
     let noise_model = noise_models(&figures);
     mark_wander(&problem, &mut selection, &noise_model, m);
     selection.wander_std_errors = wander_std_errors(&problem, &selection, &noise_model);
+    let unsupported = unsupported(&problem, &selection, m);
+    if !unsupported.is_empty() {
+        // Once: what the second selection admits is not tested again.
+        let excluded: Vec<usize> = unsupported.iter().map(|u| u.candidate).collect();
+        selection =
+            select_without(&mut problem, sample_tests(session), &excluded).map_err(|e| InputError::file(source, e))?;
+        mark_wander(&problem, &mut selection, &noise_model, m);
+        selection.wander_std_errors = wander_std_errors(&problem, &selection, &noise_model);
+        selection.unsupported = unsupported;
+    }
     widen_tested(&problem, &mut selection, &noise_model);
     let windows = window_check(&problem, &selection, &noise_model);
     let mut effects = effects_of(&problem, &selection);

@@ -109,6 +109,13 @@ fn effects_md(md: &mut String, a: &Analysis) {
             );
         }
     }
+    if !a.unsupported.is_empty() {
+        let _ =
+            writeln!(md, "\n## Admitted, but not an effect: within the criterion of zero by its own standard error\n");
+        for u in &a.unsupported {
+            let _ = writeln!(md, "- {}", u.text());
+        }
+    }
     if !a.confounded.is_empty() {
         let _ = writeln!(md, "\n## Time terms confounded with pose order\n");
         for c in &a.confounded {

@@ -55,11 +55,7 @@ fn effect_of(problem: &Problem, selection: &Selection, index: usize) -> Effect {
         pos: cand.pos,
         pair_pos: cand.pair_pos,
         estimate: selection.final_fit.beta[j],
-        // The fit's standard error assumes independent block means; correlated ones widen it, and so does a
-        // bias that wanders (the larger of the two).
-        std_error: (selection.final_fit.std_error(j)
-            * cand.groups.iter().map(|&g| selection.inflation[g]).fold(1.0, f64::max).sqrt())
-        .max(selection.wander_std_errors.get(j).copied().unwrap_or(0.0)),
+        std_error: std_error_of(problem, selection, index),
         unit: cand.unit().to_string(),
         delta_bic: c.delta_bic,
         residual_rms_before: c.rms_before,
@@ -87,6 +83,15 @@ fn effect_of(problem: &Problem, selection: &Selection, index: usize) -> Effect {
         Some(ApartFromAliases::Inflated(_) | ApartFromAliases::NotDetermined) => Some(None),
     };
     effect
+}
+
+/// The standard error of the `index`-th chosen candidate: the fit's assumes independent block means;
+/// correlated ones widen it, and so does a bias that wanders (the larger of the two).
+pub(super) fn std_error_of(problem: &Problem, selection: &Selection, index: usize) -> f64 {
+    let j = problem.base.len() + index;
+    let groups = &problem.candidates[selection.chosen[index].candidate].groups;
+    (selection.final_fit.std_error(j) * groups.iter().map(|&g| selection.inflation[g]).fold(1.0, f64::max).sqrt())
+        .max(selection.wander_std_errors.get(j).copied().unwrap_or(0.0))
 }
 
 /// What leaving chosen effect `index` out of the final model does to the biases: refitting without it moves
@@ -216,8 +221,10 @@ pub(super) fn assemble(
     let (misfits, confounded) = misfits_and_confounded(&problem, &selection);
     let mut unobservable = problem.unobservable.clone();
     if input == ANGLES {
-        // The per-channel time and noise effects (no single sensor in the catalogue) need samples.
-        let not_in_angles = EffectKind::ALL.into_iter().filter(|e| e.sensor().is_none());
+        // The per-channel time and noise effects (no single sensor in the catalogue) need samples, and the
+        // accelerometers' nonlinearity their forces (the alignment equations are linear in the sensor terms).
+        let not_in_angles =
+            EffectKind::ALL.into_iter().filter(|e| e.sensor().is_none() || *e == EffectKind::AccelNonlinearity);
         unobservable.extend(not_in_angles.map(|e| format!("{e}: angles only")));
     }
     let m = findings.m;
@@ -230,6 +237,19 @@ pub(super) fn assemble(
         unobservable,
         misfits,
         confounded,
+        unsupported: selection
+            .unsupported
+            .iter()
+            .map(|u| {
+                let c = &problem.candidates[u.candidate];
+                super::UnsupportedEffect {
+                    candidate: c.name(),
+                    estimate: u.estimate,
+                    std_error: u.std_error,
+                    unit: c.unit().to_string(),
+                }
+            })
+            .collect(),
         verdict,
         criterion: format!(
             "forward selection; an effect is added when its likelihood-ratio p-value is below alpha/m = {:.3e} \
@@ -239,6 +259,9 @@ pub(super) fn assemble(
         ),
         alpha: ALPHA,
         candidates_tested: m as usize,
+        cut_short: selection
+            .cut_short
+            .map(|(ci, lr)| super::CutShort { candidate: problem.candidates[ci].name(), likelihood_ratio: lr }),
         tested: selection.tested,
         diagnostics: findings.diagnostics,
         noise_model: findings.noise_model,

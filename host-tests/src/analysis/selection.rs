@@ -98,6 +98,24 @@ pub(super) struct Selection {
     pub wander_std_errors: Vec<f64>,
     /// Per chosen candidate: its standard error with its aliases beside it ([`apart_from_aliases`]).
     pub apart_from_aliases: Vec<ApartFromAliases>,
+    /// The best candidate that still passed the criterion when the selection stopped at [`MAX_EFFECTS`], with
+    /// its likelihood ratio.
+    pub cut_short: Option<(usize, f64)>,
+    /// Candidates a first selection admitted whose own standard error could not tell them from zero, left
+    /// out of this one (`wander::unsupported`).
+    pub unsupported: Vec<Unsupported>,
+}
+
+/// A candidate the criterion admitted whose estimate its own standard error (with the bias's wander) cannot
+/// tell from zero.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub(super) struct Unsupported {
+    /// Index in the problem's candidates.
+    pub candidate: usize,
+    /// Its estimate in the first selection's final model, SI.
+    pub estimate: f64,
+    /// Its standard error there, SI.
+    pub std_error: f64,
 }
 
 /// A candidate that passes the criterion at an implausible value: the model misses something there.
@@ -144,14 +162,41 @@ pub(super) const CONTRADICTED: f64 = 3.0;
 /// Forward selection over the problem's candidates; the Bonferroni `m` counts the observable candidates and
 /// `extra_tests` more (the sample tests). Adds the unobservable candidates to `problem.unobservable`.
 pub(super) fn select(problem: &mut Problem, extra_tests: usize) -> Result<Selection, String> {
+    select_at_most(problem, extra_tests, MAX_EFFECTS, &[])
+}
+
+/// [`select`] with the candidates `excluded` never added: those a first selection admitted that their own
+/// standard error cannot tell from zero (`wander::unsupported`).
+pub(super) fn select_without(
+    problem: &mut Problem,
+    extra_tests: usize,
+    excluded: &[usize],
+) -> Result<Selection, String> {
+    select_at_most(problem, extra_tests, MAX_EFFECTS, excluded)
+}
+
+/// [`select`], adding at most `max_effects` candidates and none of `excluded`.
+fn select_at_most(
+    problem: &mut Problem,
+    extra_tests: usize,
+    max_effects: usize,
+    excluded: &[usize],
+) -> Result<Selection, String> {
     let base_cols: Vec<&[f64]> = problem.base.iter().map(|c| c.as_slice()).collect();
     let base_fit =
         fit(&problem.obs, &base_cols).ok_or("the base model's biases cannot be fitted (dependent columns)")?;
     let base = Projection::new(&problem.obs, base_cols, &base_fit)
         .ok_or("the base model's biases cannot be fitted (dependent columns)")?;
-    let screen = Screen::new(&problem.candidates, &base, &mut problem.unobservable);
+    let mut unobservable = Vec::new();
+    let screen = Screen::new(&problem.candidates, &base, &mut unobservable);
+    // A second selection (`select_without`) finds the same unobservable candidates: named once.
+    for name in unobservable {
+        if !problem.unobservable.contains(&name) {
+            problem.unobservable.push(name);
+        }
+    }
     let m = (screen.observable.len() + extra_tests).max(1) as f64;
-    let forward = Forward::run(problem, &screen.observable, base_fit.clone(), m);
+    let forward = Forward::run(problem, &screen.observable, base_fit.clone(), (m, max_effects), excluded);
     let chosen: Vec<usize> = forward.chosen.iter().map(|c| c.candidate).collect();
     let base_count = problem.base.len();
     let aliases: Vec<Vec<String>> = forward
@@ -194,6 +239,8 @@ pub(super) fn select(problem: &mut Problem, extra_tests: usize) -> Result<Select
         inflation: forward.inflation,
         wander_std_errors: Vec::new(),
         apart_from_aliases,
+        cut_short: forward.cut_short,
+        unsupported: Vec::new(),
     })
 }
 
@@ -511,6 +558,8 @@ struct Forward<'a> {
     set_aside: Vec<usize>,
     /// Per group: the variance inflation of a sum of neighbouring block residuals ([`block_inflation`]).
     inflation: Vec<f64>,
+    /// The best candidate still passing the criterion when [`MAX_EFFECTS`] stopped the selection.
+    cut_short: Option<(usize, f64)>,
 }
 
 /// Most the likelihood ratios are deflated for correlated block residuals.
@@ -604,9 +653,15 @@ const HALVES_DISAGREE: f64 = 3.0;
 pub(super) const POSE_ORDER: &str = "pose order (the poses are not revisited)";
 
 impl<'a> Forward<'a> {
-    /// Adds candidates of `observable` while the best passes the criterion (at most [`MAX_EFFECTS`]); the
-    /// first step also records every candidate against the base model alone.
-    fn run(problem: &'a Problem, observable: &[usize], base_fit: LinearFit, m: f64) -> Forward<'a> {
+    /// Adds candidates of `observable` while the best passes the criterion (at most `max_effects`); the
+    /// first step also records every candidate against the base model alone; `m` is the Bonferroni count.
+    fn run(
+        problem: &'a Problem,
+        observable: &[usize],
+        base_fit: LinearFit,
+        (m, max_effects): (f64, usize),
+        excluded: &[usize],
+    ) -> Forward<'a> {
         let ln_n = (problem.obs.y.len() as f64).ln();
         let mut f = Forward {
             problem,
@@ -618,17 +673,33 @@ impl<'a> Forward<'a> {
             correlated: Vec::new(),
             misfits: Vec::new(),
             confounded: Vec::new(),
-            set_aside: Vec::new(),
+            set_aside: excluded.to_vec(),
             inflation: Vec::new(),
+            cut_short: None,
         };
         f.inflation = block_inflation(problem, &f.current.residual);
-        for step in 0..=MAX_EFFECTS {
+        for step in 0..=max_effects {
             let ranked = f.ranked_additions(observable, step == 0);
-            if step == MAX_EFFECTS || !f.add_best(&ranked, m) {
+            if step == max_effects {
+                f.cut_short = f.still_passing(&ranked, m);
+                break;
+            }
+            if !f.add_best(&ranked, m) {
                 break;
             }
         }
         f
+    }
+
+    /// The first of `ranked` whose exact likelihood ratio passes the criterion (the vetoes not applied):
+    /// what the selection leaves out when it stops at [`MAX_EFFECTS`]. Only the first [`EXACT_FITS`] are
+    /// fitted.
+    fn still_passing(&self, ranked: &[Scored], m: f64) -> Option<(usize, f64)> {
+        ranked.iter().take(EXACT_FITS).find_map(|s| {
+            let (ci, _, _, lr) = self.exact(s.candidate, s.variant)?;
+            let k = self.problem.candidates[ci].parameters() as f64;
+            (lr > chi_square_quantile_upper(ALPHA / m, k) && -lr + k * self.ln_n < 0.0).then_some((ci, lr))
+        })
     }
 
     /// Fits exactly (the variances fitted again) the candidates of `ranked` in turns of [`EXACT_FITS`], best
@@ -909,6 +980,7 @@ fn group_rms(fit: &LinearFit, groups: &[usize]) -> f64 {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::model::catalogue::{EffectKind, Sensor};
 
     /// Observations of known standard deviation 0.5 at `t = 0, 0.1, ...`: a line, with a small wiggle.
     fn line(n: usize) -> (Observations, Vec<Vec<f64>>) {
@@ -942,5 +1014,52 @@ mod tests {
         let dependent: Vec<f64> = columns[1].iter().map(|t| 2.0 - 3.0 * t).collect();
         assert!(inflation(&model, 1, &Column::new(dependent)) >= NOT_DETERMINED);
         assert_eq!(inflation(&model, 1, &Column::new(vec![2.0; n])), 1.0);
+    }
+
+    /// Three effects in the data, each at about 40 of its standard errors, and one candidate of nothing: a
+    /// selection of at most two effects stops with the third still passing (`cut_short` names it); one of at
+    /// most three finds all three and is not cut short.
+    #[test]
+    fn a_selection_stopped_by_its_most_effects_names_the_candidate_still_passing() {
+        let n = 120;
+        let wave = |k: f64| (0..n).map(move |i| (k * i as f64).sin()).collect::<Vec<f64>>();
+        let columns = [wave(0.3), wave(0.7), wave(1.9), wave(2.6)];
+        let noise = wave(7.77);
+        let y: Vec<f64> =
+            (0..n).map(|i| 2.0 * columns[0][i] - 1.5 * columns[1][i] + columns[2][i] + 0.1 * noise[i]).collect();
+        let problem = |max_effects: usize| {
+            let candidates = columns
+                .iter()
+                .enumerate()
+                .map(|(k, c)| {
+                    let axes = ["x", "y", "z"][k % 3].to_string();
+                    let effect = if k < 3 { EffectKind::AccelScaleFactor } else { EffectKind::AccelNonlinearity };
+                    Candidate::single(effect, Sensor::Accel, axes, Column::new(c.clone()), vec![0])
+                })
+                .collect();
+            let mut p = Problem {
+                obs: Observations { y: y.clone(), group: vec![0; n], groups: 1, sigma: None },
+                base: vec![vec![1.0; n]],
+                base_names: vec!["accel_bias_x".into()],
+                group_names: vec!["ax_mps2".into()],
+                group_units: vec!["m/s^2"],
+                obs_pos: vec![1; n],
+                obs_pose: None,
+                obs_block: None,
+                candidates,
+                unobservable: Vec::new(),
+                residual_of: "block means",
+            };
+            let s = select_at_most(&mut p, 0, max_effects, &[]).unwrap();
+            let names: Vec<String> = s.chosen.iter().map(|c| p.candidates[c.candidate].name()).collect();
+            (names, s.cut_short.map(|(ci, lr)| (p.candidates[ci].name(), lr)))
+        };
+        let (names, cut_short) = problem(2);
+        assert_eq!(names, ["accel_scale_factor:x", "accel_scale_factor:y"]);
+        let (name, lr) = cut_short.expect("cut short");
+        assert!(name == "accel_scale_factor:z" && lr > 100.0, "{name} {lr}");
+        let (names, cut_short) = problem(3);
+        assert_eq!(names, ["accel_scale_factor:x", "accel_scale_factor:y", "accel_scale_factor:z"]);
+        assert!(cut_short.is_none(), "{cut_short:?}");
     }
 }

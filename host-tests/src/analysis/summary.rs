@@ -39,6 +39,9 @@ pub fn summary(a: &Analysis) -> String {
             m.candidate, m.estimate, m.std_error, m.unit, m.limit, m.pos, m.channel
         );
     }
+    for u in &a.unsupported {
+        let _ = writeln!(s, "  unsupported: {}", u.text());
+    }
     for c in &a.confounded {
         let _ = writeln!(s, "  {}", super::confounded_text(c));
     }

@@ -13,7 +13,8 @@
 use crate::stats::linfit::{chi_square_quantile_upper, fit, LinearFit, Observations};
 
 use super::noise_terms::{NoiseModel, Term};
-use super::selection::{final_columns, BlockOf, Problem, Selection};
+use super::result::std_error_of;
+use super::selection::{final_columns, BlockOf, Problem, Selection, Unsupported};
 use super::ALPHA;
 
 /// The alias of a time term that the noise model's wander explains.
@@ -348,6 +349,31 @@ pub(super) fn mark_wander(problem: &Problem, selection: &mut Selection, models: 
     for q in marked {
         selection.aliases[q].push(WANDER.to_string());
     }
+}
+
+/// The chosen effects other than time terms (which [`mark_wander`] marks instead) that the criterion admitted
+/// on the likelihood of white block means but whose estimate their own standard error, with the bias's
+/// wander ([`super::result::std_error_of`]), cannot tell from zero: `(estimate / std_error)^2` (per parameter)
+/// within the criterion at `alpha / m`. The analysis then selects again without them
+/// (docs/analysis.md#criterion).
+pub(super) fn unsupported(problem: &Problem, selection: &Selection, m: f64) -> Vec<Unsupported> {
+    let base = problem.base.len();
+    (0..selection.chosen.len())
+        .filter_map(|q| {
+            let candidate = selection.chosen[q].candidate;
+            let c = &problem.candidates[candidate];
+            if c.effect.is_time_term() {
+                return None;
+            }
+            let (estimate, std_error) = (selection.final_fit.beta[base + q], std_error_of(problem, selection, q));
+            let wald = (estimate / std_error).powi(2);
+            (wald <= chi_square_quantile_upper(ALPHA / m, c.parameters() as f64)).then_some(Unsupported {
+                candidate,
+                estimate,
+                std_error,
+            })
+        })
+        .collect()
 }
 
 #[cfg(test)]

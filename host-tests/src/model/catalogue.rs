@@ -1,4 +1,4 @@
-//! The effect catalogue (docs/formats.md#effect-catalogue): the thirteen effects `sinscal analyze` tests and
+//! The effect catalogue (docs/formats.md#effect-catalogue): the fourteen effects `sinscal analyze` tests and
 //! `sinscal simulate` can switch on, each with its fixed name, its sensor and the SI unit of its estimate.
 //! The names are part of the analysis JSON (docs/formats.md#analysis-json): [`EffectKind::name`] is what is
 //! written, [`str::parse`] reads it back.
@@ -54,6 +54,8 @@ pub enum EffectKind {
     AccelScaleFactor,
     /// Accelerometer axis i's sensitivity to force along j.
     AccelMisalignment,
+    /// Accelerometer second-order nonlinearity K2: axis i reads `K2 f_i^2` more.
+    AccelNonlinearity,
     /// Gyro relative scale-factor error.
     GyroScaleFactor,
     /// Gyro axis i's sensitivity to rate about j.
@@ -76,11 +78,12 @@ pub enum EffectKind {
 
 impl EffectKind {
     /// The catalogue, in the order of docs/formats.md#effect-catalogue.
-    pub const ALL: [EffectKind; 13] = [
+    pub const ALL: [EffectKind; 14] = [
         EffectKind::ReferenceOffset,
         EffectKind::PositionError,
         EffectKind::AccelScaleFactor,
         EffectKind::AccelMisalignment,
+        EffectKind::AccelNonlinearity,
         EffectKind::GyroScaleFactor,
         EffectKind::GyroMisalignment,
         EffectKind::GyroGSensitivity,
@@ -99,6 +102,7 @@ impl EffectKind {
             EffectKind::PositionError => "position_error",
             EffectKind::AccelScaleFactor => "accel_scale_factor",
             EffectKind::AccelMisalignment => "accel_misalignment",
+            EffectKind::AccelNonlinearity => "accel_nonlinearity",
             EffectKind::GyroScaleFactor => "gyro_scale_factor",
             EffectKind::GyroMisalignment => "gyro_misalignment",
             EffectKind::GyroGSensitivity => "gyro_g_sensitivity",
@@ -116,7 +120,9 @@ impl EffectKind {
     pub fn sensor(self) -> Option<Sensor> {
         match self {
             EffectKind::ReferenceOffset | EffectKind::PositionError => Some(Sensor::Reference),
-            EffectKind::AccelScaleFactor | EffectKind::AccelMisalignment => Some(Sensor::Accel),
+            EffectKind::AccelScaleFactor | EffectKind::AccelMisalignment | EffectKind::AccelNonlinearity => {
+                Some(Sensor::Accel)
+            }
             EffectKind::GyroScaleFactor | EffectKind::GyroMisalignment | EffectKind::GyroGSensitivity => {
                 Some(Sensor::Gyro)
             }
@@ -135,6 +141,7 @@ impl EffectKind {
             | EffectKind::GyroScaleFactor
             | EffectKind::GyroMisalignment => "1",
             EffectKind::GyroGSensitivity => "(rad/s)/(m/s^2)",
+            EffectKind::AccelNonlinearity => "1/(m/s^2)",
             EffectKind::BiasDrift if gyro => "(rad/s)/s",
             EffectKind::BiasDrift => "(m/s^2)/s",
             EffectKind::TemperatureBias if gyro => "(rad/s)/K",
@@ -156,6 +163,9 @@ pub use crate::io::calibration_model::{
     MAX_ACCEL_BIAS_MPS2, MAX_GYRO_BIAS_RADPS, MAX_G_SENSITIVITY_RADPS_PER_MPS2, MAX_LEVEL_ERROR_RAD,
     MAX_SCALE_OR_MISALIGNMENT,
 };
+/// Largest accelerometer second-order nonlinearity K2, 1/(m/s^2): 1e-3, about 10 mg/g^2 (a consumer MEMS
+/// accelerometer's is of the order of 1 mg/g^2, a navigation-grade one's 10 ug/g^2).
+pub const MAX_ACCEL_NONLINEARITY_PER_MPS2: f64 = 1e-3;
 /// Largest heading error of a reference attitude, rad (29 degrees).
 pub const MAX_HEADING_ERROR_RAD: f64 = 0.5;
 
@@ -174,6 +184,7 @@ impl EffectKind {
             | EffectKind::GyroScaleFactor
             | EffectKind::GyroMisalignment => Some(MAX_SCALE_OR_MISALIGNMENT),
             EffectKind::GyroGSensitivity => Some(MAX_G_SENSITIVITY_RADPS_PER_MPS2),
+            EffectKind::AccelNonlinearity => Some(MAX_ACCEL_NONLINEARITY_PER_MPS2),
             EffectKind::BiasDrift => Some(bias / span_s.max(1.0)),
             EffectKind::BiasWarmup => Some(bias),
             EffectKind::TemperatureBias => Some(bias / temperature_span_k.max(1.0)),

@@ -197,6 +197,8 @@ pub struct AccelSpec {
     pub scale_factor: [f64; 3],
     /// Misalignment M_a (row i, column j: sensitivity of axis i to force along j), 1; diagonal must be 0.
     pub misalignment: M3,
+    /// Second-order nonlinearity K2 per axis: axis i reads `K2_i f_i^2` more, 1/(m/s^2).
+    pub nonlinearity_per_mps2: [f64; 3],
     /// Velocity random walk (white force noise density), m/s^2/sqrt(Hz) = m/s/sqrt(s).
     pub velocity_random_walk_mps_per_sqrt_s: f64,
     /// Acceleration random walk, m/s^2/sqrt(s).
@@ -263,6 +265,9 @@ pub struct TriadModel {
     pub warmup: Option<([f64; 3], f64)>,
     /// Bias per kelvin.
     pub temperature_coefficient_per_k: [f64; 3],
+    /// Second-order nonlinearity per axis: axis i reads `K2_i q_i^2` more (`q` its own interval-averaged true
+    /// quantity), 1/unit.
+    pub nonlinearity_per_unit: [f64; 3],
 }
 
 /// Most rows a scenario may ask for (about 1 GB in memory; 2.8 hours at 1 kHz).
@@ -418,6 +423,7 @@ impl ScenarioFile {
             drift_per_s: g.drift_radps_per_s,
             warmup: g.warmup.as_ref().map(|w| (w.amplitude, w.tau_s)),
             temperature_coefficient_per_k: g.temperature_coefficient_radps_per_k,
+            nonlinearity_per_unit: [0.0; 3],
         }
     }
 
@@ -434,6 +440,7 @@ impl ScenarioFile {
             drift_per_s: a.drift_mps2_per_s,
             warmup: a.warmup.as_ref().map(|w| (w.amplitude, w.tau_s)),
             temperature_coefficient_per_k: a.temperature_coefficient_mps2_per_k,
+            nonlinearity_per_unit: a.nonlinearity_per_mps2,
         }
     }
 }
@@ -494,6 +501,7 @@ impl TriadState {
         let t_mid = t0 + 0.5 * dt;
         for i in 0..3 {
             let mut y = m.statics.measure_axis(i, own, other);
+            y += m.nonlinearity_per_unit[i] * own[i] * own[i];
             y += m.drift_per_s[i] * t_mid;
             if let Some((a, tau)) = m.warmup {
                 // Exact interval average of A exp(-t/tau).
