@@ -140,13 +140,7 @@ fn measured_data_give_plausible_effects_and_name_what_they_cannot_tell_apart() {
 #[test]
 fn standard_errors_hold_across_the_thirds_of_every_dwell_of_the_measured_data() {
     let Some(dir) = common::data_dir() else { return };
-    let sets = [
-        ("ferraris", common::ferraris_session(&dir)),
-        ("imu_tk", common::imutk_session(&dir)),
-        ("psins", common::psins_session(&dir)),
-    ];
-    for (name, recording) in sets {
-        let a = analyze_recording(&recording).unwrap();
+    for (name, a) in analyses_of_the_shared_sets(&dir) {
         let w = a.windows.as_ref().unwrap_or_else(|| panic!("{name}: no window check"));
         assert!(w.dof > 0.0 && w.chi_square / w.dof <= 1.5, "{name}: {}", w.text());
         if name == "psins" {
@@ -198,6 +192,16 @@ fn a_second_order_nonlinearity_is_found_on_its_axis_with_its_sign() {
     assert_eq!(e.std_error_with_aliases, Some(None), "{e:?}");
 }
 
+/// The analyses of the three shared sets as imported, by name.
+fn analyses_of_the_shared_sets(dir: &std::path::Path) -> Vec<(&'static str, Analysis)> {
+    let sets = [
+        ("ferraris", common::ferraris_session(dir)),
+        ("imu_tk", common::imutk_session(dir)),
+        ("psins", common::psins_session(dir)),
+    ];
+    sets.into_iter().map(|(name, recording)| (name, analyze_recording(&recording).unwrap())).collect()
+}
+
 /// REAL DATA (`SINSCAL_DATA`; skipped, and says so, without it): no column effect other than a time term is
 /// named whose own standard error (with the bias's wander) cannot tell it from zero, on the three shared
 /// sets: `(estimate / std_error)^2` beyond the criterion's `chi2(1 - alpha / m, 1)` (docs/analysis.md#criterion).
@@ -206,13 +210,7 @@ fn a_second_order_nonlinearity_is_found_on_its_axis_with_its_sign() {
 #[test]
 fn every_static_effect_named_is_beyond_the_criterion_by_its_own_standard_error() {
     let Some(dir) = common::data_dir() else { return };
-    let sets = [
-        ("ferraris", common::ferraris_session(&dir)),
-        ("imu_tk", common::imutk_session(&dir)),
-        ("psins", common::psins_session(&dir)),
-    ];
-    for (name, recording) in sets {
-        let a = analyze_recording(&recording).unwrap();
+    for (name, a) in analyses_of_the_shared_sets(&dir) {
         let criterion =
             sinscal_host::stats::linfit::chi_square_quantile_upper(a.alpha / a.candidates_tested as f64, 1.0);
         let time_term = |e: &Effect| e.effect.parse::<EffectKind>().is_ok_and(|k| k.is_time_term());
