@@ -17,7 +17,7 @@ use super::noise_terms::noise_models;
 use super::observations::{BlockObs, Blocks, Session};
 use super::result::{assemble, effects_of, residuals_by_group, Findings, RECORDING};
 use super::sample_tests::{measure_samples, sample_tests, test_samples, SampleFindings};
-use super::selection::{final_columns, select, select_without, BlockOf, Problem, Selection};
+use super::selection::{final_columns, select, select_without, BlockOf, Problem, Selection, Unsupported};
 use super::wander::{mark_wander, unsupported, wander_std_errors, widen_tested};
 use super::windows::window_check;
 use super::{Analysis, ChannelDiagnostics, CHANNELS, CHANNEL_UNITS};
@@ -40,6 +40,10 @@ pub fn analyze_recording(recording: &(impl RowSource + Sync)) -> Result<Analysis
     Ok(analysis)
 }
 
+/// Most selections run again without the effects a selection admitted that their own standard errors cannot
+/// tell from zero ([`unsupported`]); what the last one admits is kept.
+const MAX_RESELECTIONS: usize = 3;
+
 /// The analysis of a session read from `source`; `levelled`: its attitudes were levelled from its own
 /// accelerometers.
 fn analyze_session(mut session: Session, levelled: bool, source: &str) -> Result<Analysis, InputError> {
@@ -61,16 +65,22 @@ fn analyze_session(mut session: Session, levelled: bool, source: &str) -> Result
     let noise_model = noise_models(&figures);
     mark_wander(&problem, &mut selection, &noise_model, m);
     selection.wander_std_errors = wander_std_errors(&problem, &selection, &noise_model);
-    let unsupported = unsupported(&problem, &selection, m);
-    if !unsupported.is_empty() {
-        // Once: what the second selection admits is not tested again.
-        let excluded: Vec<usize> = unsupported.iter().map(|u| u.candidate).collect();
+    // Each selection's unsupported effects are left out of the next, until none is left (at most
+    // `MAX_RESELECTIONS` more selections).
+    let mut all_unsupported = Vec::new();
+    for _ in 0..MAX_RESELECTIONS {
+        let unsupported = unsupported(&problem, &selection, m);
+        if unsupported.is_empty() {
+            break;
+        }
+        all_unsupported.extend(unsupported);
+        let excluded: Vec<usize> = all_unsupported.iter().map(|u: &Unsupported| u.candidate).collect();
         selection =
             select_without(&mut problem, sample_tests(session), &excluded).map_err(|e| InputError::file(source, e))?;
         mark_wander(&problem, &mut selection, &noise_model, m);
         selection.wander_std_errors = wander_std_errors(&problem, &selection, &noise_model);
-        selection.unsupported = unsupported;
     }
+    selection.unsupported = all_unsupported;
     widen_tested(&problem, &mut selection, &noise_model);
     let windows = window_check(&problem, &selection, &noise_model);
     let mut effects = effects_of(&problem, &selection);

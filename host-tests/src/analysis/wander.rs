@@ -354,7 +354,7 @@ pub(super) fn mark_wander(problem: &Problem, selection: &mut Selection, models: 
 /// The chosen effects other than time terms (which [`mark_wander`] marks instead) that the criterion admitted
 /// on the likelihood of white block means but whose estimate their own standard error, with the bias's
 /// wander ([`super::result::std_error_of`]), cannot tell from zero: `(estimate / std_error)^2` (per parameter)
-/// within the criterion at `alpha / m`. The analysis then selects again without them
+/// within the criterion at `alpha / m`. The analysis then selects again without them, until none is left
 /// (docs/analysis.md#criterion).
 pub(super) fn unsupported(problem: &Problem, selection: &Selection, m: f64) -> Vec<Unsupported> {
     let base = problem.base.len();
