@@ -299,8 +299,6 @@ impl ChannelEstimator {
         Ok(self.finish(&state, &pass, used, iterations, converged, moves))
     }
 
-    /// One Gauss-Newton pass at `theta` and the dwells' `attitude`: structural rank, weighted solution of the
-    /// determined parameters and of a completion of the undetermined ones (see [`Pass::solved`]).
     /// How many times the f32 rounding of the fit's arithmetic ([`ROUNDING_ULPS`] units of f32 rounding of
     /// gravity and of the Earth rate, the magnitudes its residuals are computed from) exceeds the smallest
     /// standard deviation of a dwell mean (of its accelerometers, and of its gyros when they are used); 1 when
@@ -323,6 +321,8 @@ impl ChannelEstimator {
         ratio
     }
 
+    /// One Gauss-Newton pass at `theta` and the dwells' `attitude`: structural rank, weighted solution of the
+    /// determined parameters and of a completion of the undetermined ones (see [`Pass::solved`]).
     pub(super) fn pass(
         &self,
         theta: &[f32; PARAMETERS],
