@@ -243,16 +243,6 @@ fn part_of_every_dwell(recording: &Recording, k: usize) -> Recording {
 /// Parts of every dwell analysed on their own ([`part_of_every_dwell`]).
 const WINDOWS: usize = 3;
 
-/// The standard error an effect's estimate carries across analyses: its own, or with its aliases
-/// (docs/analysis.md#confounding) when it has any; `None` when the data determine only its combination
-/// with an alias.
-fn std_error_across_models(e: &Effect) -> Option<f64> {
-    match e.std_error_with_aliases {
-        None => Some(e.std_error),
-        Some(with_aliases) => with_aliases.map(|s| s.max(e.std_error)),
-    }
-}
-
 /// REAL DATA (`SINSCAL_DATA`; skipped, and says so, without it): each third of every dwell of the Ferraris
 /// session and of the imu_tk session analysed on its own, as `scripts/window-scatter` does. Every effect the
 /// three analyses name is set against its standard error with its aliases: the chi-square of the three
@@ -272,7 +262,7 @@ fn independent_analyses_of_disjoint_windows_agree_within_their_standard_errors()
         let mut found: std::collections::BTreeMap<String, Vec<(f64, Option<f64>)>> = Default::default();
         for a in &analyses {
             for e in a.effects.iter().filter(|e| e.std_error > 0.0) {
-                found.entry(key(e)).or_default().push((e.estimate, std_error_across_models(e)));
+                found.entry(key(e)).or_default().push((e.estimate, e.std_error_across_models()));
             }
         }
         let (mut chi_square, mut dof, mut worst) = (0.0, 0usize, (0.0, String::new()));

@@ -674,18 +674,13 @@ fn carries_planted(e: &Effect, twin: Option<&Effect>, h: &Hidden) -> Result<(), 
             return Err("the baseline's value");
         }
         let expected = h.value + twin.map_or(0.0, |u| u.estimate);
-        // The standard error the analysis gives the estimate across the models its aliases allow
-        // (docs/analysis.md#confounding); none when it determines only their combination.
-        let std_error = match e.std_error_with_aliases {
-            None => e.std_error,
-            Some(Some(s)) => s.max(e.std_error),
-            Some(None) if (e.estimate - expected).abs() > 3.0 * e.std_error => {
-                return Err("not determined apart from its aliases");
-            }
-            Some(None) => e.std_error,
-        };
-        if (e.estimate - expected).abs() > 3.0 * std_error {
-            return Err("estimate off");
+        // The standard error the analysis gives the estimate across the models its aliases allow; none when it
+        // determines only their combination (then its own standard error judges, and a miss says why).
+        let off = |std_error: f64| (e.estimate - expected).abs() > 3.0 * std_error;
+        match e.std_error_across_models() {
+            None if off(e.std_error) => return Err("not determined apart from its aliases"),
+            across if off(across.unwrap_or(e.std_error)) => return Err("estimate off"),
+            _ => {}
         }
     } else {
         let same_tau = |u: &Effect| match (u.tau_s, e.tau_s) {

@@ -279,6 +279,16 @@ impl Effect {
         }
     }
 
+    /// The standard error the estimate carries whichever of its aliases the data are given to (SI): with
+    /// aliases, `std_error_with_aliases` (never below `std_error`); `None` when the data determine only its
+    /// combination with an alias (docs/analysis.md#confounding).
+    pub fn std_error_across_models(&self) -> Option<f64> {
+        match self.std_error_with_aliases {
+            None => Some(self.std_error),
+            Some(with_aliases) => with_aliases.map(|s| s.max(self.std_error)),
+        }
+    }
+
     /// The aliases in words, with what the estimate is worth apart from them: "indistinguishable here from:
     /// a, b; with them: +- 1.23e-4" (or "...; with them: not determined, only the combination is"); empty
     /// without aliases.
