@@ -63,22 +63,20 @@ fn analyze_session(mut session: Session, levelled: bool, source: &str) -> Result
     let m = (selection.observable + sample_tests(session)) as f64;
     let SampleFindings { effects: sample_effects, diagnostics, mut figures } = test_samples(session, &measures, m);
     let noise_model = noise_models(&figures);
-    mark_wander(&problem, &mut selection, &noise_model, m);
-    selection.wander_std_errors = wander_std_errors(&problem, &selection, &noise_model);
     // Each selection's unsupported effects are left out of the next, until none is left (at most
     // `MAX_RESELECTIONS` more selections).
-    let mut all_unsupported = Vec::new();
-    for _ in 0..MAX_RESELECTIONS {
-        let unsupported = unsupported(&problem, &selection, m);
+    let mut all_unsupported: Vec<Unsupported> = Vec::new();
+    for round in 0..=MAX_RESELECTIONS {
+        mark_wander(&problem, &mut selection, &noise_model, m);
+        selection.wander_std_errors = wander_std_errors(&problem, &selection, &noise_model);
+        let unsupported = if round < MAX_RESELECTIONS { unsupported(&problem, &selection, m) } else { Vec::new() };
         if unsupported.is_empty() {
             break;
         }
         all_unsupported.extend(unsupported);
-        let excluded: Vec<usize> = all_unsupported.iter().map(|u: &Unsupported| u.candidate).collect();
+        let excluded: Vec<usize> = all_unsupported.iter().map(|u| u.candidate).collect();
         selection =
             select_without(&mut problem, sample_tests(session), &excluded).map_err(|e| InputError::file(source, e))?;
-        mark_wander(&problem, &mut selection, &noise_model, m);
-        selection.wander_std_errors = wander_std_errors(&problem, &selection, &noise_model);
     }
     selection.unsupported = all_unsupported;
     widen_tested(&problem, &mut selection, &noise_model);
