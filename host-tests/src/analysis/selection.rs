@@ -3,6 +3,7 @@
 //! which ones are added, and which others the data cannot tell from them (`aliases`).
 
 use std::borrow::Cow;
+use std::collections::HashMap;
 
 use crate::stats::linfit::{chi_square_quantile_upper, chi_square_upper, fit, solve_spd, LinearFit, Observations};
 
@@ -221,9 +222,21 @@ fn select_at_most(
         .collect();
     let full_columns: Vec<&[f64]> = forward.columns.iter().map(|c| c.as_slice()).collect();
     let full = Projection::new(&problem.obs, full_columns, &forward.current);
+    // The candidates by name, once (the aliases are names), and only when there are aliases; of two of one
+    // name (dwells of one position label), the first.
+    let mut by_name: HashMap<String, usize> = HashMap::new();
+    if aliases.iter().any(|a| !a.is_empty()) {
+        for (ci, c) in problem.candidates.iter().enumerate() {
+            by_name.entry(c.name()).or_insert(ci);
+        }
+    }
     let apart_from_aliases: Vec<ApartFromAliases> = (0..forward.chosen.len())
         .map(|j| match &full {
-            Some(model) => apart_from_aliases(problem, model, base_count + j, &aliases[j]),
+            Some(model) => {
+                let alias_candidates =
+                    aliases[j].iter().filter_map(|n| by_name.get(n)).map(|&ci| &problem.candidates[ci]);
+                apart_from_aliases(model, base_count + j, alias_candidates)
+            }
             None => ApartFromAliases::NotDetermined,
         })
         .collect();
@@ -261,12 +274,15 @@ pub(super) enum ApartFromAliases {
 /// alias's remainder is below 1e-6 of its norm, as [`EXPLAINED`] has it.
 const NOT_DETERMINED: f64 = 1e6;
 
-/// Column `j` of the final model (`model`) against each alias of `names` that is a candidate, each of its
-/// variants fitted beside the model ([`inflation`]). The worst alias's factor.
-fn apart_from_aliases(problem: &Problem, model: &Projection, j: usize, names: &[String]) -> ApartFromAliases {
+/// Column `j` of the final model (`model`) against each of its aliases that is a candidate (`aliases`), each
+/// of their variants fitted beside the model ([`inflation`]). The worst alias's factor.
+fn apart_from_aliases<'c>(
+    model: &Projection,
+    j: usize,
+    aliases: impl Iterator<Item = &'c Candidate>,
+) -> ApartFromAliases {
     let mut worst: Option<f64> = None;
-    for name in names {
-        let Some(candidate) = problem.candidates.iter().find(|c| c.name() == *name) else { continue };
+    for candidate in aliases {
         for (_, column) in &candidate.variants {
             let factor = inflation(model, j, column);
             if factor.is_nan() || factor >= NOT_DETERMINED {
