@@ -115,7 +115,8 @@ pub fn draw(effect: EffectKind, seed: u64, reference: &ReferenceErrors) -> (Scen
     let mut d = Draw::new(effect, seed, reference);
     match effect {
         EffectKind::AccelScaleFactor | EffectKind::AccelMisalignment => d.accel_term(),
-        EffectKind::AccelNonlinearity => d.nonlinearity(),
+        // Not in `TRIALS` (see `catalogue`): `Draw::new` has refused it already.
+        EffectKind::AccelNonlinearity => unreachable!("accel_nonlinearity is not a Table 1 trial"),
         EffectKind::GyroScaleFactor | EffectKind::GyroMisalignment => d.gyro_term(),
         EffectKind::GyroGSensitivity => d.g_sensitivity(),
         EffectKind::ReferenceOffset => d.reference_offset(),
@@ -187,11 +188,6 @@ impl<'a> Draw<'a> {
         if i == j {
             self.s.accel.scale_factor[i] = self.hidden.value;
         }
-    }
-
-    fn nonlinearity(&mut self) {
-        self.hidden.value = self.linear_value();
-        self.s.accel.nonlinearity_per_mps2[axis(self.axes.as_bytes()[0] as char)] = self.hidden.value;
     }
 
     fn gyro_term(&mut self) {
