@@ -325,7 +325,7 @@ impl Profile {
 /// The maximum of `value` by the simplex method of Nelder and Mead in `N` dimensions: from `start` and the
 /// `N` points one `step` away along each axis, every point through `clamp`, until the simplex's values agree
 /// within 1e-6 (relative, at least absolute) or after `iterations` steps. Returns the best point and value.
-fn nelder_mead<const N: usize>(
+pub(super) fn nelder_mead<const N: usize>(
     value: impl Fn([f64; N]) -> f64,
     clamp: impl Fn([f64; N]) -> [f64; N],
     start: [f64; N],

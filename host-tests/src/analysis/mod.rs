@@ -67,6 +67,7 @@ mod parallel;
 mod recording;
 pub mod report;
 mod result;
+mod sample_colour;
 mod sample_tests;
 mod selection;
 mod summary;
@@ -379,6 +380,11 @@ pub struct ChannelDiagnostics {
     /// The step of the decimal digits the samples were printed with (`10^-d`), if every sample is a whole
     /// multiple of one: a lattice at this step is the file's, not the sensor's quantisation.
     pub print_step: Option<f64>,
+    /// The noise's colour at the scale of a few samples (the sensor's own filter): the coefficients
+    /// `[theta_1, theta_2]` of the moving average `w_t + theta_1 w_(t-1) + theta_2 w_(t-2)` of white noise
+    /// that the detrended samples are, dimensionless; the correlated-noise test runs on the samples freed of
+    /// it (docs/analysis.md#the-noise-at-the-scale-of-a-few-samples).
+    pub sample_colour_ma: [f64; 2],
 }
 
 /// The result of `sinscal analyze` (docs/formats.md#analysis-json, with extra fields).

@@ -6,6 +6,7 @@ use std::collections::BTreeMap;
 
 use crate::model::catalogue::EffectKind;
 
+use super::sample_tests::{FASTEST_RESOLVED, SLOWEST_RESOLVED};
 use super::selection::{ApartFromAliases, Problem, Selection, HALVES, POSE_ORDER};
 use super::windows::NOT_STATIONARY;
 use super::{Analysis, BaseModel, ChannelDiagnostics, Confounded, Consequence, Effect, FigureData, Misfit, ALPHA};
@@ -150,8 +151,10 @@ fn misfits_and_confounded(problem: &Problem, selection: &Selection) -> (Vec<Misf
 /// Effects ranked: the column effects (what a calibration must model) in the order the forward selection
 /// chose them; then the noise effects, which move no estimate, by their BIC gain; the uncertain time terms
 /// (confounded with pose order, a random walk of the bias or the session's halves, or a time constant at its
-/// grid's end) and the noise terms that differ between the thirds of the dwells after all of them. Each column effect carries its consequence; the ranking does not sort by it (a small partial alias
-/// of a strong effect can move a bias more than the effect itself: docs/analysis.md#verdict).
+/// grid's end) and the noise terms that differ between the thirds of the dwells or whose time constant is an
+/// end of what the samples resolve after all of them. Each column effect carries its consequence; the ranking does
+/// not sort by it (a small partial alias of a strong effect can move a bias more than the effect itself:
+/// docs/analysis.md#verdict).
 fn rank(effects: &mut [Effect]) {
     for e in effects.iter_mut() {
         e.uncertain = is_uncertain(e);
@@ -179,10 +182,17 @@ fn rank(effects: &mut [Effect]) {
 }
 
 /// An effect the analysis cannot stand behind: an alias of pose order, the session's halves, the bias's
-/// wander or the thirds of the dwells, or a column effect whose time constant is an end of its grid (not
-/// determined either).
+/// wander, the thirds of the dwells, a slower term bending the dwells or the noise's colour at the sample
+/// scale, or a column effect whose time constant is an end of its grid (not determined either).
 fn is_uncertain(e: &Effect) -> bool {
-    let alias = |a: &String| a == POSE_ORDER || a == HALVES || a == super::wander::WANDER || a == NOT_STATIONARY;
+    let alias = |a: &String| {
+        a == POSE_ORDER
+            || a == HALVES
+            || a == super::wander::WANDER
+            || a == NOT_STATIONARY
+            || a == SLOWEST_RESOLVED
+            || a == FASTEST_RESOLVED
+    };
     e.aliases.iter().any(alias) || (e.at_grid_edge && e.consequence.is_some())
 }
 
