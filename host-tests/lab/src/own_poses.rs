@@ -33,8 +33,9 @@
 //! - a correlated noise (first-order Gauss-Markov of time constant `tau`, 0.2 to 2 s but at most 0.8 of
 //!   the analysis's search range, a quarter of the shortest dwell): the standard error of its VARIANCE
 //!   estimated at zero against the channel's measured noise density (Whittle's information, summed over the
-//!   Fourier frequencies of all dwells); `k` standard errors is the variance `k` times that, so that its
-//!   likelihood ratio is about `k^2` as for the others;
+//!   Fourier frequencies of every dwell but the two lowest, which the dwell's own mean and line take);
+//!   `k` standard errors is the variance `k` times that, so that its likelihood ratio is about `k^2` as for
+//!   the others;
 //! - a quantisation step `q`: its noise `q^2 / 12` counted in standard errors of the per-sample variance
 //!   (`sigma^2 sqrt(2 / n)`, `sigma` the detrended RMS per sample): `q = sqrt(12 k sigma^2 sqrt(2 / n))`.
 //!
@@ -401,27 +402,27 @@ impl Baseline {
     }
 
     /// One standard error of the variance of a Gauss-Markov process of time constant `tau_s` on channel `ch`
-    /// (see the module's documentation), SI^2.
+    /// (see the module's documentation), SI^2: Whittle's information at zero variance, summed over every
+    /// dwell's own Fourier frequencies `k / T` but its two lowest (`k` = 0 and 1: what the dwell's mean and
+    /// line take, which the analysis removes), the measured density read at the nearest bin.
     pub fn markov_variance_unit(&self, ch: usize, tau_s: f64) -> f64 {
         let r = &self.reference;
         let (freqs, density) = &r.spectra[ch];
         let dt = 1.0 / r.rate_hz;
         let phi = (-dt / tau_s).exp();
-        let df = freqs.get(1).copied().unwrap_or(1.0);
-        let info: f64 = freqs
+        let bin = freqs.get(1).copied().unwrap_or(1.0);
+        let per_unit = |f: f64| {
+            2.0 * dt * (1.0 - phi * phi) / (1.0 - 2.0 * phi * (std::f64::consts::TAU * f * dt).cos() + phi * phi)
+        };
+        let info: f64 = r
+            .dwell_samples
             .iter()
-            .zip(density)
-            .skip(1)
-            .filter(|(_, s)| **s > 0.0)
-            .map(|(f, s)| {
-                let per_unit = 2.0 * dt * (1.0 - phi * phi)
-                    / (1.0 - 2.0 * phi * (std::f64::consts::TAU * f * dt).cos() + phi * phi);
-                (per_unit / s).powi(2)
+            .flat_map(|&n| (2..n.div_ceil(2)).map(move |k| k as f64 / (n as f64 * dt)))
+            .filter_map(|f| {
+                let i = ((f / bin).round() as usize).clamp(1, density.len().max(2) - 1);
+                density.get(i).filter(|s| **s > 0.0).map(|s| (per_unit(f) / s).powi(2))
             })
-            .sum::<f64>()
-            * r.samples as f64
-            * dt
-            * df;
+            .sum();
         1.0 / info.sqrt()
     }
 
@@ -603,7 +604,8 @@ pub struct Outcome {
     pub false_alarms: Vec<(String, bool)>,
     /// Why it was not found (None when found): "estimate off", "not determined apart from its aliases" (off,
     /// and the analysis says the data fix only its combination with an alias), "the baseline's value",
-    /// "another line", "instead: LABEL", "nothing new".
+    /// "another line", "instead: LABEL", "named as its alias: LABEL" (an effect of another kind or place
+    /// that the analysis names as indistinguishable from the planted one), "nothing new".
     pub miss: Option<String>,
 }
 
@@ -709,10 +711,19 @@ pub fn judge(analysis: &Analysis, baseline: &Analysis, h: &Hidden, size: f64) ->
         .filter(|e| !at_planted_place(e, h) && !explained(e, baseline, h))
         .map(|e| (label(e), is_uncertain(e)))
         .collect();
+    // An effect of another kind or place that names the planted candidate among its aliases: the data cannot
+    // tell the two apart in this schedule (a gyro's warm-up and drift seen in one up/down pair).
+    let as_alias = || {
+        analysis.effects.iter().find(|e| !at_planted_place(e, h) && e.aliases.iter().any(|a| *a == candidate_name(h)))
+    };
     let miss = match (hit, verdicts.first()) {
         (Some(_), _) => None,
         (None, Some(Err(why))) => Some(why.to_string()),
-        (None, _) => Some(false_alarms.first().map_or("nothing new".to_string(), |(l, _)| format!("instead: {l}"))),
+        (None, _) => Some(match (false_alarms.first(), as_alias()) {
+            (Some((l, _)), _) => format!("instead: {l}"),
+            (None, Some(e)) => format!("named as its alias: {}", label(e)),
+            (None, None) => "nothing new".to_string(),
+        }),
     };
     Outcome {
         hidden: h.clone(),

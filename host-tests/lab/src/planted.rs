@@ -431,6 +431,8 @@ pub(crate) struct Reference {
     block_times: Vec<Vec<f64>>,
     /// Samples in the dwells.
     pub(crate) samples: usize,
+    /// Samples of each dwell.
+    pub(crate) dwell_samples: Vec<usize>,
     /// Sample rate, Hz.
     pub(crate) rate_hz: f64,
     /// Position labels.
@@ -476,6 +478,7 @@ impl Reference {
             spectra,
             block_times,
             samples: dwells.iter().map(|d| d.rows.len()).sum(),
+            dwell_samples: dwells.iter().map(|d| d.rows.len()).collect(),
             rate_hz,
             positions: dwells.iter().map(|d| d.pos).collect(),
         }
