@@ -1,8 +1,8 @@
 //! The colour of a channel's noise at the scale of a few samples: the sensor's own filter (an anti-aliasing
 //! or decimation filter) makes neighbouring samples correlated, which no Gauss-Markov process of a time
-//! constant of two samples or more can describe. Measured on the shared records (docs/analysis.md#the-noise-at-the-scale-of-a-few-samples):
-//! the Ferraris gyros' detrended samples correlate +0.20 at one sample and -0.07 to -0.11 at two, nothing
-//! beyond.
+//! constant of two samples or more can describe. Measured on the shared records
+//! (docs/analysis.md#the-noise-at-the-scale-of-a-few-samples): the Ferraris gyros' detrended samples
+//! correlate +0.19 to +0.20 at one sample and -0.07 to -0.11 at two, nothing beyond.
 //!
 //! Modelled as a moving average of order two of the white noise, `w_t + theta_1 w_(t-1) + theta_2 w_(t-2)`,
 //! fitted on the autocovariances (lags 0 to 3) of the sample DIFFERENCES within every dwell. A process slower
