@@ -6,9 +6,10 @@
 //!
 //! Modelled as a moving average of order two of the white noise, `w_t + theta_1 w_(t-1) + theta_2 w_(t-2)`,
 //! fitted on the autocovariances (lags 0 to 3) of the sample DIFFERENCES within every dwell. A process slower
-//! than a few samples (time constant `tau` samples, variance `s2`) hardly moves them: it adds `2 s2 (1 - phi)`
-//! at lag 0 and `-s2 phi^(k-1) (1 - phi)^2` at lag `k` (`phi = exp(-1/tau)`), 0.25 % of its variance at
-//! `tau = 20`. The correlated-noise tests then run on the series passed through the inverse of that moving
+//! than a few samples (time constant `tau` samples, variance `s2`) hardly moves them: it adds `-s2
+//! phi^(k-1) (1 - phi)^2` at lag `k` (`phi = exp(-1/tau)`), 0.24 % of its variance at `tau = 20`, and `2 s2
+//! (1 - phi)` at lag 0, which reads as a little more white noise (10 % of its variance at `tau = 20`) and
+//! pulls the coefficients slightly towards zero. The correlated-noise tests then run on the series passed through the inverse of that moving
 //! average ([`SampleColour::whiten`]): the sensor's filter no longer stands in for, or masks, a process.
 //! A process slower than the filter passes it with the filter's gain at zero frequency, `1 + theta_1 +
 //! theta_2`, by which its fitted standard deviation is multiplied back ([`SampleColour::gain`]).

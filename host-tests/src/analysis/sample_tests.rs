@@ -673,7 +673,8 @@ mod tests {
         let (mut close, mut passing_colour) = (0, 0);
         for seed in 0..6 {
             let colour_only = CorrelatedFits::of(filtered_with_process(0.0, seed), 0.01);
-            assert!((colour_only.colour.theta[0] - 0.25).abs() < 0.05, "{:?}", colour_only.colour);
+            // 12,000 samples with theta_1 = 0.25: seeds 0 to 5 read 0.218 to 0.299.
+            assert!((colour_only.colour.theta[0] - 0.25).abs() < 0.08, "{:?}", colour_only.colour);
             let gm = colour_only.one.as_ref().expect("a fit");
             if gm.lr > threshold {
                 assert!(gm.tau_s < 0.03, "seed {seed}: the colour passes as a process of {} s", gm.tau_s);
