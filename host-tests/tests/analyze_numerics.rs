@@ -207,8 +207,8 @@ fn analyses_of_the_shared_sets(dir: &std::path::Path) -> Vec<(&'static str, Anal
 /// of the Ferraris and imu_tk records (docs/analysis.md#the-noise-at-the-scale-of-a-few-samples). The colour
 /// is removed before the correlated-noise test on every channel of both (Ferraris +0.24 to +0.31 at one
 /// sample, imu_tk +0.05 to +0.15), and no correlated noise is named at two samples, where before every channel
-/// of both named one. The PSINS laser gyros' colour stresses the high frequencies (the quantisation of counts
-/// that carry their remainder): it is left, and their three processes (0.14 to 0.27 s) are still named.
+/// of both named one. The PSINS laser gyros' colour is no low-pass filter's (the quantisation of counts that
+/// carry their remainder): it is left, and their three processes (0.14 to 0.27 s) are still named.
 #[test]
 fn the_sensor_filters_colour_is_no_correlated_noise_on_the_measured_data() {
     let Some(dir) = common::data_dir() else { return };

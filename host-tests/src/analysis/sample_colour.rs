@@ -95,8 +95,8 @@ impl SampleColour {
     /// theta_1 + theta_2`), its gain at zero frequency is within [`MAX_GAIN_FACTOR`] of 1, and every root of
     /// its moving average is at most [`MAX_ROOT`] from the origin. A colour that stresses the high frequencies
     /// is a differenced white noise, such as the quantisation of a counter that carries its remainder (the
-    /// PSINS laser gyros: gains at zero frequency of 0.05 to 0.7): its inverse would multiply every slow
-    /// process 1 / gain times, and it is left in the samples.
+    /// PSINS laser gyros y and z: gains at zero frequency of 0.05 and 0.68; x: a root 0.97 from the origin):
+    /// its inverse would multiply every slow process 1 / gain times, and it is left in the samples.
     fn is_a_filter(&self) -> bool {
         let [a, b] = self.theta;
         // The roots of z^2 + a z + b: complex ones have modulus sqrt(b).
