@@ -581,6 +581,29 @@ fn psd_panel(area: &Area, a: &Analysis, c: usize, samples: &[f64]) -> anyhow::Re
         .map_err(|x| e(&x))?
         .label(format!("white level of the base model (N = {} {n_unit})", sig(n_white / n_per)))
         .legend(legend_line(RED, 2));
+    if let Some(theta) =
+        a.diagnostics.iter().find(|d| d.channel == CHANNELS[c]).map(|d| d.sample_colour_ma).filter(|t| *t != [0.0, 0.0])
+    {
+        // The moving average of white noise with the base model's variance: |H(f)|^2 / (1 + theta_1^2 +
+        // theta_2^2) times the white level.
+        let norm = 1.0 + theta[0] * theta[0] + theta[1] * theta[1];
+        let shape = |f: f64| {
+            let w = std::f64::consts::TAU * f / rate;
+            let re = 1.0 + theta[0] * w.cos() + theta[1] * (2.0 * w).cos();
+            let im = theta[0] * w.sin() + theta[1] * (2.0 * w).sin();
+            white * (re * re + im * im) / norm
+        };
+        let curve: Vec<(f64, f64)> =
+            (0..=200).map(|i| f0 * (f1 / f0).powf(i as f64 / 200.0)).map(|f| (f, shape(f))).collect();
+        chart
+            .draw_series(LineSeries::new(curve, MAGENTA.stroke_width(2)))
+            .map_err(|x| e(&x))?
+            .label(format!(
+                "the sensor's filter (moving average {:.2}, {:.2}), removed before the correlated-noise test",
+                theta[0], theta[1]
+            ))
+            .legend(legend_line(MAGENTA, 2));
+    }
     for &(amp, f) in &a.figures.vibration[c] {
         chart
             .draw_series(LineSeries::new([(f, lo), (f, hi)], BLUE.stroke_width(2)))
