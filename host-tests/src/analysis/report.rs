@@ -10,6 +10,7 @@ use plotters::coord::combinators::LogCoord;
 use plotters::coord::combinators::{BindKeyPoints, WithKeyPoints};
 
 use crate::analysis::noise_terms::{sig, FitPoint, NoiseModel, Term};
+use crate::analysis::sample_colour::SampleColour;
 use crate::analysis::{Analysis, CHANNELS};
 use crate::plot::{display_unit, figure, log_ticks, short_name, tick_label, Png};
 use crate::stats::noise::{log_spaced_clusters, overlapping_allan_deviation, welch_psd};
@@ -584,15 +585,9 @@ fn psd_panel(area: &Area, a: &Analysis, c: usize, samples: &[f64]) -> anyhow::Re
     if let Some(theta) =
         a.diagnostics.iter().find(|d| d.channel == CHANNELS[c]).map(|d| d.sample_colour_ma).filter(|t| *t != [0.0, 0.0])
     {
-        // The moving average of white noise with the base model's variance: |H(f)|^2 / (1 + theta_1^2 +
-        // theta_2^2) times the white level.
-        let norm = 1.0 + theta[0] * theta[0] + theta[1] * theta[1];
-        let shape = |f: f64| {
-            let w = std::f64::consts::TAU * f / rate;
-            let re = 1.0 + theta[0] * w.cos() + theta[1] * (2.0 * w).cos();
-            let im = theta[0] * w.sin() + theta[1] * (2.0 * w).sin();
-            white * (re * re + im * im) / norm
-        };
+        // The moving average of white noise with the base model's variance.
+        let colour = SampleColour { theta };
+        let shape = |f: f64| white * colour.relative_density(f, rate);
         let curve: Vec<(f64, f64)> =
             (0..=200).map(|i| f0 * (f1 / f0).powf(i as f64 / 200.0)).map(|f| (f, shape(f))).collect();
         chart

@@ -106,23 +106,33 @@ impl SampleColour {
         a >= 0.0 && largest_root <= MAX_ROOT && (1.0 / MAX_GAIN_FACTOR..=MAX_GAIN_FACTOR).contains(&gain)
     }
 
-    /// `series` passed through the inverse of the moving average: `v_t = y_t - theta_1 v_(t-1) - theta_2
-    /// v_(t-2)`, each dwell from rest.
-    pub fn whiten(&self, series: &[Vec<f64>]) -> Vec<Vec<f64>> {
+    /// `series` passed through the inverse of the moving average in place: `v_t = y_t - theta_1 v_(t-1) -
+    /// theta_2 v_(t-2)`, each dwell from rest (no copy of the samples; nothing to do for white noise).
+    pub fn whiten(&self, mut series: Vec<Vec<f64>>) -> Vec<Vec<f64>> {
         let [a, b] = self.theta;
+        if self.theta == [0.0, 0.0] {
+            return series;
+        }
+        for d in series.iter_mut() {
+            let (mut v1, mut v2) = (0.0, 0.0);
+            for y in d.iter_mut() {
+                let v = *y - a * v1 - b * v2;
+                (v2, v1) = (v1, v);
+                *y = v;
+            }
+        }
         series
-            .iter()
-            .map(|d| {
-                let (mut v1, mut v2) = (0.0, 0.0);
-                d.iter()
-                    .map(|y| {
-                        let v = y - a * v1 - b * v2;
-                        (v2, v1) = (v1, v);
-                        v
-                    })
-                    .collect()
-            })
-            .collect()
+    }
+
+    /// The density of the moving average at `f_hz` (samples `rate_hz` apart) over that of white noise of the
+    /// same variance: `|1 + theta_1 e^(-i w) + theta_2 e^(-2 i w)|^2 / (1 + theta_1^2 + theta_2^2)`, `w = 2 pi
+    /// f / rate`; dimensionless.
+    pub fn relative_density(&self, f_hz: f64, rate_hz: f64) -> f64 {
+        let [a, b] = self.theta;
+        let w = std::f64::consts::TAU * f_hz / rate_hz;
+        let re = 1.0 + a * w.cos() + b * (2.0 * w).cos();
+        let im = a * w.sin() + b * (2.0 * w).sin();
+        (re * re + im * im) / (1.0 + a * a + b * b)
     }
 
     /// The moving average's gain at zero frequency, `1 + theta_1 + theta_2`: a process slower than the
@@ -159,7 +169,7 @@ mod tests {
         for k in 0..2 {
             assert!((c.theta[k] - theta[k]).abs() < 0.02, "theta {:?} against {theta:?}", c.theta);
         }
-        let white = c.whiten(&series);
+        let white = c.whiten(series.clone());
         let n: f64 = white.iter().map(|d| d.len() as f64).sum();
         let var = white.iter().flatten().map(|v| v * v).sum::<f64>() / n;
         for lag in 1..4 {
@@ -180,6 +190,15 @@ mod tests {
     }
 
     #[test]
+    fn the_relative_density_averages_one_and_is_the_gain_squared_at_zero_frequency() {
+        let c = SampleColour { theta: [0.25, -0.1] };
+        let norm = 1.0 + 0.25 * 0.25 + 0.1 * 0.1;
+        assert!((c.relative_density(0.0, 100.0) - c.gain().powi(2) / norm).abs() < 1e-12);
+        let mean = (0..1000).map(|i| c.relative_density((i as f64 + 0.5) * 0.05, 100.0)).sum::<f64>() / 1000.0;
+        assert!((mean - 1.0).abs() < 1e-9, "{mean}");
+    }
+
+    #[test]
     fn white_noise_keeps_its_colour_near_nothing() {
         let c = SampleColour::of(&moving_average([0.0, 0.0], 10, 4000, 5));
         assert!(c.theta.iter().all(|t| t.abs() < 0.02), "{:?}", c.theta);
@@ -192,7 +211,7 @@ mod tests {
         // divided by the gain at zero frequency.
         let c = SampleColour { theta: [0.3, -0.1] };
         let ramp: Vec<f64> = (0..5000).map(|i| i as f64 * 1e-3).collect();
-        let white = c.whiten(&[ramp]);
+        let white = c.whiten(vec![ramp]);
         let slope = (white[0][4999] - white[0][4000]) / 999.0;
         assert!((slope * c.gain() - 1e-3).abs() < 1e-12, "{slope}");
     }

@@ -518,11 +518,11 @@ impl CorrelatedFits {
     /// every dwell ([`in_windows`]; empty without).
     fn with_windows(series: Vec<Vec<f64>>, dt: f64, windows: bool) -> (CorrelatedFits, Vec<(f64, f64)>) {
         let colour = SampleColour::of(&series);
-        let whitened = colour.whiten(&series);
-        let n: usize = whitened.iter().map(Vec::len).sum();
+        let n: usize = series.iter().map(Vec::len).sum();
         let rms = |s: &[Vec<f64>]| (s.iter().flatten().map(|v| v * v).sum::<f64>() / n.max(1) as f64).sqrt();
-        let (gain, ratio) = (colour.gain(), rms(&series) / rms(&whitened).max(f64::MIN_POSITIVE));
-        drop(series);
+        let rms_before = rms(&series);
+        let whitened = colour.whiten(series);
+        let (gain, ratio) = (colour.gain(), rms_before / rms(&whitened).max(f64::MIN_POSITIVE));
         let in_thirds = if windows {
             in_windows(&whitened, |w| {
                 gauss_markov_test(w.to_vec(), dt).map(|gm| (gm.sigma * gain, gm.sigma_std * gain))
