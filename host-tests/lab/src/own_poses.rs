@@ -633,7 +633,8 @@ pub struct Outcome {
     /// Why it was not found (None when found): "estimate off", "not determined apart from its aliases" (off,
     /// and the analysis says the data fix only its combination with an alias), "the baseline's value",
     /// "another line", "instead: LABEL", "named as its alias: LABEL" (an effect of another kind or place
-    /// that the analysis names as indistinguishable from the planted one), "nothing new".
+    /// that the analysis names as indistinguishable from the planted one), "named as its rival: LABEL" (one
+    /// that names the planted one as nearly as good), "nothing new".
     pub miss: Option<String>,
 }
 
@@ -673,16 +674,20 @@ fn baseline_twin<'a>(baseline: &'a Analysis, e: &Effect) -> Option<&'a Effect> {
 }
 
 /// `e` is no false alarm: the baseline's own effect ([`baseline_twin`]), or named as indistinguishable (an
-/// alias either way, of any kind) from a baseline effect or from the planted candidate: the analysis says
-/// that the data cannot tell them apart, given the rest of its model.
+/// alias either way, of any kind) from a baseline effect, or with the planted candidate as an alias or a
+/// rival: the analysis says that the data cannot tell them apart, given the rest of its model, or that they
+/// favour `e` over the planted candidate by a Bayes factor below 20 ([`names_planted`]).
 fn explained(e: &Effect, baseline: &Analysis, h: &Hidden) -> bool {
     let aliased = |u: &Effect| {
         (u.aliases.contains(&candidate_of(e)) || e.aliases.contains(&candidate_of(u)))
             && same_line(u.frequency_hz, e.frequency_hz)
     };
-    baseline_twin(baseline, e).is_some()
-        || baseline.effects.iter().any(aliased)
-        || e.aliases.iter().any(|a| *a == candidate_name(h))
+    baseline_twin(baseline, e).is_some() || baseline.effects.iter().any(aliased) || names_planted(e, h)
+}
+
+/// `e` names the planted candidate among its aliases or its rivals.
+fn names_planted(e: &Effect, h: &Hidden) -> bool {
+    e.aliases.iter().chain(&e.rivals).any(|a| *a == candidate_name(h))
 }
 
 /// `a` agrees with `b` within 30 % of `b`.
@@ -739,17 +744,19 @@ pub fn judge(analysis: &Analysis, baseline: &Analysis, h: &Hidden, size: f64) ->
         .filter(|e| !at_planted_place(e, h) && !explained(e, baseline, h))
         .map(|e| (label(e), is_uncertain(e)))
         .collect();
-    // An effect of another kind or place that names the planted candidate among its aliases: the data cannot
-    // tell the two apart in this schedule (a gyro's warm-up and drift seen in one up/down pair).
-    let as_alias = || {
-        analysis.effects.iter().find(|e| !at_planted_place(e, h) && e.aliases.iter().any(|a| *a == candidate_name(h)))
-    };
+    // An effect of another kind or place that names the planted candidate among its aliases or rivals: the
+    // data cannot tell the two apart in this schedule (a gyro's warm-up and drift seen in one up/down pair),
+    // or favour the other one only weakly.
+    let as_alias = || analysis.effects.iter().find(|e| !at_planted_place(e, h) && names_planted(e, h));
     let miss = match (hit, verdicts.first()) {
         (Some(_), _) => None,
         (None, Some(Err(why))) => Some(why.to_string()),
         (None, _) => Some(match (false_alarms.first(), as_alias()) {
             (Some((l, _)), _) => format!("instead: {l}"),
-            (None, Some(e)) => format!("named as its alias: {}", label(e)),
+            (None, Some(e)) if e.aliases.iter().any(|a| *a == candidate_name(h)) => {
+                format!("named as its alias: {}", label(e))
+            }
+            (None, Some(e)) => format!("named as its rival: {}", label(e)),
             (None, None) => "nothing new".to_string(),
         }),
     };

@@ -159,6 +159,10 @@ pub struct Effect {
     pub p_value: f64,
     /// Other candidates this data set cannot tell apart from this one.
     pub aliases: Vec<String>,
+    /// Other candidates that explained the data nearly as well when this one was chosen (a BIC gain within 6
+    /// of its own: a Bayes factor below 20), not among `aliases` (docs/analysis.md#rivals).
+    #[serde(skip_serializing_if = "Vec::is_empty")]
+    pub rivals: Vec<String>,
     /// Its standard error once the worst of its aliases (those of `aliases` that are candidates) is fitted
     /// beside it, SI: what the estimate is worth when the data cannot tell which of them it is
     /// (docs/analysis.md#confounding). Absent when none of its aliases is a candidate; `null` when the data
@@ -304,6 +308,14 @@ impl Effect {
             None => {}
         }
         text
+    }
+
+    /// The rivals in words: "nearly as good here (Bayes factor below 20): a, b"; empty without rivals.
+    pub fn rivals_text(&self) -> String {
+        if self.rivals.is_empty() {
+            return String::new();
+        }
+        format!("nearly as good here (Bayes factor below 20): {}", self.rivals.join(", "))
     }
 
     /// The extra fields in words: "pos 3", "tau 1.234 s", "f 7.3000 Hz" (comma-separated, empty if none).

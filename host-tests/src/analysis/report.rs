@@ -71,7 +71,7 @@ fn effects_md(md: &mut String, a: &Analysis) {
     } else {
         let _ = writeln!(
             md,
-            "| effect | sensor | axes | estimate | std error | unit | moves (in standard errors) | delta BIC | residual RMS before -> after | extra | aliases |\n|---|---|---|---|---|---|---|---|---|---|---|"
+            "| effect | sensor | axes | estimate | std error | unit | moves (in standard errors) | delta BIC | residual RMS before -> after | extra | aliases, rivals |\n|---|---|---|---|---|---|---|---|---|---|---|"
         );
     }
     for e in &a.effects {
@@ -93,7 +93,12 @@ fn effects_md(md: &mut String, a: &Analysis) {
             e.residual_unit,
             e.residual_of,
             extras,
-            e.aliases_text()
+            [e.aliases_text(), e.rivals_text()]
+                .iter()
+                .filter(|t| !t.is_empty())
+                .cloned()
+                .collect::<Vec<_>>()
+                .join("; ")
         );
     }
     if !a.misfits.is_empty() {

@@ -70,6 +70,7 @@ fn effect_of(problem: &Problem, selection: &Selection, index: usize) -> Effect {
         parameters: cand.parameters(),
         p_value: c.p_value,
         aliases: selection.aliases[index].clone(),
+        rivals: rivals(problem, selection, index),
         std_error_with_aliases: None,
         consequence: consequence(problem, selection, index),
         at_grid_edge: cand.variants.len() > 1 && (c.variant == 0 || c.variant + 1 == cand.variants.len()),
@@ -146,6 +147,16 @@ fn misfits_and_confounded(problem: &Problem, selection: &Selection) -> (Vec<Misf
         })
         .collect();
     (misfits, confounded)
+}
+
+/// The rivals of chosen effect `index` that are neither among its aliases nor in the final model.
+fn rivals(problem: &Problem, selection: &Selection, index: usize) -> Vec<String> {
+    let in_model: Vec<String> = selection.chosen.iter().map(|c| problem.candidates[c.candidate].name()).collect();
+    selection.rivals[index]
+        .iter()
+        .filter(|r| !selection.aliases[index].contains(r) && !in_model.contains(r))
+        .cloned()
+        .collect()
 }
 
 /// Effects ranked: the column effects (what a calibration must model) in the order the forward selection

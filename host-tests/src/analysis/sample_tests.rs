@@ -338,6 +338,7 @@ impl ChannelMeasures {
             parameters: 0,
             p_value: 0.0,
             aliases: Vec::new(),
+            rivals: Vec::new(),
             std_error_with_aliases: None,
             consequence: None,
             at_grid_edge: false,

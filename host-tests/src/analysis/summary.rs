@@ -96,5 +96,8 @@ fn effect_line(s: &mut String, e: &Effect) {
     if !e.aliases.is_empty() {
         let _ = write!(s, "  ({})", e.aliases_text());
     }
+    if !e.rivals.is_empty() {
+        let _ = write!(s, "  ({})", e.rivals_text());
+    }
     let _ = writeln!(s);
 }
