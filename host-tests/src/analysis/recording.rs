@@ -7,7 +7,7 @@ use crate::calibration::attitude_knowledge;
 use crate::calibration::checks::physics_of_recording;
 use crate::io::error::InputError;
 use crate::io::recording::RowSource;
-use crate::model::catalogue::EffectKind;
+use crate::model::catalogue::{EffectKind, Sensor};
 use crate::stats::linfit::Observations;
 use sinscal::calib::general::AttitudeKnowledge;
 
@@ -61,7 +61,8 @@ fn analyze_session(mut session: Session, levelled: bool, source: &str) -> Result
     });
     let mut selection = selection.map_err(|e| InputError::file(source, e))?;
     let m = (selection.observable + sample_tests(session)) as f64;
-    let SampleFindings { effects: sample_effects, diagnostics, mut figures } = test_samples(session, &measures, m);
+    let SampleFindings { effects: sample_effects, diagnostics, mut figures } =
+        test_samples(session, &measures, m, &chosen_warmups(&problem, &selection));
     let noise_model = noise_models(&figures);
     // Each selection's unsupported effects are left out of the next, until none is left (at most
     // `MAX_RESELECTIONS` more selections).
@@ -112,6 +113,21 @@ fn analyze_session(mut session: Session, levelled: bool, source: &str) -> Result
         }
     }
     Ok(analysis)
+}
+
+/// The warm-ups of `selection`, per channel of the six: amplitude (the channel's unit) and time constant, s.
+fn chosen_warmups(problem: &Problem, selection: &Selection) -> [Vec<(f64, f64)>; 6] {
+    let mut out: [Vec<(f64, f64)>; 6] = Default::default();
+    for (j, c) in selection.chosen.iter().enumerate() {
+        let candidate = &problem.candidates[c.candidate];
+        let (EffectKind::BiasWarmup, Some(tau)) = (candidate.effect, candidate.variants[c.variant].0) else {
+            continue;
+        };
+        let Some(axis) = ["x", "y", "z"].iter().position(|a| *a == candidate.axes) else { continue };
+        let channel = if candidate.sensor == Sensor::Gyro { axis } else { 3 + axis };
+        out[channel].push((selection.final_fit.beta[problem.base.len() + j], tau));
+    }
+    out
 }
 
 /// The final model's block-mean residuals with what the verdict on the model needs

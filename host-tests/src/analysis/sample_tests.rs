@@ -114,10 +114,17 @@ pub(super) fn measure_samples(session: &Session) -> SampleMeasures {
     }
 }
 
-/// Decides the sample tests of `measures` (of `session`), each against `alpha / m`. The figure data are per
-/// channel of the six, empty (no samples, NaN) for a channel the recording does not have; the diagnostics
-/// only for those it has.
-pub(super) fn test_samples(session: &Session, measures: &SampleMeasures, m: f64) -> SampleFindings {
+/// Decides the sample tests of `measures` (of `session`), each against `alpha / m`, the correlated noise of a
+/// channel with the block model's warm-ups of that channel removed (`warmups`: per channel of the six,
+/// amplitude in the channel's unit and time constant, s; docs/analysis.md#correlated-noise). The figure data
+/// are per channel of the six, empty (no samples, NaN) for a channel the recording does not have; the
+/// diagnostics only for those it has.
+pub(super) fn test_samples(
+    session: &Session,
+    measures: &SampleMeasures,
+    m: f64,
+    warmups: &[Vec<(f64, f64)>; 6],
+) -> SampleFindings {
     let mut out = SampleFindings {
         effects: Vec::new(),
         diagnostics: Vec::new(),
@@ -132,7 +139,7 @@ pub(super) fn test_samples(session: &Session, measures: &SampleMeasures, m: f64)
         figures.vibration.push(Vec::new());
     }
     let channels = &measures.channels;
-    for outcome in on_cores(channels.len(), |c| channels[c].judge(session, m)) {
+    for outcome in on_cores(channels.len(), |c| channels[c].judge(session, m, &warmups[channels[c].c])) {
         out.effects.extend(outcome.effects);
         let figures = &mut out.figures;
         figures.base_sigma.push(outcome.diagnostics.detrended_rms);
@@ -277,22 +284,34 @@ impl ChannelMeasures {
 
     /// Quantisation, vibration, correlated noise, in that order, against `alpha / m`; the diagnostics and
     /// figure data.
-    fn judge(&self, session: &Session, m: f64) -> ChannelOutcome {
+    fn judge(&self, session: &Session, m: f64, warmups: &[(f64, f64)]) -> ChannelOutcome {
         let mut effects = Vec::new();
         let q_step = self.quantization(m, &mut effects);
         let (passing, vib) = self.vibration(m, session.dt, &mut effects);
         let refitted;
-        let correlated = if passing == self.lines.len() {
-            &self.correlated
+        let correlated = if passing == self.lines.len() && warmups.is_empty() {
+            (&self.correlated, &self.correlated_windows[..])
         } else {
-            // Fewer lines pass at this m than at the smallest m: fit the series with those removed.
-            let mut series: Vec<Vec<f64>> =
-                session.dwells.iter().map(|d| detrend(&d.t, &d.y[self.c]).residual).collect();
+            // Fewer lines pass at this m than at the smallest m, or the block model holds a warm-up of this
+            // channel, whose bend within a dwell its line leaves: fit the series with those removed.
+            let warmup = |t: f64| warmups.iter().map(|(a, tau)| a * (-(t - session.t0) / tau).exp()).sum::<f64>();
+            let mut series: Vec<Vec<f64>> = session
+                .dwells
+                .iter()
+                .map(|d| {
+                    let y: Vec<f64> = d.t.iter().zip(&d.y[self.c]).map(|(&t, y)| y - warmup(t)).collect();
+                    detrend(&d.t, &y).residual
+                })
+                .collect();
             for l in &self.lines[..passing] {
                 remove_line(&mut series, &l.line, session.dt);
             }
-            refitted = CorrelatedFits::of(series, session.dt);
-            &refitted
+            refitted = if warmups.is_empty() {
+                (CorrelatedFits::of(series, session.dt), self.correlated_windows.clone())
+            } else {
+                CorrelatedFits::with_windows(series, session.dt, true)
+            };
+            (&refitted.0, &refitted.1[..])
         };
         let corr_found = self.correlated_noise(correlated, m, session.dt, &mut effects);
         let long = self.long.clone();
@@ -305,7 +324,7 @@ impl ChannelMeasures {
                 max_trend_z: self.max_trend_z,
                 quantization_step: q_step,
                 print_step: self.print_step,
-                sample_colour_ma: correlated.colour.theta,
+                sample_colour_ma: correlated.0.colour.theta,
             },
             longest_dwell: long,
             correlated: corr_found,
@@ -433,7 +452,7 @@ impl ChannelMeasures {
     /// process, or of the two processes' larger, if found.
     fn correlated_noise(
         &self,
-        fits: &CorrelatedFits,
+        (fits, windows): (&CorrelatedFits, &[(f64, f64)]),
         m: f64,
         dt: f64,
         effects: &mut Vec<Effect>,
@@ -445,11 +464,11 @@ impl ChannelMeasures {
         };
         let delta_bic = passes(gm.lr)?;
         if let Some((two, delta_bic_two)) = fits.two.as_ref().and_then(|t| passes(t.lr).map(|d| (t, d))) {
-            return Some(self.two_processes(gm, two, [delta_bic, delta_bic_two], dt, effects));
+            return Some(self.two_processes((gm, two), windows, [delta_bic, delta_bic_two], dt, effects));
         }
         effects.push(Effect {
             estimate: gm.sigma,
-            std_error: gm.sigma_std * widening(&self.correlated_windows),
+            std_error: gm.sigma_std * widening(windows),
             delta_bic,
             residual_rms_before: gm.rms_white,
             residual_rms_after: gm.rms_innovation,
@@ -458,7 +477,7 @@ impl ChannelMeasures {
             parameters: 2,
             p_value: chi_square_upper(gm.lr, 2.0),
             at_grid_edge: gm.tau_at_edge,
-            aliases: correlated_aliases(&self.correlated_windows, gm.tau_at_edge, gm.tau_s, dt),
+            aliases: correlated_aliases(windows, gm.tau_at_edge, gm.tau_s, dt),
             ..self.effect(EffectKind::CorrelatedNoise, "innovations")
         });
         Some((gm.sigma, gm.tau_s))
@@ -468,8 +487,8 @@ impl ChannelMeasures {
     /// against white noise (`gm`), the other the test of two processes against one; `delta_bic` of each.
     fn two_processes(
         &self,
-        gm: &GaussMarkovResult,
-        two: &TwoProcessResult,
+        (gm, two): (&GaussMarkovResult, &TwoProcessResult),
+        windows: &[(f64, f64)],
         delta_bic: [f64; 2],
         dt: f64,
         effects: &mut Vec<Effect>,
@@ -480,7 +499,7 @@ impl ChannelMeasures {
             let lr = if first { gm.lr } else { two.lr };
             effects.push(Effect {
                 estimate: p.sigma,
-                std_error: p.sigma_std * widening(&self.correlated_windows),
+                std_error: p.sigma_std * widening(windows),
                 delta_bic: delta_bic[usize::from(!first)],
                 residual_rms_before: if first { gm.rms_white } else { gm.rms_innovation },
                 residual_rms_after: if first { gm.rms_innovation } else { two.rms_innovation },
@@ -489,7 +508,7 @@ impl ChannelMeasures {
                 parameters: 2,
                 p_value: chi_square_upper(lr, 2.0),
                 at_grid_edge: p.tau_at_edge,
-                aliases: correlated_aliases(&self.correlated_windows, p.tau_at_edge, p.tau_s, dt),
+                aliases: correlated_aliases(windows, p.tau_at_edge, p.tau_s, dt),
                 ..self.effect(EffectKind::CorrelatedNoise, "innovations")
             });
         }
