@@ -1063,6 +1063,25 @@ mod tests {
         (obs, vec![vec![1.0; n], t])
     }
 
+    /// A problem of one accelerometer channel: observations `y` (variance fitted), its bias as the base
+    /// model, every observation in position 1, and `candidates`.
+    fn one_channel(y: Vec<f64>, candidates: Vec<Candidate>) -> Problem {
+        let n = y.len();
+        Problem {
+            obs: Observations { y, group: vec![0; n], groups: 1, sigma: None },
+            base: vec![vec![1.0; n]],
+            base_names: vec!["accel_bias_x".into()],
+            group_names: vec!["ax_mps2".into()],
+            group_units: vec!["m/s^2"],
+            obs_pos: vec![1; n],
+            obs_pose: None,
+            obs_block: None,
+            candidates,
+            unobservable: Vec::new(),
+            residual_of: "block means",
+        }
+    }
+
     /// The factor of [`inflation`] is the ratio of the slope's standard errors fitted with and without the
     /// alias (to 1e-9), for an alias along the slope (`t^2`) and one along a single observation; an alias the
     /// model's columns make (exactly dependent) gives at least [`NOT_DETERMINED`] when it holds the slope, 1
@@ -1110,19 +1129,7 @@ mod tests {
                     Candidate::single(effect, Sensor::Accel, axes, Column::new(c.clone()), vec![0])
                 })
                 .collect();
-            let mut p = Problem {
-                obs: Observations { y: y.clone(), group: vec![0; n], groups: 1, sigma: None },
-                base: vec![vec![1.0; n]],
-                base_names: vec!["accel_bias_x".into()],
-                group_names: vec!["ax_mps2".into()],
-                group_units: vec!["m/s^2"],
-                obs_pos: vec![1; n],
-                obs_pose: None,
-                obs_block: None,
-                candidates,
-                unobservable: Vec::new(),
-                residual_of: "block means",
-            };
+            let mut p = one_channel(y.clone(), candidates);
             let s = select_at_most(&mut p, 0, max_effects, &[]).unwrap();
             let names: Vec<String> = s.chosen.iter().map(|c| p.candidates[c.candidate].name()).collect();
             (names, s.cut_short.map(|(ci, lr)| (p.candidates[ci].name(), lr)))
@@ -1166,23 +1173,14 @@ mod tests {
         };
         let column = |v: &[f64]| Column::new(v.to_vec());
         let drift: Vec<f64> = t.iter().map(|t| t - 50.0).collect();
-        let mut p = Problem {
-            obs: Observations { y, group: vec![0; n], groups: 1, sigma: None },
-            base: vec![vec![1.0; n]],
-            base_names: vec!["accel_bias_x".into()],
-            group_names: vec!["ax_mps2".into()],
-            group_units: vec!["m/s^2"],
-            obs_pos: vec![1; n],
-            obs_pose: None,
-            obs_block: None,
-            candidates: vec![
+        let mut p = one_channel(
+            y,
+            vec![
                 warmup,
                 Candidate::single(EffectKind::AccelScaleFactor, Sensor::Accel, "x".into(), column(&step), vec![0]),
                 Candidate::single(EffectKind::BiasDrift, Sensor::Accel, "x".into(), column(&drift), vec![0]),
             ],
-            unobservable: Vec::new(),
-            residual_of: "block means",
-        };
+        );
         let s = select_at_most(&mut p, 0, 3, &[]).unwrap();
         let names: Vec<String> = s.chosen.iter().map(|c| p.candidates[c.candidate].name()).collect();
         assert_eq!(names, ["bias_warmup:x (accel)", "accel_scale_factor:x"], "the drift is not added");
@@ -1214,19 +1212,7 @@ mod tests {
                 vec![0],
             )
         };
-        let mut p = Problem {
-            obs: Observations { y, group: vec![0; n], groups: 1, sigma: None },
-            base: vec![vec![1.0; n]],
-            base_names: vec!["accel_bias_x".into()],
-            group_names: vec!["ax_mps2".into()],
-            group_units: vec!["m/s^2"],
-            obs_pos: vec![1; n],
-            obs_pose: None,
-            obs_block: None,
-            candidates: vec![candidate("x", &first), candidate("y", &second), candidate("z", &c)],
-            unobservable: Vec::new(),
-            residual_of: "block means",
-        };
+        let mut p = one_channel(y, vec![candidate("x", &first), candidate("y", &second), candidate("z", &c)]);
         let s = select_at_most(&mut p, 0, 3, &[]).unwrap();
         let names: Vec<String> = s.chosen.iter().map(|c| p.candidates[c.candidate].name()).collect();
         let rival = if names[0] == "accel_scale_factor:x" { "accel_scale_factor:y" } else { "accel_scale_factor:x" };
