@@ -673,15 +673,18 @@ fn baseline_twin<'a>(baseline: &'a Analysis, e: &Effect) -> Option<&'a Effect> {
     baseline.effects.iter().find(|u| same_candidate(u, e))
 }
 
-/// `e` is no false alarm: the baseline's own effect ([`baseline_twin`]), or named as indistinguishable (an
-/// alias either way, of any kind) from a baseline effect, or with the planted candidate as an alias or a
-/// rival: the analysis says that the data cannot tell them apart, given the rest of its model, or that they
-/// favour `e` over the planted candidate by a Bayes factor below 20 ([`names_planted`]).
+/// `e` is no false alarm: the baseline's own effect ([`baseline_twin`]), or named as indistinguishable or
+/// nearly as good (an alias or a rival either way, of any kind) as a baseline effect, or with the planted
+/// candidate as an alias or a rival: the analysis says that the data cannot tell them apart, given the rest
+/// of its model, or that they favour one over the other by a Bayes factor below 20 ([`names_planted`]). A
+/// weak effect of the record itself can come back under another name: the imu_tk accelerometer z's uncertain
+/// warm-up as a drift of y, its rival.
 fn explained(e: &Effect, baseline: &Analysis, h: &Hidden) -> bool {
-    let aliased = |u: &Effect| {
-        (u.aliases.contains(&candidate_of(e)) || e.aliases.contains(&candidate_of(u)))
-            && same_line(u.frequency_hz, e.frequency_hz)
+    let named = |by: &Effect, of: &Effect| {
+        let c = candidate_of(of);
+        by.aliases.contains(&c) || by.rivals.contains(&c)
     };
+    let aliased = |u: &Effect| (named(u, e) || named(e, u)) && same_line(u.frequency_hz, e.frequency_hz);
     baseline_twin(baseline, e).is_some() || baseline.effects.iter().any(aliased) || names_planted(e, h)
 }
 
