@@ -436,12 +436,12 @@ impl Baseline {
     /// The quantisation step planted at `size` standard errors on channel `ch`, SI.
     pub fn quantisation_step(&self, ch: usize, size: f64) -> f64 {
         let sigma = self.reference.sample_sigma[ch];
-        (12.0 * size * sigma * sigma * (2.0 / self.reference.samples as f64).sqrt()).sqrt()
+        (12.0 * size * sigma * sigma * (2.0 / self.reference.samples() as f64).sqrt()).sqrt()
     }
 
     /// One standard error of a line's amplitude at `f_hz` on channel `ch`, SI.
     pub fn line_unit(&self, ch: usize, f_hz: f64) -> f64 {
-        self.reference.line_sigma(ch, f_hz) * (2.0 / self.reference.samples as f64).sqrt()
+        self.reference.line_sigma(ch, f_hz) * (2.0 / self.reference.samples() as f64).sqrt()
     }
 
     /// The longest correlated-noise time constant planted: 0.8 of the analysis's search range (a quarter of

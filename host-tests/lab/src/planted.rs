@@ -429,8 +429,6 @@ pub(crate) struct Reference {
     pub(crate) spectra: Vec<(Vec<f64>, Vec<f64>)>,
     /// The sample times of every block (all dwells), s.
     block_times: Vec<Vec<f64>>,
-    /// Samples in the dwells.
-    pub(crate) samples: usize,
     /// Samples of each dwell.
     pub(crate) dwell_samples: Vec<usize>,
     /// Sample rate, Hz.
@@ -440,6 +438,11 @@ pub(crate) struct Reference {
 }
 
 impl Reference {
+    /// Samples in the dwells.
+    pub(crate) fn samples(&self) -> usize {
+        self.dwell_samples.iter().sum()
+    }
+
     /// What the analysis `untouched` of `rec` says about its noise.
     pub(crate) fn new(rec: &Recording, untouched: &Analysis) -> Reference {
         let dwells = rec.dwells();
@@ -477,7 +480,6 @@ impl Reference {
             sample_sigma: std::array::from_fn(|ch| untouched.diagnostics.get(ch).map_or(0.0, |d| d.detrended_rms)),
             spectra,
             block_times,
-            samples: dwells.iter().map(|d| d.rows.len()).sum(),
             dwell_samples: dwells.iter().map(|d| d.rows.len()).collect(),
             rate_hz,
             positions: dwells.iter().map(|d| d.pos).collect(),
@@ -605,7 +607,7 @@ pub fn draw(p: &Prepared, effect: EffectKind, seed: u64) -> Result<Planted, Stri
         EffectKind::Vibration => {
             let f = rng.random_range(0.3..30.0);
             h.frequency_hz = Some(f);
-            snr * r.line_sigma(ch, f) * (2.0 / r.samples as f64).sqrt()
+            snr * r.line_sigma(ch, f) * (2.0 / r.samples() as f64).sqrt()
         }
         EffectKind::BiasWarmup => {
             // 5 to 26 % of the session, as 20 to 100 s are of the simulated trials' 391 s, and at least 10 s
