@@ -61,12 +61,14 @@ impl SampleColour {
         let mut sums = [0.0; LAGS];
         let mut counts = [0usize; LAGS];
         for d in series {
-            let diff: Vec<f64> = d.windows(2).map(|w| w[1] - w[0]).collect();
+            // The differences read from the samples in place (no copy of a dwell).
+            let diffs = d.len().saturating_sub(1);
+            let diff = |i: usize| d[i + 1] - d[i];
             for k in 0..LAGS {
-                for i in k..diff.len() {
-                    sums[k] += diff[i] * diff[i - k];
+                for i in k..diffs {
+                    sums[k] += diff(i) * diff(i - k);
                 }
-                counts[k] += diff.len().saturating_sub(k);
+                counts[k] += diffs.saturating_sub(k);
             }
         }
         if counts[0] < MIN_DIFFERENCES || sums[0] <= 0.0 {
