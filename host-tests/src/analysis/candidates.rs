@@ -149,6 +149,12 @@ pub(super) struct RecordingColumns<'a> {
     blocks: &'a Blocks,
 }
 
+/// The bias warm-up's shape at time `t_s`: `exp(-(t_s - t0_s) / tau_s)`, 1 at the session's first row `t0_s`
+/// (times in s); the warm-up is its amplitude times this.
+pub(super) fn warmup_shape(t_s: f64, t0_s: f64, tau_s: f64) -> f64 {
+    (-(t_s - t0_s) / tau_s).exp()
+}
+
 impl<'a> RecordingColumns<'a> {
     /// The columns over `blocks` of `session`.
     pub fn new(session: &'a Session, blocks: &'a Blocks) -> RecordingColumns<'a> {
@@ -169,7 +175,7 @@ impl<'a> RecordingColumns<'a> {
         candidates.extend(self.table_errors(unobservable));
         let tau_grid = self.tau_grid();
         let t0 = self.session.t0;
-        let shapes: Vec<_> = tau_grid.iter().map(|&tau| move |t: f64| (-(t - t0) / tau).exp()).collect();
+        let shapes: Vec<_> = tau_grid.iter().map(|&tau| move |t: f64| warmup_shape(t, t0, tau)).collect();
         let warmup_means = self.blocks.time_means(self.session, &shapes);
         let span_s = tau_grid.last().copied().unwrap_or(1.0);
         for c in (0..6).filter(|&c| self.blocks.present[c]) {

@@ -16,7 +16,7 @@ use super::model_fit::{model_fit, FitResiduals};
 use super::noise_terms::noise_models;
 use super::observations::{BlockObs, Blocks, Session};
 use super::result::{assemble, effects_of, residuals_by_group, Findings, RECORDING};
-use super::sample_tests::{measure_samples, sample_tests, test_samples, SampleFindings};
+use super::sample_tests::{measure_samples, sample_tests, test_samples, SampleFindings, Warmup};
 use super::selection::{final_columns, select, select_without, BlockOf, Problem, Selection, Unsupported};
 use super::wander::{mark_wander, unsupported, wander_std_errors, widen_tested};
 use super::windows::window_check;
@@ -115,9 +115,9 @@ fn analyze_session(mut session: Session, levelled: bool, source: &str) -> Result
     Ok(analysis)
 }
 
-/// The warm-ups of `selection`, per channel of the six: amplitude (the channel's unit) and time constant, s.
-fn chosen_warmups(problem: &Problem, selection: &Selection) -> [Vec<(f64, f64)>; 6] {
-    let mut out: [Vec<(f64, f64)>; 6] = Default::default();
+/// The warm-ups of `selection`, per channel of the six.
+fn chosen_warmups(problem: &Problem, selection: &Selection) -> [Vec<Warmup>; 6] {
+    let mut out: [Vec<Warmup>; 6] = Default::default();
     for (j, c) in selection.chosen.iter().enumerate() {
         let candidate = &problem.candidates[c.candidate];
         let (EffectKind::BiasWarmup, Some(tau)) = (candidate.effect, candidate.variants[c.variant].0) else {
@@ -125,7 +125,7 @@ fn chosen_warmups(problem: &Problem, selection: &Selection) -> [Vec<(f64, f64)>;
         };
         let Some(axis) = ["x", "y", "z"].iter().position(|a| *a == candidate.axes) else { continue };
         let channel = if candidate.sensor == Sensor::Gyro { axis } else { 3 + axis };
-        out[channel].push((selection.final_fit.beta[problem.base.len() + j], tau));
+        out[channel].push(Warmup { amplitude: selection.final_fit.beta[problem.base.len() + j], tau_s: tau });
     }
     out
 }

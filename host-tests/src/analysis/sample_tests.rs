@@ -18,6 +18,7 @@ use crate::stats::noise::{
 };
 
 use super::candidates::axis_of;
+use super::candidates::warmup_shape;
 use super::correlated_noise::{
     gauss_markov_test, two_process_test, GaussMarkovResult, TwoProcessResult, MAX_TWO_PROCESS_SAMPLES,
 };
@@ -78,6 +79,15 @@ fn correlated_aliases(windows: &[(f64, f64)], at_edge: bool, tau_s: f64, dt: f64
     aliases
 }
 
+/// A bias warm-up of the block model, taken off a channel's samples before its correlated-noise test.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub(super) struct Warmup {
+    /// Amplitude at the session's first row, in the channel's unit (rad/s, m/s^2).
+    pub amplitude: f64,
+    /// Time constant, s.
+    pub tau_s: f64,
+}
+
 /// A dwell's straight-line fit `y = a + b (t - t_mean)`.
 struct Trend {
     /// Slope `b`, channel unit per second.
@@ -115,15 +125,15 @@ pub(super) fn measure_samples(session: &Session) -> SampleMeasures {
 }
 
 /// Decides the sample tests of `measures` (of `session`), each against `alpha / m`, the correlated noise of a
-/// channel with the block model's warm-ups of that channel removed (`warmups`: per channel of the six,
-/// amplitude in the channel's unit and time constant, s; docs/analysis.md#correlated-noise). The figure data
+/// channel with the block model's warm-ups of that channel removed (`warmups`: per channel of the six;
+/// docs/analysis.md#correlated-noise). The figure data
 /// are per channel of the six, empty (no samples, NaN) for a channel the recording does not have; the
 /// diagnostics only for those it has.
 pub(super) fn test_samples(
     session: &Session,
     measures: &SampleMeasures,
     m: f64,
-    warmups: &[Vec<(f64, f64)>; 6],
+    warmups: &[Vec<Warmup>; 6],
 ) -> SampleFindings {
     let mut out = SampleFindings {
         effects: Vec::new(),
@@ -284,7 +294,7 @@ impl ChannelMeasures {
 
     /// Quantisation, vibration, correlated noise, in that order, against `alpha / m`; the diagnostics and
     /// figure data.
-    fn judge(&self, session: &Session, m: f64, warmups: &[(f64, f64)]) -> ChannelOutcome {
+    fn judge(&self, session: &Session, m: f64, warmups: &[Warmup]) -> ChannelOutcome {
         let mut effects = Vec::new();
         let q_step = self.quantization(m, &mut effects);
         let (passing, vib) = self.vibration(m, session.dt, &mut effects);
@@ -294,13 +304,17 @@ impl ChannelMeasures {
         } else {
             // Fewer lines pass at this m than at the smallest m, or the block model holds a warm-up of this
             // channel, whose bend within a dwell its line leaves: fit the series with those removed.
-            let warmup = |t: f64| warmups.iter().map(|(a, tau)| a * (-(t - session.t0) / tau).exp()).sum::<f64>();
+            let warmup =
+                |t_s: f64| warmups.iter().map(|w| w.amplitude * warmup_shape(t_s, session.t0, w.tau_s)).sum::<f64>();
             let mut series: Vec<Vec<f64>> = session
                 .dwells
                 .iter()
-                .map(|d| {
-                    let y: Vec<f64> = d.t.iter().zip(&d.y[self.c]).map(|(&t, y)| y - warmup(t)).collect();
-                    detrend(&d.t, &y).residual
+                .map(|d| match warmups {
+                    [] => detrend(&d.t, &d.y[self.c]).residual,
+                    _ => {
+                        let y: Vec<f64> = d.t.iter().zip(&d.y[self.c]).map(|(&t, y)| y - warmup(t)).collect();
+                        detrend(&d.t, &y).residual
+                    }
                 })
                 .collect();
             for l in &self.lines[..passing] {
