@@ -45,7 +45,7 @@ fn json_report_and_verdict_none_on_a_clean_session() {
         assert!(unobservable.contains(&name), "{name} missing from {unobservable:?}");
     }
     assert!(!unobservable.contains(&"accel_scale_factor:x"));
-    for f in ["summary.md", "residuals.png", "allan.png", "psd.png"] {
+    for f in ["summary.md", "residuals.png", "allan.png", "psd.png", "noise_level.png"] {
         let len = std::fs::metadata(report.join(f)).unwrap().len();
         assert!(len > 1000, "{f}: {len} bytes");
     }

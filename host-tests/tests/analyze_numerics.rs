@@ -134,10 +134,11 @@ fn measured_data_give_plausible_effects_and_name_what_they_cannot_tell_apart() {
 
 /// REAL DATA (`SINSCAL_DATA`; skipped, and says so, without it): standard errors against disjoint windows
 /// (docs/analysis.md#windows). On each shared set, the final model fitted again on each third of every dwell
-/// scatters within its standard errors (chi2/dof at most 1.5). The PSINS laser gyros' correlated noise is
-/// 2.6 times larger in the first third of the record than in the last (sigma 1.14e-3 against 4.3e-4 rad/s on
-/// y): each gyro's correlated noise is marked not stationary, with its standard error widened by the thirds'
-/// scatter (at least a tenth of the estimate, where the stationary fit gave under 0.5 %).
+/// scatters within its standard errors (chi2/dof at most 1.5). The PSINS laser gyros' correlated noise, fitted
+/// after their noise warm-up (docs/analysis.md#noise-warm-up), is still 2.4 times larger in the first third of
+/// the record than in the last (sigma 1.03e-3 against 4.3e-4 rad/s on y, each third analysed alone): each
+/// gyro's correlated noise is marked not stationary, with its standard error widened by the thirds' scatter
+/// (measured 9 to 17 % of the estimate; at least 5 % is required, where the stationary fit gave under 0.5 %).
 #[test]
 fn standard_errors_hold_across_the_thirds_of_every_dwell_of_the_measured_data() {
     let Some(dir) = common::data_dir() else { return };
@@ -150,7 +151,7 @@ fn standard_errors_hold_across_the_thirds_of_every_dwell_of_the_measured_data() 
             assert_eq!(gyro_noise.len(), 3, "{:?}", a.effects);
             for e in gyro_noise {
                 assert!(e.aliases.iter().any(|x| x.contains("not stationary")), "{e:?}");
-                assert!(e.std_error > 0.1 * e.estimate, "{e:?}");
+                assert!(e.std_error > 0.05 * e.estimate, "{e:?}");
             }
         }
     }
@@ -645,4 +646,41 @@ fn published_angles_tables_without_errors_give_the_planted_effect() {
             assert!((e.estimate / value - 1.0).abs() < 0.3, "{effect}: {:e} vs {value:e}", e.estimate);
         }
     }
+}
+
+/// REAL DATA (`SINSCAL_DATA`; skipped, and says so, without it): the noise's warm-up
+/// (docs/analysis.md#noise-warm-up). The PSINS ring-laser gyros' noise is larger in the record's first
+/// minute and a half (the log-variance of one-second blocks 2.2 to 2.7 higher in the first 30 s than after,
+/// noise bursts until about 100 s): each gyro names a noise warm-up that settles between 60 and 160 s, its
+/// excess at least three of its standard errors, and its correlated noise is fitted on the samples after
+/// it (measured: settled at 98, 97 and 100 s; the process's sigma 23 %, 17 % and 18 % below the fit on
+/// every sample). The same record without its first 200 s names none, nor do the Ferraris and imu_tk
+/// records, whose first minute is as quiet as the rest.
+#[test]
+fn the_laser_gyros_noise_warm_up_is_named_and_the_noise_terms_are_fitted_after_it() {
+    let Some(dir) = common::data_dir() else { return };
+    let warmups = |a: &Analysis| -> Vec<Effect> {
+        a.effects.iter().filter(|e| e.effect == EffectKind::NoiseWarmup).cloned().collect()
+    };
+    for (name, a) in analyses_of_the_shared_sets(&dir) {
+        let found = warmups(&a);
+        if name != "psins" {
+            assert!(found.is_empty(), "{name}: {found:?}");
+            continue;
+        }
+        let mut axes: Vec<&str> = found.iter().map(|e| e.axes.as_str()).collect();
+        axes.sort_unstable();
+        assert_eq!(axes, ["x", "y", "z"], "{found:?}");
+        for e in &found {
+            assert_eq!((e.sensor.as_str(), e.unit.as_str()), ("gyro", "rad/s"), "{e:?}");
+            let settled = e.settled_after_s.expect("the time it settled");
+            assert!((60.0..160.0).contains(&settled) && e.estimate > 3.0 * e.std_error, "{e:?}");
+            assert!(e.residual_rms_after < e.residual_rms_before, "{e:?}");
+        }
+    }
+    let mut late = common::psins_session(&dir);
+    let t0 = late.rows[0].t_s;
+    late.rows.retain(|r| r.t_s - t0 >= 200.0);
+    let a = analyze_recording(&late).unwrap();
+    assert!(warmups(&a).is_empty(), "{:?}", warmups(&a));
 }

@@ -67,12 +67,23 @@ pub struct Hidden {
     pub tau_s: Option<f64>,
     /// Frequency, Hz (vibration).
     pub frequency_hz: Option<f64>,
+    /// The time after the record's first sample at which a noise warm-up ends, s.
+    pub settled_s: Option<f64>,
 }
 
 impl Hidden {
     /// An effect of `sensor` at `axes`, its value and extras not set yet.
     pub fn new(effect: EffectKind, sensor: Sensor, axes: &str) -> Hidden {
-        Hidden { effect, sensor, axes: axes.to_string(), pos: None, value: 0.0, tau_s: None, frequency_hz: None }
+        Hidden {
+            effect,
+            sensor,
+            axes: axes.to_string(),
+            pos: None,
+            value: 0.0,
+            tau_s: None,
+            frequency_hz: None,
+            settled_s: None,
+        }
     }
 }
 
@@ -117,6 +128,8 @@ pub fn draw(effect: EffectKind, seed: u64, reference: &ReferenceErrors) -> (Scen
         EffectKind::AccelScaleFactor | EffectKind::AccelMisalignment => d.accel_term(),
         // Not in `TRIALS` (see `catalogue`): `Draw::new` has refused it already.
         EffectKind::AccelNonlinearity => unreachable!("accel_nonlinearity is not a Table 1 trial"),
+        // The simulator has no noise warm-up.
+        EffectKind::NoiseWarmup => unreachable!("noise_warmup is not a Table 1 trial"),
         EffectKind::GyroScaleFactor | EffectKind::GyroMisalignment => d.gyro_term(),
         EffectKind::GyroGSensitivity => d.g_sensitivity(),
         EffectKind::ReferenceOffset => d.reference_offset(),

@@ -9,8 +9,9 @@
 //! only where the largest planted value plus the baseline's own estimate of that candidate stays within the
 //! catalogue's plausible limit; the warm-up on the channels whose warm-up is tested, where the largest size
 //! stays within the plausible limit of its amplitude at some time constant of the range; vibration and
-//! correlated noise on every channel; quantisation on the channels where the smallest planted step is at
-//! least [`QUANTISATION_MARGIN`] times the record's own.
+//! correlated noise on every channel; a noise warm-up on every channel of a record long enough for one;
+//! quantisation on the channels where the smallest planted step is at least [`QUANTISATION_MARGIN`] times
+//! the record's own.
 //!
 //! **Planting** ([`crate::planted::plant_into`]): the sensor model of [`crate::planted`], on the record's own
 //! rows, poses (an unknown heading taken as 0: the analysis uses the Earth rate of such a pose only along a
@@ -36,6 +37,10 @@
 //!   (Whittle's likelihood, over the Fourier frequencies of every dwell but the two lowest, which the dwell's
 //!   own mean and line take). A variance's standard error depends on the variance: for a weak process this
 //!   is `k` standard errors of the variance estimated at zero, a strong one needs more;
+//! - a noise warm-up (white noise of standard deviation `e` added until `T`, 10 to 30 % of the session, at
+//!   least 30 s; on the channels whose baseline names none): `k` standard errors of the test's difference of
+//!   mean log-variances of one-second blocks before and after `T`, on the record itself
+//!   ([`Baseline::noise_warmup_excess`]);
 //! - a quantisation step `q`: its noise `q^2 / 12` counted in standard errors of the per-sample variance
 //!   (`sigma^2 sqrt(2 / n)`, `sigma` the detrended RMS per sample): `q = sqrt(12 k sigma^2 sqrt(2 / n))`.
 //!
@@ -43,7 +48,8 @@
 //! with the planted candidate among its aliases: two halves of a misalignment that gravity alone sees as one)
 //! and position, at the planted line for a vibration, whose estimate is the planted value (linear terms:
 //! within 3 of its standard errors of the planted value, plus the baseline's estimate when the baseline
-//! names the same candidate; warm-up, vibration, correlated noise and quantisation: within 30 %), and which
+//! names the same candidate; warm-up, vibration, correlated noise, noise warm-up and quantisation: within
+//! 30 %), and which
 //! is not the baseline's own (a candidate the baseline names counts only when the estimate moved away from
 //! the baseline's by more than 3 standard errors, or 30 %). FALSE ALARM: an effect named in the trial that
 //! is neither of the planted kind, sensor, axes and position nor in the baseline (same candidate, same
@@ -62,7 +68,7 @@ use rand_chacha::ChaCha8Rng;
 use crate::hidden::{catalogue, Hidden};
 use crate::planted::{block_ranges, candidate_name, plant_into, same_line, Base, Planted, Quantiser, Reference};
 use sinscal::calib::general::AttitudeKnowledge;
-use sinscal_host::analysis::{analyze_recording, Analysis, Effect, CHANNELS};
+use sinscal_host::analysis::{analyze_recording, noise_warmup_scale, Analysis, Effect, CHANNELS};
 use sinscal_host::calibration::{attitude_knowledge, site_of};
 use sinscal_host::io::import::{import_imucal, import_imutk, import_psins, level_attitude_deg, StaticDetection};
 use sinscal_host::io::recording::Recording;
@@ -304,23 +310,23 @@ impl Baseline {
         let largest = SIZES.iter().fold(0.0f64, |m, &k| m.max(k));
         let smallest = SIZES.iter().fold(f64::INFINITY, |m, &k| m.min(k));
         let channels = |filter: &dyn Fn(usize) -> bool| -> Vec<Target> {
-            (0..6)
-                .filter(|&ch| ch < self.analysis.diagnostics.len() && filter(ch))
-                .map(|ch| Target {
-                    sensor: Sensor::of_channel(ch),
-                    axes: AXES[ch % 3].to_string(),
-                    pos: None,
-                    channel: Some(ch),
-                    std_error: None,
-                })
-                .collect()
+            (0..6).filter(|&ch| ch < self.analysis.diagnostics.len() && filter(ch)).map(channel_target).collect()
         };
         let mut out = Vec::new();
-        for (name, _) in catalogue() {
-            let Ok(effect) = name.parse::<EffectKind>() else { continue };
+        // The Table 1 trials' kinds, and the noise warm-up, which the simulator cannot make.
+        let kinds = catalogue().into_iter().filter_map(|(name, _)| name.parse::<EffectKind>().ok());
+        for effect in kinds.chain([EffectKind::NoiseWarmup]) {
             let targets = match effect {
                 EffectKind::TemperatureBias => Vec::new(),
                 EffectKind::Vibration | EffectKind::CorrelatedNoise => channels(&|_| true),
+                EffectKind::NoiseWarmup => match self.noise_warmup_settled_s() {
+                    // A channel whose noise has a warm-up of its own cannot show another.
+                    Some(range) => channels(&|ch| {
+                        self.named_estimate(EffectKind::NoiseWarmup, &channel_target(ch)).is_none()
+                            && [range.start, range.end].iter().all(|&t| self.noise_warmup_excess(ch, t, 1.0).is_some())
+                    }),
+                    None => Vec::new(),
+                },
                 EffectKind::Quantization => channels(&|ch| {
                     self.steps_si[ch].is_none_or(|q| self.quantisation_step(ch, smallest) >= QUANTISATION_MARGIN * q)
                 }),
@@ -444,6 +450,35 @@ impl Baseline {
         self.reference.line_sigma(ch, f_hz) * (2.0 / self.reference.samples() as f64).sqrt()
     }
 
+    /// The times a noise warm-up planted ends at, s after the record's first sample: 10 to 30 % of the
+    /// session, at least 30 s, where at least 20 one-second blocks of dwell samples lie before the earliest
+    /// and after the latest (`None` when none does: the record is too short).
+    fn noise_warmup_settled_s(&self) -> Option<std::ops::Range<f64>> {
+        let (lo, hi) = ((0.1 * self.span_s).max(30.0), 0.3 * self.span_s);
+        let (before, after) = (self.dwell_seconds(lo).0, self.dwell_seconds(hi).1);
+        (lo < hi && before >= 20.0 && after >= 20.0).then_some(lo..hi)
+    }
+
+    /// The seconds of dwell samples before and after `t_s` after the record's first sample.
+    fn dwell_seconds(&self, t_s: f64) -> (f64, f64) {
+        let dt = 1.0 / self.reference.rate_hz;
+        let t0 = self.recording.rows.first().map_or(0.0, |r| r.t_s);
+        let dwell = self.recording.rows.iter().filter(|r| r.pos != 0);
+        let before = dwell.clone().filter(|r| r.t_s - t0 < t_s).count() as f64 * dt;
+        (before, dwell.count() as f64 * dt - before)
+    }
+
+    /// The excess standard deviation of a noise warm-up that ends at `settled_s`, planted at `size` standard
+    /// errors on channel `ch`, SI: the test sets the mean log-variance of one-second blocks before against
+    /// after, with the standard error `s` of that difference on the record itself (Newey-West, as the analysis
+    /// has it: [`noise_warmup_scale`]). White noise of `e` added before raises it by `ln(1 + e^2 / v)` (`v` the
+    /// blocks' mean variance after), so `size` standard errors are `e = sqrt(v (exp(size s) - 1))`. `None` when
+    /// either side has too few blocks.
+    pub fn noise_warmup_excess(&self, ch: usize, settled_s: f64, size: f64) -> Option<f64> {
+        let (s, settled_variance) = noise_warmup_scale(&self.recording, ch, settled_s).ok().flatten()?;
+        Some((settled_variance * ((size * s).exp() - 1.0)).sqrt())
+    }
+
     /// The longest correlated-noise time constant planted: 0.8 of the analysis's search range (a quarter of
     /// the shortest dwell), at most 2 s.
     fn longest_markov_tau_s(&self) -> f64 {
@@ -543,6 +578,17 @@ fn parse_candidate(name: &str, effect: EffectKind, std_error: f64) -> Option<Tar
     Some(Target { sensor, axes, pos, channel, std_error: Some(std_error) })
 }
 
+/// The target of a per-channel effect on channel `ch` (0 to 5, gx to az).
+fn channel_target(ch: usize) -> Target {
+    Target {
+        sensor: Sensor::of_channel(ch),
+        axes: AXES[ch % 3].to_string(),
+        pos: None,
+        channel: Some(ch),
+        std_error: None,
+    }
+}
+
 /// Whether the analysis ranks `e` with the uncertain effects ([`Effect::uncertain`]).
 pub fn is_uncertain(e: &Effect) -> bool {
     e.uncertain
@@ -589,6 +635,12 @@ pub fn draw(b: &Baseline, effect: EffectKind, size: f64, seed: u64) -> Result<Pl
             let tau = rng.random_range(0.2..b.longest_markov_tau_s().max(0.25));
             h.tau_s = Some(tau);
             b.markov_variance(ch, tau, size).sqrt()
+        }
+        EffectKind::NoiseWarmup => {
+            let range = b.noise_warmup_settled_s().ok_or("noise_warmup: the record is too short")?;
+            let settled_s = rng.random_range(range);
+            h.settled_s = Some(settled_s);
+            b.noise_warmup_excess(ch, settled_s, size).ok_or("noise_warmup: too few blocks on a side")?
         }
         EffectKind::Quantization => b.quantisation_step(ch, size),
         _ => sign * size * target.std_error.ok_or_else(|| format!("{effect}: no standard error"))?,
@@ -702,7 +754,11 @@ fn within_30(a: f64, b: f64) -> bool {
 fn carries_planted(e: &Effect, twin: Option<&Effect>, h: &Hidden) -> Result<(), &'static str> {
     let linear = !matches!(
         h.effect,
-        EffectKind::BiasWarmup | EffectKind::Vibration | EffectKind::CorrelatedNoise | EffectKind::Quantization
+        EffectKind::BiasWarmup
+            | EffectKind::Vibration
+            | EffectKind::CorrelatedNoise
+            | EffectKind::NoiseWarmup
+            | EffectKind::Quantization
     );
     if !same_line(h.frequency_hz, e.frequency_hz) {
         return Err("another line");

@@ -671,6 +671,15 @@ pub fn plant_into(base: &Base, planted: &Planted) -> Recording {
     let ch = if h.sensor == Sensor::Gyro { 0 } else { 3 } + AXES.iter().position(|a| *a == h.axes).unwrap_or(0);
     match h.effect {
         EffectKind::Quantization => requantise(&mut rec, ch, h.value),
+        // Off the lattice: through the record's quantiser, with the rounding the record made drawn afresh, a
+        // white noise weaker than a step would add about `0.8 e q` to the variance where the sensor's own
+        // noise (which dithers its quantiser) would add `e^2` (PSINS accelerometers: twice the excess).
+        EffectKind::NoiseWarmup => {
+            let signal = moving_signal(&rec, planted);
+            for (row, s) in rec.rows.iter_mut().zip(signal) {
+                add(row, ch, s);
+            }
+        }
         EffectKind::BiasDrift | EffectKind::BiasWarmup | EffectKind::Vibration | EffectKind::CorrelatedNoise => {
             let signal = moving_signal(&rec, planted);
             let signal = match (base.steps_si[ch], base.quantiser) {
@@ -759,6 +768,9 @@ fn moving_signal(rec: &Recording, planted: &Planted) -> Vec<f64> {
                     let p = planted.phase_rad;
                     h.value / (w * dt) * ((w * t + p).cos() - (w * (t + dt) + p).cos())
                 }
+                // White noise of the excess standard deviation until the noise has settled.
+                EffectKind::NoiseWarmup if t < h.settled_s.unwrap_or(0.0) => h.value * normal(&mut markov_rng),
+                EffectKind::NoiseWarmup => 0.0,
                 _ => {
                     let phi = (-(t - last_t) / tau).exp();
                     x = phi * x + h.value * (1.0 - phi * phi).sqrt() * normal(&mut markov_rng);

@@ -62,6 +62,7 @@ mod column;
 mod correlated_noise;
 mod model_fit;
 pub mod noise_terms;
+mod noise_warmup;
 mod observations;
 mod parallel;
 mod recording;
@@ -145,6 +146,10 @@ pub struct Effect {
     /// Time constant, s (warm-up, correlated noise).
     #[serde(skip_serializing_if = "Option::is_none")]
     pub tau_s: Option<f64>,
+    /// The noise's warm-up (docs/analysis.md#noise-warm-up): the time after the record's first sample at which
+    /// the noise has settled, s. The channel's noise terms are fitted on the samples after it.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub settled_after_s: Option<f64>,
     /// Frequency, Hz (vibration: of its strongest component).
     #[serde(skip_serializing_if = "Option::is_none")]
     pub frequency_hz: Option<f64>,
@@ -329,6 +334,9 @@ impl Effect {
         if let Some(t) = self.tau_s {
             parts.push(format!("tau {t:.3} s"));
         }
+        if let Some(t) = self.settled_after_s {
+            parts.push(format!("settled after {t:.1} s"));
+        }
         if let Some(f) = self.frequency_hz {
             parts.push(format!("f {f:.4} Hz"));
         }
@@ -475,6 +483,9 @@ pub struct FigureData {
     pub quantization: Vec<Option<f64>>,
     /// Per channel: the spectral lines found (amplitude as seen, frequency), strongest first.
     pub vibration: Vec<Vec<(f64, f64)>>,
+    /// Per channel: each one-second block's time after the record's first row (s) and standard deviation
+    /// (channel unit), in time order (the noise warm-up's test: docs/analysis.md#noise-warm-up).
+    pub noise_level: Vec<Vec<(f64, f64)>>,
     /// Per observation group (channel or angle): (position label, base residual, final residual) of each
     /// observation.
     pub residuals: Vec<Vec<(u32, f64, f64)>>,
@@ -525,6 +536,22 @@ fn check_column_memory(what: &str, observations: usize, entries: u64, source: &s
             MAX_COLUMN_BYTES >> 20
         ),
     ))
+}
+
+/// What a noise warm-up of channel `channel` (0 to 5, gx to az) of `recording` that settles at `settled_s` after
+/// its first row must exceed (docs/analysis.md#noise-warm-up): the standard error of the test's difference of
+/// mean log-variances of one-second blocks before and after, and the settled blocks' mean variance (channel
+/// unit squared). `None` when either side has too few blocks. For the campaign of planted effects.
+pub fn noise_warmup_scale(
+    recording: &impl crate::io::recording::RowSource,
+    channel: usize,
+    settled_s: f64,
+) -> Result<Option<(f64, f64)>, InputError> {
+    let session = observations::Session::read(recording)?;
+    let series: Vec<Vec<f64>> =
+        session.dwells.iter().map(|d| sample_tests::detrend(&d.t, &d.y[channel]).residual).collect();
+    let times: Vec<&[f64]> = session.dwells.iter().map(|d| &d.t[..]).collect();
+    Ok(noise_warmup::scale_at(&series, &times, session.t0, session.dt, settled_s))
 }
 
 /// Reads `path` as an angles file when it starts with `# sinscal-angles`, otherwise as a recording (line by

@@ -12,6 +12,7 @@ use plotters::coord::combinators::{BindKeyPoints, WithKeyPoints};
 use crate::analysis::noise_terms::{sig, FitPoint, NoiseModel, Term};
 use crate::analysis::sample_colour::SampleColour;
 use crate::analysis::{Analysis, CHANNELS};
+use crate::model::catalogue::EffectKind;
 use crate::plot::{display_unit, figure, log_ticks, short_name, tick_label, Png};
 use crate::stats::noise::{log_spaced_clusters, overlapping_allan_deviation, welch_psd};
 
@@ -19,7 +20,8 @@ fn err(path: &Path, e: &dyn std::fmt::Display) -> anyhow::Error {
     anyhow::anyhow!("plot {}: {e}", path.display())
 }
 
-/// Writes `summary.md`, `residuals.png` and, for recordings, `allan.png` and `psd.png` into `dir`.
+/// Writes `summary.md`, `residuals.png` and, for recordings, `allan.png`, `psd.png` and `noise_level.png`
+/// into `dir`.
 pub fn write_report(a: &Analysis, dir: &Path) -> anyhow::Result<Vec<String>> {
     std::fs::create_dir_all(dir).map_err(|e| anyhow::anyhow!("{}: {e}", dir.display()))?;
     let mut files = vec!["summary.md".to_string(), "residuals.png".to_string()];
@@ -27,8 +29,10 @@ pub fn write_report(a: &Analysis, dir: &Path) -> anyhow::Result<Vec<String>> {
     if !a.noise_model.is_empty() {
         allan_plot(a, &dir.join("allan.png"))?;
         psd_plot(a, &dir.join("psd.png"))?;
+        noise_level_plot(a, &dir.join("noise_level.png"))?;
         files.push("allan.png".into());
         files.push("psd.png".into());
+        files.push("noise_level.png".into());
     }
     let mut md = String::new();
     base_model_md(&mut md, a);
@@ -222,10 +226,11 @@ fn figures_md(md: &mut String, a: &Analysis, noise_figures: bool) {
     if noise_figures {
         let _ = writeln!(md, "- `allan.png`: overlapping Allan deviation of the longest dwell (mean and trend removed): the octave points fitted with 1-sigma bars and a dense curve, white noise alone (red), the named terms (blue) and each term (dashed).");
         let _ = writeln!(md, "- `psd.png`: Welch power spectral density (Hann, 1024-sample segments) of the same samples, with the base model's white level.");
+        let _ = writeln!(md, "- `noise_level.png`: the standard deviation of every one-second block of the dwells (mean removed) against the time since the record's first row, with the time a noise warm-up settles where one is named.");
     }
     let _ = writeln!(md, "\n![residuals](residuals.png)");
     if noise_figures {
-        let _ = writeln!(md, "\n![allan](allan.png)\n\n![psd](psd.png)");
+        let _ = writeln!(md, "\n![allan](allan.png)\n\n![psd](psd.png)\n\n![noise level](noise_level.png)");
     }
 }
 
@@ -547,6 +552,79 @@ fn psd_plot(a: &Analysis, path: &Path) -> anyhow::Result<()> {
         psd_panel(&area, a, c, samples).map_err(|e| err(path, &e))?;
     }
     root.present().map_err(|e| err(path, &e))?;
+    Ok(())
+}
+
+/// `noise_level.png`: per channel, each one-second block's standard deviation against time (log scale), and
+/// where a noise warm-up is named, the time it settles and the levels before and after.
+fn noise_level_plot(a: &Analysis, path: &Path) -> anyhow::Result<()> {
+    let root = figure(path, noise_figure_size(a))?;
+    let title = "Noise level: the standard deviation of each one-second block of the dwells, against time";
+    let root = root.titled(title, ("sans-serif", 22)).map_err(|e| err(path, &e))?;
+    for (area, c) in channel_panels(a, &root) {
+        let Some(levels) = a.figures.noise_level.get(c).filter(|l| l.len() > 1) else { continue };
+        noise_level_panel(&area, a, c, levels).map_err(|e| err(path, &e))?;
+    }
+    root.present().map_err(|e| err(path, &e))?;
+    Ok(())
+}
+
+fn noise_level_panel(area: &Area, a: &Analysis, c: usize, levels: &[(f64, f64)]) -> anyhow::Result<()> {
+    let e = |e: &dyn std::fmt::Display| anyhow::anyhow!("{e}");
+    let (unit, per) = display_unit(CHANNELS[c], 0.0);
+    let points: Vec<(f64, f64)> = levels.iter().filter(|p| p.1 > 0.0).map(|&(t, s)| (t, s / per)).collect();
+    let (Some(first), Some(last)) = (points.first(), points.last()) else { return Ok(()) };
+    let (t0, t1) = (first.0.min(0.0), last.0.max(first.0 + 1.0));
+    let lo = points.iter().map(|p| p.1).fold(f64::INFINITY, f64::min) * 0.8;
+    let hi = points.iter().map(|p| p.1).fold(0.0, f64::max) * 1.25;
+    let mut chart = ChartBuilder::on(area)
+        .caption(short_name(CHANNELS[c]), ("sans-serif", 17))
+        .margin(10)
+        .x_label_area_size(40)
+        .y_label_area_size(80)
+        .build_cartesian_2d(t0..t1, (lo..hi).log_scale().with_key_points(log_ticks(lo, hi)))
+        .map_err(|x| e(&x))?;
+    chart
+        .configure_mesh()
+        .light_line_style(TRANSPARENT)
+        .x_label_formatter(&|v| format!("{v:.0}"))
+        .y_label_formatter(&|v| tick_label(*v))
+        .x_desc("time since the first row [s]")
+        .y_desc(format!("block standard deviation [{unit}]"))
+        .draw()
+        .map_err(|x| e(&x))?;
+    chart
+        .draw_series(points.iter().map(|&p| Circle::new(p, 1, BLACK.mix(0.5).filled())))
+        .map_err(|x| e(&x))?
+        .label("one-second blocks")
+        .legend(|(x, y)| Circle::new((x + 12, y), 3, BLACK.filled()));
+    let warmup = a.effects.iter().find(|w| {
+        w.effect == EffectKind::NoiseWarmup.name() && CHANNELS[c].starts_with(&format!("{}{}", &w.sensor[..1], w.axes))
+    });
+    if let Some((w, settled)) = warmup.and_then(|w| w.settled_after_s.map(|s| (w, s))) {
+        let after = w.residual_rms_after / per;
+        let before = (after * after + (w.estimate / per).powi(2)).sqrt();
+        chart
+            .draw_series(LineSeries::new([(settled, lo), (settled, hi)], BLUE.stroke_width(2)))
+            .map_err(|x| e(&x))?
+            .label(format!("noise warm-up: settled after {settled:.1} s"))
+            .legend(legend_line(BLUE, 2));
+        chart
+            .draw_series(LineSeries::new(
+                [(t0, before), (settled, before), (settled, after), (t1, after)],
+                RED.stroke_width(2),
+            ))
+            .map_err(|x| e(&x))?
+            .label(format!("RMS level: {} before, {} after", sig(before), sig(after)))
+            .legend(legend_line(RED, 2));
+    }
+    chart
+        .configure_series_labels()
+        .background_style(WHITE.mix(0.85))
+        .border_style(BLACK)
+        .position(SeriesLabelPosition::UpperRight)
+        .draw()
+        .map_err(|x| e(&x))?;
     Ok(())
 }
 

@@ -64,6 +64,7 @@ fn effect_of(problem: &Problem, selection: &Selection, index: usize) -> Effect {
         residual_unit: units.first().copied().unwrap_or("").to_string(),
         residual_of: problem.residual_of.to_string(),
         tau_s: cand.variants[c.variant].0,
+        settled_after_s: None,
         frequency_hz: None,
         frequency_spread_hz: None,
         likelihood_ratio: c.lr,

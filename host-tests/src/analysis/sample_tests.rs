@@ -22,6 +22,7 @@ use super::candidates::warmup_shape;
 use super::correlated_noise::{
     gauss_markov_test, two_process_test, GaussMarkovResult, TwoProcessResult, MAX_TWO_PROCESS_SAMPLES,
 };
+use super::noise_warmup::{keep, settled, NoiseWarmup};
 use super::observations::Session;
 use super::parallel::on_cores;
 use super::sample_colour::SampleColour;
@@ -31,10 +32,10 @@ use super::vibration::{
 use super::windows::{in_windows, in_windows_indexed, not_stationary, widening, window_starts, NOT_STATIONARY};
 use super::{ChannelDiagnostics, Effect, FigureData, ALPHA, CHANNELS, CHANNEL_UNITS};
 
-/// Tests on the samples, counted in the Bonferroni `m`: quantisation, vibration, correlated noise on every
-/// channel the recording has.
+/// Tests on the samples, counted in the Bonferroni `m`: quantisation, the noise's warm-up, vibration,
+/// correlated noise on every channel the recording has.
 pub(super) fn sample_tests(session: &Session) -> usize {
-    3 * session.channels().len()
+    4 * session.channels().len()
 }
 
 /// What the sample tests found.
@@ -89,16 +90,16 @@ pub(super) struct Warmup {
 }
 
 /// A dwell's straight-line fit `y = a + b (t - t_mean)`.
-struct Trend {
+pub(super) struct Trend {
     /// Slope `b`, channel unit per second.
     slope_per_s: f64,
     /// Its standard error for white residuals, same unit.
     slope_std_error_per_s: f64,
     /// `y` minus the line.
-    residual: Vec<f64>,
+    pub residual: Vec<f64>,
 }
 
-fn detrend(t: &[f64], y: &[f64]) -> Trend {
+pub(super) fn detrend(t: &[f64], y: &[f64]) -> Trend {
     let n = t.len() as f64;
     let tm = t.iter().sum::<f64>() / n;
     let ym = y.iter().sum::<f64>() / n;
@@ -147,9 +148,11 @@ pub(super) fn test_samples(
         figures.correlated.push(None);
         figures.quantization.push(None);
         figures.vibration.push(Vec::new());
+        figures.noise_level.push(Vec::new());
     }
     let channels = &measures.channels;
-    for outcome in on_cores(channels.len(), |c| channels[c].judge(session, m, &warmups[channels[c].c])) {
+    let outcomes = on_cores(channels.len(), |c| channels[c].judge(session, m, &warmups[channels[c].c]));
+    for (outcome, measures) in outcomes.into_iter().zip(channels) {
         out.effects.extend(outcome.effects);
         let figures = &mut out.figures;
         figures.base_sigma.push(outcome.diagnostics.detrended_rms);
@@ -158,6 +161,7 @@ pub(super) fn test_samples(
         figures.correlated.push(outcome.correlated);
         figures.quantization.push(outcome.quantization);
         figures.vibration.push(outcome.vibration);
+        figures.noise_level.push(measures.noise_warmup.levels());
     }
     out
 }
@@ -180,6 +184,10 @@ struct ChannelMeasures {
     n_all: usize,
     /// Dwells.
     dwells: usize,
+    /// The noise's warm-up, and the time it settled at the smallest `m` (the correlated noise's series
+    /// starts there; docs/analysis.md#noise-warm-up).
+    noise_warmup: NoiseWarmup,
+    settled_s: Option<f64>,
     /// RMS of the detrended samples.
     rms: f64,
     /// Largest within-dwell slope over its standard error.
@@ -251,6 +259,9 @@ impl ChannelMeasures {
             .iter()
             .map(|d| (first_s(d) - session.dwells.first().map_or(0.0, first_s)) / session.dt)
             .collect();
+        let smallest_m_limit = ALPHA / sample_tests(session) as f64;
+        let times: Vec<&[f64]> = session.dwells.iter().map(|d| &d.t[..]).collect();
+        let noise_warmup = NoiseWarmup::measure(&series, &times, session.t0, session.dt, smallest_m_limit);
         let mut search = LineSearch::new(&series, &starts_samples);
         let room = |lines: &[Line]| lines.len() < MAX_COMPONENTS && wandering(lines).len() < MAX_LINES;
         while let Some(fits) =
@@ -275,12 +286,21 @@ impl ChannelMeasures {
             remove_line(&mut series, &v, session.dt);
             lines.push(Line { line: v, windows });
         }
+        let dwells = series.len();
+        // The correlated noise describes the settled instrument: with a noise warm-up at the smallest m, it is
+        // fitted on the samples after it.
+        let settled_s = noise_warmup.at(smallest_m_limit).map(|w| w.settled_s);
+        let series = match settled_s {
+            Some(t) => keep(series, &settled(&times, session.t0, t)),
+            None => series,
+        };
         let (correlated, correlated_windows) = CorrelatedFits::with_windows(series, session.dt, true);
-        let dwells = session.dwells.len();
         ChannelMeasures {
             c,
             n_all,
             dwells,
+            noise_warmup,
+            settled_s,
             rms,
             max_trend_z,
             long,
@@ -292,18 +312,20 @@ impl ChannelMeasures {
         }
     }
 
-    /// Quantisation, vibration, correlated noise, in that order, against `alpha / m`; the diagnostics and
-    /// figure data.
+    /// Quantisation, the noise's warm-up, vibration, correlated noise, in that order, against `alpha / m`;
+    /// the diagnostics and figure data.
     fn judge(&self, session: &Session, m: f64, warmups: &[Warmup]) -> ChannelOutcome {
         let mut effects = Vec::new();
         let q_step = self.quantization(m, &mut effects);
+        let settled_s = self.noise_warmup(m, &mut effects);
         let (passing, vib) = self.vibration(m, session.dt, &mut effects);
         let refitted;
-        let correlated = if passing == self.lines.len() && warmups.is_empty() {
+        let correlated = if passing == self.lines.len() && warmups.is_empty() && settled_s == self.settled_s {
             (&self.correlated, &self.correlated_windows[..])
         } else {
-            // Fewer lines pass at this m than at the smallest m, or the block model holds a warm-up of this
-            // channel, whose bend within a dwell its line leaves: fit the series with those removed.
+            // Fewer lines pass at this m than at the smallest m, the noise settled at another time at this m,
+            // or the block model holds a warm-up of this channel, whose bend within a dwell its line leaves: fit
+            // the series with those removed.
             let warmup =
                 |t_s: f64| warmups.iter().map(|w| w.amplitude * warmup_shape(t_s, session.t0, w.tau_s)).sum::<f64>();
             let mut series: Vec<Vec<f64>> = session
@@ -320,7 +342,14 @@ impl ChannelMeasures {
             for l in &self.lines[..passing] {
                 remove_line(&mut series, &l.line, session.dt);
             }
-            refitted = if warmups.is_empty() {
+            let series = match settled_s {
+                Some(t) => {
+                    let times: Vec<&[f64]> = session.dwells.iter().map(|d| &d.t[..]).collect();
+                    keep(series, &settled(&times, session.t0, t))
+                }
+                None => series,
+            };
+            refitted = if warmups.is_empty() && settled_s == self.settled_s {
                 (CorrelatedFits::of(series, session.dt), self.correlated_windows.clone())
             } else {
                 CorrelatedFits::with_windows(series, session.dt, true)
@@ -347,6 +376,25 @@ impl ChannelMeasures {
         }
     }
 
+    /// The noise's warm-up at `alpha / m`, if its first step passes: the effect, and the time the noise
+    /// settled.
+    fn noise_warmup(&self, m: f64, effects: &mut Vec<Effect>) -> Option<f64> {
+        let w = self.noise_warmup.at(ALPHA / m)?;
+        effects.push(Effect {
+            estimate: w.excess,
+            std_error: w.std_error,
+            delta_bic: -w.statistic + 2.0 * w.steps as f64 * (w.blocks as f64).ln(),
+            residual_rms_before: w.all_rms,
+            residual_rms_after: w.settled_rms,
+            settled_after_s: Some(w.settled_s),
+            likelihood_ratio: w.statistic,
+            parameters: 2 * w.steps,
+            p_value: w.p_value,
+            ..self.effect(EffectKind::NoiseWarmup, "samples")
+        });
+        Some(w.settled_s)
+    }
+
     /// An effect of this channel found on its samples, before its numbers are set.
     fn effect(&self, effect: EffectKind, residual_of: &str) -> Effect {
         let sensor = Sensor::of_channel(self.c);
@@ -365,6 +413,7 @@ impl ChannelMeasures {
             residual_unit: CHANNEL_UNITS[self.c].into(),
             residual_of: residual_of.into(),
             tau_s: None,
+            settled_after_s: None,
             frequency_hz: None,
             frequency_spread_hz: None,
             likelihood_ratio: 0.0,

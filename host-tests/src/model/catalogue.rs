@@ -1,5 +1,6 @@
-//! The effect catalogue (docs/formats.md#effect-catalogue): the fourteen effects `sinscal analyze` tests and
-//! `sinscal simulate` can switch on, each with its fixed name, its sensor and the SI unit of its estimate.
+//! The effect catalogue (docs/formats.md#effect-catalogue): the fifteen effects `sinscal analyze` tests, all
+//! but the noise warm-up of which `sinscal simulate` can switch on, each with its fixed name, its sensor and
+//! the SI unit of its estimate.
 //! The names are part of the analysis JSON (docs/formats.md#analysis-json): [`EffectKind::name`] is what is
 //! written, [`str::parse`] reads it back.
 
@@ -68,6 +69,8 @@ pub enum EffectKind {
     BiasWarmup,
     /// First-order Gauss-Markov noise.
     CorrelatedNoise,
+    /// Noise larger at the start of the record than once settled: the standard deviation it adds.
+    NoiseWarmup,
     /// A sinusoid.
     Vibration,
     /// An output step.
@@ -78,7 +81,7 @@ pub enum EffectKind {
 
 impl EffectKind {
     /// The catalogue, in the order of docs/formats.md#effect-catalogue.
-    pub const ALL: [EffectKind; 14] = [
+    pub const ALL: [EffectKind; 15] = [
         EffectKind::ReferenceOffset,
         EffectKind::PositionError,
         EffectKind::AccelScaleFactor,
@@ -90,6 +93,7 @@ impl EffectKind {
         EffectKind::BiasDrift,
         EffectKind::BiasWarmup,
         EffectKind::CorrelatedNoise,
+        EffectKind::NoiseWarmup,
         EffectKind::Vibration,
         EffectKind::Quantization,
         EffectKind::TemperatureBias,
@@ -109,6 +113,7 @@ impl EffectKind {
             EffectKind::BiasDrift => "bias_drift",
             EffectKind::BiasWarmup => "bias_warmup",
             EffectKind::CorrelatedNoise => "correlated_noise",
+            EffectKind::NoiseWarmup => "noise_warmup",
             EffectKind::Vibration => "vibration",
             EffectKind::Quantization => "quantization",
             EffectKind::TemperatureBias => "temperature_bias",
@@ -116,7 +121,7 @@ impl EffectKind {
     }
 
     /// The sensor the effect belongs to; `None` for the effects either sensor can have, one per channel
-    /// (drift, warm-up, correlated noise, vibration, quantisation, temperature).
+    /// (drift, warm-up, correlated noise, noise warm-up, vibration, quantisation, temperature).
     pub fn sensor(self) -> Option<Sensor> {
         match self {
             EffectKind::ReferenceOffset | EffectKind::PositionError => Some(Sensor::Reference),
@@ -146,7 +151,11 @@ impl EffectKind {
             EffectKind::BiasDrift => "(m/s^2)/s",
             EffectKind::TemperatureBias if gyro => "(rad/s)/K",
             EffectKind::TemperatureBias => "(m/s^2)/K",
-            EffectKind::BiasWarmup | EffectKind::CorrelatedNoise | EffectKind::Vibration | EffectKind::Quantization => {
+            EffectKind::BiasWarmup
+            | EffectKind::CorrelatedNoise
+            | EffectKind::NoiseWarmup
+            | EffectKind::Vibration
+            | EffectKind::Quantization => {
                 if gyro {
                     "rad/s"
                 } else {
@@ -188,7 +197,10 @@ impl EffectKind {
             EffectKind::BiasDrift => Some(bias / span_s.max(1.0)),
             EffectKind::BiasWarmup => Some(bias),
             EffectKind::TemperatureBias => Some(bias / temperature_span_k.max(1.0)),
-            EffectKind::CorrelatedNoise | EffectKind::Vibration | EffectKind::Quantization => None,
+            EffectKind::CorrelatedNoise
+            | EffectKind::NoiseWarmup
+            | EffectKind::Vibration
+            | EffectKind::Quantization => None,
         }
     }
 
