@@ -9,7 +9,7 @@ use sinscal_host::analysis::{analyze_recording, Analysis, Effect};
 use sinscal_host::io::recording::Recording;
 use sinscal_host::model::catalogue::EffectKind;
 use sinscal_host::model::simulator::clean_scenario;
-use sinscal_host::model::simulator::{simulate, PositionError, ScenarioFile};
+use sinscal_host::model::simulator::{simulate, NoiseWarmupSpec, PositionError, ScenarioFile};
 use sinscal_host::stats::linfit::chi_square_quantile_upper;
 
 /// The analysis of the scenario with its positions `positions_deg`.
@@ -683,4 +683,33 @@ fn the_laser_gyros_noise_warm_up_is_named_and_the_noise_terms_are_fitted_after_i
     late.rows.retain(|r| r.t_s - t0 >= 200.0);
     let a = analyze_recording(&late).unwrap();
     assert!(warmups(&a).is_empty(), "{:?}", warmups(&a));
+}
+
+/// SIMULATION: a noise warm-up made by the simulator (docs/analysis.md#noise-warm-up). The Table 1 session
+/// with white noise of twice the gyro z's own per sample added until 100 s (its noise three times larger)
+/// names a noise warm-up on gyro z alone, settled within 30 s of 100 s (the grid of times is about 20 % apart)
+/// and its excess within three standard errors of the truth; the same session and seed without it names none.
+#[test]
+fn a_simulated_noise_warm_up_is_found_where_it_was_made() {
+    let warmups = |a: &Analysis| -> Vec<Effect> {
+        a.effects.iter().filter(|e| e.effect == EffectKind::NoiseWarmup).cloned().collect()
+    };
+    let mut s: ScenarioFile = clean_scenario();
+    let sample_sigma_radps = s.gyro.angle_random_walk_rad_per_sqrt_s * s.schedule.rate_hz.sqrt();
+    let excess_radps = 2.0 * sample_sigma_radps;
+    let clean = analyze_recording(&simulate(&s, 7, "clean")).unwrap();
+    assert!(warmups(&clean).is_empty(), "{:?}", warmups(&clean));
+    s.gyro.noise_warmup = Some(NoiseWarmupSpec { excess: [0.0, 0.0, excess_radps], settled_s: 100.0 });
+    let a = analyze_recording(&simulate(&s, 7, "noise warm-up")).unwrap();
+    let found = warmups(&a);
+    assert_eq!(found.len(), 1, "{found:?}");
+    let e = &found[0];
+    assert_eq!((e.sensor.as_str(), e.axes.as_str(), e.unit.as_str()), ("gyro", "z", "rad/s"), "{e:?}");
+    let settled = e.settled_after_s.expect("the time it settled");
+    assert!((settled - 100.0).abs() < 30.0, "{e:?}");
+    assert!((e.estimate - excess_radps).abs() < 3.0 * e.std_error, "{e:?} against {excess_radps}");
+    println!(
+        "settled at {settled:.1} s, excess {:.3e} +- {:.1e} rad/s for {excess_radps:.3e}",
+        e.estimate, e.std_error
+    );
 }

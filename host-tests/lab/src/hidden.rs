@@ -128,7 +128,8 @@ pub fn draw(effect: EffectKind, seed: u64, reference: &ReferenceErrors) -> (Scen
         EffectKind::AccelScaleFactor | EffectKind::AccelMisalignment => d.accel_term(),
         // Not in `TRIALS` (see `catalogue`): `Draw::new` has refused it already.
         EffectKind::AccelNonlinearity => unreachable!("accel_nonlinearity is not a Table 1 trial"),
-        // The simulator has no noise warm-up.
+        // Not among the Table 1 trials: its size needs a unit of its own, which only the campaign in the
+        // records' own poses has (`own_poses::Baseline::noise_warmup_excess`).
         EffectKind::NoiseWarmup => unreachable!("noise_warmup is not a Table 1 trial"),
         EffectKind::GyroScaleFactor | EffectKind::GyroMisalignment => d.gyro_term(),
         EffectKind::GyroGSensitivity => d.g_sensitivity(),

@@ -313,7 +313,7 @@ impl Baseline {
             (0..6).filter(|&ch| ch < self.analysis.diagnostics.len() && filter(ch)).map(channel_target).collect()
         };
         let mut out = Vec::new();
-        // The Table 1 trials' kinds, and the noise warm-up, which the simulator cannot make.
+        // The Table 1 trials' kinds, and the noise warm-up, which they do not plant.
         let kinds = catalogue().into_iter().filter_map(|(name, _)| name.parse::<EffectKind>().ok());
         for effect in kinds.chain([EffectKind::NoiseWarmup]) {
             let targets = match effect {

@@ -117,16 +117,48 @@ fn noise_walk(group_name: &str, models: &[NoiseModel]) -> f64 {
     (CHANNELS[3..].iter().map(|c| of(c).powi(2)).sum::<f64>() / 3.0).sqrt()
 }
 
-/// The verdict on `fit` against `models`; `None` when no group has a noise model.
-pub(super) fn model_fit(fit: &FitResiduals, models: &[NoiseModel]) -> Option<ModelFit> {
-    model_fit_with(fit, |name, tau_s| noise_variance(name, models, tau_s), |name| noise_walk(name, models))
+/// A channel's noise warm-up (docs/analysis.md#noise-warm-up), as the block means see it.
+pub(super) struct NoiseWarmupOf {
+    /// The channel ("gx_radps", ...).
+    pub channel: &'static str,
+    /// The standard deviation it adds to each sample, channel unit.
+    pub excess: f64,
+    /// The record time at which it has settled, s.
+    pub settled_at_s: f64,
+    /// Samples per second.
+    pub rate_hz: f64,
 }
 
-/// The verdict on `fit`, `variance(group name, block length s)` giving the noise variance of a block mean and
+/// The variance a noise warm-up of `warmups` adds to the mean of `block` in group `group_name` (the force
+/// along gravity: the three accelerometers' averaged, as [`noise_variance`] averages their noise): the
+/// excess's variance over the block's samples, times the share of them before it settled.
+fn warmup_variance(group_name: &str, warmups: &[NoiseWarmupOf], block: &BlockOf) -> f64 {
+    let of = |name: &str| {
+        let w = warmups.iter().find(|w| w.channel == name)?;
+        let start_s = block.t_mid_s - 0.5 * block.duration_s;
+        let share = ((w.settled_at_s - start_s) / block.duration_s.max(f64::MIN_POSITIVE)).clamp(0.0, 1.0);
+        Some(w.excess * w.excess * share / (block.duration_s * w.rate_hz).max(1.0))
+    };
+    if CHANNELS.contains(&group_name) {
+        return of(group_name).unwrap_or(0.0);
+    }
+    CHANNELS[3..].iter().map(|c| of(c).unwrap_or(0.0)).sum::<f64>() / 3.0
+}
+
+/// The verdict on `fit` against `models` and the channels' noise warm-ups; `None` when no group has a noise
+/// model.
+pub(super) fn model_fit(fit: &FitResiduals, models: &[NoiseModel], warmups: &[NoiseWarmupOf]) -> Option<ModelFit> {
+    let variance = |name: &str, block: &BlockOf| {
+        noise_variance(name, models, block.duration_s).map(|v| v + warmup_variance(name, warmups, block))
+    };
+    model_fit_with(fit, variance, |name| noise_walk(name, models))
+}
+
+/// The verdict on `fit`, `variance(group name, block)` giving the noise variance of a block mean and
 /// `walk_of(group name)` the rate random walk of its bias (`K`, the unit per sqrt(s)).
 fn model_fit_with(
     fit: &FitResiduals,
-    variance_of: impl Fn(&str, f64) -> Option<f64>,
+    variance_of: impl Fn(&str, &BlockOf) -> Option<f64>,
     walk_of: impl Fn(&str) -> f64,
 ) -> Option<ModelFit> {
     let groups_present: Vec<usize> = (0..fit.group_names.len()).filter(|g| fit.group.contains(g)).collect();
@@ -137,7 +169,7 @@ fn model_fit_with(
         let name = &fit.group_names[g];
         let rows: Vec<usize> = (0..fit.residual.len()).filter(|&i| fit.group[i] == g).collect();
         let variance: Option<Vec<f64>> =
-            rows.iter().map(|&i| variance_of(name, fit.block[i].duration_s).filter(|v| *v > 0.0)).collect();
+            rows.iter().map(|&i| variance_of(name, &fit.block[i]).filter(|v| *v > 0.0)).collect();
         let Some(variance) = variance else { continue };
         let (group, named) = group_fit(fit, g, (&rows, &variance), walk_of(name), dwell_cells);
         groups.push(group);
@@ -342,8 +374,8 @@ mod tests {
     #[test]
     fn residuals_as_large_as_the_noise_are_explained() {
         let sigma = 1e-3;
-        let variance = |name: &str, tau: f64| {
-            assert_eq!((name, tau), ("ax_mps2", 6.0));
+        let variance = |name: &str, block: &BlockOf| {
+            assert_eq!((name, block.duration_s), ("ax_mps2", 6.0));
             Some(sigma * sigma)
         };
         let fit = model_fit_with(&residuals(sigma, |_| 0.0).fit(), variance, |_| 0.0).unwrap();

@@ -12,7 +12,7 @@ use crate::stats::linfit::Observations;
 use sinscal::calib::general::AttitudeKnowledge;
 
 use super::candidates::RecordingColumns;
-use super::model_fit::{model_fit, FitResiduals};
+use super::model_fit::{model_fit, FitResiduals, NoiseWarmupOf};
 use super::noise_terms::noise_models;
 use super::observations::{BlockObs, Blocks, Session};
 use super::result::{assemble, effects_of, residuals_by_group, Findings, RECORDING};
@@ -20,7 +20,7 @@ use super::sample_tests::{measure_samples, sample_tests, test_samples, SampleFin
 use super::selection::{final_columns, select, select_without, BlockOf, Problem, Selection, Unsupported};
 use super::wander::{mark_wander, unsupported, wander_std_errors, widen_tested};
 use super::windows::window_check;
-use super::{Analysis, ChannelDiagnostics, CHANNELS, CHANNEL_UNITS};
+use super::{Analysis, ChannelDiagnostics, Effect, CHANNELS, CHANNEL_UNITS};
 
 /// Analyses a recording: in one pass over its rows, of which the dwells' columns are kept
 /// (docs/analysis.md#speed-and-memory). Its dwells are also held against gravity and the Earth rate as
@@ -94,7 +94,7 @@ fn analyze_session(mut session: Session, levelled: bool, source: &str) -> Result
     let (residual_rms, block_residual_rms) = residual_rms(&problem, &selection, &diagnostics);
     figures.residual_names = problem.group_names.clone();
     figures.residuals = residuals_by_group(&problem, &selection);
-    let model_fit = model_fit(&fit_residuals(&problem, &selection), &noise_model);
+    let model_fit = model_fit(&fit_residuals(&problem, &selection), &noise_model, &noise_warmups(&effects, session));
     let findings = Findings {
         effects,
         residual_rms,
@@ -306,6 +306,24 @@ fn along_gravity(mut p: Problem, session: &Session, blocks: &Blocks, bias: [f64;
     p.unobservable
         .push("accelerometer terms across gravity: the attitudes are levelled from the accelerometers".into());
     p
+}
+
+/// The noise warm-ups among `effects` (docs/analysis.md#noise-warm-up), as the model fit adds them to the
+/// block means' noise.
+fn noise_warmups(effects: &[Effect], session: &Session) -> Vec<NoiseWarmupOf> {
+    effects
+        .iter()
+        .filter(|e| e.effect == EffectKind::NoiseWarmup.name())
+        .filter_map(|e| {
+            let channel = CHANNELS.iter().find(|c| c.starts_with(&format!("{}{}", &e.sensor[..1], e.axes)))?;
+            Some(NoiseWarmupOf {
+                channel,
+                excess: e.estimate,
+                settled_at_s: session.t0 + e.settled_after_s?,
+                rate_hz: session.rate_hz,
+            })
+        })
+        .collect()
 }
 
 /// Where and when each block of `blocks` lies: its dwell, its length and its middle time.

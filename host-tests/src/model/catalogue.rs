@@ -1,6 +1,5 @@
-//! The effect catalogue (docs/formats.md#effect-catalogue): the fifteen effects `sinscal analyze` tests, all
-//! but the noise warm-up of which `sinscal simulate` can switch on, each with its fixed name, its sensor and
-//! the SI unit of its estimate.
+//! The effect catalogue (docs/formats.md#effect-catalogue): the fifteen effects `sinscal analyze` tests and
+//! `sinscal simulate` can switch on, each with its fixed name, its sensor and the SI unit of its estimate.
 //! The names are part of the analysis JSON (docs/formats.md#analysis-json): [`EffectKind::name`] is what is
 //! written, [`str::parse`] reads it back.
 

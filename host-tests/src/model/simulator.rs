@@ -157,6 +157,18 @@ pub struct WarmupSpec {
     pub tau_s: f64,
 }
 
+/// Noise larger at the start (docs/analysis.md#noise-warm-up): white noise of `excess` per sample added to
+/// every sample before `settled_s`.
+#[derive(Clone, Debug, Deserialize, PartialEq)]
+#[serde(deny_unknown_fields)]
+pub struct NoiseWarmupSpec {
+    /// Standard deviation per sample added per axis (rad/s for gyros, m/s^2 for accelerometers).
+    #[serde(alias = "excess_radps", alias = "excess_mps2")]
+    pub excess: [f64; 3],
+    /// Time after the session's start at which the noise has settled, s.
+    pub settled_s: f64,
+}
+
 /// Gyro errors (rad, s).
 #[derive(Clone, Debug, Default, Deserialize, PartialEq)]
 #[serde(deny_unknown_fields, default)]
@@ -183,6 +195,8 @@ pub struct GyroSpec {
     pub drift_radps_per_s: [f64; 3],
     /// Warm-up transient (`amplitude_radps`, `tau_s`).
     pub warmup: Option<WarmupSpec>,
+    /// Noise larger at the start (`excess_radps`, `settled_s`).
+    pub noise_warmup: Option<NoiseWarmupSpec>,
     /// Bias per kelvin of sensor temperature above the reference, (rad/s)/K.
     pub temperature_coefficient_radps_per_k: [f64; 3],
 }
@@ -213,6 +227,8 @@ pub struct AccelSpec {
     pub drift_mps2_per_s: [f64; 3],
     /// Warm-up transient (`amplitude_mps2`, `tau_s`).
     pub warmup: Option<WarmupSpec>,
+    /// Noise larger at the start (`excess_mps2`, `settled_s`).
+    pub noise_warmup: Option<NoiseWarmupSpec>,
     /// Bias per kelvin of sensor temperature above the reference, (m/s^2)/K.
     pub temperature_coefficient_mps2_per_k: [f64; 3],
 }
@@ -263,6 +279,8 @@ pub struct TriadModel {
     pub drift_per_s: [f64; 3],
     /// Warm-up amplitude per axis and time constant, s.
     pub warmup: Option<([f64; 3], f64)>,
+    /// Noise warm-up: (standard deviation per sample added, s until it settles).
+    pub noise_warmup: Option<([f64; 3], f64)>,
     /// Bias per kelvin.
     pub temperature_coefficient_per_k: [f64; 3],
     /// Second-order nonlinearity per axis: axis i reads `K2_i q_i^2` more (`q` its own interval-averaged true
@@ -379,6 +397,11 @@ impl ScenarioFile {
         if taus.iter().flatten().any(|&t| t.is_nan() || t <= 0.0) {
             return Err("every tau_s of bias_instability and warmup must be positive".into());
         }
+        for (name, w) in [("gyro", &self.gyro.noise_warmup), ("accel", &self.accel.noise_warmup)] {
+            if w.as_ref().is_some_and(|w| [w.settled_s].iter().chain(&w.excess).any(|v| v.is_nan() || *v < 0.0)) {
+                return Err(format!("{name}.noise_warmup: settled_s and excess must not be negative"));
+            }
+        }
         let densities = [
             self.gyro.angle_random_walk_rad_per_sqrt_s,
             self.gyro.rate_random_walk_radps_per_sqrt_s,
@@ -422,6 +445,7 @@ impl ScenarioFile {
             vibration: g.vibration.as_ref().map(|v| (v.amplitude, v.frequency_hz)),
             drift_per_s: g.drift_radps_per_s,
             warmup: g.warmup.as_ref().map(|w| (w.amplitude, w.tau_s)),
+            noise_warmup: g.noise_warmup.as_ref().map(|w| (w.excess, w.settled_s)),
             temperature_coefficient_per_k: g.temperature_coefficient_radps_per_k,
             nonlinearity_per_unit: [0.0; 3],
         }
@@ -439,6 +463,7 @@ impl ScenarioFile {
             vibration: a.vibration.as_ref().map(|v| (v.amplitude, v.frequency_hz)),
             drift_per_s: a.drift_mps2_per_s,
             warmup: a.warmup.as_ref().map(|w| (w.amplitude, w.tau_s)),
+            noise_warmup: a.noise_warmup.as_ref().map(|w| (w.excess, w.settled_s)),
             temperature_coefficient_per_k: a.temperature_coefficient_mps2_per_k,
             nonlinearity_per_unit: a.nonlinearity_per_mps2,
         }
@@ -453,6 +478,7 @@ struct TriadState {
     white: ChaCha8Rng,
     walk: ChaCha8Rng,
     markov: ChaCha8Rng,
+    noise_warmup: ChaCha8Rng,
     walk_b: [f64; 3],
     markov_x: [f64; 3],
     vibration_phase: [f64; 3],
@@ -487,6 +513,7 @@ impl TriadState {
             white: rng(seed, base_stream),
             walk: rng(seed, base_stream + 1),
             markov,
+            noise_warmup: rng(seed, base_stream + 4),
             walk_b: [0.0; 3],
             markov_x,
             quantizer_carry: [0.0; 3],
@@ -527,6 +554,9 @@ impl TriadState {
             }
             if m.white_density > 0.0 {
                 y += m.white_density / dt.sqrt() * normal(&mut self.white);
+            }
+            if let Some((excess, _)) = m.noise_warmup.filter(|&(_, settled_s)| t0 < settled_s) {
+                y += excess[i] * normal(&mut self.noise_warmup);
             }
             out[i] = y;
         }
