@@ -243,7 +243,15 @@ pub(super) fn settled(t_s: &[&[f64]], t0_s: f64, settled_s: f64) -> Vec<(usize, 
 /// `series` (per dwell) reduced to the `kept` samples of [`settled`].
 pub(super) fn keep(series: Vec<Vec<f64>>, kept: &[(usize, usize)]) -> Vec<Vec<f64>> {
     let mut series: Vec<Option<Vec<f64>>> = series.into_iter().map(Some).collect();
-    kept.iter().filter_map(|&(d, from)| series[d].take().map(|mut y| y.split_off(from))).collect()
+    // In place: the samples before are dropped from each kept dwell's own allocation.
+    kept.iter()
+        .filter_map(|&(d, from)| {
+            series[d].take().map(|mut y| {
+                y.drain(..from);
+                y
+            })
+        })
+        .collect()
 }
 
 #[cfg(test)]
