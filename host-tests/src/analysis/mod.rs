@@ -279,6 +279,17 @@ pub struct Confounded {
 }
 
 impl Effect {
+    /// The channel of a per-channel effect (gyro x: 0, ... accelerometer z: 5, as [`CHANNELS`]); `None` for the
+    /// reference's effects and an axis pair.
+    pub fn channel(&self) -> Option<usize> {
+        let first = match self.sensor.as_str() {
+            "gyro" => 0,
+            "accel" => 3,
+            _ => return None,
+        };
+        AXES.iter().position(|a| *a == self.axes).map(|a| first + a)
+    }
+
     /// The standard error as printed: "exact" for 0 (a quantisation step on which every difference lies),
     /// otherwise three significant digits.
     pub fn std_error_text(&self) -> String {

@@ -1,7 +1,7 @@
 //! The noise's own warm-up (docs/analysis.md#noise-warm-up): a channel whose noise is larger at the start of
-//! the record than after it, as a ring-laser gyro's is in its first minutes. The noise terms (lines,
-//! correlated noise) describe the settled instrument, so they are fitted on the samples after the noise has
-//! settled; an estimate that mixed the two would differ from one window of the record to the next.
+//! the record than after it, as a ring-laser gyro's is in its first minutes. The correlated noise describes the
+//! settled instrument, so it is fitted on the samples after the noise has settled; an estimate that mixed the
+//! two would differ from one window of the record to the next.
 //!
 //! The test works on the logarithm of each block's sample variance (blocks of one second, at least
 //! [`MIN_BLOCK_SAMPLES`] samples, within the dwells, in the record's time). The blocks before a time `T` are
@@ -20,7 +20,7 @@ const FIRST_S: f64 = 20.0;
 /// Fewest blocks on either side of a step.
 const MIN_SIDE_BLOCKS: usize = 10;
 /// Fewest samples in a block (a block is one second, or this many samples when a second has fewer).
-pub(super) const MIN_BLOCK_SAMPLES: usize = 20;
+const MIN_BLOCK_SAMPLES: usize = 20;
 
 /// One block: its time since the record's first sample (of its first sample, s) and its samples' variance
 /// about their mean (channel unit squared).
@@ -137,9 +137,7 @@ impl NoiseWarmup {
             blocks: self.blocks.len(),
         })
     }
-}
 
-impl NoiseWarmup {
     /// Each block's time after the record's first sample (s) and standard deviation (channel unit), in time
     /// order.
     pub fn levels(&self) -> Vec<(f64, f64)> {

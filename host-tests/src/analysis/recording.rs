@@ -315,9 +315,8 @@ fn noise_warmups(effects: &[Effect], session: &Session) -> Vec<NoiseWarmupOf> {
         .iter()
         .filter(|e| e.effect == EffectKind::NoiseWarmup.name())
         .filter_map(|e| {
-            let channel = CHANNELS.iter().find(|c| c.starts_with(&format!("{}{}", &e.sensor[..1], e.axes)))?;
             Some(NoiseWarmupOf {
-                channel,
+                channel: CHANNELS[e.channel()?],
                 excess: e.estimate,
                 settled_at_s: session.t0 + e.settled_after_s?,
                 rate_hz: session.rate_hz,

@@ -598,9 +598,7 @@ fn noise_level_panel(area: &Area, a: &Analysis, c: usize, levels: &[(f64, f64)])
         .map_err(|x| e(&x))?
         .label("one-second blocks")
         .legend(|(x, y)| Circle::new((x + 12, y), 3, BLACK.filled()));
-    let warmup = a.effects.iter().find(|w| {
-        w.effect == EffectKind::NoiseWarmup.name() && CHANNELS[c].starts_with(&format!("{}{}", &w.sensor[..1], w.axes))
-    });
+    let warmup = a.effects.iter().find(|w| w.effect == EffectKind::NoiseWarmup.name() && w.channel() == Some(c));
     if let Some((w, settled)) = warmup.and_then(|w| w.settled_after_s.map(|s| (w, s))) {
         let after = w.residual_rms_after / per;
         let before = (after * after + (w.estimate / per).powi(2)).sqrt();
