@@ -147,7 +147,7 @@ pub struct Effect {
     #[serde(skip_serializing_if = "Option::is_none")]
     pub tau_s: Option<f64>,
     /// The noise's warm-up (docs/analysis.md#noise-warm-up): the time after the record's first sample at which
-    /// the noise has settled, s. The channel's noise terms are fitted on the samples after it.
+    /// the noise has settled, s. The channel's correlated noise is fitted on the samples after it.
     #[serde(skip_serializing_if = "Option::is_none")]
     pub settled_after_s: Option<f64>,
     /// Frequency, Hz (vibration: of its strongest component).
