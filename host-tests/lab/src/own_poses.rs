@@ -451,21 +451,11 @@ impl Baseline {
     }
 
     /// The times a noise warm-up planted ends at, s after the record's first sample: 10 to 30 % of the
-    /// session, at least 30 s, where at least 20 one-second blocks of dwell samples lie before the earliest
-    /// and after the latest (`None` when none does: the record is too short).
+    /// session, at least 30 s (`None` when the record is too short for that). A channel is a target when the
+    /// test has blocks enough on both sides of either end ([`Baseline::noise_warmup_excess`]).
     fn noise_warmup_settled_s(&self) -> Option<std::ops::Range<f64>> {
         let (lo, hi) = ((0.1 * self.span_s).max(30.0), 0.3 * self.span_s);
-        let (before, after) = (self.dwell_seconds(lo).0, self.dwell_seconds(hi).1);
-        (lo < hi && before >= 20.0 && after >= 20.0).then_some(lo..hi)
-    }
-
-    /// The seconds of dwell samples before and after `t_s` after the record's first sample.
-    fn dwell_seconds(&self, t_s: f64) -> (f64, f64) {
-        let dt = 1.0 / self.reference.rate_hz;
-        let t0 = self.recording.rows.first().map_or(0.0, |r| r.t_s);
-        let dwell = self.recording.rows.iter().filter(|r| r.pos != 0);
-        let before = dwell.clone().filter(|r| r.t_s - t0 < t_s).count() as f64 * dt;
-        (before, dwell.count() as f64 * dt - before)
+        (lo < hi).then_some(lo..hi)
     }
 
     /// The excess standard deviation of a noise warm-up that ends at `settled_s`, planted at `size` standard
