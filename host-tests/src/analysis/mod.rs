@@ -60,6 +60,8 @@ mod candidates;
 mod checks;
 mod column;
 mod correlated_noise;
+mod disturbance;
+pub use disturbance::Found as Disturbances;
 mod model_fit;
 pub mod noise_terms;
 mod noise_warmup;
@@ -416,6 +418,10 @@ pub struct ChannelDiagnostics {
     /// that the detrended samples are, dimensionless; the correlated-noise test runs on the samples freed of
     /// it (docs/analysis.md#the-noise-at-the-scale-of-a-few-samples).
     pub sample_colour_ma: [f64; 2],
+    /// Seconds whose noise stands far above the channel's own level (docs/analysis.md#disturbances); absent
+    /// when none does. The noise terms include them.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub disturbances: Option<Disturbances>,
 }
 
 /// The result of `sinscal analyze` (docs/formats.md#analysis-json, with extra fields).

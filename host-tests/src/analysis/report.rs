@@ -183,18 +183,19 @@ fn diagnostics_md(md: &mut String, a: &Analysis) {
     let _ = writeln!(md, "\n## Diagnostics per channel\n");
     let _ = writeln!(
         md,
-        "| channel | detrended RMS | Ljung-Box p (20 lags, longest dwell) | largest within-dwell trend (z) | quantisation step | print step (file's digits) |\n|---|---|---|---|---|---|"
+        "| channel | detrended RMS | Ljung-Box p (20 lags, longest dwell) | largest within-dwell trend (z) | quantisation step | print step (file's digits) | disturbed seconds (episodes) |\n|---|---|---|---|---|---|---|"
     );
     for d in &a.diagnostics {
         let _ = writeln!(
             md,
-            "| {} | {:.4e} | {:.3} | {:.1} | {} | {} |",
+            "| {} | {:.4e} | {:.3} | {:.1} | {} | {} | {} |",
             d.channel,
             d.detrended_rms,
             d.whiteness_p_value,
             d.max_trend_z,
             d.quantization_step.map_or("-".to_string(), |q| format!("{q:.4e}")),
-            d.print_step.map_or("-".to_string(), |q| format!("{q:.0e}"))
+            d.print_step.map_or("-".to_string(), |q| format!("{q:.0e}")),
+            d.disturbances.as_ref().map_or("-".to_string(), |x| format!("{:.0} ({})", x.disturbed_s, x.episodes))
         );
     }
 }
@@ -593,6 +594,15 @@ fn noise_level_panel(area: &Area, a: &Analysis, c: usize, levels: &[(f64, f64)])
         .y_desc(format!("block standard deviation [{unit}]"))
         .draw()
         .map_err(|x| e(&x))?;
+    let disturbed = a.diagnostics.iter().find(|d| d.channel == CHANNELS[c]).and_then(|d| d.disturbances.as_ref());
+    if let Some(x) = disturbed {
+        let shade = RGBColor(230, 140, 0).mix(0.35).filled();
+        chart
+            .draw_series(x.episodes_s.iter().map(|&[from, to]| Rectangle::new([(from, lo), (to, hi)], shade)))
+            .map_err(|x| e(&x))?
+            .label(format!("disturbed: {:.0} s in {} episodes", x.disturbed_s, x.episodes))
+            .legend(move |(x, y)| Rectangle::new([(x + 6, y - 5), (x + 18, y + 5)], shade));
+    }
     chart
         .draw_series(points.iter().map(|&p| Circle::new(p, 1, BLACK.mix(0.5).filled())))
         .map_err(|x| e(&x))?

@@ -22,6 +22,7 @@ use super::candidates::warmup_shape;
 use super::correlated_noise::{
     gauss_markov_test, two_process_test, GaussMarkovResult, TwoProcessResult, MAX_TWO_PROCESS_SAMPLES,
 };
+use super::disturbance::{Disturbances, Found};
 use super::noise_warmup::{keep, settled, NoiseWarmup};
 use super::observations::Session;
 use super::parallel::on_cores;
@@ -188,6 +189,8 @@ struct ChannelMeasures {
     /// starts there; docs/analysis.md#noise-warm-up).
     noise_warmup: NoiseWarmup,
     settled_s: Option<f64>,
+    /// Seconds far above the channel's level, at the smallest `m` (a diagnostic).
+    disturbances: Option<Found>,
     /// RMS of the detrended samples.
     rms: f64,
     /// Largest within-dwell slope over its standard error.
@@ -262,6 +265,7 @@ impl ChannelMeasures {
         let smallest_m_limit = ALPHA / sample_tests(session) as f64;
         let times: Vec<&[f64]> = session.dwells.iter().map(|d| &d.t[..]).collect();
         let noise_warmup = NoiseWarmup::measure(&series, &times, session.t0, session.dt, smallest_m_limit);
+        let disturbances = Disturbances::measure(&series, &times, session.t0, session.dt).at(smallest_m_limit);
         let mut search = LineSearch::new(&series, &starts_samples);
         let room = |lines: &[Line]| lines.len() < MAX_COMPONENTS && wandering(lines).len() < MAX_LINES;
         while let Some(fits) =
@@ -301,6 +305,7 @@ impl ChannelMeasures {
             dwells,
             noise_warmup,
             settled_s,
+            disturbances,
             rms,
             max_trend_z,
             long,
@@ -368,6 +373,7 @@ impl ChannelMeasures {
                 quantization_step: q_step,
                 print_step: self.print_step,
                 sample_colour_ma: correlated.0.colour.theta,
+                disturbances: self.disturbances.clone(),
             },
             longest_dwell: long,
             correlated: corr_found,

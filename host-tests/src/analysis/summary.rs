@@ -60,6 +60,21 @@ pub fn summary(a: &Analysis) -> String {
             let _ = writeln!(s, "  {}", m.text());
         }
     }
+    let disturbed: Vec<_> = a.diagnostics.iter().filter_map(|d| d.disturbances.as_ref().map(|x| (d, x))).collect();
+    if !disturbed.is_empty() {
+        let _ = writeln!(
+            s,
+            "disturbances (one-second blocks whose noise stands far above the channel's own level; the noise terms include them):"
+        );
+        for (d, x) in disturbed {
+            let unit = super::CHANNELS.iter().position(|c| *c == d.channel).map_or("", |c| super::CHANNEL_UNITS[c]);
+            let _ = writeln!(
+                s,
+                "  {}: {:.0} s ({} of {} blocks) in {} episodes; they add {:.3e} +- {:.2e} {unit} to its level of {:.3e} {unit} (p {:.1e})",
+                d.channel, x.disturbed_s, x.blocks, x.tested, x.episodes, x.excess, x.std_error, x.quiet_rms, x.p_value
+            );
+        }
+    }
     if !a.unobservable.is_empty() {
         let _ = writeln!(s, "unobservable with this data: {}", a.unobservable.join(", "));
     }
