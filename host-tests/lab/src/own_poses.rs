@@ -49,7 +49,9 @@
 //! and position, at the planted line for a vibration, whose estimate is the planted value (linear terms:
 //! within 3 of its standard errors of the planted value, plus the baseline's estimate when the baseline
 //! names the same candidate; warm-up, vibration, correlated noise, noise warm-up and quantisation: within
-//! 30 %), and which
+//! 30 %; a correlated noise on a channel whose baseline names one: within 30 % of the root sum of squares of
+//! the two, since independent processes add their variances, and moved from the baseline's by more than 3
+//! of its standard errors), and which
 //! is not the baseline's own (a candidate the baseline names counts only when the estimate moved away from
 //! the baseline's by more than 3 standard errors, or 30 %). FALSE ALARM: an effect named in the trial that
 //! is neither of the planted kind, sensor, axes and position nor in the baseline (same candidate, same
@@ -771,11 +773,27 @@ fn carries_planted(e: &Effect, twin: Option<&Effect>, h: &Hidden) -> Result<(), 
             (Some(a), Some(b)) => within_30(b, a),
             _ => true,
         };
-        if twin.is_some_and(|u| within_30(e.estimate, u.estimate) && same_tau(u)) {
-            return Err("the baseline's value");
-        }
-        if !within_30(e.estimate, h.value) {
-            return Err("estimate off");
+        match (h.effect, twin) {
+            // A process planted beside the baseline's own on the channel: independent processes add their
+            // variances, and the analysis reads the channel's one process. Added in quadrature, it moves the
+            // estimate less than its own size: it counts when it moved the estimate by more than 3 of its
+            // standard errors, as a linear term does.
+            (EffectKind::CorrelatedNoise, Some(u)) => {
+                if (e.estimate - u.estimate).abs() <= 3.0 * e.std_error {
+                    return Err("the baseline's value");
+                }
+                if !within_30(e.estimate, h.value.hypot(u.estimate)) {
+                    return Err("estimate off");
+                }
+            }
+            _ => {
+                if twin.is_some_and(|u| within_30(e.estimate, u.estimate) && same_tau(u)) {
+                    return Err("the baseline's value");
+                }
+                if !within_30(e.estimate, h.value) {
+                    return Err("estimate off");
+                }
+            }
         }
     }
     Ok(())

@@ -61,7 +61,6 @@ mod checks;
 mod column;
 mod correlated_noise;
 mod disturbance;
-pub use disturbance::Found as Disturbances;
 mod model_fit;
 pub mod noise_terms;
 mod noise_warmup;
@@ -73,6 +72,7 @@ mod result;
 mod sample_colour;
 mod sample_tests;
 mod selection;
+mod settling;
 mod summary;
 mod vibration;
 mod wander;
@@ -87,8 +87,10 @@ use crate::io::error::InputError;
 use crate::io::recording::RecordingFile;
 
 pub use angles::{analyze_angles, AnglesFile, AnglesRow};
+pub use disturbance::Found as Disturbances;
 pub use model_fit::{DwellFit, GroupFit, ModelFit};
 pub use recording::analyze_recording;
+pub use settling::{Settling, SettlingTest};
 pub use summary::summary;
 pub use windows::{WindowCheck, WindowParameter};
 
@@ -477,6 +479,11 @@ pub struct Analysis {
     /// (recordings; docs/analysis.md#windows)?
     #[serde(skip_serializing_if = "Option::is_none")]
     pub windows: Option<WindowCheck>,
+    /// Settling after a move (docs/analysis.md#settling-after-a-move): the seconds left out at the start and
+    /// end of the dwells whose first or last half-seconds differ from their rest beyond its noise; absent when
+    /// none do (and for angles).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub settling: Option<settling::Settling>,
     /// The checks of the analysis (docs/cli.md#checks): `fit` (recordings) and `plausibility`, passed or
     /// failed; a failed one makes `analyze` exit with status 3.
     pub checks: Vec<crate::calibration::checks::Check>,

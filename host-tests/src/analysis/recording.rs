@@ -18,6 +18,7 @@ use super::observations::{BlockObs, Blocks, Session};
 use super::result::{assemble, effects_of, residuals_by_group, Findings, RECORDING};
 use super::sample_tests::{measure_samples, sample_tests, test_samples, SampleFindings, Warmup};
 use super::selection::{final_columns, select, select_without, BlockOf, Problem, Selection, Unsupported};
+use super::settling::settle;
 use super::wander::{mark_wander, unsupported, wander_std_errors, widen_tested};
 use super::windows::window_check;
 use super::{Analysis, ChannelDiagnostics, Effect, CHANNELS, CHANNEL_UNITS};
@@ -47,6 +48,7 @@ const MAX_RESELECTIONS: usize = 3;
 /// The analysis of a session read from `source`; `levelled`: its attitudes were levelled from its own
 /// accelerometers.
 fn analyze_session(mut session: Session, levelled: bool, source: &str) -> Result<Analysis, InputError> {
+    let settling = settle(&mut session);
     let accel_bias_mps2 = if levelled { relevel(&mut session) } else { [0.0; 3] };
     let session = &session;
     let blocks = Blocks::cut(session);
@@ -107,6 +109,7 @@ fn analyze_session(mut session: Session, levelled: bool, source: &str) -> Result
         windows,
     };
     let mut analysis = assemble(problem, selection, findings, RECORDING, source);
+    analysis.settling = settling;
     for (k, axis) in ["x", "y", "z"].iter().enumerate() {
         if let Some(b) = analysis.base_model.biases.get_mut(&format!("accel_bias_{axis}")) {
             *b += accel_bias_mps2[k];

@@ -289,6 +289,7 @@ pub(super) fn assemble(
         noise_model: findings.noise_model,
         model_fit: findings.model_fit,
         windows: findings.windows,
+        settling: None,
         checks: Vec::new(),
         figures: findings.figures,
     };

@@ -51,6 +51,27 @@ pub fn summary(a: &Analysis) -> String {
     if let Some(w) = &a.windows {
         let _ = writeln!(s, "{}", w.text());
     }
+    if let Some(x) = &a.settling {
+        let tests: Vec<String> = x
+            .passed
+            .iter()
+            .map(|t| {
+                format!(
+                    "{} {} segment {}: F {:.1} ({}, {}), p {:.1e}",
+                    t.channel, t.end, t.segment, t.f, t.dof[0], t.dof[1], t.p_value
+                )
+            })
+            .collect();
+        let _ = writeln!(
+            s,
+            "settling after a move: the first {:.1} s and the last {:.1} s of {} dwells of {} tested left out ({})",
+            x.start_s,
+            x.end_s,
+            x.dwells,
+            x.tested_dwells,
+            tests.join("; ")
+        );
+    }
     for c in &a.checks {
         let _ = writeln!(s, "check {}: {}: {}", c.check, if c.passed { "passed" } else { "FAILED" }, c.detail);
     }
