@@ -1,6 +1,7 @@
 //! Disturbances (docs/analysis.md#disturbances): seconds in which a channel's noise stands far above its own
 //! level, as a parked vehicle's gyros do when someone moves in it. They are a diagnostic, not an effect of the
-//! catalogue: the analysis says where they are and how large, and that its noise terms include them.
+//! catalogue: the analysis says where they are and how large, and that its noise terms include them. A
+//! channel with a noise warm-up is tested after it has settled: the warm-up's blocks are its own.
 //!
 //! The test works on the logarithm of each block's sample variance (blocks of one second, at least
 //! [`MIN_BLOCK_SAMPLES`] samples, within the dwells), each about its own straight line so that a process
@@ -74,15 +75,16 @@ pub struct Found {
 
 impl Disturbances {
     /// The blocks of each dwell's `series` (the samples less the dwell's mean and line), whose samples are at
-    /// `t_s` (per dwell, the record's time; `t0_s` its first sample), `dt` s apart.
-    pub fn measure(series: &[Vec<f64>], t_s: &[&[f64]], t0_s: f64, dt: f64) -> Disturbances {
+    /// `t_s` (per dwell, the record's time; `t0_s` its first sample), `dt` s apart, that start at or after
+    /// `from_s` after the first sample (where a noise warm-up has settled: its blocks are its own).
+    pub fn measure(series: &[Vec<f64>], t_s: &[&[f64]], t0_s: f64, dt: f64, from_s: f64) -> Disturbances {
         let per_block = ((1.0 / dt).round() as usize).max(MIN_BLOCK_SAMPLES);
         let mut blocks = Vec::new();
         for (dwell, (y, t)) in series.iter().zip(t_s).enumerate() {
             for (k, chunk) in y.chunks_exact(per_block).enumerate() {
                 let variance = variance_about_line(chunk);
-                if variance > 0.0 && variance.is_finite() {
-                    let first = k * per_block;
+                let first = k * per_block;
+                if variance > 0.0 && variance.is_finite() && t[first] - t0_s >= from_s {
                     blocks.push(Block { dwell, first, t_s: t[first] - t0_s, variance, z: 0.0 });
                 }
             }
@@ -242,7 +244,7 @@ mod tests {
         let limit = 0.01 / 24.0;
         for seed in 0..5 {
             let y = record(900, true, seed);
-            let d = Disturbances::measure(std::slice::from_ref(&y), &[&times(&y)], 0.0, 0.01);
+            let d = Disturbances::measure(std::slice::from_ref(&y), &[&times(&y)], 0.0, 0.01, 0.0);
             let found = d.at(limit).expect("bursts found");
             // Fifty disturbed seconds in ten episodes; a block that straddles a burst's edge may pass or not.
             assert!((50..=60).contains(&found.blocks), "seed {seed}: {found:?}");
@@ -259,7 +261,7 @@ mod tests {
         }
         for seed in 0..30 {
             let y = record(900, false, 100 + seed);
-            let d = Disturbances::measure(std::slice::from_ref(&y), &[&times(&y)], 0.0, 0.01);
+            let d = Disturbances::measure(std::slice::from_ref(&y), &[&times(&y)], 0.0, 0.01, 0.0);
             assert_eq!(d.at(limit), None, "seed {seed}: white noise");
             // A Gauss-Markov process of 2 s (standard deviation 3) beside the white noise: its blocks' variances
             // scatter more, and the robust spread takes that from the bulk.
@@ -273,7 +275,7 @@ mod tests {
                     x + w
                 })
                 .collect();
-            let d = Disturbances::measure(std::slice::from_ref(&coloured), &[&times(&coloured)], 0.0, 0.01);
+            let d = Disturbances::measure(std::slice::from_ref(&coloured), &[&times(&coloured)], 0.0, 0.01, 0.0);
             assert_eq!(d.at(limit), None, "seed {seed}: coloured noise");
         }
     }

@@ -265,7 +265,11 @@ impl ChannelMeasures {
         let smallest_m_limit = ALPHA / sample_tests(session) as f64;
         let times: Vec<&[f64]> = session.dwells.iter().map(|d| &d.t[..]).collect();
         let noise_warmup = NoiseWarmup::measure(&series, &times, session.t0, session.dt, smallest_m_limit);
-        let disturbances = Disturbances::measure(&series, &times, session.t0, session.dt).at(smallest_m_limit);
+        // The noise's warm-up at the smallest m: the correlated noise is fitted after it, and the disturbances
+        // are sought after it.
+        let settled_s = noise_warmup.at(smallest_m_limit).map(|w| w.settled_s);
+        let disturbances = Disturbances::measure(&series, &times, session.t0, session.dt, settled_s.unwrap_or(0.0))
+            .at(smallest_m_limit);
         let mut search = LineSearch::new(&series, &starts_samples);
         let room = |lines: &[Line]| lines.len() < MAX_COMPONENTS && wandering(lines).len() < MAX_LINES;
         while let Some(fits) =
@@ -293,7 +297,6 @@ impl ChannelMeasures {
         let dwells = series.len();
         // The correlated noise describes the settled instrument: with a noise warm-up at the smallest m, it is
         // fitted on the samples after it.
-        let settled_s = noise_warmup.at(smallest_m_limit).map(|w| w.settled_s);
         let series = match settled_s {
             Some(t) => keep(series, &settled(&times, session.t0, t)),
             None => series,
