@@ -8,9 +8,9 @@
 //! slower than a block counts little. Each block is set against the channel's own level with robust
 //! statistics: its distance from the median of the blocks over the spread of their lower half (the median
 //! distance below the median, times 1.4826: the standard deviation of normal values). The disturbances, a
-//! minority in the upper tail, move neither much. A block is disturbed when that distance passes the one-sided normal quantile at
-//! `alpha / (m n)`, Bonferroni over the `n` blocks, and its square the BIC's `ln n`, and its standard
-//! deviation is at least twice the median block's.
+//! minority in the upper tail, move neither much. A block is disturbed when that distance passes the
+//! one-sided normal quantile at `alpha / (m n)`, Bonferroni over the `n` blocks (and its square the BIC's
+//! `ln n`), and its standard deviation is at least twice the median block's.
 
 use crate::stats::linfit::{chi_square_quantile_upper, chi_square_upper};
 
@@ -39,7 +39,7 @@ struct Block {
 
 /// A channel's blocks, in dwell order, and its level.
 #[derive(Clone, Debug, Default)]
-pub(super) struct Disturbances {
+pub(super) struct BlockLevels {
     /// Samples per block.
     per_block: usize,
     /// Seconds per block.
@@ -51,7 +51,7 @@ pub(super) struct Disturbances {
 
 /// The disturbances at some level (a channel's diagnostic in the analysis JSON).
 #[derive(Clone, Debug, PartialEq, serde::Serialize)]
-pub struct Found {
+pub struct Disturbances {
     /// Disturbed blocks.
     pub blocks: usize,
     /// Runs of disturbed blocks (episodes).
@@ -73,11 +73,11 @@ pub struct Found {
     pub tested: usize,
 }
 
-impl Disturbances {
+impl BlockLevels {
     /// The blocks of each dwell's `series` (the samples less the dwell's mean and line), whose samples are at
     /// `t_s` (per dwell, the record's time; `t0_s` its first sample), `dt` s apart, that start at or after
     /// `from_s` after the first sample (where a noise warm-up has settled: its blocks are its own).
-    pub fn measure(series: &[Vec<f64>], t_s: &[&[f64]], t0_s: f64, dt: f64, from_s: f64) -> Disturbances {
+    pub fn measure(series: &[Vec<f64>], t_s: &[&[f64]], t0_s: f64, dt: f64, from_s: f64) -> BlockLevels {
         let per_block = ((1.0 / dt).round() as usize).max(MIN_BLOCK_SAMPLES);
         let mut blocks = Vec::new();
         for (dwell, (y, t)) in series.iter().zip(t_s).enumerate() {
@@ -104,7 +104,7 @@ impl Disturbances {
                 }
             }
         }
-        Disturbances { per_block, block_s: per_block as f64 * dt, median_variance, blocks }
+        BlockLevels { per_block, block_s: per_block as f64 * dt, median_variance, blocks }
     }
 
     /// The robust distance a block must pass at `p_value_limit` (alpha over the Bonferroni `m`); infinite
@@ -122,7 +122,7 @@ impl Disturbances {
     /// The disturbances that pass at `p_value_limit`; `None` when no block does. A block is disturbed when its
     /// robust distance passes the limit and its standard deviation is at least [`MIN_RATIO`] times the median
     /// block's.
-    pub fn at(&self, p_value_limit: f64) -> Option<Found> {
+    pub fn at(&self, p_value_limit: f64) -> Option<Disturbances> {
         let limit = self.limit(p_value_limit);
         let floor = MIN_RATIO * MIN_RATIO * self.median_variance;
         let disturbed: Vec<bool> = self.blocks.iter().map(|b| b.z > limit && b.variance >= floor).collect();
@@ -141,7 +141,7 @@ impl Disturbances {
         }
         let z = self.blocks.iter().map(|b| b.z).fold(f64::MIN, f64::max);
         let n = self.blocks.len() as f64;
-        Some(Found {
+        Some(Disturbances {
             blocks: count,
             episodes: episodes_s.len(),
             disturbed_s: count as f64 * self.block_s,
@@ -244,7 +244,7 @@ mod tests {
         let limit = 0.01 / 24.0;
         for seed in 0..5 {
             let y = record(900, true, seed);
-            let d = Disturbances::measure(std::slice::from_ref(&y), &[&times(&y)], 0.0, 0.01, 0.0);
+            let d = BlockLevels::measure(std::slice::from_ref(&y), &[&times(&y)], 0.0, 0.01, 0.0);
             let found = d.at(limit).expect("bursts found");
             // Fifty disturbed seconds in ten episodes; a block that straddles a burst's edge may pass or not.
             assert!((50..=60).contains(&found.blocks), "seed {seed}: {found:?}");
@@ -261,7 +261,7 @@ mod tests {
         }
         for seed in 0..30 {
             let y = record(900, false, 100 + seed);
-            let d = Disturbances::measure(std::slice::from_ref(&y), &[&times(&y)], 0.0, 0.01, 0.0);
+            let d = BlockLevels::measure(std::slice::from_ref(&y), &[&times(&y)], 0.0, 0.01, 0.0);
             assert_eq!(d.at(limit), None, "seed {seed}: white noise");
             // A Gauss-Markov process of 2 s (standard deviation 3) beside the white noise: its blocks' variances
             // scatter more, and the robust spread takes that from the bulk.
@@ -275,7 +275,7 @@ mod tests {
                     x + w
                 })
                 .collect();
-            let d = Disturbances::measure(std::slice::from_ref(&coloured), &[&times(&coloured)], 0.0, 0.01, 0.0);
+            let d = BlockLevels::measure(std::slice::from_ref(&coloured), &[&times(&coloured)], 0.0, 0.01, 0.0);
             assert_eq!(d.at(limit), None, "seed {seed}: coloured noise");
         }
     }

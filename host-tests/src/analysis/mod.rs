@@ -87,7 +87,7 @@ use crate::io::error::InputError;
 use crate::io::recording::RecordingFile;
 
 pub use angles::{analyze_angles, AnglesFile, AnglesRow};
-pub use disturbance::Found as Disturbances;
+pub use disturbance::Disturbances;
 pub use model_fit::{DwellFit, GroupFit, ModelFit};
 pub use recording::analyze_recording;
 pub use settling::{Settling, SettlingTest};

@@ -22,7 +22,7 @@ use super::candidates::warmup_shape;
 use super::correlated_noise::{
     gauss_markov_test, two_process_test, GaussMarkovResult, TwoProcessResult, MAX_TWO_PROCESS_SAMPLES,
 };
-use super::disturbance::{Disturbances, Found};
+use super::disturbance::{BlockLevels, Disturbances};
 use super::noise_warmup::{keep, settled, NoiseWarmup};
 use super::observations::Session;
 use super::parallel::on_cores;
@@ -190,7 +190,7 @@ struct ChannelMeasures {
     noise_warmup: NoiseWarmup,
     settled_s: Option<f64>,
     /// Seconds far above the channel's level, at the smallest `m` (a diagnostic).
-    disturbances: Option<Found>,
+    disturbances: Option<Disturbances>,
     /// RMS of the detrended samples.
     rms: f64,
     /// Largest within-dwell slope over its standard error.
@@ -268,7 +268,7 @@ impl ChannelMeasures {
         // The noise's warm-up at the smallest m: the correlated noise is fitted after it, and the disturbances
         // are sought after it.
         let settled_s = noise_warmup.at(smallest_m_limit).map(|w| w.settled_s);
-        let disturbances = Disturbances::measure(&series, &times, session.t0, session.dt, settled_s.unwrap_or(0.0))
+        let disturbances = BlockLevels::measure(&series, &times, session.t0, session.dt, settled_s.unwrap_or(0.0))
             .at(smallest_m_limit);
         let mut search = LineSearch::new(&series, &starts_samples);
         let room = |lines: &[Line]| lines.len() < MAX_COMPONENTS && wandering(lines).len() < MAX_LINES;
