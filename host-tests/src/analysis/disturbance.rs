@@ -3,8 +3,8 @@
 //! catalogue: the analysis says where they are and how large, and that its noise terms include them. A
 //! channel with a noise warm-up is tested after it has settled: the warm-up's blocks are its own.
 //!
-//! The test works on the logarithm of each block's sample variance (blocks of one second, at least
-//! [`MIN_BLOCK_SAMPLES`] samples, within the dwells), each about its own straight line so that a process
+//! The test works on the logarithm of each block's sample variance (the noise warm-up's blocks,
+//! [`samples_per_block`]: one second, within the dwells), each about its own straight line so that a process
 //! slower than a block counts little. Each block is set against the channel's own level with robust
 //! statistics: its distance from the median of the blocks over the spread of their lower half (the median
 //! distance below the median, times 1.4826: the standard deviation of normal values). The disturbances, a
@@ -14,8 +14,8 @@
 
 use crate::stats::linfit::{chi_square_quantile_upper, chi_square_upper};
 
-/// Fewest samples in a block (a block is one second, or this many samples when a second has fewer).
-const MIN_BLOCK_SAMPLES: usize = 20;
+use super::noise_warmup::samples_per_block;
+
 /// Fewest blocks for the test (the median and its deviation need a bulk).
 const MIN_BLOCKS: usize = 20;
 /// A disturbed block's standard deviation is at least this many times the median block's: the size that
@@ -78,7 +78,7 @@ impl BlockLevels {
     /// `t_s` (per dwell, the record's time; `t0_s` its first sample), `dt` s apart, that start at or after
     /// `from_s` after the first sample (where a noise warm-up has settled: its blocks are its own).
     pub fn measure(series: &[Vec<f64>], t_s: &[&[f64]], t0_s: f64, dt: f64, from_s: f64) -> BlockLevels {
-        let per_block = ((1.0 / dt).round() as usize).max(MIN_BLOCK_SAMPLES);
+        let per_block = samples_per_block(dt);
         let mut blocks = Vec::new();
         for (dwell, (y, t)) in series.iter().zip(t_s).enumerate() {
             for (k, chunk) in y.chunks_exact(per_block).enumerate() {

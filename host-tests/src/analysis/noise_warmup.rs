@@ -145,10 +145,16 @@ impl NoiseWarmup {
     }
 }
 
+/// Samples in a block of the noise's level at `dt` s a sample: one second, or [`MIN_BLOCK_SAMPLES`] when a
+/// second has fewer (the noise warm-up's blocks and the disturbances' are the same).
+pub(super) fn samples_per_block(dt: f64) -> usize {
+    ((1.0 / dt).round() as usize).max(MIN_BLOCK_SAMPLES)
+}
+
 /// The blocks of each dwell's `series`, whose samples are at `t_s` (the record's time, `t0_s` its first
 /// sample), `dt` s apart, in time order.
 fn blocks(series: &[Vec<f64>], t_s: &[&[f64]], t0_s: f64, dt: f64) -> Vec<Block> {
-    let per_block = ((1.0 / dt).round() as usize).max(MIN_BLOCK_SAMPLES);
+    let per_block = samples_per_block(dt);
     let mut blocks = Vec::new();
     for (y, t) in series.iter().zip(t_s) {
         for (k, chunk) in y.chunks_exact(per_block).enumerate() {
