@@ -19,8 +19,8 @@ use super::noise_warmup::samples_per_block;
 /// Fewest blocks for the test (the median and its deviation need a bulk).
 const MIN_BLOCKS: usize = 20;
 /// A disturbed block's standard deviation is at least this many times the median block's: the size that
-/// makes a disturbance, beside the test (a process of a few seconds makes an odd block pass the test alone,
-/// never one this far out).
+/// makes a disturbance, beside the test (a process of a few seconds made a block pass the test alone; with
+/// this, none did in the unit test's 30 seeds).
 const MIN_RATIO: f64 = 2.0;
 /// The normal standard deviation over the median distance of the lower half from the median (a quartile's).
 const MAD_TO_SD: f64 = 1.4826;
