@@ -175,8 +175,23 @@ fn model_fit_md(md: &mut String, a: &Analysis) {
     }
 }
 
-/// `summary.md`: the per-channel diagnostics (recordings).
+/// `summary.md`: the per-channel diagnostics (recordings), and what settling after a move left out.
 fn diagnostics_md(md: &mut String, a: &Analysis) {
+    if let Some(x) = &a.settling {
+        let _ = writeln!(
+            md,
+            "\n## Settling after a move\n\nThe first {:.1} s and the last {:.1} s of {} dwells (of {} tested) were left out \
+             (docs/analysis.md#settling-after-a-move):\n\n| channel | end | segment | F | dof | p |\n|---|---|---|---|---|---|",
+            x.start_s, x.end_s, x.dwells, x.tested_dwells
+        );
+        for t in &x.passed {
+            let _ = writeln!(
+                md,
+                "| {} | {} | {} | {:.2} | {}, {} | {:.1e} |",
+                t.channel, t.end, t.segment, t.f, t.dof[0], t.dof[1], t.p_value
+            );
+        }
+    }
     if a.diagnostics.is_empty() {
         return;
     }
