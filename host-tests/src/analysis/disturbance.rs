@@ -14,7 +14,7 @@
 
 use crate::stats::linfit::{chi_square_quantile_upper, chi_square_upper};
 
-use super::noise_warmup::samples_per_block;
+use super::noise_warmup::{block_chunks, excess_in_quadrature, samples_per_block};
 
 /// Fewest blocks for the test (the median and its deviation need a bulk).
 const MIN_BLOCKS: usize = 20;
@@ -79,16 +79,13 @@ impl BlockLevels {
     /// `from_s` after the first sample (where a noise warm-up has settled: its blocks are its own).
     pub fn measure(series: &[Vec<f64>], t_s: &[&[f64]], t0_s: f64, dt: f64, from_s: f64) -> BlockLevels {
         let per_block = samples_per_block(dt);
-        let mut blocks = Vec::new();
-        for (dwell, (y, t)) in series.iter().zip(t_s).enumerate() {
-            for (k, chunk) in y.chunks_exact(per_block).enumerate() {
+        let mut blocks: Vec<Block> = block_chunks(series, t_s, t0_s, dt)
+            .filter(|&(_, _, t_s, _)| t_s >= from_s)
+            .filter_map(|(dwell, first, t_s, chunk)| {
                 let variance = variance_about_line(chunk);
-                let first = k * per_block;
-                if variance > 0.0 && variance.is_finite() && t[first] - t0_s >= from_s {
-                    blocks.push(Block { dwell, first, t_s: t[first] - t0_s, variance, z: 0.0 });
-                }
-            }
-        }
+                (variance > 0.0 && variance.is_finite()).then_some(Block { dwell, first, t_s, variance, z: 0.0 })
+            })
+            .collect();
         let mut median_variance = f64::INFINITY;
         if blocks.len() >= MIN_BLOCKS {
             let logs: Vec<f64> = blocks.iter().map(|b| b.variance.ln()).collect();
@@ -179,12 +176,7 @@ fn excess(blocks: &[Block], disturbed: &[bool], per_block: usize) -> Option<(f64
     let gaussian = |m: f64, n: usize| 2.0 * m * m / (per_block as f64 - 1.0) / n as f64;
     let var_disturbed = scatter_disturbed.max(gaussian(mean_disturbed, count));
     let var_quiet = scatter_quiet.max(gaussian(mean_quiet, blocks.len() - count));
-    let excess_variance = mean_disturbed - mean_quiet;
-    (excess_variance > 0.0).then(|| {
-        let excess = excess_variance.sqrt();
-        // d sqrt(v) = dv / (2 sqrt(v)).
-        (excess, (var_disturbed + var_quiet).sqrt() / (2.0 * excess))
-    })
+    excess_in_quadrature((mean_disturbed, var_disturbed), (mean_quiet, var_quiet))
 }
 
 /// The variance of `y` about its own straight line (least squares on the sample index, `n - 2` degrees of

@@ -117,19 +117,13 @@ impl NoiseWarmup {
         let (before, after) = self.blocks.split_at(split);
         let variances = |b: &[Block]| b.iter().map(|b| b.variance).collect::<Vec<f64>>();
         let (before, after) = (variances(before), variances(after));
-        let (mean_before, var_before) = mean_and_variance(&before);
-        let (mean_after, var_after) = mean_and_variance(&after);
-        let excess_variance = mean_before - mean_after;
-        if excess_variance <= 0.0 {
-            return None;
-        }
-        let excess = excess_variance.sqrt();
+        let after = mean_and_variance(&after);
+        let (excess, std_error) = excess_in_quadrature(mean_and_variance(&before), after)?;
         Some(Size {
             settled_s: last.settled_s,
             excess,
-            // d sqrt(v) = dv / (2 sqrt(v)).
-            std_error: (var_before + var_after).sqrt() / (2.0 * excess),
-            settled_rms: mean_after.sqrt(),
+            std_error,
+            settled_rms: after.0.sqrt(),
             all_rms: (self.blocks.iter().map(|b| b.variance).sum::<f64>() / self.blocks.len() as f64).sqrt(),
             steps: steps.len(),
             statistic: steps.iter().map(|s| s.z * s.z).sum(),
@@ -151,23 +145,48 @@ pub(super) fn samples_per_block(dt: f64) -> usize {
     ((1.0 / dt).round() as usize).max(MIN_BLOCK_SAMPLES)
 }
 
-/// The blocks of each dwell's `series`, whose samples are at `t_s` (the record's time, `t0_s` its first
-/// sample), `dt` s apart, in time order.
-fn blocks(series: &[Vec<f64>], t_s: &[&[f64]], t0_s: f64, dt: f64) -> Vec<Block> {
+/// The blocks of the noise's level in each dwell's `series` (samples at `t_s`, the record's time; `t0_s` its
+/// first sample; `dt` s apart), dwell by dwell: (the dwell, the block's first sample in it, that sample's time
+/// after the record's first sample in s, the block's samples).
+pub(super) fn block_chunks<'a>(
+    series: &'a [Vec<f64>],
+    t_s: &'a [&'a [f64]],
+    t0_s: f64,
+    dt: f64,
+) -> impl Iterator<Item = (usize, usize, f64, &'a [f64])> + 'a {
     let per_block = samples_per_block(dt);
-    let mut blocks = Vec::new();
-    for (y, t) in series.iter().zip(t_s) {
-        for (k, chunk) in y.chunks_exact(per_block).enumerate() {
+    series.iter().zip(t_s).enumerate().flat_map(move |(dwell, (y, t))| {
+        y.chunks_exact(per_block).enumerate().map(move |(k, chunk)| {
+            let first = k * per_block;
+            (dwell, first, t[first] - t0_s, chunk)
+        })
+    })
+}
+
+/// The blocks of each dwell's `series`, whose samples are at `t_s` (the record's time, `t0_s` its first
+/// sample), `dt` s apart, in time order; each block's variance about its mean.
+fn blocks(series: &[Vec<f64>], t_s: &[&[f64]], t0_s: f64, dt: f64) -> Vec<Block> {
+    let mut blocks: Vec<Block> = block_chunks(series, t_s, t0_s, dt)
+        .filter_map(|(_, _, t_s, chunk)| {
             let n = chunk.len() as f64;
             let mean = chunk.iter().sum::<f64>() / n;
             let variance = chunk.iter().map(|v| (v - mean).powi(2)).sum::<f64>() / (n - 1.0);
-            if variance > 0.0 && variance.is_finite() {
-                blocks.push(Block { t_s: t[k * per_block] - t0_s, variance });
-            }
-        }
-    }
+            (variance > 0.0 && variance.is_finite()).then_some(Block { t_s, variance })
+        })
+        .collect();
     blocks.sort_by(|a, b| a.t_s.total_cmp(&b.t_s));
     blocks
+}
+
+/// The standard deviation that a noise whose mean block variance is `larger` adds in quadrature to one whose
+/// is `smaller`, each given as (mean variance, the variance of that mean), with its standard error by the
+/// delta method (`d sqrt(v) = dv / (2 sqrt(v))`); `None` unless the first is the larger.
+pub(super) fn excess_in_quadrature(larger: (f64, f64), smaller: (f64, f64)) -> Option<(f64, f64)> {
+    let excess_variance = larger.0 - smaller.0;
+    (excess_variance > 0.0).then(|| {
+        let excess = excess_variance.sqrt();
+        (excess, (larger.1 + smaller.1).sqrt() / (2.0 * excess))
+    })
 }
 
 /// What a noise warm-up that settles at `settled_s` must exceed on a channel with these samples (as
