@@ -297,10 +297,7 @@ impl ChannelMeasures {
         let dwells = series.len();
         // The correlated noise describes the settled instrument: with a noise warm-up at the smallest m, it is
         // fitted on the samples after it.
-        let series = match settled_s {
-            Some(t) => keep(series, &settled(&times, session.t0, t)),
-            None => series,
-        };
+        let series = after_settled(series, session, settled_s);
         let (correlated, correlated_windows) = CorrelatedFits::with_windows(series, session.dt, true);
         ChannelMeasures {
             c,
@@ -350,13 +347,7 @@ impl ChannelMeasures {
             for l in &self.lines[..passing] {
                 remove_line(&mut series, &l.line, session.dt);
             }
-            let series = match settled_s {
-                Some(t) => {
-                    let times: Vec<&[f64]> = session.dwells.iter().map(|d| &d.t[..]).collect();
-                    keep(series, &settled(&times, session.t0, t))
-                }
-                None => series,
-            };
+            let series = after_settled(series, session, settled_s);
             refitted = if warmups.is_empty() && settled_s == self.settled_s {
                 (CorrelatedFits::of(series, session.dt), self.correlated_windows.clone())
             } else {
@@ -586,6 +577,18 @@ impl ChannelMeasures {
         }
         let p = &two.processes[larger];
         (p.sigma, p.tau_s)
+    }
+}
+
+/// `series` (per dwell of `session`) from where the noise settled at `settled_s` on ([`settled`]); whole
+/// without a noise warm-up.
+fn after_settled(series: Vec<Vec<f64>>, session: &Session, settled_s: Option<f64>) -> Vec<Vec<f64>> {
+    match settled_s {
+        Some(t) => {
+            let times: Vec<&[f64]> = session.dwells.iter().map(|d| &d.t[..]).collect();
+            keep(series, &settled(&times, session.t0, t))
+        }
+        None => series,
     }
 }
 
